@@ -1,0 +1,316 @@
+//! Command line → validated configuration. Clap types stop here.
+
+use std::path::{Path, PathBuf};
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+use crate::diag::{ErrorKind, MessageFormat};
+use crate::eval::{Define, Settings};
+use crate::program::ini::Ini;
+use crate::program::SearchPath;
+
+/// Flatten LinuxCNC-dialect G-code (O-word subroutines, loops, conditionals,
+/// parameters and expressions) into plain straight-line G-code for
+/// controllers such as GRBL, grblHAL, FluidNC, Marlin and Smoothieware.
+///
+/// Every expression and parameter is evaluated and every O-word expanded
+/// exactly as LinuxCNC 2.9's interpreter would run the program; the result
+/// goes to stdout (or --output) only if the whole program flattened without
+/// error.
+///
+/// Subroutine files (`o<name> call` → name.ngc, lower-cased) are searched in:
+/// --program-prefix (or the INI's [DISPLAY]PROGRAM_PREFIX), each -I folder,
+/// each folder of $NGCFLAT_SUBROUTINE_PATH (colon-separated), the INI's
+/// [RS274NGC]SUBROUTINE_PATH, the INI's [WIZARD]WIZARD_ROOT (recursively),
+/// and last the folder of the program being flattened (unlike LinuxCNC;
+/// --no-program-dir turns that off).
+///
+/// Exit status: 0 success, 1 the program is wrong, 2 usage or I/O error.
+#[derive(Parser, Debug)]
+#[command(name = "ngcflat", version, args_conflicts_with_subcommands = true)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    #[command(flatten)]
+    pub flatten: FlattenArgs,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Check programs without writing output: every file is fully evaluated
+    /// with the same rules as flattening; exit 1 if any has an error.
+    Check(CheckArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct FlattenArgs {
+    /// Program to flatten; stdin when absent or `-`.
+    pub file: Option<PathBuf>,
+    /// Write the result to FILE (atomically: on error FILE is left as it was).
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    #[command(flatten)]
+    pub common: CommonArgs,
+}
+
+#[derive(Args, Debug)]
+pub struct CheckArgs {
+    /// Programs or folders (walked recursively).
+    #[arg(required = true)]
+    pub paths: Vec<PathBuf>,
+    /// File extensions checked in folders (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "ngc,nc,tap")]
+    pub ext: Vec<String>,
+    /// Exit 1 on warnings too.
+    #[arg(long)]
+    pub deny_warnings: bool,
+    #[command(flatten)]
+    pub common: CommonArgs,
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FormatArg {
+    Human,
+    Short,
+    Json,
+    Github,
+}
+
+#[derive(Args, Debug)]
+pub struct CommonArgs {
+    /// Folder searched for subroutine files (repeatable).
+    #[arg(short = 'I', long = "subroutine-path", value_name = "DIR")]
+    pub subroutine_path: Vec<PathBuf>,
+    /// Folder searched first for subroutine files (like PROGRAM_PREFIX).
+    #[arg(long, value_name = "DIR")]
+    pub program_prefix: Option<PathBuf>,
+    /// LinuxCNC INI file: PROGRAM_PREFIX, SUBROUTINE_PATH, WIZARD_ROOT,
+    /// PARAMETER_FILE, DISABLE_FANUC_STYLE_SUB, OWORD_NARGS and #<_ini[..]>
+    /// values.
+    #[arg(long, value_name = "FILE")]
+    pub ini: Option<PathBuf>,
+    /// LinuxCNC parameter (.var) file with numbered parameters.
+    #[arg(long, value_name = "FILE")]
+    pub var_file: Option<PathBuf>,
+    /// Set a parameter before the run: `-D 5063=-1.25` (numbered),
+    /// `-D depth=3` (named), `-D _depth=3` (global). Overrides the var file.
+    #[arg(short = 'D', long = "define", value_name = "PARAM=VALUE")]
+    pub define: Vec<String>,
+    /// Round computed numbers to N decimals (default: full precision).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(0..=12))]
+    pub precision: Option<u8>,
+    /// Remove all comments from the output.
+    #[arg(long)]
+    pub strip_comments: bool,
+    /// Stop after this many executed lines (runaway loops and recursion).
+    #[arg(long, value_name = "N", default_value_t = 100_000_000)]
+    pub max_steps: u64,
+    /// Stop when the output grows beyond this many lines.
+    #[arg(long, value_name = "N", default_value_t = 50_000_000)]
+    pub max_output_lines: u64,
+    /// Assume the state LinuxCNC's standalone interpreter starts in: position
+    /// 0, all offsets, tool data and probe results 0 (as in conformance
+    /// runs). Without it, reading such values is an error until the program
+    /// or -D fixes them.
+    #[arg(long)]
+    pub zero_start: bool,
+    /// Known start position, e.g. `--start-position X0 Y0 Z10`.
+    #[arg(long, value_name = "AXIS_VALUE", num_args = 1..)]
+    pub start_position: Vec<String>,
+    /// Do not search the program's own folder for subroutine files.
+    #[arg(long)]
+    pub no_program_dir: bool,
+    /// How diagnostics are written to stderr.
+    #[arg(long, value_enum, default_value = "human")]
+    pub message_format: FormatArg,
+}
+
+/// Validated options shared by flattening and checking.
+#[derive(Debug, Clone)]
+pub struct Config {
+    pub settings: Settings,
+    pub search: SearchPath,
+    pub format: MessageFormat,
+}
+
+fn expand_tilde(p: &str) -> PathBuf {
+    if let Some(rest) = p.strip_prefix("~/") {
+        if let Some(home) = std::env::var_os("HOME") {
+            return Path::new(&home).join(rest);
+        }
+    } else if p == "~" {
+        if let Some(home) = std::env::var_os("HOME") {
+            return PathBuf::from(home);
+        }
+    }
+    PathBuf::from(p)
+}
+
+fn resolve_in(base: &Path, p: &str) -> PathBuf {
+    let e = expand_tilde(p);
+    if e.is_absolute() {
+        e
+    } else {
+        base.join(e)
+    }
+}
+
+/// Parses a `-D` argument.
+pub fn parse_define(text: &str) -> Result<Define, ErrorKind> {
+    let bad = || ErrorKind::BadDefine { text: text.to_string() };
+    let (k, v) = text.split_once('=').ok_or_else(bad)?;
+    let k = k.trim().trim_start_matches('#');
+    let k = k.trim_start_matches('<').trim_end_matches('>');
+    let v: f64 = v.trim().parse().map_err(|_| bad())?;
+    if !v.is_finite() {
+        return Err(bad());
+    }
+    if !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()) {
+        let i: usize = k.parse().map_err(|_| bad())?;
+        if !(1..crate::eval::params::MAX_PARAM).contains(&i) {
+            return Err(ErrorKind::ParamOutOfRange { index: i as i64 });
+        }
+        return Ok(Define::Numbered(i, v));
+    }
+    let name: String = k.chars().filter(|c| !c.is_whitespace()).flat_map(|c| c.to_lowercase()).collect();
+    if name.is_empty() || name.contains('>') {
+        return Err(bad());
+    }
+    Ok(Define::Named(name, v))
+}
+
+/// Reads a LinuxCNC .var file: `number value` lines in ascending order.
+pub fn read_var_file(path: &Path) -> Result<Vec<Define>, ErrorKind> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| ErrorKind::Io { path: path.to_path_buf(), message: e.to_string() })?;
+    let mut out = Vec::new();
+    let mut last = 0i64;
+    for line in text.lines() {
+        let t = line.trim();
+        if t.is_empty() || t.starts_with('#') || t.starts_with(';') {
+            continue;
+        }
+        let mut it = t.split_whitespace();
+        let (Some(a), Some(b)) = (it.next(), it.next()) else {
+            return Err(ErrorKind::VarFileSyntax { text: t.to_string() });
+        };
+        let (Ok(i), Ok(v)) = (a.parse::<i64>(), b.parse::<f64>()) else {
+            return Err(ErrorKind::VarFileSyntax { text: t.to_string() });
+        };
+        if i <= last {
+            return Err(ErrorKind::VarFileOrder { index: i });
+        }
+        if !(1..crate::eval::params::MAX_PARAM as i64).contains(&i) {
+            return Err(ErrorKind::ParamOutOfRange { index: i });
+        }
+        last = i;
+        out.push(Define::Numbered(i as usize, v));
+    }
+    Ok(out)
+}
+
+impl CommonArgs {
+    /// Builds the configuration; `env_path` is $NGCFLAT_SUBROUTINE_PATH.
+    pub fn to_config(&self, env_path: Option<String>) -> Result<Config, ErrorKind> {
+        let mut settings = Settings {
+            precision: self.precision,
+            strip_comments: self.strip_comments,
+            max_steps: self.max_steps,
+            max_output_lines: self.max_output_lines,
+            zero_start: self.zero_start,
+            ..Settings::default()
+        };
+        let mut search = SearchPath { program_dir: !self.no_program_dir, ..SearchPath::default() };
+        let mut prefixes = Vec::new();
+        if let Some(p) = &self.program_prefix {
+            prefixes.push(p.clone());
+        }
+        let mut dirs: Vec<PathBuf> = self.subroutine_path.clone();
+        if let Some(env) = env_path {
+            dirs.extend(env.split(':').filter(|s| !s.is_empty()).map(expand_tilde));
+        }
+        let mut var_file = self.var_file.clone();
+        if let Some(ini_path) = &self.ini {
+            let text = std::fs::read_to_string(ini_path)
+                .map_err(|e| ErrorKind::Io { path: ini_path.clone(), message: e.to_string() })?;
+            let ini = Ini::parse(&text);
+            let base = ini_path.parent().map(Path::to_path_buf).unwrap_or_default();
+            let base = if base.as_os_str().is_empty() { PathBuf::from(".") } else { base };
+            if self.program_prefix.is_none() {
+                if let Some(p) = ini.get("DISPLAY", "PROGRAM_PREFIX") {
+                    prefixes.push(resolve_in(&base, p));
+                }
+            }
+            if let Some(sp) = ini.get("RS274NGC", "SUBROUTINE_PATH") {
+                let existing: Vec<PathBuf> = sp
+                    .split(':')
+                    .map(str::trim)
+                    .filter(|s| !s.is_empty())
+                    .map(|s| resolve_in(&base, s))
+                    .filter(|p| p.is_dir())
+                    .collect();
+                if existing.len() > 10 {
+                    return Err(ErrorKind::TooManyPathDirs { count: existing.len() });
+                }
+                dirs.extend(existing);
+            }
+            if let Some(w) = ini.get("WIZARD", "WIZARD_ROOT") {
+                search.recursive.push(resolve_in(&base, w));
+            }
+            if var_file.is_none() {
+                if let Some(v) = ini.get("RS274NGC", "PARAMETER_FILE") {
+                    let p = resolve_in(&base, v);
+                    if p.is_file() {
+                        var_file = Some(p);
+                    }
+                }
+            }
+            settings.fanuc_disabled = ini.flag("RS274NGC", "DISABLE_FANUC_STYLE_SUB");
+            settings.oword_nargs = ini.flag("RS274NGC", "OWORD_NARGS");
+            settings.ini = Some(ini);
+        }
+        search.dirs = prefixes.into_iter().chain(dirs).collect();
+        if let Some(v) = &var_file {
+            settings.defines.extend(read_var_file(v)?);
+        }
+        for d in &self.define {
+            settings.defines.push(parse_define(d)?);
+        }
+        for word in self.start_position.iter().flat_map(|s| s.split_whitespace()) {
+            let bad = || ErrorKind::BadDefine { text: format!("--start-position {word}") };
+            let mut chars = word.chars();
+            let letter = chars.next().ok_or_else(bad)?.to_ascii_lowercase();
+            let axis = crate::eval::state::AXES.iter().position(|&c| c as char == letter).ok_or_else(bad)?;
+            let v: f64 = chars.as_str().parse().map_err(|_| bad())?;
+            settings.start_position.push((axis, v));
+        }
+        let format = match self.message_format {
+            FormatArg::Human => MessageFormat::Human,
+            FormatArg::Short => MessageFormat::Short,
+            FormatArg::Json => MessageFormat::Json,
+            FormatArg::Github => MessageFormat::Github,
+        };
+        Ok(Config { settings, search, format })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn cli_is_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn defines() {
+        assert_eq!(parse_define("5063=-1.25").unwrap(), Define::Numbered(5063, -1.25));
+        assert_eq!(parse_define("Depth=3").unwrap(), Define::Named("depth".into(), 3.0));
+        assert_eq!(parse_define("_g=1").unwrap(), Define::Named("_g".into(), 1.0));
+        assert!(parse_define("nothing").is_err());
+        assert!(parse_define("0=1").is_err());
+        assert!(parse_define("x=inf").is_err());
+    }
+}

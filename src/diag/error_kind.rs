@@ -1,0 +1,362 @@
+//! Everything that can go wrong with a program, as data. Each variant names
+//! an input that triggers it. Messages are rendered by [`std::fmt::Display`];
+//! positions and call stacks are added by [`crate::diag::Diagnostic`].
+
+use std::fmt;
+use std::path::PathBuf;
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum ErrorKind {
+    // ------------------------------------------------------------ lexical
+    /// A line of 253 characters or more.
+    CommandTooLong,
+    /// `(a (b))`
+    NestedComment,
+    /// `G0 (open`
+    UnclosedComment,
+    /// `G0 X1 {` or a UTF-8 byte outside a comment.
+    BadCharacter { ch: char, byte: u8 },
+    /// `G1 X[1+2` and other shapes the grammar does not accept.
+    Syntax { expected: String },
+    /// `X.` or `[1+]`
+    BadNumber { text: String },
+    /// `X1.2.3`
+    TrailingNumber { text: String },
+    /// `#1.5=0` or `G1.5`-style integer contexts.
+    NonInteger { value: f64 },
+    /// `%` line in a program that did not start with `%`.
+    StrayPercent,
+    /// `G0 X1 X2`
+    DuplicateWord { letter: char },
+    /// `M3 M8 M7 M9 M5`: more than four M words.
+    TooManyMWords,
+    /// `N` number that is not at the start of the line: `G0 N10`.
+    MisplacedLineNumber,
+    // ------------------------------------------------------------ expressions
+    /// `[1/0]`
+    DivideByZero,
+    /// `[-2**0.5]`
+    NegativePower,
+    /// `ACOS[2]`
+    AcosRange,
+    /// `ASIN[2]`
+    AsinRange,
+    /// `LN[0]`
+    LnDomain,
+    /// `SQRT[-1]`
+    SqrtNegative,
+    /// `[1 MOD 0]`
+    NotANumber,
+    /// `EXP[1000]`
+    Infinity,
+    // ------------------------------------------------------------ parameters
+    /// `#0=1`, `#5602`
+    ParamOutOfRange { index: i64 },
+    /// `#5400=1`
+    ParamReadOnly { index: i64 },
+    /// `G0 X#<nowhere>`
+    NamedUndefined { name: String },
+    /// `#<_x>=1`
+    NamedReadOnly { name: String },
+    /// `G0 X#5061`: a value that exists only on the running machine.
+    RuntimeParam { what: String, why: String, hint: String },
+    /// `(debug, #<open)`
+    UnterminatedName,
+    /// `(print, #<_x>)` with the X position unknown.
+    UnknownPosition { axis: char, why: String },
+    // ------------------------------------------------------------ O-words
+    /// `o1 frobnicate`
+    UnknownOCommand { word: String },
+    /// `o1 if [1] G0 X1`
+    UnexpectedAfterOWord,
+    /// `o1 if 1`
+    MissingBracket { keyword: &'static str },
+    /// `o1 call 5` (arguments must be bracketed)
+    CallArgNotBracketed,
+    /// `o1 return` in the main program.
+    NotInSub,
+    /// `o1 while [1]` twice at different lines in the same scope.
+    DuplicateLabel { label: String, first_line: u32 },
+    /// `o9 endif` with no `o9 if`.
+    UndefinedLabel { label: String },
+    /// `o1 while [0]` ... `o1 endif`
+    LabelMismatch { label: String, expected: &'static str, found: &'static str, line: u32 },
+    /// `o1 sub` inside another sub definition.
+    NestedSubDefinition { inner: String, outer: String },
+    /// A `sub` line reached by normal flow after the sub was called.
+    IllegalSubLocation { name: String },
+    /// Two `o<x> sub` definitions.
+    RedefiningSub { name: String, first: PathBuf, first_line: u32 },
+    /// `o1 call [1] ... [31]`
+    TooManyArgs,
+    /// Recursion ten calls deep.
+    TooDeep { limit: usize },
+    /// `o<nothere> call` with no definition and no file.
+    SubNotFound { name: String, searched: Vec<PathBuf> },
+    /// A sub file that does not define the sub it is named after.
+    SubNotInFile { name: String, file: PathBuf },
+    /// A closing `%` reached while looking for a label.
+    LabelBeforePercent { label: String },
+    /// End of file while looking for `o<label> ...`.
+    EofSeeking { label: String, from_line: u32 },
+    /// A program with no `M2`/`M30`/closing `%`.
+    MissingProgramEnd { percent: bool },
+    /// An empty input.
+    EmptyProgram,
+    /// `M98 L2`
+    M98WithoutP,
+    /// `o100 call` where `O100` is a bare (M98-style) block.
+    FanucNeedsM98 { name: String },
+    /// `M98 P100` where `o100 sub` is an O-call sub.
+    SubNeedsCall { name: String },
+    /// `M99` ending an `o... sub`.
+    M99InSub,
+    /// `o100 endsub` ending an M98 subprogram.
+    EndsubInFanuc,
+    /// Fanuc-style M98/M99/bare O with `DISABLE_FANUC_STYLE_SUB`.
+    FanucDisabled { what: &'static str },
+    /// `o<x> sub` with no `o<x> endsub` before the end of file.
+    UnterminatedSub { name: String },
+    /// `(abort, tool broke)`
+    Abort { message: String },
+    // ------------------------------------------------------------ limits and output
+    /// An output line longer than 252 characters after substitution.
+    OutputLineTooLong { len: usize },
+    /// `o1 while [1]` ... `o1 endwhile` with no exit.
+    StepLimit { limit: u64, label: Option<String>, line: Option<u32> },
+    /// A loop that writes more lines than `--max-output-lines`.
+    OutputLimit { limit: u64, label: Option<String>, line: Option<u32> },
+    /// A value that cannot be written as a G-code number.
+    Unprintable { value: f64 },
+    // ------------------------------------------------------------ files and setup
+    /// A file that cannot be read.
+    Io { path: PathBuf, message: String },
+    /// `o<../etc/passwd> call`
+    UnsafeSubName { name: String },
+    /// A var file whose parameter numbers are not ascending.
+    VarFileOrder { index: i64 },
+    /// A var file line that is not `number value`.
+    VarFileSyntax { text: String },
+    /// A `-D` definition that is not `PARAM=VALUE`.
+    BadDefine { text: String },
+    /// `SUBROUTINE_PATH` with more than ten existing folders.
+    TooManyPathDirs { count: usize },
+    /// Lathe cycle needing a contour sub (`G71 Q...`).
+    Unsupported { what: String },
+}
+
+impl ErrorKind {
+    /// Stable code shown with every diagnostic.
+    pub fn code(&self) -> &'static str {
+        use ErrorKind::*;
+        match self {
+            CommandTooLong => "E0001",
+            NestedComment => "E0002",
+            UnclosedComment => "E0003",
+            BadCharacter { .. } => "E0004",
+            Syntax { .. } => "E0005",
+            BadNumber { .. } => "E0006",
+            TrailingNumber { .. } => "E0007",
+            NonInteger { .. } => "E0008",
+            StrayPercent => "E0009",
+            DuplicateWord { .. } => "E0010",
+            TooManyMWords => "E0011",
+            MisplacedLineNumber => "E0012",
+            DivideByZero => "E0101",
+            NegativePower => "E0102",
+            AcosRange => "E0103",
+            AsinRange => "E0104",
+            LnDomain => "E0105",
+            SqrtNegative => "E0106",
+            NotANumber => "E0107",
+            Infinity => "E0108",
+            ParamOutOfRange { .. } => "E0201",
+            ParamReadOnly { .. } => "E0202",
+            NamedUndefined { .. } => "E0203",
+            NamedReadOnly { .. } => "E0204",
+            RuntimeParam { .. } => "E0205",
+            UnterminatedName => "E0206",
+            UnknownPosition { .. } => "E0207",
+            UnknownOCommand { .. } => "E0301",
+            UnexpectedAfterOWord => "E0302",
+            MissingBracket { .. } => "E0303",
+            CallArgNotBracketed => "E0304",
+            NotInSub => "E0305",
+            DuplicateLabel { .. } => "E0306",
+            UndefinedLabel { .. } => "E0307",
+            LabelMismatch { .. } => "E0308",
+            NestedSubDefinition { .. } => "E0309",
+            IllegalSubLocation { .. } => "E0310",
+            RedefiningSub { .. } => "E0311",
+            TooManyArgs => "E0312",
+            TooDeep { .. } => "E0313",
+            SubNotFound { .. } => "E0314",
+            SubNotInFile { .. } => "E0315",
+            LabelBeforePercent { .. } => "E0316",
+            EofSeeking { .. } => "E0317",
+            MissingProgramEnd { .. } => "E0318",
+            EmptyProgram => "E0319",
+            M98WithoutP => "E0320",
+            FanucNeedsM98 { .. } => "E0321",
+            SubNeedsCall { .. } => "E0322",
+            M99InSub => "E0323",
+            EndsubInFanuc => "E0324",
+            FanucDisabled { .. } => "E0325",
+            UnterminatedSub { .. } => "E0326",
+            Abort { .. } => "E0327",
+            OutputLineTooLong { .. } => "E0401",
+            StepLimit { .. } => "E0402",
+            OutputLimit { .. } => "E0403",
+            Unprintable { .. } => "E0404",
+            Io { .. } => "E0501",
+            UnsafeSubName { .. } => "E0502",
+            VarFileOrder { .. } => "E0503",
+            VarFileSyntax { .. } => "E0504",
+            BadDefine { .. } => "E0505",
+            TooManyPathDirs { .. } => "E0506",
+            Unsupported { .. } => "E0507",
+        }
+    }
+}
+
+fn limit_site(f: &mut fmt::Formatter<'_>, label: &Option<String>, line: &Option<u32>) -> fmt::Result {
+    match (label, line) {
+        (Some(l), Some(n)) => write!(f, " (innermost loop: o{l} at line {n})"),
+        (Some(l), None) => write!(f, " (innermost loop: o{l})"),
+        _ => Ok(()),
+    }
+}
+
+impl fmt::Display for ErrorKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use ErrorKind::*;
+        match self {
+            CommandTooLong => write!(f, "line is longer than 252 characters"),
+            NestedComment => write!(f, "comment opened inside a comment"),
+            UnclosedComment => write!(f, "comment is not closed before the end of the line"),
+            BadCharacter { ch, byte } => {
+                if ch.is_ascii_graphic() {
+                    write!(f, "character '{ch}' is not allowed here")
+                } else {
+                    write!(f, "byte 0x{byte:02x} is not allowed outside a comment")
+                }
+            }
+            Syntax { expected } => write!(f, "expected {expected}"),
+            BadNumber { text } => write!(f, "'{text}' is not a number"),
+            TrailingNumber { text } => write!(f, "'{text}' is not a number (more than one decimal point)"),
+            NonInteger { value } => write!(f, "{value} is not an integer"),
+            StrayPercent => write!(f, "'%' line in a program that does not start with '%'"),
+            DuplicateWord { letter } => write!(f, "more than one {} word on the line", letter.to_ascii_uppercase()),
+            TooManyMWords => write!(f, "more than four M words on the line"),
+            MisplacedLineNumber => write!(f, "an N line number may only start the line"),
+            DivideByZero => write!(f, "division by zero"),
+            NegativePower => write!(f, "negative number raised to a non-integer power"),
+            AcosRange => write!(f, "argument of ACOS is outside -1..1"),
+            AsinRange => write!(f, "argument of ASIN is outside -1..1"),
+            LnDomain => write!(f, "argument of LN is zero or negative"),
+            SqrtNegative => write!(f, "argument of SQRT is negative"),
+            NotANumber => write!(f, "calculation gives no number (NaN)"),
+            Infinity => write!(f, "calculation gives infinity"),
+            ParamOutOfRange { index } => write!(f, "parameter #{index} is out of range (1..5601)"),
+            ParamReadOnly { index } => write!(f, "parameter #{index} is read-only"),
+            NamedUndefined { name } => write!(f, "parameter #<{name}> is not defined"),
+            NamedReadOnly { name } => write!(f, "parameter #<{name}> is read-only"),
+            RuntimeParam { what, why, hint } => {
+                write!(f, "{what} is only known on the running machine ({why}); supply it with {hint}")
+            }
+            UnterminatedName => write!(f, "named parameter is not terminated by '>'"),
+            UnknownPosition { axis, why } => write!(
+                f,
+                "the {} position is not known here ({why}); fix it with an absolute move first, or give --start-position / -D",
+                axis.to_ascii_uppercase()
+            ),
+            UnknownOCommand { word } => write!(f, "unknown O-word command '{word}'"),
+            UnexpectedAfterOWord => write!(f, "only a comment may follow an O-word command"),
+            MissingBracket { keyword } => write!(f, "'[' expected after '{keyword}'"),
+            CallArgNotBracketed => write!(f, "subroutine arguments must be bracketed: [value]"),
+            NotInSub => write!(f, "return or endsub outside a subroutine"),
+            DuplicateLabel { label, first_line } => {
+                write!(f, "label o{label} is already used at line {first_line}")
+            }
+            UndefinedLabel { label } => write!(f, "label o{label} has not been opened"),
+            LabelMismatch { label, expected, found, line } => write!(
+                f,
+                "o{label} is a '{found}' (line {line}), not a{} '{expected}'",
+                if expected.starts_with(['a', 'e', 'i', 'o', 'u']) { "n" } else { "" }
+            ),
+            NestedSubDefinition { inner, outer } => {
+                write!(f, "subroutine o<{inner}> is defined inside subroutine o<{outer}>")
+            }
+            IllegalSubLocation { name } => write!(
+                f,
+                "definition of o<{name}> reached by normal flow after it was called (put subroutines after the program end)"
+            ),
+            RedefiningSub { name, first, first_line } => {
+                write!(f, "subroutine o<{name}> is already defined at {}:{first_line}", first.display())
+            }
+            TooManyArgs => write!(f, "more than 30 subroutine arguments"),
+            TooDeep { limit } => write!(f, "subroutine calls nested more than {limit} deep"),
+            SubNotFound { name, searched } => {
+                write!(f, "subroutine o<{name}> is not defined and no file {name}.ngc was found")?;
+                if searched.is_empty() {
+                    write!(f, " (no search folders configured)")
+                } else {
+                    write!(f, " in: ")?;
+                    for (i, d) in searched.iter().enumerate() {
+                        if i > 0 {
+                            write!(f, ", ")?;
+                        }
+                        write!(f, "{}", d.display())?;
+                    }
+                    Ok(())
+                }
+            }
+            SubNotInFile { name, file } => {
+                write!(f, "file {} does not define o<{name}> sub", file.display())
+            }
+            LabelBeforePercent { label } => write!(f, "closing '%' reached while looking for o{label}"),
+            EofSeeking { label, from_line } => {
+                write!(f, "end of file reached while looking for o{label} (from line {from_line})")
+            }
+            MissingProgramEnd { percent: true } => write!(f, "file ends without the closing '%'"),
+            MissingProgramEnd { percent: false } => {
+                write!(f, "file ends without a program end (M2, M30 or '%')")
+            }
+            EmptyProgram => write!(f, "the program is empty"),
+            M98WithoutP => write!(f, "M98 without a P word"),
+            FanucNeedsM98 { name } => write!(f, "O{name} is an M98 subprogram; call it with M98 P{name}"),
+            SubNeedsCall { name } => write!(f, "o{name} is an O-word subroutine; call it with 'o{name} call'"),
+            M99InSub => write!(f, "M99 ends an 'o... sub' subroutine; use 'o... endsub'"),
+            EndsubInFanuc => write!(f, "endsub/return inside an M98 subprogram; end it with M99"),
+            FanucDisabled { what } => write!(f, "{what} used but DISABLE_FANUC_STYLE_SUB is set"),
+            UnterminatedSub { name } => write!(f, "subroutine o<{name}> has no endsub"),
+            Abort { message } => write!(f, "program aborted: {message}"),
+            OutputLineTooLong { len } => {
+                write!(f, "output line would be {len} characters; the limit is 252 (try --precision)")
+            }
+            StepLimit { limit, label, line } => {
+                write!(f, "more than {limit} lines executed; runaway loop or recursion?")?;
+                limit_site(f, label, line)?;
+                write!(f, " (raise with --max-steps)")
+            }
+            OutputLimit { limit, label, line } => {
+                write!(f, "more than {limit} output lines")?;
+                limit_site(f, label, line)?;
+                write!(f, " (raise with --max-output-lines)")
+            }
+            Unprintable { value } => write!(f, "value {value} cannot be written as a G-code number"),
+            Io { path, message } => write!(f, "{}: {message}", path.display()),
+            UnsafeSubName { name } => write!(
+                f,
+                "subroutine name '{name}' could leave the search path; use plain names (letters, digits, '_', '-')"
+            ),
+            VarFileOrder { index } => write!(f, "parameter file is not in ascending order at #{index}"),
+            VarFileSyntax { text } => write!(f, "parameter file line '{text}' is not 'number value'"),
+            BadDefine { text } => write!(f, "-D '{text}' is not PARAM=VALUE (e.g. 5063=-1.25, depth=3, _depth=3)"),
+            TooManyPathDirs { count } => {
+                write!(f, "SUBROUTINE_PATH has {count} folders; LinuxCNC uses at most 10")
+            }
+            Unsupported { what } => write!(f, "{what}"),
+        }
+    }
+}

@@ -1,0 +1,99 @@
+//! Diagnostics: errors and warnings as data, and their rendering.
+
+mod error_kind;
+mod render;
+mod warning_kind;
+
+pub use error_kind::ErrorKind;
+pub use render::{render, LineIndex, MessageFormat};
+pub use warning_kind::WarningKind;
+
+use std::fmt;
+use std::sync::Arc;
+
+use crate::program::SourceFile;
+
+/// A place in a source file: byte offsets from the start of the file.
+#[derive(Debug, Clone)]
+pub struct Site {
+    pub file: Arc<SourceFile>,
+    pub start: u32,
+    pub end: u32,
+}
+
+impl Site {
+    pub fn new(file: &Arc<SourceFile>, start: u32, end: u32) -> Site {
+        Site { file: Arc::clone(file), start, end: end.max(start) }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Level {
+    Error,
+    Warning,
+}
+
+impl fmt::Display for Level {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Level::Error => "error",
+            Level::Warning => "warning",
+        })
+    }
+}
+
+#[derive(Debug, Clone)]
+pub enum Kind {
+    Error(ErrorKind),
+    Warning(WarningKind),
+}
+
+/// One error or warning with its position and the chain of calls that led
+/// there (innermost caller first).
+#[derive(Debug, Clone)]
+pub struct Diagnostic {
+    pub kind: Kind,
+    pub site: Option<Site>,
+    pub stack: Vec<Site>,
+}
+
+/// The error type of the library.
+pub type Error = Box<Diagnostic>;
+
+impl Diagnostic {
+    pub fn error(kind: ErrorKind, site: Option<Site>) -> Error {
+        Box::new(Diagnostic { kind: Kind::Error(kind), site, stack: Vec::new() })
+    }
+
+    pub fn warning(kind: WarningKind, site: Option<Site>) -> Diagnostic {
+        Diagnostic { kind: Kind::Warning(kind), site, stack: Vec::new() }
+    }
+
+    pub fn level(&self) -> Level {
+        match self.kind {
+            Kind::Error(_) => Level::Error,
+            Kind::Warning(_) => Level::Warning,
+        }
+    }
+
+    pub fn code(&self) -> &'static str {
+        match &self.kind {
+            Kind::Error(k) => k.code(),
+            Kind::Warning(k) => k.code(),
+        }
+    }
+
+    pub fn message(&self) -> String {
+        match &self.kind {
+            Kind::Error(k) => k.to_string(),
+            Kind::Warning(k) => k.to_string(),
+        }
+    }
+
+    pub fn error_kind(&self) -> Option<&ErrorKind> {
+        match &self.kind {
+            Kind::Error(k) => Some(k),
+            Kind::Warning(_) => None,
+        }
+    }
+}

@@ -1,0 +1,108 @@
+//! Legal but suspicious constructs, and places where a program depends on a
+//! behaviour of the reference interpreter that ngcflat deliberately does not
+//! copy. Each variant names an input that triggers it.
+
+use std::fmt;
+use std::path::PathBuf;
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum WarningKind {
+    /// `o1 if [1] (debug, x)`: comments on O-lines are never executed.
+    CommentOnOLine,
+    /// `o<unused> sub` never called.
+    UnusedSub { name: String },
+    /// `#7` read in the main program before anything assigned it.
+    ReadBeforeSet { index: i64 },
+    /// Lines after `M2` that can never run.
+    UnreachableAfterEnd { line: u32 },
+    /// A sub file found in two folders of the search path.
+    ShadowedSubFile { name: String, used: PathBuf, shadowed: PathBuf },
+    /// A `(debug/print/log, ...)` text that changes meaning if read again.
+    MessageNotStable,
+    /// The reference evaluates a condition ngcflat skips, and it would fail.
+    QuirkSkippedCondition { message: String },
+    /// A `break` out of a while loop leaves the reference's break flag set.
+    QuirkStaleBreak { first_line: u32 },
+    /// A `continue` in a do loop leaves the reference's continue flag set.
+    QuirkStaleContinue { first_line: u32 },
+    /// `return` inside a `repeat`: the reference keeps the remaining count.
+    QuirkRepeatCount,
+    /// Recursion from inside a `repeat`: the reference shares the counter.
+    QuirkRepeatRecursion,
+    /// `M98 P.. L0`: the reference leaks a call frame.
+    QuirkL0,
+    /// A sub definition reached inside another called sub (2.9 runs on).
+    QuirkNestedSubInCall,
+    /// `o1 endsub [5]` evaluated while the definition is skipped.
+    QuirkDefinitionValue,
+}
+
+impl WarningKind {
+    pub fn code(&self) -> &'static str {
+        use WarningKind::*;
+        match self {
+            CommentOnOLine => "W0001",
+            UnusedSub { .. } => "W0002",
+            ReadBeforeSet { .. } => "W0003",
+            UnreachableAfterEnd { .. } => "W0004",
+            ShadowedSubFile { .. } => "W0005",
+            MessageNotStable => "W0006",
+            QuirkSkippedCondition { .. } => "W0101",
+            QuirkStaleBreak { .. } => "W0102",
+            QuirkStaleContinue { .. } => "W0103",
+            QuirkRepeatCount => "W0104",
+            QuirkRepeatRecursion => "W0105",
+            QuirkL0 => "W0106",
+            QuirkNestedSubInCall => "W0107",
+            QuirkDefinitionValue => "W0108",
+        }
+    }
+}
+
+impl fmt::Display for WarningKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use WarningKind::*;
+        match self {
+            CommentOnOLine => write!(f, "a comment on an O-word line is never executed"),
+            UnusedSub { name } => write!(f, "subroutine o<{name}> is never called"),
+            ReadBeforeSet { index } => write!(f, "parameter #{index} is read before anything sets it (reads 0)"),
+            UnreachableAfterEnd { line } => write!(f, "code after the program end (line {line}) never runs"),
+            ShadowedSubFile { name, used, shadowed } => write!(
+                f,
+                "{name}.ngc in {} hides the one in {}",
+                used.display(),
+                shadowed.display()
+            ),
+            MessageNotStable => write!(
+                f,
+                "the substituted message still contains '#' or '%' directives and may read differently"
+            ),
+            QuirkSkippedCondition { message } => write!(
+                f,
+                "LinuxCNC evaluates this condition although its branch cannot run, and fails: {message}"
+            ),
+            QuirkStaleBreak { first_line } => write!(
+                f,
+                "LinuxCNC would end this do-loop after one pass (break flag left over from line {first_line}); ngcflat runs it normally"
+            ),
+            QuirkStaleContinue { first_line } => write!(
+                f,
+                "LinuxCNC would run this loop once more (continue flag left over from line {first_line}); ngcflat exits it normally"
+            ),
+            QuirkRepeatCount => write!(
+                f,
+                "return from inside a repeat: LinuxCNC keeps the remaining count for the next call; ngcflat starts fresh"
+            ),
+            QuirkRepeatRecursion => write!(
+                f,
+                "recursive call inside a repeat: LinuxCNC shares one counter across the calls; ngcflat counts each call"
+            ),
+            QuirkL0 => write!(f, "M98 with L0: LinuxCNC leaves a call frame behind; ngcflat does not"),
+            QuirkNestedSubInCall => write!(f, "sub definition inside a called subroutine"),
+            QuirkDefinitionValue => write!(
+                f,
+                "LinuxCNC sets #<_value> from this endsub/return while skipping the definition"
+            ),
+        }
+    }
+}

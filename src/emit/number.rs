@@ -1,0 +1,172 @@
+//! Numbers as G-code can read them: plain decimal, never an exponent, never
+//! `inf`, `NaN` or `-0`.
+
+/// Appends `v` to `out`. Without a precision the shortest text that reads
+/// back as exactly `v`; with one, rounded to that many decimals and trailing
+/// zeros dropped. Returns false for values that have no G-code form.
+pub fn write_number(out: &mut Vec<u8>, v: f64, precision: Option<u8>) -> bool {
+    if !v.is_finite() {
+        return false;
+    }
+    match precision {
+        None => write_shortest(out, v),
+        Some(p) => write_fixed(out, v, p),
+    }
+    true
+}
+
+fn write_shortest(out: &mut Vec<u8>, v: f64) {
+    if v == 0.0 {
+        out.push(b'0');
+        return;
+    }
+    let mut buf = ryu::Buffer::new();
+    let s = buf.format_finite(v).as_bytes();
+    let (neg, s) = match s.first() {
+        Some(b'-') => (true, &s[1..]),
+        _ => (false, s),
+    };
+    // Split mantissa and exponent.
+    let (mant, exp) = match s.iter().position(|&b| b == b'e' || b == b'E') {
+        Some(i) => {
+            let e = std::str::from_utf8(&s[i + 1..]).ok().and_then(|t| t.parse::<i32>().ok()).unwrap_or(0);
+            (&s[..i], e)
+        }
+        None => (s, 0),
+    };
+    // Digits and the position of the decimal point within them.
+    let mut digits: [u8; 32] = [0; 32];
+    let mut n = 0;
+    let mut point = None;
+    for &b in mant {
+        if b == b'.' {
+            point = Some(n);
+        } else {
+            digits[n] = b;
+            n += 1;
+        }
+    }
+    let mut point = point.unwrap_or(n) as i32 + exp;
+    // Trim trailing zeros of the digit string (they carry no value once the
+    // point is placed) and leading zeros.
+    let mut start = 0;
+    while start < n - 1 && digits[start] == b'0' {
+        start += 1;
+        point -= 1;
+    }
+    let mut end = n;
+    while end > start + 1 && digits[end - 1] == b'0' {
+        end -= 1;
+    }
+    let d = &digits[start..end];
+    if neg {
+        out.push(b'-');
+    }
+    if point <= 0 {
+        out.extend_from_slice(b"0.");
+        out.extend(std::iter::repeat_n(b'0', (-point) as usize));
+        out.extend_from_slice(d);
+    } else if point as usize >= d.len() {
+        out.extend_from_slice(d);
+        out.extend(std::iter::repeat_n(b'0', point as usize - d.len()));
+    } else {
+        out.extend_from_slice(&d[..point as usize]);
+        out.push(b'.');
+        out.extend_from_slice(&d[point as usize..]);
+    }
+}
+
+fn write_fixed(out: &mut Vec<u8>, v: f64, p: u8) {
+    let p = p.min(15);
+    let scale = 10f64.powi(p as i32);
+    let scaled = (v * scale).round();
+    if scaled.abs() >= 9.0e15 {
+        // Too large for exact integer scaling: the value has no fraction
+        // digits worth keeping at this size.
+        write_shortest(out, v.round());
+        return;
+    }
+    let mut n = scaled as i64;
+    if n == 0 {
+        out.push(b'0');
+        return;
+    }
+    if n < 0 {
+        out.push(b'-');
+        n = -n;
+    }
+    let mut ib = itoa::Buffer::new();
+    let s = ib.format(n).as_bytes();
+    let p = p as usize;
+    if s.len() <= p {
+        out.extend_from_slice(b"0.");
+        out.extend(std::iter::repeat_n(b'0', p - s.len()));
+        let t = trim_zeros(s);
+        out.extend_from_slice(t);
+    } else {
+        let (int, frac) = s.split_at(s.len() - p);
+        out.extend_from_slice(int);
+        let t = trim_zeros(frac);
+        if !t.is_empty() {
+            out.push(b'.');
+            out.extend_from_slice(t);
+        }
+    }
+}
+
+fn trim_zeros(s: &[u8]) -> &[u8] {
+    let mut e = s.len();
+    while e > 0 && s[e - 1] == b'0' {
+        e -= 1;
+    }
+    &s[..e]
+}
+
+/// Convenience for tests and messages.
+pub fn number_string(v: f64, precision: Option<u8>) -> String {
+    let mut b = Vec::new();
+    write_number(&mut b, v, precision);
+    String::from_utf8(b).expect("ascii")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::number_string as s;
+
+    #[test]
+    fn shortest_without_exponent() {
+        let cases: &[(f64, &str)] = &[
+            (0.0, "0"),
+            (-0.0, "0"),
+            (1.0, "1"),
+            (-2.5, "-2.5"),
+            (0.1, "0.1"),
+            (1e-7, "0.0000001"),
+            (1.5e17, "150000000000000000"),
+            (123456.789, "123456.789"),
+            (1.0 / 3.0, "0.3333333333333333"),
+            (-14.324700000000007, "-14.324700000000007"),
+            (100.0, "100"),
+        ];
+        for &(v, want) in cases {
+            assert_eq!(s(v, None), want, "{v:e}");
+        }
+    }
+
+    #[test]
+    fn fixed_precision() {
+        assert_eq!(s(1.23456, Some(3)), "1.235");
+        assert_eq!(s(1.5, Some(3)), "1.5");
+        assert_eq!(s(-0.0001, Some(3)), "0");
+        assert_eq!(s(-0.0006, Some(3)), "-0.001");
+        assert_eq!(s(2.0, Some(4)), "2");
+        assert_eq!(s(0.05, Some(1)), "0.1");
+    }
+
+    #[test]
+    fn rejects_non_finite() {
+        let mut b = Vec::new();
+        assert!(!super::write_number(&mut b, f64::NAN, None));
+        assert!(!super::write_number(&mut b, f64::INFINITY, Some(3)));
+    }
+}

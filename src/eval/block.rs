@@ -1,0 +1,232 @@
+//! One ordinary line: evaluate every value with pre-line parameters, apply
+//! the assignments, act on the active comment, write the line with values in
+//! place of expressions, and update the state model.
+
+use std::rc::Rc;
+
+use crate::diag::{ErrorKind, WarningKind};
+use crate::emit::write_number;
+use crate::parse::ast::{CommentKind, Item, Line, ParamRef, Span};
+use crate::parse::MAX_LINE;
+use crate::program::FileIndex;
+
+use super::message::is_stable;
+use super::params::is_read_only;
+use super::Interp;
+
+/// How a span of the raw line is rewritten.
+enum Repl {
+    Number(f64),
+    Remove,
+    Text(String),
+}
+
+/// Evaluated words of the line: (letter, value).
+pub type Words = Vec<(u8, f64)>;
+
+impl Interp<'_> {
+    pub(super) fn exec_items(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        raw: &[u8],
+        line: &Line,
+        items: &[Item],
+    ) -> Result<(), crate::diag::Error> {
+        let _ = line;
+        let mut words: Words = Vec::with_capacity(8);
+        let mut repl: Vec<(Span, Repl)> = Vec::new();
+        let mut num_set: Vec<(usize, f64)> = Vec::new();
+        let mut named_set: Vec<(Rc<str>, f64)> = Vec::new();
+        let mut active = None;
+        let mut seen = 0u32;
+        let mut m_count = 0;
+        // 1. Read the line: every value sees the parameters as they were.
+        for item in items {
+            match item {
+                Item::Word(w) => {
+                    let v = self.eval(&w.value).map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
+                    let bit = 1u32 << (w.letter.wrapping_sub(b'a') as u32 & 31);
+                    if w.letter == b'm' {
+                        m_count += 1;
+                        if m_count > 4 {
+                            return Err(self.error_in_line(ErrorKind::TooManyMWords, file, start, w.span));
+                        }
+                    } else if w.letter != b'g' && w.letter.is_ascii_lowercase() {
+                        if seen & bit != 0 {
+                            let k = ErrorKind::DuplicateWord { letter: w.letter as char };
+                            return Err(self.error_in_line(k, file, start, w.span));
+                        }
+                        seen |= bit;
+                    }
+                    words.push((w.letter, v));
+                    if !w.literal {
+                        repl.push((w.value.span, Repl::Number(v)));
+                    }
+                }
+                Item::Assign(a) => {
+                    match &a.target {
+                        ParamRef::Numbered(index) => {
+                            let i = self.param_index(index).map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
+                            if is_read_only(i) {
+                                let k = ErrorKind::ParamReadOnly { index: i as i64 };
+                                return Err(self.error_in_line(k, file, start, a.target_span));
+                            }
+                            let v = self.eval(&a.value).map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
+                            num_set.push((i, v));
+                        }
+                        ParamRef::Named(name) => {
+                            self.create_named(name, a.target_span)
+                                .map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
+                            let v = self.eval(&a.value).map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
+                            named_set.push((name.clone(), v));
+                        }
+                    }
+                    repl.push((a.span, Repl::Remove));
+                }
+                Item::Comment(c) => {
+                    if c.kind != CommentKind::Semicolon {
+                        active = Some(c);
+                    }
+                    if self.s.strip_comments {
+                        repl.push((c.span, Repl::Remove));
+                    }
+                }
+            }
+        }
+        // 2. Assignments: numbered in order, then named in order.
+        for (i, v) in num_set {
+            self.params.assign(i, v);
+        }
+        for (n, v) in named_set {
+            self.set_named(&n, v);
+        }
+        // 3. The active comment, after the assignments.
+        if let Some(c) = active {
+            let body = String::from_utf8_lossy(&raw[c.body.start as usize..c.body.end as usize]).into_owned();
+            match c.kind {
+                CommentKind::Debug | CommentKind::Print | CommentKind::Log | CommentKind::Abort => {
+                    let text = self
+                        .substitute(&body, c.body.start)
+                        .map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
+                    if c.kind == CommentKind::Abort {
+                        return Err(self.error_in_line(ErrorKind::Abort { message: text }, file, start, c.span));
+                    }
+                    if !self.s.strip_comments {
+                        if c.kind == CommentKind::Debug && self.params.values[5599] <= 0.0 {
+                            repl.push((c.span, Repl::Remove));
+                        } else {
+                            if !is_stable(&text) {
+                                self.warn(WarningKind::MessageNotStable, file, start + c.span.start, start + c.span.end);
+                            }
+                            repl.push((c.body, Repl::Text(text)));
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+        // 4. Program flow words.
+        let m99 = words.iter().any(|&(l, v)| l == b'm' && v == 99.0);
+        if m99 && self.level() > 0 {
+            return self.return_m99(file, start, raw.len() as u32);
+        }
+        if m99 {
+            // M99 in the main program ends it like M2 in the reference.
+            let mut k = 0;
+            for item in items {
+                if let Item::Word(w) = item {
+                    if words[k] == (b'm', 99.0) {
+                        repl.retain(|(s, _)| *s != w.value.span);
+                        repl.push((w.span, Repl::Text("M2".into())));
+                        break;
+                    }
+                    k += 1;
+                }
+            }
+        }
+        // 5. Write the line.
+        repl.sort_by_key(|(s, _)| s.start);
+        let kept = items
+            .iter()
+            .filter(|i| match i {
+                Item::Word(_) => true,
+                Item::Assign(_) => false,
+                Item::Comment(c) => {
+                    !self.s.strip_comments
+                        && !repl.iter().any(|(s, r)| matches!(r, Repl::Remove) && *s == c.span)
+                }
+            })
+            .count();
+        if kept > 0 {
+            self.write_line(file, start, raw, &repl)?;
+        }
+        // 6. State.
+        let ends = self.apply_words(file, start, &words, m99)?;
+        if ends {
+            if self.main.percent_start {
+                self.emit_raw(b"%")?;
+            }
+            self.ended = true;
+        }
+        Ok(())
+    }
+
+    fn write_line(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        raw: &[u8],
+        repl: &[(Span, Repl)],
+    ) -> Result<(), crate::diag::Error> {
+        let mut out = std::mem::take(&mut self.out);
+        out.clear();
+        let trimmed_len = raw.iter().rposition(|b| !b.is_ascii_whitespace()).map_or(0, |p| p + 1);
+        if repl.is_empty() {
+            out.extend_from_slice(&raw[..trimmed_len]);
+        } else {
+            let mut last = 0usize;
+            for (span, r) in repl {
+                let (a, b) = (span.start as usize, span.end as usize);
+                if a < last {
+                    continue;
+                }
+                out.extend_from_slice(&raw[last..a]);
+                last = b;
+                match r {
+                    Repl::Number(v) => {
+                        if !write_number(&mut out, *v, self.s.precision) {
+                            self.out = out;
+                            return Err(self.error_in_line(ErrorKind::Unprintable { value: *v }, file, start, *span));
+                        }
+                    }
+                    Repl::Text(t) => out.extend_from_slice(t.as_bytes()),
+                    Repl::Remove => {
+                        while last < raw.len() && matches!(raw[last], b' ' | b'\t') {
+                            last += 1;
+                        }
+                    }
+                }
+            }
+            if last < trimmed_len {
+                out.extend_from_slice(&raw[last..trimmed_len]);
+            }
+            while let Some(&b) = out.last() {
+                if b.is_ascii_whitespace() {
+                    out.pop();
+                } else {
+                    break;
+                }
+            }
+        }
+        if out.len() > MAX_LINE {
+            let len = out.len();
+            self.out = out;
+            let end = start + trimmed_len as u32;
+            return Err(self.error(ErrorKind::OutputLineTooLong { len }, file, start, end));
+        }
+        let r = self.emit_raw(&out);
+        self.out = out;
+        r
+    }
+}

@@ -1,0 +1,664 @@
+//! O-words: subroutines, conditionals, loops, M98/M99. Jump targets come from
+//! the file index (occurrences of each label in order), so nothing is
+//! rescanned per iteration.
+
+use std::rc::Rc;
+
+use crate::diag::{Error, ErrorKind, WarningKind};
+use crate::parse::ast::{Label, LineKind, OKind, OLine};
+use crate::parse::integer_value;
+use crate::program::{control_key, FileIndex};
+
+use super::expr::round_half_even_int;
+use super::{Cursor, Frame, FrameKind, Interp, LabelRec, SubRec, MAX_CALL_LEVEL};
+
+/// What a forward search was looking for (for the error when nothing is found).
+enum Seek {
+    Control,
+    Sub { from_line: u32 },
+}
+
+impl Interp<'_> {
+    fn oline<'f>(&self, file: &'f Rc<FileIndex>, oidx: u32) -> &'f OLine {
+        match &file.olines[oidx as usize].line.kind {
+            LineKind::O(o) => o,
+            _ => unreachable!("not an O-line"),
+        }
+    }
+
+    fn osite(&self, file: &Rc<FileIndex>, oidx: u32) -> (u32, u32) {
+        let o = &file.olines[oidx as usize];
+        (o.start, o.start + o.line_len())
+    }
+
+    fn oerr(&self, kind: ErrorKind, file: &Rc<FileIndex>, oidx: u32) -> Error {
+        let (a, b) = self.osite(file, oidx);
+        self.error(kind, file, a, b)
+    }
+
+    /// Evaluates an expression of an O-line.
+    fn o_eval(&mut self, file: &Rc<FileIndex>, oidx: u32, e: &crate::parse::ast::Expr) -> Result<f64, Error> {
+        let start = file.olines[oidx as usize].start;
+        self.eval(e).map_err(|(k, s)| self.error_in_line(k, file, start, s))
+    }
+
+    /// The label text of an O-line (computed labels are evaluated).
+    fn label_text(&mut self, file: &Rc<FileIndex>, oidx: u32) -> Result<Rc<str>, Error> {
+        let o = self.oline(file, oidx);
+        match &o.label {
+            Label::Static(s) => Ok(s.clone()),
+            Label::Dynamic(e) => {
+                let e = e.clone();
+                let v = self.o_eval(file, oidx, &e)?;
+                let n = integer_value(v).map_err(|k| {
+                    let start = file.olines[oidx as usize].start;
+                    self.error_in_line(k, file, start, o.label_span)
+                })?;
+                Ok(Rc::from(n.to_string()))
+            }
+        }
+    }
+
+    /// Internal key of the O-line's label.
+    fn key_of(&mut self, file: &Rc<FileIndex>, oidx: u32) -> Result<Rc<str>, Error> {
+        if let Some(k) = &file.olines[oidx as usize].key {
+            return Ok(k.clone());
+        }
+        let label = self.label_text(file, oidx)?;
+        let info = &file.olines[oidx as usize];
+        let kind = info.kind().unwrap_or(OKind::Bare);
+        Ok(if kind.is_control() { control_key(&info.scope, &label) } else { label })
+    }
+
+    /// Moves reading to an O-line (`after`: to the line after it).
+    fn goto(&mut self, file: &Rc<FileIndex>, oidx: u32, after: bool) {
+        let o = &file.olines[oidx as usize];
+        self.cur = if after {
+            Cursor { file: file.clone(), pos: o.next, line: o.line_idx + 1, next_o: oidx as usize + 1 }
+        } else {
+            Cursor { file: file.clone(), pos: o.start, line: o.line_idx, next_o: oidx as usize }
+        };
+    }
+
+    /// Finds the next O-line after `from` whose label key is `key`, raising
+    /// the errors of the lines skipped on the way.
+    fn seek(&mut self, file: &Rc<FileIndex>, from: u32, key: &Rc<str>, what: Seek, only: &[OKind]) -> Result<u32, Error> {
+        let from_line = file.olines[from as usize].line_idx;
+        let mut best: Option<u32> = None;
+        if let Some(list) = file.occ.get(key) {
+            let p = list.partition_point(|&j| j <= from);
+            best = list[p..].iter().copied().find(|&j| only.is_empty() || file.kind_of(j).is_some_and(|k| only.contains(&k)));
+        }
+        if !file.dynamic.is_empty() {
+            let p = file.dynamic.partition_point(|&j| j <= from);
+            for &j in &file.dynamic[p..] {
+                if best.is_some_and(|b| j > b) {
+                    break;
+                }
+                if !only.is_empty() && !file.kind_of(j).is_some_and(|k| only.contains(&k)) {
+                    continue;
+                }
+                if file.olines[j as usize].scope != file.olines[from as usize].scope && matches!(what, Seek::Control) {
+                    continue;
+                }
+                if self.key_of(file, j)? == *key {
+                    best = Some(j);
+                    break;
+                }
+            }
+        }
+        let until = best.map(|b| file.olines[b as usize].line_idx).unwrap_or(u32::MAX);
+        if let Some((_, start, e)) = file.skipped_error(from_line, until) {
+            return Err(self.error_in_line(e.kind.clone(), file, *start, e.span));
+        }
+        if Rc::ptr_eq(file, &self.main) && self.main.percent_start {
+            if let Some(pl) = file.percent_after(from_line) {
+                if pl < until {
+                    let label = key.to_string();
+                    let (a, b) = self.osite(file, from);
+                    return Err(self.error(ErrorKind::LabelBeforePercent { label }, file, a, b));
+                }
+            }
+        }
+        match best {
+            Some(b) => Ok(b),
+            None => {
+                let (a, b) = self.osite(file, from);
+                let kind = match what {
+                    Seek::Control => ErrorKind::MissingProgramEnd { percent: self.main.percent_start },
+                    Seek::Sub { from_line } => ErrorKind::EofSeeking { label: key.to_string(), from_line },
+                };
+                Err(self.error(kind, file, a, b))
+            }
+        }
+    }
+
+    fn frame(&mut self) -> &mut Frame {
+        self.frames.last_mut().expect("frame")
+    }
+
+    fn record(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Rc<str>, kind: OKind) -> Result<(), Error> {
+        let line = file.olines[oidx as usize].line_idx;
+        if let Some(rec) = self.frame().labels.get(key) {
+            if rec.line != line && matches!(kind, OKind::If | OKind::While | OKind::Repeat) {
+                let first_line = rec.line + 1;
+                let label = self.label_text(file, oidx)?.to_string();
+                return Err(self.oerr(ErrorKind::DuplicateLabel { label, first_line }, file, oidx));
+            }
+            if rec.line == line && rec.kind == kind {
+                return Ok(());
+            }
+        }
+        self.frame().labels.insert(key.clone(), LabelRec { kind, oidx, line, repeat: -1 });
+        Ok(())
+    }
+
+    /// The record of a label that must exist and be one of `kinds`.
+    fn expect(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Rc<str>, kinds: &[OKind], expected: &'static str) -> Result<LabelRec, Error> {
+        let label = || -> String { key.rsplit('#').next().unwrap_or("").to_string() };
+        match self.frame().labels.get(key).cloned() {
+            None => Err(self.oerr(ErrorKind::UndefinedLabel { label: label() }, file, oidx)),
+            Some(rec) if kinds.contains(&rec.kind) => Ok(rec),
+            Some(rec) => Err(self.oerr(
+                ErrorKind::LabelMismatch { label: label(), expected, found: rec.kind.name(), line: rec.line + 1 },
+                file,
+                oidx,
+            )),
+        }
+    }
+
+    fn note_loop(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Rc<str>) {
+        let line = file.olines[oidx as usize].line_idx;
+        let label = key.rsplit('#').next().unwrap_or("").into();
+        self.last_loop = Some((label, line, file.clone()));
+    }
+
+    /// Evaluates a condition the reference evaluates but ngcflat skips; warns
+    /// if it would fail there.
+    fn probe_condition(&mut self, file: &Rc<FileIndex>, oidx: u32) {
+        if let Some(e) = self.oline(file, oidx).expr.clone() {
+            if let Err((k, _)) = self.eval(&e) {
+                let (a, b) = self.osite(file, oidx);
+                self.warn(WarningKind::QuirkSkippedCondition { message: k.to_string() }, file, a, b);
+            }
+        }
+    }
+
+    /// Runs the O-line `oidx` of `file` (reached in normal flow).
+    pub(super) fn exec_oline(&mut self, file: &Rc<FileIndex>, oidx: u32) -> Result<(), Error> {
+        self.current_line_idx = file.olines[oidx as usize].line_idx;
+        self.current_line_start = file.olines[oidx as usize].start;
+        let info_line = file.olines[oidx as usize].line.clone();
+        let o = match &info_line.kind {
+            LineKind::O(o) => o,
+            LineKind::M98(m) => return self.exec_m98(file, oidx, m),
+            _ => return Ok(()),
+        };
+        if let Some((k, span)) = &o.exec_error {
+            let start = file.olines[oidx as usize].start;
+            return Err(self.error_in_line(k.clone(), file, start, *span));
+        }
+        if o.has_comment {
+            let (a, b) = self.osite(file, oidx);
+            self.warn(WarningKind::CommentOnOLine, file, a, b);
+        }
+        let key = self.key_of(file, oidx)?;
+        match o.kind {
+            OKind::If => {
+                let c = self.o_eval(file, oidx, o.expr.as_ref().expect("condition"))?;
+                self.record(file, oidx, &key, OKind::If)?;
+                if c != 0.0 {
+                    self.executed_if = true;
+                    Ok(())
+                } else {
+                    self.executed_if = false;
+                    self.skip_if(file, oidx, &key)
+                }
+            }
+            OKind::ElseIf | OKind::Else => {
+                self.expect(file, oidx, &key, &[OKind::If], "if")?;
+                // A branch was taken: go to the endif.
+                let mut at = oidx;
+                loop {
+                    let t = self.seek(file, at, &key, Seek::Control, &[])?;
+                    match file.kind_of(t) {
+                        Some(OKind::EndIf) => {
+                            self.executed_if = true;
+                            self.goto(file, t, true);
+                            return Ok(());
+                        }
+                        Some(OKind::ElseIf) => {
+                            self.probe_condition(file, t);
+                            at = t;
+                        }
+                        Some(OKind::Else) => at = t,
+                        _ => return self.stray(file, t, &key),
+                    }
+                }
+            }
+            OKind::EndIf => {
+                self.expect(file, oidx, &key, &[OKind::If], "if")?;
+                self.executed_if = true;
+                Ok(())
+            }
+            OKind::Do => {
+                self.record(file, oidx, &key, OKind::Do)?;
+                Ok(())
+            }
+            OKind::While => {
+                let is_do_end = self.frame().labels.get(&key).is_some_and(|r| r.kind == OKind::Do);
+                let c = self.o_eval(file, oidx, o.expr.as_ref().expect("condition"))?;
+                if is_do_end {
+                    let rec = self.frame().labels.get(&key).cloned().expect("do record");
+                    if c != 0.0 {
+                        if let Some(first_line) = self.ref_stale_break.take() {
+                            let (a, b) = self.osite(file, oidx);
+                            self.warn(WarningKind::QuirkStaleBreak { first_line }, file, a, b);
+                        }
+                        self.note_loop(file, rec.oidx, &key);
+                        self.goto(file, rec.oidx, true);
+                    } else {
+                        self.ref_stale_break = None;
+                    }
+                    return Ok(());
+                }
+                self.record(file, oidx, &key, OKind::While)?;
+                if c != 0.0 {
+                    return Ok(());
+                }
+                let t = self.seek(file, oidx, &key, Seek::Control, &[])?;
+                self.loop_exit(file, t, &key, OKind::EndWhile, "while")
+            }
+            OKind::EndWhile => {
+                let rec = self.expect(file, oidx, &key, &[OKind::While], "while")?;
+                self.note_loop(file, rec.oidx, &key);
+                self.goto(file, rec.oidx, false);
+                Ok(())
+            }
+            OKind::Repeat => {
+                self.record(file, oidx, &key, OKind::Repeat)?;
+                let count = self.frame().labels.get(&key).map(|r| r.repeat).unwrap_or(-1);
+                let mut count = count;
+                if count == -1 {
+                    let n = self.o_eval(file, oidx, o.expr.as_ref().expect("count"))?;
+                    count = round_half_even_int(n);
+                }
+                if count > 0 {
+                    if let Some(r) = self.frame().labels.get_mut(&key) {
+                        r.repeat = count - 1;
+                    }
+                    Ok(())
+                } else {
+                    if let Some(r) = self.frame().labels.get_mut(&key) {
+                        r.repeat = -1;
+                    }
+                    let t = self.seek(file, oidx, &key, Seek::Control, &[])?;
+                    self.loop_exit(file, t, &key, OKind::EndRepeat, "repeat")
+                }
+            }
+            OKind::EndRepeat => {
+                let rec = self.expect(file, oidx, &key, &[OKind::Repeat], "repeat")?;
+                self.note_loop(file, rec.oidx, &key);
+                self.goto(file, rec.oidx, false);
+                Ok(())
+            }
+            OKind::Break | OKind::Continue => {
+                let expected = if o.kind == OKind::Break { "while/do" } else { "while/do" };
+                let rec = self.expect(file, oidx, &key, &[OKind::While, OKind::Do], expected)?;
+                let t = self.seek(file, oidx, &key, Seek::Control, &[])?;
+                let tkind = file.kind_of(t);
+                match (rec.kind, tkind, o.kind) {
+                    (OKind::While, Some(OKind::EndWhile), OKind::Break) => {
+                        self.ref_stale_break = Some(file.olines[oidx as usize].line_idx + 1);
+                        self.goto(file, t, true);
+                        Ok(())
+                    }
+                    (OKind::While, Some(OKind::EndWhile), _) => {
+                        self.note_loop(file, rec.oidx, &key);
+                        self.goto(file, rec.oidx, false);
+                        Ok(())
+                    }
+                    (OKind::Do, Some(OKind::While), OKind::Break) => {
+                        self.probe_condition(file, t);
+                        self.goto(file, t, true);
+                        Ok(())
+                    }
+                    (OKind::Do, Some(OKind::While), _) => {
+                        self.ref_stale_continue = Some(file.olines[oidx as usize].line_idx + 1);
+                        let e = self.oline(file, t).expr.clone().expect("condition");
+                        let c = self.o_eval(file, t, &e)?;
+                        if c != 0.0 {
+                            self.note_loop(file, rec.oidx, &key);
+                            self.goto(file, rec.oidx, true);
+                        } else {
+                            self.goto(file, t, true);
+                        }
+                        Ok(())
+                    }
+                    _ => self.stray(file, t, &key),
+                }
+            }
+            OKind::Sub => self.reach_sub(file, oidx, &key),
+            OKind::EndSub | OKind::Return => {
+                if self.level() == 0 {
+                    return Err(self.oerr(ErrorKind::NotInSub, file, oidx));
+                }
+                if self.frame().kind == FrameKind::M98 {
+                    return Err(self.oerr(ErrorKind::EndsubInFanuc, file, oidx));
+                }
+                let v = match &o.expr {
+                    Some(e) => Some(self.o_eval(file, oidx, e)?),
+                    None => None,
+                };
+                self.return_from_call(file, oidx, v)
+            }
+            OKind::Call => self.call(file, oidx, &key),
+            OKind::Bare => {
+                if self.s.fanuc_disabled {
+                    return Err(self.oerr(ErrorKind::FanucDisabled { what: "a bare O-word" }, file, oidx));
+                }
+                if self.level() > 0 {
+                    return Err(self.oerr(ErrorKind::FanucNeedsM98 { name: key.to_string() }, file, oidx));
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// A line with the label being looked for, but of a kind that does not
+    /// belong there.
+    fn stray(&mut self, file: &Rc<FileIndex>, t: u32, key: &Rc<str>) -> Result<(), Error> {
+        let label = key.rsplit('#').next().unwrap_or("").to_string();
+        let found = file.kind_of(t).map(|k| k.name()).unwrap_or("?");
+        let rec = self.frame().labels.get(key).cloned();
+        let (expected, line) = rec.map(|r| (r.kind.name(), r.line + 1)).unwrap_or(("?", 0));
+        Err(self.oerr(ErrorKind::LabelMismatch { label, expected, found, line }, file, t))
+    }
+
+    fn skip_if(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Rc<str>) -> Result<(), Error> {
+        let mut at = oidx;
+        loop {
+            let t = self.seek(file, at, key, Seek::Control, &[])?;
+            self.current_line_idx = file.olines[t as usize].line_idx;
+            self.current_line_start = file.olines[t as usize].start;
+            match file.kind_of(t) {
+                Some(OKind::ElseIf) => {
+                    if let Some((k, span)) = &self.oline(file, t).exec_error {
+                        let start = file.olines[t as usize].start;
+                        return Err(self.error_in_line(k.clone(), file, start, *span));
+                    }
+                    let e = self.oline(file, t).expr.clone().expect("condition");
+                    let c = self.o_eval(file, t, &e)?;
+                    if c != 0.0 {
+                        self.executed_if = true;
+                        self.goto(file, t, true);
+                        return Ok(());
+                    }
+                    at = t;
+                }
+                Some(OKind::Else) | Some(OKind::EndIf) => {
+                    self.executed_if = true;
+                    self.goto(file, t, true);
+                    return Ok(());
+                }
+                _ => return self.stray(file, t, key),
+            }
+        }
+    }
+
+    /// Leaves a loop at its end line `t` (found by skipping).
+    fn loop_exit(&mut self, file: &Rc<FileIndex>, t: u32, key: &Rc<str>, end: OKind, _what: &str) -> Result<(), Error> {
+        if file.kind_of(t) != Some(end) {
+            return self.stray(file, t, key);
+        }
+        if let Some(first_line) = self.ref_stale_continue.take() {
+            let (a, b) = self.osite(file, t);
+            self.warn(WarningKind::QuirkStaleContinue { first_line }, file, a, b);
+        }
+        self.goto(file, t, true);
+        Ok(())
+    }
+
+    /// A `sub` line reached by normal flow: a definition to register and
+    /// skip.
+    fn reach_sub(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Rc<str>) -> Result<(), Error> {
+        if self.level() > 0 {
+            let outer = self.frames.last().map(|f| f.name.to_string()).unwrap_or_default();
+            return Err(self.oerr(ErrorKind::NestedSubDefinition { inner: key.to_string(), outer }, file, oidx));
+        }
+        if let Some(rec) = self.subs.get(key) {
+            if Rc::ptr_eq(&rec.file, file) && rec.oidx == oidx {
+                return Err(self.oerr(ErrorKind::IllegalSubLocation { name: key.to_string() }, file, oidx));
+            }
+            let first = rec.file.file.path.clone();
+            let first_line = rec.file.olines[rec.oidx as usize].line_idx + 1;
+            return Err(self.oerr(ErrorKind::RedefiningSub { name: key.to_string(), first, first_line }, file, oidx));
+        }
+        self.subs.insert(key.clone(), SubRec { file: file.clone(), oidx });
+        let def = file.defs.get(&oidx).cloned().expect("sub definition");
+        if let Some((j, inner)) = &def.nested {
+            if def.end.is_none_or(|e| *j < e) {
+                let k = ErrorKind::NestedSubDefinition { inner: inner.to_string(), outer: key.to_string() };
+                return Err(self.oerr(k, file, *j));
+            }
+        }
+        let end_line = def.end.map(|e| file.olines[e as usize].line_idx).unwrap_or(u32::MAX);
+        if let Some((_, start, e)) = file.skipped_error(file.olines[oidx as usize].line_idx, end_line) {
+            return Err(self.error_in_line(e.kind.clone(), file, *start, e.span));
+        }
+        // The reference evaluates valued endsub/return lines of the
+        // definition while skipping it, setting #<_value>.
+        self.defining = true;
+        for &j in &def.valued {
+            let e = self.oline(file, j).expr.clone().expect("value");
+            let r = self.o_eval(file, j, &e);
+            match r {
+                Ok(v) => {
+                    self.value = v;
+                    self.value_returned = true;
+                }
+                Err(e) => {
+                    self.defining = false;
+                    return Err(e);
+                }
+            }
+        }
+        self.defining = false;
+        match def.end {
+            Some(e) => {
+                self.goto(file, e, true);
+                Ok(())
+            }
+            None => Err(self.oerr(ErrorKind::UnterminatedSub { name: key.to_string() }, file, oidx)),
+        }
+    }
+
+    /// Finds a subroutine: registered, then a file on the search path, then
+    /// further down the current file.
+    fn resolve(&mut self, file: &Rc<FileIndex>, oidx: u32, name: &Rc<str>) -> Result<SubRec, Error> {
+        let base: Rc<str> = Rc::from(name.rsplit('/').next().unwrap_or(name));
+        if let Some(rec) = self.subs.get(&base) {
+            return Ok(rec.clone());
+        }
+        let found = self.loader.find(name).map_err(|k| self.oerr(k, file, oidx))?;
+        if let Some(sub_file) = found {
+            let target = sub_file.occ.get(&base).and_then(|l| {
+                l.iter().copied().find(|&j| matches!(sub_file.kind_of(j), Some(OKind::Sub | OKind::Bare)))
+            });
+            let Some(t) = target else {
+                let k = crate::program::not_in_file(&base, &sub_file.file);
+                return Err(self.oerr(k, file, oidx));
+            };
+            let until = sub_file.olines[t as usize].line_idx;
+            if let Some((_, start, e)) = sub_file.skipped_error(0, until).or_else(|| {
+                sub_file.skip_errors.first().filter(|e| e.0 == 0 && until > 0)
+            }) {
+                let mut err = self.error_in_line(e.kind.clone(), &sub_file, *start, e.span);
+                let (a, b) = self.osite(file, oidx);
+                err.stack.insert(0, crate::diag::Site::new(&file.file, a, b));
+                return Err(err);
+            }
+            return Ok(SubRec { file: sub_file, oidx: t });
+        }
+        // Forward search in the current file.
+        let line = file.olines[oidx as usize].line_idx;
+        let t = self.seek(file, oidx, &base, Seek::Sub { from_line: line + 1 }, &[OKind::Sub, OKind::Bare]);
+        match t {
+            Ok(t) => Ok(SubRec { file: file.clone(), oidx: t }),
+            Err(e) if matches!(e.error_kind(), Some(ErrorKind::EofSeeking { .. })) => {
+                let searched = self.loader.searched();
+                Err(self.oerr(ErrorKind::SubNotFound { name: name.to_string(), searched }, file, oidx))
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    fn push_frame(&mut self, file: &Rc<FileIndex>, oidx: u32, kind: FrameKind, name: Rc<str>, ret: Cursor) -> Result<(), Error> {
+        if self.level() + 1 > MAX_CALL_LEVEL {
+            return Err(self.oerr(ErrorKind::TooDeep { limit: MAX_CALL_LEVEL }, file, oidx));
+        }
+        let (a, b) = self.osite(file, oidx);
+        let mut f = Frame::new(kind, name);
+        f.ret = Some(ret);
+        f.call_site = Some(crate::diag::Site::new(&file.file, a, b));
+        self.frames.push(f);
+        Ok(())
+    }
+
+    fn call(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Rc<str>) -> Result<(), Error> {
+        let o = self.oline(file, oidx).clone();
+        let mut args = Vec::with_capacity(o.args.len());
+        for a in &o.args {
+            args.push(self.o_eval(file, oidx, a)?);
+        }
+        let target = self.resolve(file, oidx, key)?;
+        let base: Rc<str> = Rc::from(key.rsplit('/').next().unwrap_or(key));
+        if target.file.kind_of(target.oidx) == Some(OKind::Bare) {
+            return Err(self.oerr(ErrorKind::FanucNeedsM98 { name: base.to_string() }, file, oidx));
+        }
+        // Recursion from inside a running repeat shares its counter in the
+        // reference.
+        if self.frame().name == base && self.frame().labels.values().any(|r| r.kind == OKind::Repeat && r.repeat >= 0) {
+            let (a, b) = self.osite(file, oidx);
+            self.warn(WarningKind::QuirkRepeatRecursion, file, a, b);
+        }
+        self.subs.entry(base.clone()).or_insert_with(|| target.clone());
+        self.called.insert(base.clone());
+        let o_info = &file.olines[oidx as usize];
+        let ret = Cursor { file: file.clone(), pos: o_info.next, line: o_info.line_idx + 1, next_o: oidx as usize + 1 };
+        self.push_frame(file, oidx, FrameKind::Call, base, ret)?;
+        let mut saved = Box::new([0.0; 30]);
+        saved.copy_from_slice(&self.params.values[1..31]);
+        for i in 0..30 {
+            self.params.values[i + 1] = args.get(i).copied().unwrap_or(0.0);
+            self.params.set[i + 1] = true;
+        }
+        let nargs = args.len() as f64;
+        let oword_nargs = self.s.oword_nargs;
+        let f = self.frame();
+        f.saved = Some(saved);
+        if oword_nargs {
+            f.locals.insert(Rc::from("n_args"), nargs);
+        }
+        self.goto(&target.file, target.oidx, true);
+        Ok(())
+    }
+
+    fn return_from_call(&mut self, file: &Rc<FileIndex>, oidx: u32, v: Option<f64>) -> Result<(), Error> {
+        match v {
+            Some(v) => {
+                self.value = v;
+                self.value_returned = true;
+            }
+            None => {
+                self.value = 0.0;
+                self.value_returned = false;
+            }
+        }
+        if self.frame().labels.values().any(|r| r.kind == OKind::Repeat && r.repeat >= 0) {
+            let (a, b) = self.osite(file, oidx);
+            self.warn(WarningKind::QuirkRepeatCount, file, a, b);
+        }
+        let f = self.frames.pop().expect("call frame");
+        if let Some(saved) = f.saved {
+            self.params.values[1..31].copy_from_slice(&saved[..]);
+        }
+        if f.auto_restore {
+            if let Some(m) = f.saved_modal {
+                self.restore_modal(&m)?;
+            }
+        }
+        self.cur = f.ret.expect("return cursor");
+        Ok(())
+    }
+
+    /// `M99` inside a subprogram called with M98.
+    pub(super) fn return_m99(&mut self, file: &Rc<FileIndex>, start: u32, len: u32) -> Result<(), Error> {
+        if self.frame().kind != FrameKind::M98 {
+            return Err(self.error(ErrorKind::M99InSub, file, start, start + len));
+        }
+        self.value = 0.0;
+        self.value_returned = false;
+        let f = self.frames.pop().expect("M98 frame");
+        if f.auto_restore {
+            if let Some(m) = f.saved_modal {
+                self.restore_modal(&m)?;
+            }
+        }
+        self.cur = f.ret.expect("return cursor");
+        Ok(())
+    }
+
+    fn exec_m98(&mut self, file: &Rc<FileIndex>, oidx: u32, m: &crate::parse::ast::M98Line) -> Result<(), Error> {
+        if self.s.fanuc_disabled {
+            return Err(self.oerr(ErrorKind::FanucDisabled { what: "M98" }, file, oidx));
+        }
+        let Some(p) = &m.p else {
+            return Err(self.oerr(ErrorKind::M98WithoutP, file, oidx));
+        };
+        let line = file.olines[oidx as usize].line_idx;
+        let pv = self.o_eval(file, oidx, p)?;
+        let start = file.olines[oidx as usize].start;
+        let n = integer_value(pv).map_err(|k| self.error_in_line(k, file, start, p.span))?;
+        let pending = match self.frame().m98_loop {
+            Some((l, rem)) if l == line => Some(rem),
+            _ => None,
+        };
+        match pending {
+            Some(0) => {
+                self.frame().m98_loop = None;
+                return Ok(());
+            }
+            Some(rem) => self.frame().m98_loop = Some((line, rem - 1)),
+            None => {
+                let count = match &m.l {
+                    Some(l) => {
+                        let lv = self.o_eval(file, oidx, l)?;
+                        integer_value(lv).map_err(|k| self.error_in_line(k, file, start, l.span))?
+                    }
+                    None => 1,
+                };
+                if count <= 0 {
+                    if count == 0 {
+                        let (a, b) = self.osite(file, oidx);
+                        self.warn(WarningKind::QuirkL0, file, a, b);
+                    }
+                    return Ok(());
+                }
+                self.frame().m98_loop = Some((line, count - 1));
+            }
+        }
+        let name: Rc<str> = Rc::from(n.to_string());
+        let target = self.resolve(file, oidx, &name)?;
+        if target.file.kind_of(target.oidx) == Some(OKind::Sub) {
+            return Err(self.oerr(ErrorKind::SubNeedsCall { name: name.to_string() }, file, oidx));
+        }
+        self.subs.entry(name.clone()).or_insert_with(|| target.clone());
+        self.called.insert(name.clone());
+        let info = &file.olines[oidx as usize];
+        let ret = Cursor { file: file.clone(), pos: info.start, line: info.line_idx, next_o: oidx as usize };
+        self.push_frame(file, oidx, FrameKind::M98, name, ret)?;
+        self.goto(&target.file, target.oidx, true);
+        Ok(())
+    }
+}

@@ -1,0 +1,294 @@
+//! Expression evaluation with the reference's rules: degrees, EQ/NE
+//! tolerance, MOD sign, ROUND half away from zero, domain errors, and the
+//! NaN/infinity check on every value (not on intermediate results).
+
+use crate::diag::ErrorKind;
+use crate::parse::ast::{BinOp, Expr, ExprKind, Func, ParamRef, Span};
+use crate::parse::integer_value;
+
+use super::params::{classify, ParamClass, MAX_PARAM};
+use super::Interp;
+
+/// EQ/NE tolerance of LinuxCNC 2.9.
+pub const TOLERANCE_EQUAL: f64 = 0.0001;
+
+pub type EvalResult = Result<f64, (ErrorKind, Span)>;
+
+fn check(v: f64, span: Span) -> EvalResult {
+    if v.is_nan() {
+        Err((ErrorKind::NotANumber, span))
+    } else if v.is_infinite() {
+        Err((ErrorKind::Infinity, span))
+    } else {
+        Ok(v)
+    }
+}
+
+fn b(x: bool) -> f64 {
+    if x {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+/// Binary operation; `span` is where a domain error is reported.
+pub fn binary(op: BinOp, a: f64, c: f64, span: Span) -> EvalResult {
+    Ok(match op {
+        BinOp::Pow => {
+            if a < 0.0 && c.floor() != c {
+                return Err((ErrorKind::NegativePower, span));
+            }
+            a.powf(c)
+        }
+        BinOp::Mul => a * c,
+        BinOp::Div => {
+            if c == 0.0 {
+                return Err((ErrorKind::DivideByZero, span));
+            }
+            a / c
+        }
+        BinOp::Mod => {
+            let mut r = a % c;
+            if r < 0.0 {
+                r += c.abs();
+            }
+            r
+        }
+        BinOp::Add => a + c,
+        BinOp::Sub => a - c,
+        BinOp::Eq => b((a - c).abs() < TOLERANCE_EQUAL),
+        BinOp::Ne => b((a - c).abs() >= TOLERANCE_EQUAL),
+        BinOp::Gt => b(a > c),
+        BinOp::Ge => b(a >= c),
+        BinOp::Lt => b(a < c),
+        BinOp::Le => b(a <= c),
+        BinOp::And => b(a != 0.0 && c != 0.0),
+        BinOp::Or => b(a != 0.0 || c != 0.0),
+        BinOp::Xor => b((a != 0.0) != (c != 0.0)),
+    })
+}
+
+const DEG: f64 = std::f64::consts::PI / 180.0;
+
+/// One-argument function.
+pub fn unary(f: Func, x: f64, span: Span) -> EvalResult {
+    Ok(match f {
+        Func::Abs => x.abs(),
+        Func::Acos => {
+            if !(-1.0..=1.0).contains(&x) {
+                return Err((ErrorKind::AcosRange, span));
+            }
+            x.acos() / DEG
+        }
+        Func::Asin => {
+            if !(-1.0..=1.0).contains(&x) {
+                return Err((ErrorKind::AsinRange, span));
+            }
+            x.asin() / DEG
+        }
+        Func::Cos => (x * DEG).cos(),
+        Func::Sin => (x * DEG).sin(),
+        Func::Tan => (x * DEG).tan(),
+        Func::Exp => x.exp(),
+        Func::Fix => x.floor(),
+        Func::Fup => x.ceil(),
+        Func::Ln => {
+            if x <= 0.0 {
+                return Err((ErrorKind::LnDomain, span));
+            }
+            x.ln()
+        }
+        Func::Round => round_half_away(x),
+        Func::Sqrt => {
+            if x < 0.0 {
+                return Err((ErrorKind::SqrtNegative, span));
+            }
+            x.sqrt()
+        }
+    })
+}
+
+/// `(int)(x + (x < 0 ? -0.5 : 0.5))` as x86 computes it.
+pub fn round_half_away(x: f64) -> f64 {
+    let t = (x + if x < 0.0 { -0.5 } else { 0.5 }).trunc();
+    if t >= 2147483648.0 || t < -2147483648.0 || t.is_nan() {
+        -2147483648.0
+    } else {
+        t
+    }
+}
+
+/// `(int)nearbyint(x)`: half to even, overflow to INT_MIN.
+pub fn round_half_even_int(x: f64) -> i64 {
+    let r = x.round_ties_even();
+    if !(-2147483648.0..2147483648.0).contains(&r) {
+        i32::MIN as i64
+    } else {
+        r as i64
+    }
+}
+
+impl Interp<'_> {
+    /// Evaluates a value (checked for NaN and infinity).
+    pub(crate) fn eval(&mut self, e: &Expr) -> EvalResult {
+        match &e.kind {
+            ExprKind::Num(v) => check(*v, e.span),
+            ExprKind::Param(p) => {
+                let v = self.read_param(p, e.span)?;
+                check(v, e.span)
+            }
+            ExprKind::Neg(inner) => Ok(-self.eval(inner)?),
+            ExprKind::Bin(op, operands, checked) => {
+                let a = self.eval_operand(&operands.0)?;
+                let c = self.eval_operand(&operands.1)?;
+                let v = binary(*op, a, c, e.span)?;
+                if *checked {
+                    check(v, e.span)
+                } else {
+                    Ok(v)
+                }
+            }
+            ExprKind::Func(f, arg) => {
+                let x = self.eval(arg)?;
+                check(unary(*f, x, e.span)?, e.span)
+            }
+            ExprKind::Atan(args) => {
+                let y = self.eval(&args.0)?;
+                let x = self.eval(&args.1)?;
+                check(y.atan2(x) / DEG, e.span)
+            }
+            ExprKind::Exists(p) => Ok(b(self.param_exists(p, e.span)?)),
+        }
+    }
+
+    /// Operand of a binary operation: intermediate results pass unchecked.
+    fn eval_operand(&mut self, e: &Expr) -> EvalResult {
+        match &e.kind {
+            ExprKind::Bin(op, operands, false) => {
+                let a = self.eval_operand(&operands.0)?;
+                let c = self.eval_operand(&operands.1)?;
+                binary(*op, a, c, e.span)
+            }
+            _ => self.eval(e),
+        }
+    }
+
+    /// Index of a numbered parameter reference.
+    pub(crate) fn param_index(&mut self, index: &Expr) -> Result<usize, (ErrorKind, Span)> {
+        let v = self.eval(index)?;
+        let i = integer_value(v).map_err(|k| (k, index.span))?;
+        if i < 1 || i >= MAX_PARAM as i64 {
+            return Err((ErrorKind::ParamOutOfRange { index: i }, index.span));
+        }
+        Ok(i as usize)
+    }
+
+    pub(crate) fn read_param(&mut self, p: &ParamRef, span: Span) -> EvalResult {
+        match p {
+            ParamRef::Numbered(index) => {
+                let i = self.param_index(index)?;
+                self.read_numbered(i, span)
+            }
+            ParamRef::Named(name) => self.read_named(name, span),
+        }
+    }
+
+    pub(crate) fn read_numbered(&mut self, i: usize, span: Span) -> EvalResult {
+        if let ParamClass::Position(axis) = classify(i) {
+            if !self.params.set[i] {
+                return self.position(axis, span);
+            }
+        }
+        if !self.params.known[i] {
+            let (what, why) = match classify(i) {
+                ParamClass::Runtime(w, y) | ParamClass::ReadOnlyRuntime(w, y) => (w, y),
+                _ => ("value", "it depends on the machine"),
+            };
+            return Err((
+                ErrorKind::RuntimeParam {
+                    what: format!("#{i} ({what})"),
+                    why: why.to_string(),
+                    hint: format!("-D {i}=VALUE, a --var-file, or --zero-start"),
+                },
+                span,
+            ));
+        }
+        if !self.params.set[i] && self.s.warnings && self.level() == 0 && (31..5000).contains(&i) {
+            let file = self.cur.file.clone();
+            let at = self.current_line_start;
+            self.warn(
+                crate::diag::WarningKind::ReadBeforeSet { index: i as i64 },
+                &file,
+                at + span.start,
+                at + span.end,
+            );
+        }
+        Ok(self.params.values[i])
+    }
+
+    fn param_exists(&mut self, p: &ParamRef, span: Span) -> Result<bool, (ErrorKind, Span)> {
+        match p {
+            ParamRef::Numbered(index) => {
+                let v = self.eval(index)?;
+                let i = integer_value(v).map_err(|k| (k, index.span))?;
+                Ok((1..MAX_PARAM as i64).contains(&i))
+            }
+            ParamRef::Named(name) => self.named_exists(name, span),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const S: Span = Span { start: 0, end: 0 };
+
+    #[test]
+    fn operators_table() {
+        let cases: &[(BinOp, f64, f64, f64)] = &[
+            (BinOp::Mod, -7.0, 3.0, 2.0),
+            (BinOp::Mod, 7.0, -3.0, 1.0),
+            (BinOp::Mod, -7.0, -3.0, 2.0),
+            (BinOp::Mod, 7.5, 2.0, 1.5),
+            (BinOp::Eq, 1.0, 1.00005, 1.0),
+            (BinOp::Eq, 1.0, 1.0002, 0.0),
+            (BinOp::Ne, 1.0, 1.00005, 0.0),
+            (BinOp::Ge, 1.0, 1.00005, 0.0),
+            (BinOp::Le, 1.0000005, 1.0, 0.0),
+            (BinOp::Pow, 2.0, 3.0, 8.0),
+            (BinOp::Pow, -2.0, 2.0, 4.0),
+            (BinOp::Xor, 1.0, 1.0, 0.0),
+            (BinOp::And, 2.0, 0.5, 1.0),
+            (BinOp::Or, 0.0, 0.0, 0.0),
+        ];
+        for &(op, a, c, want) in cases {
+            assert_eq!(binary(op, a, c, S).unwrap(), want, "{a} {op:?} {c}");
+        }
+    }
+
+    #[test]
+    fn domain_errors() {
+        assert_eq!(binary(BinOp::Div, 1.0, 0.0, S).unwrap_err().0, ErrorKind::DivideByZero);
+        assert_eq!(binary(BinOp::Pow, -2.0, 0.5, S).unwrap_err().0, ErrorKind::NegativePower);
+        assert!(binary(BinOp::Mod, 1.0, 0.0, S).unwrap().is_nan());
+        assert_eq!(unary(Func::Acos, 1.5, S).unwrap_err().0, ErrorKind::AcosRange);
+        assert_eq!(unary(Func::Asin, -1.5, S).unwrap_err().0, ErrorKind::AsinRange);
+        assert_eq!(unary(Func::Ln, 0.0, S).unwrap_err().0, ErrorKind::LnDomain);
+        assert_eq!(unary(Func::Sqrt, -1.0, S).unwrap_err().0, ErrorKind::SqrtNegative);
+    }
+
+    #[test]
+    fn rounding() {
+        assert_eq!(round_half_away(2.5), 3.0);
+        assert_eq!(round_half_away(-2.5), -3.0);
+        assert_eq!(round_half_away(3e9), -2147483648.0);
+        assert_eq!(round_half_even_int(0.5), 0);
+        assert_eq!(round_half_even_int(1.5), 2);
+        assert_eq!(round_half_even_int(2.5), 2);
+        assert_eq!(round_half_even_int(3e9), i32::MIN as i64);
+        assert_eq!(unary(Func::Fix, -2.8, S).unwrap(), -3.0);
+        assert_eq!(unary(Func::Fup, -2.8, S).unwrap(), -2.0);
+    }
+}

@@ -1,0 +1,393 @@
+//! The evaluator: runs a program the way LinuxCNC's interpreter would and
+//! writes the lines it executes, with every parameter and expression replaced
+//! by its value.
+
+mod block;
+mod control;
+mod expr;
+mod message;
+mod modal;
+mod restore;
+mod named;
+pub mod params;
+mod settings;
+pub mod state;
+
+use std::collections::{HashMap, HashSet};
+use std::rc::Rc;
+
+use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};
+use crate::emit::Sink;
+use crate::parse::ast::{Line, LineKind, OKind, Span};
+use crate::parse::LineParser;
+use crate::program::{next_line, FileIndex, Loader};
+
+pub use settings::{Define, Settings};
+
+use params::Params;
+use state::{Modal, Position};
+
+/// Deepest nesting of active calls (the tenth nested call fails).
+pub const MAX_CALL_LEVEL: usize = 9;
+
+/// Where reading continues.
+#[derive(Clone)]
+pub struct Cursor {
+    pub file: Rc<FileIndex>,
+    /// Byte offset of the next line.
+    pub pos: u32,
+    /// 0-based index of the next line.
+    pub line: u32,
+    /// Index of the first O-line at or after `line`.
+    pub next_o: usize,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrameKind {
+    Main,
+    Call,
+    M98,
+}
+
+/// Record of a control label reached in this activation.
+#[derive(Debug, Clone)]
+pub struct LabelRec {
+    pub kind: OKind,
+    pub oidx: u32,
+    pub line: u32,
+    /// Remaining passes of a repeat loop (-1: not running).
+    pub repeat: i64,
+}
+
+pub struct Frame {
+    pub kind: FrameKind,
+    pub name: Rc<str>,
+    pub ret: Option<Cursor>,
+    pub call_site: Option<Site>,
+    pub saved: Option<Box<[f64; 30]>>,
+    pub locals: HashMap<Rc<str>, f64>,
+    pub labels: HashMap<Rc<str>, LabelRec>,
+    /// Pending passes of an `M98 ... L` on the given line of this frame.
+    pub m98_loop: Option<(u32, i64)>,
+    /// Modal state saved by M70/M73; `auto` restores it on return (M73).
+    pub saved_modal: Option<Modal>,
+    pub auto_restore: bool,
+}
+
+impl Frame {
+    fn new(kind: FrameKind, name: Rc<str>) -> Frame {
+        Frame {
+            kind,
+            name,
+            ret: None,
+            call_site: None,
+            saved: None,
+            locals: HashMap::new(),
+            labels: HashMap::new(),
+            m98_loop: None,
+            saved_modal: None,
+            auto_restore: false,
+        }
+    }
+}
+
+/// A registered subroutine definition.
+#[derive(Clone)]
+pub struct SubRec {
+    pub file: Rc<FileIndex>,
+    pub oidx: u32,
+}
+
+pub struct Interp<'s> {
+    s: &'s Settings,
+    pub loader: Loader,
+    main: Rc<FileIndex>,
+    params: Params,
+    globals: HashMap<Rc<str>, f64>,
+    frames: Vec<Frame>,
+    value: f64,
+    value_returned: bool,
+    /// Reading undefined named parameters gives 0 (sub definition skip).
+    defining: bool,
+    cur: Cursor,
+    sink: Sink,
+    out_lines: u64,
+    steps: u64,
+    pub warnings: Vec<Diagnostic>,
+    subs: HashMap<Rc<str>, SubRec>,
+    called: HashSet<Rc<str>>,
+    modal: Modal,
+    pos: Position,
+    current_tool: Option<f64>,
+    selected_tool: Option<f64>,
+    executed_if: bool,
+    /// The reference's never-cleared break/continue flags (for warnings).
+    ref_stale_break: Option<u32>,
+    ref_stale_continue: Option<u32>,
+    last_loop: Option<(Rc<str>, u32, Rc<FileIndex>)>,
+    parser: LineParser,
+    cache: HashMap<(usize, u32), Rc<Line>>,
+    out: Vec<u8>,
+    ended: bool,
+    current_line_start: u32,
+    current_line_idx: u32,
+    /// Warnings already given, to report each site once.
+    warned: HashSet<(&'static str, usize, u32)>,
+}
+
+fn file_key(f: &Rc<FileIndex>) -> usize {
+    Rc::as_ptr(f) as usize
+}
+
+impl<'s> Interp<'s> {
+    pub fn new(s: &'s Settings, loader: Loader, main: Rc<FileIndex>, sink: Sink) -> Interp<'s> {
+        let mut params = Params::new(s.zero_start);
+        let mut globals = HashMap::new();
+        let mut main_frame = Frame::new(FrameKind::Main, Rc::from(""));
+        for d in &s.defines {
+            match d {
+                Define::Numbered(i, v) => params.assign(*i, *v),
+                Define::Named(n, v) => {
+                    if n.starts_with('_') {
+                        globals.insert(Rc::from(n.as_str()), *v);
+                    } else {
+                        main_frame.locals.insert(Rc::from(n.as_str()), *v);
+                    }
+                }
+            }
+        }
+        // Level-0 locals share the global table.
+        for (k, v) in main_frame.locals.drain() {
+            globals.insert(k, v);
+        }
+        let mut pos = if s.zero_start { Position::zero() } else { Position::unknown() };
+        for &(axis, v) in &s.start_position {
+            pos.axes[axis] = Ok(v);
+        }
+        let cur = Cursor { file: main.clone(), pos: 0, line: 0, next_o: 0 };
+        Interp {
+            s,
+            loader,
+            main,
+            params,
+            globals,
+            frames: vec![main_frame],
+            value: 0.0,
+            value_returned: false,
+            defining: false,
+            cur,
+            sink,
+            out_lines: 0,
+            steps: 0,
+            warnings: Vec::new(),
+            subs: HashMap::new(),
+            called: HashSet::new(),
+            modal: Modal::default(),
+            pos,
+            current_tool: if s.zero_start { Some(0.0) } else { None },
+            selected_tool: if s.zero_start { Some(0.0) } else { None },
+            executed_if: true,
+            ref_stale_break: None,
+            ref_stale_continue: None,
+            last_loop: None,
+            parser: LineParser::default(),
+            cache: HashMap::new(),
+            out: Vec::with_capacity(256),
+            ended: false,
+            current_line_start: 0,
+            current_line_idx: 0,
+            warned: HashSet::new(),
+        }
+    }
+
+    pub fn level(&self) -> usize {
+        self.frames.len() - 1
+    }
+
+    /// The call stack as sites, innermost caller first.
+    fn stack(&self) -> Vec<Site> {
+        self.frames.iter().rev().filter_map(|f| f.call_site.clone()).collect()
+    }
+
+    pub(crate) fn error(&self, kind: ErrorKind, file: &Rc<FileIndex>, start: u32, end: u32) -> Error {
+        let mut e = Diagnostic::error(kind, Some(Site::new(&file.file, start, end)));
+        e.stack = self.stack();
+        e
+    }
+
+    /// Error at a span of the line starting at `line_start`.
+    pub(crate) fn error_in_line(&self, kind: ErrorKind, file: &Rc<FileIndex>, line_start: u32, span: Span) -> Error {
+        self.error(kind, file, line_start + span.start, line_start + span.end)
+    }
+
+    pub(crate) fn warn(&mut self, kind: WarningKind, file: &Rc<FileIndex>, start: u32, end: u32) {
+        if !self.s.warnings {
+            return;
+        }
+        if !self.warned.insert((kind.code(), file_key(file), start)) {
+            return;
+        }
+        let mut d = Diagnostic::warning(kind, Some(Site::new(&file.file, start, end)));
+        d.stack = self.stack();
+        self.warnings.push(d);
+    }
+
+    /// Runs the program to its end and releases the output.
+    pub fn run(mut self) -> Result<Vec<Diagnostic>, Error> {
+        let main = self.main.clone();
+        match main.first_nonblank {
+            None => return Err(self.error(ErrorKind::EmptyProgram, &main, 0, 0)),
+            Some(first) => {
+                if main.percent_start {
+                    self.emit_raw(b"%")?;
+                    // Continue after the opening % line.
+                    let mut pos = 0usize;
+                    for _ in 0..=first {
+                        pos = next_line(&main.file.data, pos).1;
+                    }
+                    self.cur.pos = pos as u32;
+                    self.cur.line = first + 1;
+                    self.cur.next_o = main.oline_at_or_after(first + 1);
+                }
+            }
+        }
+        while !self.ended {
+            self.step()?;
+        }
+        self.finish_warnings();
+        let Interp { sink, mut warnings, loader, .. } = self;
+        warnings.extend(loader.warnings);
+        sink.finish().map_err(|e| {
+            Diagnostic::error(ErrorKind::Io { path: "<output>".into(), message: e.to_string() }, None)
+        })?;
+        Ok(warnings)
+    }
+
+    fn finish_warnings(&mut self) {
+        // Subs defined in the main file and never called.
+        let main = self.main.clone();
+        for (i, o) in main.olines.iter().enumerate() {
+            if o.kind() == Some(OKind::Sub) {
+                if let Some(k) = &o.key {
+                    if !self.called.contains(k) && main.defs.contains_key(&(i as u32)) {
+                        let end = o.start + o.line_len();
+                        self.warn(WarningKind::UnusedSub { name: k.to_string() }, &main, o.start, end);
+                    }
+                }
+            }
+        }
+    }
+
+    fn count_step(&mut self) -> Result<(), Error> {
+        self.steps += 1;
+        if self.steps > self.s.max_steps {
+            let (label, line, file) = match &self.last_loop {
+                Some((l, n, f)) => (Some(l.to_string()), Some(*n), f.clone()),
+                None => (None, None, self.cur.file.clone()),
+            };
+            let kind = ErrorKind::StepLimit { limit: self.s.max_steps, label, line: line.map(|n| n + 1) };
+            let site = match (&self.last_loop, line) {
+                (Some(_), Some(n)) => file.olines.iter().find(|o| o.line_idx == n).map(|o| (o.start, o.start + o.line_len())),
+                _ => None,
+            };
+            let (a, b) = site.unwrap_or((self.current_line_start, self.current_line_start));
+            return Err(self.error(kind, &file, a, b));
+        }
+        Ok(())
+    }
+
+    /// Reads and runs one line.
+    fn step(&mut self) -> Result<(), Error> {
+        self.count_step()?;
+        let file = self.cur.file.clone();
+        let data: &[u8] = &file.file.data;
+        let start = self.cur.pos as usize;
+        if start >= data.len() {
+            return self.end_of_file(&file);
+        }
+        let (end, next, terminated) = next_line(data, start);
+        let line_idx = self.cur.line;
+        self.current_line_start = start as u32;
+        self.current_line_idx = line_idx;
+        self.cur.pos = next as u32;
+        self.cur.line += 1;
+        if let Some(o) = file.olines.get(self.cur.next_o) {
+            if o.line_idx == line_idx {
+                let oidx = self.cur.next_o as u32;
+                self.cur.next_o += 1;
+                return self.exec_oline(&file, oidx);
+            }
+        }
+        let raw = &data[start..end];
+        let line = if file.keeps(line_idx) {
+            let key = (file_key(&file), line_idx);
+            match self.cache.get(&key) {
+                Some(l) => l.clone(),
+                None => {
+                    let l = Rc::new(self.parse_line(&file, start as u32, raw, terminated)?);
+                    self.cache.insert(key, l.clone());
+                    l
+                }
+            }
+        } else {
+            Rc::new(self.parse_line(&file, start as u32, raw, terminated)?)
+        };
+        self.exec_line(&file, start as u32, raw, &line)
+    }
+
+    fn parse_line(&mut self, file: &Rc<FileIndex>, start: u32, raw: &[u8], terminated: bool) -> Result<Line, Error> {
+        self.parser
+            .parse(raw, terminated)
+            .map_err(|e| self.error_in_line(e.kind, file, start, e.span))
+    }
+
+    fn exec_line(&mut self, file: &Rc<FileIndex>, start: u32, raw: &[u8], line: &Line) -> Result<(), Error> {
+        match &line.kind {
+            LineKind::Blank => Ok(()),
+            LineKind::Percent => {
+                if self.main.percent_start {
+                    self.emit_raw(b"%")?;
+                    self.ended = true;
+                    Ok(())
+                } else {
+                    Err(self.error(ErrorKind::StrayPercent, file, start, start + 1))
+                }
+            }
+            LineKind::Items(items) => self.exec_items(file, start, raw, line, items),
+            // O-lines are executed from the file index; one that reaches
+            // here failed to index, so re-raise its parse error.
+            LineKind::O(_) | LineKind::M98(_) => Ok(()),
+        }
+    }
+
+    fn end_of_file(&mut self, file: &Rc<FileIndex>) -> Result<(), Error> {
+        let end = file.file.data.len() as u32;
+        if self.level() > 0 && !Rc::ptr_eq(file, &self.main) {
+            let name = self.frames.last().map(|f| f.name.to_string()).unwrap_or_default();
+            return Err(self.error(ErrorKind::UnterminatedSub { name }, file, end, end));
+        }
+        Err(self.error(ErrorKind::MissingProgramEnd { percent: self.main.percent_start }, file, end, end))
+    }
+
+    /// Writes one finished output line.
+    fn emit_raw(&mut self, bytes: &[u8]) -> Result<(), Error> {
+        self.out_lines += 1;
+        if self.out_lines > self.s.max_output_lines {
+            let (label, line, file) = match &self.last_loop {
+                Some((l, n, f)) => (Some(l.to_string()), Some(*n + 1), f.clone()),
+                None => (None, None, self.cur.file.clone()),
+            };
+            let at = self.current_line_start;
+            return Err(self.error(ErrorKind::OutputLimit { limit: self.s.max_output_lines, label, line }, &file, at, at));
+        }
+        let r = self.sink.write(bytes).and_then(|_| self.sink.write(b"\n"));
+        r.map_err(|e| Diagnostic::error(ErrorKind::Io { path: "<output>".into(), message: e.to_string() }, None))
+    }
+}
+
+impl crate::program::OInfo {
+    /// Length of the line text without its terminator.
+    pub fn line_len(&self) -> u32 {
+        (self.next - self.start).saturating_sub(1)
+    }
+}

@@ -1,0 +1,72 @@
+//! Numbered parameters #1–#5601 and which of them hold values only the
+//! running machine knows.
+
+/// One past the highest numbered parameter.
+pub const MAX_PARAM: usize = 5602;
+
+/// What a numbered parameter means to a flattener.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ParamClass {
+    Plain,
+    /// Written by the machine at run time; readable once given or assigned.
+    Runtime(&'static str, &'static str),
+    /// Current position, answered from the position model.
+    Position(usize),
+    /// Tool table and toolchanger data: read-only in LinuxCNC.
+    ReadOnlyRuntime(&'static str, &'static str),
+}
+
+pub fn classify(i: usize) -> ParamClass {
+    match i {
+        5061..=5069 => ParamClass::Runtime("probe result", "it is written by G38 probing"),
+        5070 => ParamClass::Runtime("probe success flag", "it is written by G38 probing"),
+        5161..=5169 => ParamClass::Runtime("G28 home position", "it comes from the machine's parameter file"),
+        5181..=5189 => ParamClass::Runtime("G30 home position", "it comes from the machine's parameter file"),
+        5210..=5219 => ParamClass::Runtime("G92 offset", "it comes from the machine's parameter file"),
+        5220 => ParamClass::Runtime("active coordinate system", "it comes from the machine's parameter file"),
+        5221..=5390 => ParamClass::Runtime("coordinate system offset", "it comes from the machine's parameter file"),
+        5399 => ParamClass::Runtime("M66 input value", "it is read from a machine input"),
+        5400..=5413 => ParamClass::ReadOnlyRuntime("tool data", "it comes from the tool table"),
+        5420..=5428 => ParamClass::Position(i - 5420),
+        5600 | 5601 => ParamClass::Runtime("toolchanger status", "it is reported by the toolchanger"),
+        _ => ParamClass::Plain,
+    }
+}
+
+pub fn is_read_only(i: usize) -> bool {
+    matches!(i, 5400..=5413 | 5420..=5428)
+}
+
+#[derive(Debug, Clone)]
+pub struct Params {
+    pub values: Vec<f64>,
+    /// The value is known (always true for plain parameters).
+    pub known: Vec<bool>,
+    /// Assigned by the program, a -D or a var file (for read-before-set).
+    pub set: Vec<bool>,
+}
+
+impl Params {
+    pub fn new(zero_start: bool) -> Params {
+        let mut known = vec![true; MAX_PARAM];
+        if !zero_start {
+            for (i, k) in known.iter_mut().enumerate() {
+                if !matches!(classify(i), ParamClass::Plain | ParamClass::Position(_)) {
+                    *k = false;
+                }
+            }
+        }
+        let mut values = vec![0.0; MAX_PARAM];
+        values[5220] = 1.0;
+        values[5599] = 1.0;
+        let mut set = vec![false; MAX_PARAM];
+        set[5599] = true;
+        Params { values, known, set }
+    }
+
+    pub fn assign(&mut self, i: usize, v: f64) {
+        self.values[i] = v;
+        self.known[i] = true;
+        self.set[i] = true;
+    }
+}

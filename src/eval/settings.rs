@@ -1,0 +1,50 @@
+//! Everything the evaluator needs to know from the command line and the INI,
+//! as plain data.
+
+use crate::program::ini::Ini;
+
+/// A parameter given before the run (`-D`, var file).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Define {
+    Numbered(usize, f64),
+    /// Lower-cased name; `_` names are global.
+    Named(String, f64),
+}
+
+#[derive(Debug, Clone)]
+pub struct Settings {
+    pub precision: Option<u8>,
+    pub strip_comments: bool,
+    pub max_steps: u64,
+    pub max_output_lines: u64,
+    /// Start like the reference's standalone interpreter: position, offsets,
+    /// tool data and probe results all zero and known.
+    pub zero_start: bool,
+    /// Known start position, by axis index.
+    pub start_position: Vec<(usize, f64)>,
+    pub fanuc_disabled: bool,
+    pub oword_nargs: bool,
+    pub ini: Option<Ini>,
+    /// Var-file parameters first, then `-D` values (later wins).
+    pub defines: Vec<Define>,
+    /// Collect warnings (check mode and stderr notes).
+    pub warnings: bool,
+}
+
+impl Default for Settings {
+    fn default() -> Settings {
+        Settings {
+            precision: None,
+            strip_comments: false,
+            max_steps: 100_000_000,
+            max_output_lines: 50_000_000,
+            zero_start: false,
+            start_position: Vec::new(),
+            fanuc_disabled: false,
+            oword_nargs: false,
+            ini: None,
+            defines: Vec::new(),
+            warnings: true,
+        }
+    }
+}

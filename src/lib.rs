@@ -1,0 +1,146 @@
+//! ngcflat: LinuxCNC-dialect G-code in, straight-line G-code out.
+//!
+//! Pipeline: `grammar/ngc.pest` → [`parse`] (typed line AST) → [`program`]
+//! (file index, subroutine loader) → [`eval`] (parameters, expressions,
+//! control flow) → [`emit`] (numbers, output sink) → [`diag`] (rendering).
+
+pub mod check;
+pub mod config;
+pub mod diag;
+pub mod emit;
+pub mod eval;
+pub mod parse;
+pub mod program;
+
+use std::io::{IsTerminal, Read};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::rc::Rc;
+use std::sync::Arc;
+
+use diag::{Diagnostic, Error, ErrorKind, MessageFormat};
+use emit::{Destination, Sink};
+use eval::{Interp, Settings};
+use program::{FileIndex, Loader, SearchPath, SourceFile};
+
+/// Reads a program from a path (`-` is stdin).
+pub fn read_source(path: Option<&Path>) -> Result<SourceFile, Error> {
+    match path {
+        None => read_stdin(),
+        Some(p) if p.as_os_str() == "-" => read_stdin(),
+        Some(p) => {
+            let data = std::fs::read(p).map_err(|e| {
+                Diagnostic::error(ErrorKind::Io { path: p.to_path_buf(), message: e.to_string() }, None)
+            })?;
+            Ok(SourceFile::new(p.to_path_buf(), p.display().to_string(), data))
+        }
+    }
+}
+
+fn read_stdin() -> Result<SourceFile, Error> {
+    let mut data = Vec::new();
+    std::io::stdin().read_to_end(&mut data).map_err(|e| {
+        Diagnostic::error(ErrorKind::Io { path: "<stdin>".into(), message: e.to_string() }, None)
+    })?;
+    Ok(SourceFile::new(PathBuf::from("<stdin>"), "<stdin>".into(), data))
+}
+
+/// Flattens one program. On success returns the warnings; the output has
+/// been released to `dest`. On error nothing was released.
+pub fn flatten(source: SourceFile, settings: &Settings, search: &SearchPath, dest: Destination) -> Result<Vec<Diagnostic>, Error> {
+    let main_dir = if source.path.as_os_str() == "<stdin>" {
+        None
+    } else {
+        Some(source.dir().map(Path::to_path_buf).filter(|d| !d.as_os_str().is_empty()).unwrap_or_else(|| PathBuf::from(".")))
+    };
+    let index = Rc::new(FileIndex::build(Arc::new(source)));
+    let loader = Loader::new(search.clone(), main_dir);
+    let sink = Sink::new(dest.clone()).map_err(|e| {
+        let path = match &dest {
+            Destination::File(p) => p.clone(),
+            _ => PathBuf::from("<output>"),
+        };
+        Diagnostic::error(ErrorKind::Io { path, message: e.to_string() }, None)
+    })?;
+    Interp::new(settings, loader, index, sink).run()
+}
+
+/// Flattens a string (for tests and tools); returns the output text.
+pub fn flatten_str(text: &str, settings: &Settings) -> Result<String, Error> {
+    let dir = std::env::temp_dir();
+    let out = dir.join(format!("ngcflat-str-{}-{}.out", std::process::id(), unique()));
+    let src = SourceFile::new(PathBuf::from("<string>"), "<string>".into(), text.as_bytes().to_vec());
+    let r = flatten(src, settings, &SearchPath::default(), Destination::File(out.clone()));
+    let r = r.map(|_| std::fs::read_to_string(&out).unwrap_or_default());
+    let _ = std::fs::remove_file(&out);
+    r
+}
+
+fn unique() -> u64 {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static N: AtomicU64 = AtomicU64::new(0);
+    N.fetch_add(1, Ordering::Relaxed)
+}
+
+/// Writes diagnostics to stderr in the chosen format.
+pub fn report(diags: &[Diagnostic], format: MessageFormat) {
+    let color = format == MessageFormat::Human && std::io::stderr().is_terminal();
+    let mut s = String::new();
+    for d in diags {
+        s.push_str(&diag::render(d, format, color));
+    }
+    eprint!("{s}");
+}
+
+fn exit_for(e: &Diagnostic) -> ExitCode {
+    match e.error_kind() {
+        Some(ErrorKind::Io { .. }) => ExitCode::from(2),
+        _ => ExitCode::from(1),
+    }
+}
+
+/// The command-line program.
+pub fn run(cli: config::Cli) -> ExitCode {
+    let env_path = std::env::var("NGCFLAT_SUBROUTINE_PATH").ok();
+    match cli.command {
+        Some(config::Command::Check(args)) => match args.common.to_config(env_path) {
+            Ok(cfg) => check::run(&args.paths, &args.ext, args.deny_warnings, &cfg),
+            Err(k) => {
+                report(&[*Diagnostic::error(k, None)], MessageFormat::Human);
+                ExitCode::from(2)
+            }
+        },
+        None => {
+            let args = cli.flatten;
+            let cfg = match args.common.to_config(env_path) {
+                Ok(c) => c,
+                Err(k) => {
+                    report(&[*Diagnostic::error(k, None)], MessageFormat::Human);
+                    return ExitCode::from(2);
+                }
+            };
+            let source = match read_source(args.file.as_deref()) {
+                Ok(s) => s,
+                Err(e) => {
+                    report(&[*e], cfg.format);
+                    return ExitCode::from(2);
+                }
+            };
+            let dest = match args.output {
+                Some(p) => Destination::File(p),
+                None => Destination::Stdout,
+            };
+            match flatten(source, &cfg.settings, &cfg.search, dest) {
+                Ok(warnings) => {
+                    report(&warnings, cfg.format);
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    let code = exit_for(&e);
+                    report(&[*e], cfg.format);
+                    code
+                }
+            }
+        }
+    }
+}

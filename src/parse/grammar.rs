@@ -1,0 +1,5 @@
+//! The pest parser generated from `grammar/ngc.pest`.
+
+#[derive(pest_derive::Parser)]
+#[grammar = "../grammar/ngc.pest"]
+pub struct NgcParser;

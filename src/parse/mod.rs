@@ -1,0 +1,136 @@
+//! Line parsing: raw bytes → processed line → pest pairs → typed AST.
+
+pub mod ast;
+mod grammar;
+mod lower;
+pub mod normalize;
+
+use pest::Parser as _;
+
+pub use lower::{integer_value, parse_number};
+
+use crate::diag::ErrorKind;
+use ast::{Line, LineKind, Span};
+use grammar::{NgcParser, Rule};
+use normalize::{normalize, Normalized};
+
+/// The longest raw line the reference accepts (without the newline).
+pub const MAX_LINE: usize = 252;
+
+/// A line that could not be parsed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LineError {
+    pub kind: ErrorKind,
+    pub span: Span,
+    /// The reference reports this even on lines it skips (comment and length
+    /// checks, malformed O-words).
+    pub when_skipped: bool,
+}
+
+impl LineError {
+    fn new(kind: ErrorKind, span: Span, when_skipped: bool) -> LineError {
+        LineError { kind, span, when_skipped }
+    }
+}
+
+/// Reusable scratch space for parsing.
+#[derive(Default)]
+pub struct LineParser {
+    norm: Normalized,
+}
+
+fn describe(rules: &[Rule]) -> String {
+    let mut parts: Vec<&str> = Vec::new();
+    let mut add = |s: &'static str| {
+        if !parts.contains(&s) {
+            parts.push(s);
+        }
+    };
+    for r in rules {
+        match r {
+            Rule::binop => add("an operator or ']'"),
+            Rule::number | Rule::param | Rule::bracket | Rule::unary_minus | Rule::unary_plus
+            | Rule::atan | Rule::exists | Rule::unary_fn | Rule::fn_name | Rule::named => {
+                add("a value (number, #parameter, [expression] or function)")
+            }
+            Rule::word | Rule::letter => add("a word (letter and value)"),
+            Rule::assignment => add("a parameter setting"),
+            Rule::paren_comment | Rule::semi_comment | Rule::comment_text => add("a comment"),
+            Rule::o_label => add("an O-word label"),
+            Rule::EOI => add("end of line"),
+            _ => add("valid G-code"),
+        }
+    }
+    if parts.is_empty() {
+        "valid G-code".to_string()
+    } else {
+        parts.join(" or ")
+    }
+}
+
+fn is_gcode_char(c: u8) -> bool {
+    c.is_ascii_alphanumeric() || b".+-*/#<>[]()=;%$@^_".contains(&c)
+}
+
+impl LineParser {
+    /// Parses one raw line (without terminator). `terminated` tells whether a
+    /// newline followed it, which matters for the length limit.
+    pub fn parse(&mut self, raw: &[u8], terminated: bool) -> Result<Line, LineError> {
+        let len = raw.len() + terminated as usize;
+        if len > MAX_LINE + 1 {
+            return Err(LineError::new(
+                ErrorKind::CommandTooLong,
+                Span::new(MAX_LINE as u32, raw.len() as u32),
+                true,
+            ));
+        }
+        if let Err((kind, at)) = normalize(raw, &mut self.norm) {
+            return Err(LineError::new(kind, Span::new(at, at + 1), true));
+        }
+        let text = self.norm.text.as_str();
+        if text.is_empty() {
+            return Ok(Line { kind: LineKind::Blank, block_delete: false, line_number: None });
+        }
+        if text == "%" {
+            return Ok(Line { kind: LineKind::Percent, block_delete: false, line_number: None });
+        }
+        match NgcParser::parse(Rule::line, text) {
+            Ok(mut pairs) => {
+                let pair = pairs.next().expect("line");
+                let lowerer = lower::Lowerer { norm: &self.norm };
+                let is_o = pair.clone().into_inner().any(|p| p.as_rule() == Rule::o_line);
+                lowerer
+                    .lower_line(pair)
+                    .map_err(|(kind, span)| LineError::new(kind, span, is_o))
+            }
+            Err(e) => {
+                let pos = match e.location {
+                    pest::error::InputLocation::Pos(p) => p,
+                    pest::error::InputLocation::Span((p, _)) => p,
+                };
+                let raw_at = self.norm.raw_offset(pos);
+                let span = Span::new(raw_at, raw_at + 1);
+                let bytes = text.as_bytes();
+                // An O-line the grammar rejects is malformed even when skipped.
+                let start = text.trim_start_matches('/');
+                let start = start.trim_start_matches(|c: char| c == 'n' || c.is_ascii_digit() || c == '.');
+                let is_o = start.starts_with('o');
+                if pos < bytes.len() {
+                    let c = bytes[pos];
+                    if !is_gcode_char(c) || c == b'%' || c == b'o' || c == b'n' {
+                        let ch = text[pos..].chars().next().unwrap_or('?');
+                        return Err(LineError::new(ErrorKind::BadCharacter { ch, byte: c }, span, is_o));
+                    }
+                }
+                let expected = match &e.variant {
+                    pest::error::ErrorVariant::ParsingError { positives, .. } => describe(positives),
+                    pest::error::ErrorVariant::CustomError { message } => message.clone(),
+                };
+                Err(LineError::new(ErrorKind::Syntax { expected }, span, is_o))
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

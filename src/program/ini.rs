@@ -1,0 +1,77 @@
+//! Reader for LinuxCNC INI files: `[SECTION]` headers, `NAME = value`
+//! entries (first occurrence wins), `#` and `;` comment lines, and a trailing
+//! backslash joining the next line.
+
+#[derive(Debug, Default, Clone)]
+pub struct Ini {
+    entries: Vec<(String, String, String)>,
+}
+
+impl Ini {
+    pub fn parse(text: &str) -> Ini {
+        let mut entries = Vec::new();
+        let mut section = String::new();
+        let mut lines = text.lines();
+        while let Some(line) = lines.next() {
+            let mut line = line.trim().to_string();
+            if line.starts_with('#') || line.starts_with(';') || line.is_empty() {
+                continue;
+            }
+            while line.ends_with('\\') {
+                line.pop();
+                match lines.next() {
+                    Some(more) => line.push_str(more.trim()),
+                    None => break,
+                }
+            }
+            if let Some(rest) = line.strip_prefix('[') {
+                if let Some(end) = rest.find(']') {
+                    section = rest[..end].trim().to_string();
+                }
+                continue;
+            }
+            if let Some(eq) = line.find('=') {
+                let key = line[..eq].trim().to_string();
+                let value = line[eq + 1..].trim().to_string();
+                entries.push((section.clone(), key, value));
+            }
+        }
+        Ini { entries }
+    }
+
+    /// First value of `name` in `section`.
+    pub fn get(&self, section: &str, name: &str) -> Option<&str> {
+        self.entries.iter().find(|(s, k, _)| s == section && k == name).map(|(_, _, v)| v.as_str())
+    }
+
+    /// Lookup for `#<_ini[section]name>`: both upper-cased.
+    pub fn get_upper(&self, section: &str, name: &str) -> Option<&str> {
+        let (s, n) = (section.to_ascii_uppercase(), name.to_ascii_uppercase());
+        self.entries
+            .iter()
+            .find(|(sec, k, _)| sec.to_ascii_uppercase() == s && k.to_ascii_uppercase() == n)
+            .map(|(_, _, v)| v.as_str())
+    }
+
+    pub fn flag(&self, section: &str, name: &str) -> bool {
+        self.get(section, name)
+            .and_then(|v| v.split_whitespace().next().map(|w| w.parse::<f64>().map(|x| x != 0.0).unwrap_or(false)))
+            .unwrap_or(false)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Ini;
+
+    #[test]
+    fn sections_continuations_comments() {
+        let ini = Ini::parse(
+            "# top\n[RS274NGC]\nSUBROUTINE_PATH = a:\\\nb:c\n; x\nSUBROUTINE_PATH = ignored\n[DISPLAY]\nPROGRAM_PREFIX=~/nc\n",
+        );
+        assert_eq!(ini.get("RS274NGC", "SUBROUTINE_PATH"), Some("a:b:c"));
+        assert_eq!(ini.get("DISPLAY", "PROGRAM_PREFIX"), Some("~/nc"));
+        assert_eq!(ini.get_upper("display", "program_prefix"), Some("~/nc"));
+        assert_eq!(ini.get("DISPLAY", "NOPE"), None);
+    }
+}
