@@ -2,8 +2,8 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::config::Config;
 use crate::diag::{Diagnostic, ErrorKind, Level};
@@ -19,20 +19,39 @@ pub fn collect(paths: &[PathBuf], exts: &[String]) -> (Vec<PathBuf>, Vec<Diagnos
     let mut problems = Vec::new();
     for p in paths {
         if p.is_dir() {
-            let walker = walkdir::WalkDir::new(p).follow_links(true).sort_by_file_name().into_iter().filter_entry(|e| {
-                e.depth() == 0 || !e.file_name().to_str().is_some_and(|n| n.starts_with('.'))
-            });
+            let walker = walkdir::WalkDir::new(p)
+                .follow_links(true)
+                .sort_by_file_name()
+                .into_iter()
+                .filter_entry(|e| {
+                    e.depth() == 0 || !e.file_name().to_str().is_some_and(|n| n.starts_with('.'))
+                });
             for entry in walker {
                 match entry {
                     Ok(e) => {
-                        let ext = e.path().extension().and_then(|x| x.to_str()).map(str::to_ascii_lowercase);
-                        if e.file_type().is_file() && ext.is_some_and(|x| exts.iter().any(|w| w.eq_ignore_ascii_case(&x))) {
+                        let ext = e
+                            .path()
+                            .extension()
+                            .and_then(|x| x.to_str())
+                            .map(str::to_ascii_lowercase);
+                        if e.file_type().is_file()
+                            && ext.is_some_and(|x| exts.iter().any(|w| w.eq_ignore_ascii_case(&x)))
+                        {
                             files.push(e.into_path());
                         }
                     }
                     Err(err) => {
-                        let path = err.path().map(Path::to_path_buf).unwrap_or_else(|| p.clone());
-                        problems.push(*Diagnostic::error(ErrorKind::Io { path, message: err.to_string() }, None));
+                        let path = err
+                            .path()
+                            .map(Path::to_path_buf)
+                            .unwrap_or_else(|| p.clone());
+                        problems.push(*Diagnostic::error(
+                            ErrorKind::Io {
+                                path,
+                                message: err.to_string(),
+                            },
+                            None,
+                        ));
                     }
                 }
             }
@@ -50,26 +69,28 @@ fn sub_file_name(index: &FileIndex) -> Option<String> {
     if first.kind() != Some(OKind::Sub) {
         return None;
     }
-    if let Some(n) = index.first_nonblank {
-        if n < first.line_idx {
-            // Only comment lines may come before it.
-            let data = &index.file.data;
-            let mut pos = 0usize;
-            let mut parser = crate::parse::LineParser::default();
-            for _ in 0..first.line_idx {
-                let (end, next, term) = crate::program::next_line(data, pos);
-                match parser.parse(&data[pos..end], term) {
-                    Ok(l) => {
-                        if let LineKind::Items(items) = &l.kind {
-                            if items.iter().any(|i| !matches!(i, crate::parse::ast::Item::Comment(_))) {
-                                return None;
-                            }
-                        }
+    if let Some(n) = index.first_nonblank
+        && n < first.line_idx
+    {
+        // Only comment lines may come before it.
+        let data = &index.file.data;
+        let mut pos = 0usize;
+        let mut parser = crate::parse::LineParser::default();
+        for _ in 0..first.line_idx {
+            let (end, next, term) = crate::program::next_line(data, pos);
+            match parser.parse(&data[pos..end], term) {
+                Ok(l) => {
+                    if let LineKind::Items(items) = &l.kind
+                        && items
+                            .iter()
+                            .any(|i| !matches!(i, crate::parse::ast::Item::Comment(_)))
+                    {
+                        return None;
                     }
-                    Err(_) => return None,
                 }
-                pos = next;
+                Err(_) => return None,
             }
+            pos = next;
         }
     }
     first.key.as_ref().map(|k| k.to_string())
@@ -92,14 +113,21 @@ pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
     let result = if let Some(name) = sub_file_name(&probe) {
         // A subroutine file: check it by calling it from a tiny program in
         // its own folder.
-        let dir = path.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
+        let dir = path
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_else(|| PathBuf::from("."));
         let mut search = cfg.search.clone();
         search.dirs.insert(0, dir.clone());
         let nargs = 30;
         let args: String = (0..nargs).map(|_| "[0]").collect::<Vec<_>>().join("");
         let _ = args;
         let text = format!("o<{name}> call\nM2\n");
-        let src = crate::program::SourceFile::new(dir.join("<check>"), format!("<call of {}>", path.display()), text.into_bytes());
+        let src = crate::program::SourceFile::new(
+            dir.join("<check>"),
+            format!("<call of {}>", path.display()),
+            text.into_bytes(),
+        );
         crate::flatten(src, &settings, &search, Destination::Discard)
     } else {
         crate::flatten(source, &settings, &cfg.search, Destination::Discard)
@@ -114,14 +142,19 @@ pub fn run(paths: &[PathBuf], exts: &[String], deny_warnings: bool, cfg: &Config
     let (files, mut problems) = collect(paths, exts);
     let results: Mutex<Vec<(usize, Vec<Diagnostic>)>> = Mutex::new(Vec::new());
     let next = AtomicUsize::new(0);
-    let workers = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(2).min(files.len().max(1));
+    let workers = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(2)
+        .min(files.len().max(1));
     std::thread::scope(|s| {
         for _ in 0..workers {
-            s.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                let Some(f) = files.get(i) else { break };
-                let d = check_file(f, cfg);
-                results.lock().expect("results").push((i, d));
+            s.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(f) = files.get(i) else { break };
+                    let d = check_file(f, cfg);
+                    results.lock().expect("results").push((i, d));
+                }
             });
         }
     });
@@ -135,7 +168,12 @@ pub fn run(paths: &[PathBuf], exts: &[String], deny_warnings: bool, cfg: &Config
     let errors = all.iter().filter(|d| d.level() == Level::Error).count();
     let warnings = all.iter().filter(|d| d.level() == Level::Warning).count();
     crate::report(&all, cfg.format);
-    eprintln!("{} files, {} errors, {} warnings", files.len(), errors, warnings);
+    eprintln!(
+        "{} files, {} errors, {} warnings",
+        files.len(),
+        errors,
+        warnings
+    );
     if errors > 0 || (deny_warnings && warnings > 0) {
         ExitCode::from(1)
     } else {

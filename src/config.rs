@@ -6,8 +6,8 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::diag::{ErrorKind, MessageFormat};
 use crate::eval::{Define, Settings};
-use crate::program::ini::Ini;
 use crate::program::SearchPath;
+use crate::program::ini::Ini;
 
 /// Flatten LinuxCNC-dialect G-code (O-word subroutines, loops, conditionals,
 /// parameters and expressions) into plain straight-line G-code for
@@ -138,26 +138,24 @@ fn expand_tilde(p: &str) -> PathBuf {
         if let Some(home) = std::env::var_os("HOME") {
             return Path::new(&home).join(rest);
         }
-    } else if p == "~" {
-        if let Some(home) = std::env::var_os("HOME") {
-            return PathBuf::from(home);
-        }
+    } else if p == "~"
+        && let Some(home) = std::env::var_os("HOME")
+    {
+        return PathBuf::from(home);
     }
     PathBuf::from(p)
 }
 
 fn resolve_in(base: &Path, p: &str) -> PathBuf {
     let e = expand_tilde(p);
-    if e.is_absolute() {
-        e
-    } else {
-        base.join(e)
-    }
+    if e.is_absolute() { e } else { base.join(e) }
 }
 
 /// Parses a `-D` argument.
 pub fn parse_define(text: &str) -> Result<Define, ErrorKind> {
-    let bad = || ErrorKind::BadDefine { text: text.to_string() };
+    let bad = || ErrorKind::BadDefine {
+        text: text.to_string(),
+    };
     let (k, v) = text.split_once('=').ok_or_else(bad)?;
     let k = k.trim().trim_start_matches('#');
     let k = k.trim_start_matches('<').trim_end_matches('>');
@@ -172,7 +170,11 @@ pub fn parse_define(text: &str) -> Result<Define, ErrorKind> {
         }
         return Ok(Define::Numbered(i, v));
     }
-    let name: String = k.chars().filter(|c| !c.is_whitespace()).flat_map(|c| c.to_lowercase()).collect();
+    let name: String = k
+        .chars()
+        .filter(|c| !c.is_whitespace())
+        .flat_map(|c| c.to_lowercase())
+        .collect();
     if name.is_empty() || name.contains('>') {
         return Err(bad());
     }
@@ -181,8 +183,10 @@ pub fn parse_define(text: &str) -> Result<Define, ErrorKind> {
 
 /// Reads a LinuxCNC .var file: `number value` lines in ascending order.
 pub fn read_var_file(path: &Path) -> Result<Vec<Define>, ErrorKind> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| ErrorKind::Io { path: path.to_path_buf(), message: e.to_string() })?;
+    let text = std::fs::read_to_string(path).map_err(|e| ErrorKind::Io {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
     let mut out = Vec::new();
     let mut last = 0i64;
     for line in text.lines() {
@@ -192,10 +196,14 @@ pub fn read_var_file(path: &Path) -> Result<Vec<Define>, ErrorKind> {
         }
         let mut it = t.split_whitespace();
         let (Some(a), Some(b)) = (it.next(), it.next()) else {
-            return Err(ErrorKind::VarFileSyntax { text: t.to_string() });
+            return Err(ErrorKind::VarFileSyntax {
+                text: t.to_string(),
+            });
         };
         let (Ok(i), Ok(v)) = (a.parse::<i64>(), b.parse::<f64>()) else {
-            return Err(ErrorKind::VarFileSyntax { text: t.to_string() });
+            return Err(ErrorKind::VarFileSyntax {
+                text: t.to_string(),
+            });
         };
         if i <= last {
             return Err(ErrorKind::VarFileOrder { index: i });
@@ -220,7 +228,10 @@ impl CommonArgs {
             zero_start: self.zero_start,
             ..Settings::default()
         };
-        let mut search = SearchPath { program_dir: !self.no_program_dir, ..SearchPath::default() };
+        let mut search = SearchPath {
+            program_dir: !self.no_program_dir,
+            ..SearchPath::default()
+        };
         let mut prefixes = Vec::new();
         if let Some(p) = &self.program_prefix {
             prefixes.push(p.clone());
@@ -231,15 +242,21 @@ impl CommonArgs {
         }
         let mut var_file = self.var_file.clone();
         if let Some(ini_path) = &self.ini {
-            let text = std::fs::read_to_string(ini_path)
-                .map_err(|e| ErrorKind::Io { path: ini_path.clone(), message: e.to_string() })?;
+            let text = std::fs::read_to_string(ini_path).map_err(|e| ErrorKind::Io {
+                path: ini_path.clone(),
+                message: e.to_string(),
+            })?;
             let ini = Ini::parse(&text);
             let base = ini_path.parent().map(Path::to_path_buf).unwrap_or_default();
-            let base = if base.as_os_str().is_empty() { PathBuf::from(".") } else { base };
-            if self.program_prefix.is_none() {
-                if let Some(p) = ini.get("DISPLAY", "PROGRAM_PREFIX") {
-                    prefixes.push(resolve_in(&base, p));
-                }
+            let base = if base.as_os_str().is_empty() {
+                PathBuf::from(".")
+            } else {
+                base
+            };
+            if self.program_prefix.is_none()
+                && let Some(p) = ini.get("DISPLAY", "PROGRAM_PREFIX")
+            {
+                prefixes.push(resolve_in(&base, p));
             }
             if let Some(sp) = ini.get("RS274NGC", "SUBROUTINE_PATH") {
                 let existing: Vec<PathBuf> = sp
@@ -250,19 +267,21 @@ impl CommonArgs {
                     .filter(|p| p.is_dir())
                     .collect();
                 if existing.len() > 10 {
-                    return Err(ErrorKind::TooManyPathDirs { count: existing.len() });
+                    return Err(ErrorKind::TooManyPathDirs {
+                        count: existing.len(),
+                    });
                 }
                 dirs.extend(existing);
             }
             if let Some(w) = ini.get("WIZARD", "WIZARD_ROOT") {
                 search.recursive.push(resolve_in(&base, w));
             }
-            if var_file.is_none() {
-                if let Some(v) = ini.get("RS274NGC", "PARAMETER_FILE") {
-                    let p = resolve_in(&base, v);
-                    if p.is_file() {
-                        var_file = Some(p);
-                    }
+            if var_file.is_none()
+                && let Some(v) = ini.get("RS274NGC", "PARAMETER_FILE")
+            {
+                let p = resolve_in(&base, v);
+                if p.is_file() {
+                    var_file = Some(p);
                 }
             }
             settings.fanuc_disabled = ini.flag("RS274NGC", "DISABLE_FANUC_STYLE_SUB");
@@ -276,11 +295,20 @@ impl CommonArgs {
         for d in &self.define {
             settings.defines.push(parse_define(d)?);
         }
-        for word in self.start_position.iter().flat_map(|s| s.split_whitespace()) {
-            let bad = || ErrorKind::BadDefine { text: format!("--start-position {word}") };
+        for word in self
+            .start_position
+            .iter()
+            .flat_map(|s| s.split_whitespace())
+        {
+            let bad = || ErrorKind::BadDefine {
+                text: format!("--start-position {word}"),
+            };
             let mut chars = word.chars();
             let letter = chars.next().ok_or_else(bad)?.to_ascii_lowercase();
-            let axis = crate::eval::state::AXES.iter().position(|&c| c as char == letter).ok_or_else(bad)?;
+            let axis = crate::eval::state::AXES
+                .iter()
+                .position(|&c| c as char == letter)
+                .ok_or_else(bad)?;
             let v: f64 = chars.as_str().parse().map_err(|_| bad())?;
             settings.start_position.push((axis, v));
         }
@@ -290,7 +318,11 @@ impl CommonArgs {
             FormatArg::Json => MessageFormat::Json,
             FormatArg::Github => MessageFormat::Github,
         };
-        Ok(Config { settings, search, format })
+        Ok(Config {
+            settings,
+            search,
+            format,
+        })
     }
 }
 
@@ -306,9 +338,18 @@ mod tests {
 
     #[test]
     fn defines() {
-        assert_eq!(parse_define("5063=-1.25").unwrap(), Define::Numbered(5063, -1.25));
-        assert_eq!(parse_define("Depth=3").unwrap(), Define::Named("depth".into(), 3.0));
-        assert_eq!(parse_define("_g=1").unwrap(), Define::Named("_g".into(), 1.0));
+        assert_eq!(
+            parse_define("5063=-1.25").unwrap(),
+            Define::Numbered(5063, -1.25)
+        );
+        assert_eq!(
+            parse_define("Depth=3").unwrap(),
+            Define::Named("depth".into(), 3.0)
+        );
+        assert_eq!(
+            parse_define("_g=1").unwrap(),
+            Define::Named("_g".into(), 1.0)
+        );
         assert!(parse_define("nothing").is_err());
         assert!(parse_define("0=1").is_err());
         assert!(parse_define("x=inf").is_err());

@@ -30,9 +30,19 @@ pub fn read_source(path: Option<&Path>) -> Result<SourceFile, Error> {
         Some(p) if p.as_os_str() == "-" => read_stdin(),
         Some(p) => {
             let data = std::fs::read(p).map_err(|e| {
-                Diagnostic::error(ErrorKind::Io { path: p.to_path_buf(), message: e.to_string() }, None)
+                Diagnostic::error(
+                    ErrorKind::Io {
+                        path: p.to_path_buf(),
+                        message: e.to_string(),
+                    },
+                    None,
+                )
             })?;
-            Ok(SourceFile::new(p.to_path_buf(), p.display().to_string(), data))
+            Ok(SourceFile::new(
+                p.to_path_buf(),
+                p.display().to_string(),
+                data,
+            ))
         }
     }
 }
@@ -40,18 +50,39 @@ pub fn read_source(path: Option<&Path>) -> Result<SourceFile, Error> {
 fn read_stdin() -> Result<SourceFile, Error> {
     let mut data = Vec::new();
     std::io::stdin().read_to_end(&mut data).map_err(|e| {
-        Diagnostic::error(ErrorKind::Io { path: "<stdin>".into(), message: e.to_string() }, None)
+        Diagnostic::error(
+            ErrorKind::Io {
+                path: "<stdin>".into(),
+                message: e.to_string(),
+            },
+            None,
+        )
     })?;
-    Ok(SourceFile::new(PathBuf::from("<stdin>"), "<stdin>".into(), data))
+    Ok(SourceFile::new(
+        PathBuf::from("<stdin>"),
+        "<stdin>".into(),
+        data,
+    ))
 }
 
 /// Flattens one program. On success returns the warnings; the output has
 /// been released to `dest`. On error nothing was released.
-pub fn flatten(source: SourceFile, settings: &Settings, search: &SearchPath, dest: Destination) -> Result<Vec<Diagnostic>, Error> {
+pub fn flatten(
+    source: SourceFile,
+    settings: &Settings,
+    search: &SearchPath,
+    dest: Destination,
+) -> Result<Vec<Diagnostic>, Error> {
     let main_dir = if source.path.as_os_str() == "<stdin>" {
         None
     } else {
-        Some(source.dir().map(Path::to_path_buf).filter(|d| !d.as_os_str().is_empty()).unwrap_or_else(|| PathBuf::from(".")))
+        Some(
+            source
+                .dir()
+                .map(Path::to_path_buf)
+                .filter(|d| !d.as_os_str().is_empty())
+                .unwrap_or_else(|| PathBuf::from(".")),
+        )
     };
     let index = Rc::new(FileIndex::build(Arc::new(source)));
     let loader = Loader::new(search.clone(), main_dir);
@@ -60,7 +91,13 @@ pub fn flatten(source: SourceFile, settings: &Settings, search: &SearchPath, des
             Destination::File(p) => p.clone(),
             _ => PathBuf::from("<output>"),
         };
-        Diagnostic::error(ErrorKind::Io { path, message: e.to_string() }, None)
+        Diagnostic::error(
+            ErrorKind::Io {
+                path,
+                message: e.to_string(),
+            },
+            None,
+        )
     })?;
     Interp::new(settings, loader, index, sink).run()
 }
@@ -68,9 +105,22 @@ pub fn flatten(source: SourceFile, settings: &Settings, search: &SearchPath, des
 /// Flattens a string (for tests and tools); returns the output text.
 pub fn flatten_str(text: &str, settings: &Settings) -> Result<String, Error> {
     let dir = std::env::temp_dir();
-    let out = dir.join(format!("ngcflat-str-{}-{}.out", std::process::id(), unique()));
-    let src = SourceFile::new(PathBuf::from("<string>"), "<string>".into(), text.as_bytes().to_vec());
-    let r = flatten(src, settings, &SearchPath::default(), Destination::File(out.clone()));
+    let out = dir.join(format!(
+        "ngcflat-str-{}-{}.out",
+        std::process::id(),
+        unique()
+    ));
+    let src = SourceFile::new(
+        PathBuf::from("<string>"),
+        "<string>".into(),
+        text.as_bytes().to_vec(),
+    );
+    let r = flatten(
+        src,
+        settings,
+        &SearchPath::default(),
+        Destination::File(out.clone()),
+    );
     let r = r.map(|_| std::fs::read_to_string(&out).unwrap_or_default());
     let _ = std::fs::remove_file(&out);
     r

@@ -59,7 +59,11 @@ pub enum ErrorKind {
     /// `#<_x>=1`
     NamedReadOnly { name: String },
     /// `G0 X#5061`: a value that exists only on the running machine.
-    RuntimeParam { what: String, why: String, hint: String },
+    RuntimeParam {
+        what: String,
+        why: String,
+        hint: String,
+    },
     /// `(debug, #<open)`
     UnterminatedName,
     /// `(print, #<_x>)` with the X position unknown.
@@ -80,19 +84,31 @@ pub enum ErrorKind {
     /// `o9 endif` with no `o9 if`.
     UndefinedLabel { label: String },
     /// `o1 while [0]` ... `o1 endif`
-    LabelMismatch { label: String, expected: &'static str, found: &'static str, line: u32 },
+    LabelMismatch {
+        label: String,
+        expected: &'static str,
+        found: &'static str,
+        line: u32,
+    },
     /// `o1 sub` inside another sub definition.
     NestedSubDefinition { inner: String, outer: String },
     /// A `sub` line reached by normal flow after the sub was called.
     IllegalSubLocation { name: String },
     /// Two `o<x> sub` definitions.
-    RedefiningSub { name: String, first: PathBuf, first_line: u32 },
+    RedefiningSub {
+        name: String,
+        first: PathBuf,
+        first_line: u32,
+    },
     /// `o1 call [1] ... [31]`
     TooManyArgs,
     /// Recursion ten calls deep.
     TooDeep { limit: usize },
     /// `o<nothere> call` with no definition and no file.
-    SubNotFound { name: String, searched: Vec<PathBuf> },
+    SubNotFound {
+        name: String,
+        searched: Vec<PathBuf>,
+    },
     /// A sub file that does not define the sub it is named after.
     SubNotInFile { name: String, file: PathBuf },
     /// A closing `%` reached while looking for a label.
@@ -123,9 +139,17 @@ pub enum ErrorKind {
     /// An output line longer than 252 characters after substitution.
     OutputLineTooLong { len: usize },
     /// `o1 while [1]` ... `o1 endwhile` with no exit.
-    StepLimit { limit: u64, label: Option<String>, line: Option<u32> },
+    StepLimit {
+        limit: u64,
+        label: Option<String>,
+        line: Option<u32>,
+    },
     /// A loop that writes more lines than `--max-output-lines`.
-    OutputLimit { limit: u64, label: Option<String>, line: Option<u32> },
+    OutputLimit {
+        limit: u64,
+        label: Option<String>,
+        line: Option<u32>,
+    },
     /// A value that cannot be written as a G-code number.
     Unprintable { value: f64 },
     // ------------------------------------------------------------ files and setup
@@ -219,7 +243,11 @@ impl ErrorKind {
     }
 }
 
-fn limit_site(f: &mut fmt::Formatter<'_>, label: &Option<String>, line: &Option<u32>) -> fmt::Result {
+fn limit_site(
+    f: &mut fmt::Formatter<'_>,
+    label: &Option<String>,
+    line: &Option<u32>,
+) -> fmt::Result {
     match (label, line) {
         (Some(l), Some(n)) => write!(f, " (innermost loop: o{l} at line {n})"),
         (Some(l), None) => write!(f, " (innermost loop: o{l})"),
@@ -243,10 +271,16 @@ impl fmt::Display for ErrorKind {
             }
             Syntax { expected } => write!(f, "expected {expected}"),
             BadNumber { text } => write!(f, "'{text}' is not a number"),
-            TrailingNumber { text } => write!(f, "'{text}' is not a number (more than one decimal point)"),
+            TrailingNumber { text } => {
+                write!(f, "'{text}' is not a number (more than one decimal point)")
+            }
             NonInteger { value } => write!(f, "{value} is not an integer"),
             StrayPercent => write!(f, "'%' line in a program that does not start with '%'"),
-            DuplicateWord { letter } => write!(f, "more than one {} word on the line", letter.to_ascii_uppercase()),
+            DuplicateWord { letter } => write!(
+                f,
+                "more than one {} word on the line",
+                letter.to_ascii_uppercase()
+            ),
             TooManyMWords => write!(f, "more than four M words on the line"),
             MisplacedLineNumber => write!(f, "an N line number may only start the line"),
             DivideByZero => write!(f, "division by zero"),
@@ -262,7 +296,10 @@ impl fmt::Display for ErrorKind {
             NamedUndefined { name } => write!(f, "parameter #<{name}> is not defined"),
             NamedReadOnly { name } => write!(f, "parameter #<{name}> is read-only"),
             RuntimeParam { what, why, hint } => {
-                write!(f, "{what} is only known on the running machine ({why}); supply it with {hint}")
+                write!(
+                    f,
+                    "{what} is only known on the running machine ({why}); supply it with {hint}"
+                )
             }
             UnterminatedName => write!(f, "named parameter is not terminated by '>'"),
             UnknownPosition { axis, why } => write!(
@@ -279,25 +316,48 @@ impl fmt::Display for ErrorKind {
                 write!(f, "label o{label} is already used at line {first_line}")
             }
             UndefinedLabel { label } => write!(f, "label o{label} has not been opened"),
-            LabelMismatch { label, expected, found, line } => write!(
+            LabelMismatch {
+                label,
+                expected,
+                found,
+                line,
+            } => write!(
                 f,
                 "o{label} is a '{found}' (line {line}), not a{} '{expected}'",
-                if expected.starts_with(['a', 'e', 'i', 'o', 'u']) { "n" } else { "" }
+                if expected.starts_with(['a', 'e', 'i', 'o', 'u']) {
+                    "n"
+                } else {
+                    ""
+                }
             ),
             NestedSubDefinition { inner, outer } => {
-                write!(f, "subroutine o<{inner}> is defined inside subroutine o<{outer}>")
+                write!(
+                    f,
+                    "subroutine o<{inner}> is defined inside subroutine o<{outer}>"
+                )
             }
             IllegalSubLocation { name } => write!(
                 f,
                 "definition of o<{name}> reached by normal flow after it was called (put subroutines after the program end)"
             ),
-            RedefiningSub { name, first, first_line } => {
-                write!(f, "subroutine o<{name}> is already defined at {}:{first_line}", first.display())
+            RedefiningSub {
+                name,
+                first,
+                first_line,
+            } => {
+                write!(
+                    f,
+                    "subroutine o<{name}> is already defined at {}:{first_line}",
+                    first.display()
+                )
             }
             TooManyArgs => write!(f, "more than 30 subroutine arguments"),
             TooDeep { limit } => write!(f, "subroutine calls nested more than {limit} deep"),
             SubNotFound { name, searched } => {
-                write!(f, "subroutine o<{name}> is not defined and no file {name}.ngc was found")?;
+                write!(
+                    f,
+                    "subroutine o<{name}> is not defined and no file {name}.ngc was found"
+                )?;
                 if searched.is_empty() {
                     write!(f, " (no search folders configured)")
                 } else {
@@ -314,9 +374,14 @@ impl fmt::Display for ErrorKind {
             SubNotInFile { name, file } => {
                 write!(f, "file {} does not define o<{name}> sub", file.display())
             }
-            LabelBeforePercent { label } => write!(f, "closing '%' reached while looking for o{label}"),
+            LabelBeforePercent { label } => {
+                write!(f, "closing '%' reached while looking for o{label}")
+            }
             EofSeeking { label, from_line } => {
-                write!(f, "end of file reached while looking for o{label} (from line {from_line})")
+                write!(
+                    f,
+                    "end of file reached while looking for o{label} (from line {from_line})"
+                )
             }
             MissingProgramEnd { percent: true } => write!(f, "file ends without the closing '%'"),
             MissingProgramEnd { percent: false } => {
@@ -324,18 +389,29 @@ impl fmt::Display for ErrorKind {
             }
             EmptyProgram => write!(f, "the program is empty"),
             M98WithoutP => write!(f, "M98 without a P word"),
-            FanucNeedsM98 { name } => write!(f, "O{name} is an M98 subprogram; call it with M98 P{name}"),
-            SubNeedsCall { name } => write!(f, "o{name} is an O-word subroutine; call it with 'o{name} call'"),
+            FanucNeedsM98 { name } => {
+                write!(f, "O{name} is an M98 subprogram; call it with M98 P{name}")
+            }
+            SubNeedsCall { name } => write!(
+                f,
+                "o{name} is an O-word subroutine; call it with 'o{name} call'"
+            ),
             M99InSub => write!(f, "M99 ends an 'o... sub' subroutine; use 'o... endsub'"),
             EndsubInFanuc => write!(f, "endsub/return inside an M98 subprogram; end it with M99"),
             FanucDisabled { what } => write!(f, "{what} used but DISABLE_FANUC_STYLE_SUB is set"),
             UnterminatedSub { name } => write!(f, "subroutine o<{name}> has no endsub"),
             Abort { message } => write!(f, "program aborted: {message}"),
             OutputLineTooLong { len } => {
-                write!(f, "output line would be {len} characters; the limit is 252 (try --precision)")
+                write!(
+                    f,
+                    "output line would be {len} characters; the limit is 252 (try --precision)"
+                )
             }
             StepLimit { limit, label, line } => {
-                write!(f, "more than {limit} lines executed; runaway loop or recursion?")?;
+                write!(
+                    f,
+                    "more than {limit} lines executed; runaway loop or recursion?"
+                )?;
                 limit_site(f, label, line)?;
                 write!(f, " (raise with --max-steps)")
             }
@@ -344,17 +420,29 @@ impl fmt::Display for ErrorKind {
                 limit_site(f, label, line)?;
                 write!(f, " (raise with --max-output-lines)")
             }
-            Unprintable { value } => write!(f, "value {value} cannot be written as a G-code number"),
+            Unprintable { value } => {
+                write!(f, "value {value} cannot be written as a G-code number")
+            }
             Io { path, message } => write!(f, "{}: {message}", path.display()),
             UnsafeSubName { name } => write!(
                 f,
                 "subroutine name '{name}' could leave the search path; use plain names (letters, digits, '_', '-')"
             ),
-            VarFileOrder { index } => write!(f, "parameter file is not in ascending order at #{index}"),
-            VarFileSyntax { text } => write!(f, "parameter file line '{text}' is not 'number value'"),
-            BadDefine { text } => write!(f, "-D '{text}' is not PARAM=VALUE (e.g. 5063=-1.25, depth=3, _depth=3)"),
+            VarFileOrder { index } => {
+                write!(f, "parameter file is not in ascending order at #{index}")
+            }
+            VarFileSyntax { text } => {
+                write!(f, "parameter file line '{text}' is not 'number value'")
+            }
+            BadDefine { text } => write!(
+                f,
+                "-D '{text}' is not PARAM=VALUE (e.g. 5063=-1.25, depth=3, _depth=3)"
+            ),
             TooManyPathDirs { count } => {
-                write!(f, "SUBROUTINE_PATH has {count} folders; LinuxCNC uses at most 10")
+                write!(
+                    f,
+                    "SUBROUTINE_PATH has {count} folders; LinuxCNC uses at most 10"
+                )
             }
             Unsupported { what } => write!(f, "{what}"),
         }

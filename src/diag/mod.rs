@@ -5,7 +5,7 @@ mod render;
 mod warning_kind;
 
 pub use error_kind::ErrorKind;
-pub use render::{render, LineIndex, MessageFormat};
+pub use render::{LineIndex, MessageFormat, render};
 pub use warning_kind::WarningKind;
 
 use std::fmt;
@@ -23,7 +23,11 @@ pub struct Site {
 
 impl Site {
     pub fn new(file: &Arc<SourceFile>, start: u32, end: u32) -> Site {
-        Site { file: Arc::clone(file), start, end: end.max(start) }
+        Site {
+            file: Arc::clone(file),
+            start,
+            end: end.max(start),
+        }
     }
 }
 
@@ -62,11 +66,19 @@ pub type Error = Box<Diagnostic>;
 
 impl Diagnostic {
     pub fn error(kind: ErrorKind, site: Option<Site>) -> Error {
-        Box::new(Diagnostic { kind: Kind::Error(kind), site, stack: Vec::new() })
+        Box::new(Diagnostic {
+            kind: Kind::Error(kind),
+            site,
+            stack: Vec::new(),
+        })
     }
 
     pub fn warning(kind: WarningKind, site: Option<Site>) -> Diagnostic {
-        Diagnostic { kind: Kind::Warning(kind), site, stack: Vec::new() }
+        Diagnostic {
+            kind: Kind::Warning(kind),
+            site,
+            stack: Vec::new(),
+        }
     }
 
     pub fn level(&self) -> Level {

@@ -28,7 +28,12 @@ pub struct LineIndex<'a> {
 impl<'a> LineIndex<'a> {
     pub fn new(text: &'a [u8]) -> LineIndex<'a> {
         let mut starts = vec![0u32];
-        starts.extend(text.iter().enumerate().filter(|(_, b)| **b == b'\n').map(|(i, _)| i as u32 + 1));
+        starts.extend(
+            text.iter()
+                .enumerate()
+                .filter(|(_, b)| **b == b'\n')
+                .map(|(i, _)| i as u32 + 1),
+        );
         LineIndex { text, starts }
     }
 
@@ -37,7 +42,9 @@ impl<'a> LineIndex<'a> {
         let offset = offset.min(self.text.len() as u32);
         let line = self.starts.partition_point(|&s| s <= offset).max(1) - 1;
         let start = self.starts[line] as usize;
-        let col = String::from_utf8_lossy(&self.text[start..offset as usize]).chars().count();
+        let col = String::from_utf8_lossy(&self.text[start..offset as usize])
+            .chars()
+            .count();
         (line as u32 + 1, col as u32 + 1)
     }
 
@@ -45,7 +52,11 @@ impl<'a> LineIndex<'a> {
     pub fn line_text(&self, line: u32) -> Cow<'a, str> {
         let i = (line as usize).saturating_sub(1).min(self.starts.len() - 1);
         let start = self.starts[i] as usize;
-        let end = self.starts.get(i + 1).map(|&e| e as usize - 1).unwrap_or(self.text.len());
+        let end = self
+            .starts
+            .get(i + 1)
+            .map(|&e| e as usize - 1)
+            .unwrap_or(self.text.len());
         let mut s = &self.text[start..end.max(start)];
         while let [rest @ .., b'\r'] = s {
             s = rest;
@@ -97,7 +108,9 @@ fn json_str(out: &mut String, s: &str) {
 }
 
 fn github_escape(s: &str) -> String {
-    s.replace('%', "%25").replace('\r', "%0D").replace('\n', "%0A")
+    s.replace('%', "%25")
+        .replace('\r', "%0D")
+        .replace('\n', "%0A")
 }
 
 fn github_prop(s: &str) -> String {
@@ -169,7 +182,10 @@ pub fn render(d: &Diagnostic, format: MessageFormat, color: bool) -> String {
                 }
                 None => out.push_str("null,\"line\":null,\"column\":null,\"end\":null"),
             }
-            let _ = write!(out, ",\"level\":\"{level}\",\"code\":\"{code}\",\"message\":");
+            let _ = write!(
+                out,
+                ",\"level\":\"{level}\",\"code\":\"{code}\",\"message\":"
+            );
             json_str(&mut out, &message);
             out.push_str(",\"call_stack\":[");
             for (i, c) in stack.iter().enumerate() {
@@ -184,7 +200,11 @@ pub fn render(d: &Diagnostic, format: MessageFormat, color: bool) -> String {
         }
         MessageFormat::Human => {
             let (lvl, bold, blue, reset) = if color {
-                let c = if level == Level::Error { "\x1b[1;31m" } else { "\x1b[1;33m" };
+                let c = if level == Level::Error {
+                    "\x1b[1;31m"
+                } else {
+                    "\x1b[1;33m"
+                };
                 (c, "\x1b[1m", "\x1b[1;34m", "\x1b[0m")
             } else {
                 ("", "", "", "")
@@ -207,7 +227,11 @@ pub fn render(d: &Diagnostic, format: MessageFormat, color: bool) -> String {
                     .take(l.col as usize - 1)
                     .map(|c| if c == '\t' { '\t' } else { ' ' })
                     .collect();
-                let _ = writeln!(out, "{pad} {blue}|{reset} {lead}{lvl}{}{reset}", "^".repeat(width));
+                let _ = writeln!(
+                    out,
+                    "{pad} {blue}|{reset} {lead}{lvl}{}{reset}",
+                    "^".repeat(width)
+                );
             }
             for c in &stack {
                 let _ = writeln!(out, "  = note: called from {}:{}:{}", c.file, c.line, c.col);

@@ -16,7 +16,11 @@ pub enum WarningKind {
     /// Lines after `M2` that can never run.
     UnreachableAfterEnd { line: u32 },
     /// A sub file found in two folders of the search path.
-    ShadowedSubFile { name: String, used: PathBuf, shadowed: PathBuf },
+    ShadowedSubFile {
+        name: String,
+        used: PathBuf,
+        shadowed: PathBuf,
+    },
     /// A `(debug/print/log, ...)` text that changes meaning if read again.
     MessageNotStable,
     /// The reference evaluates a condition ngcflat skips, and it would fail.
@@ -65,9 +69,18 @@ impl fmt::Display for WarningKind {
         match self {
             CommentOnOLine => write!(f, "a comment on an O-word line is never executed"),
             UnusedSub { name } => write!(f, "subroutine o<{name}> is never called"),
-            ReadBeforeSet { index } => write!(f, "parameter #{index} is read before anything sets it (reads 0)"),
-            UnreachableAfterEnd { line } => write!(f, "code after the program end (line {line}) never runs"),
-            ShadowedSubFile { name, used, shadowed } => write!(
+            ReadBeforeSet { index } => write!(
+                f,
+                "parameter #{index} is read before anything sets it (reads 0)"
+            ),
+            UnreachableAfterEnd { line } => {
+                write!(f, "code after the program end (line {line}) never runs")
+            }
+            ShadowedSubFile {
+                name,
+                used,
+                shadowed,
+            } => write!(
                 f,
                 "{name}.ngc in {} hides the one in {}",
                 used.display(),
@@ -97,7 +110,10 @@ impl fmt::Display for WarningKind {
                 f,
                 "recursive call inside a repeat: LinuxCNC shares one counter across the calls; ngcflat counts each call"
             ),
-            QuirkL0 => write!(f, "M98 with L0: LinuxCNC leaves a call frame behind; ngcflat does not"),
+            QuirkL0 => write!(
+                f,
+                "M98 with L0: LinuxCNC leaves a call frame behind; ngcflat does not"
+            ),
             QuirkNestedSubInCall => write!(f, "sub definition inside a called subroutine"),
             QuirkDefinitionValue => write!(
                 f,

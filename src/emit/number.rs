@@ -29,7 +29,10 @@ fn write_shortest(out: &mut Vec<u8>, v: f64) {
     // Split mantissa and exponent.
     let (mant, exp) = match s.iter().position(|&b| b == b'e' || b == b'E') {
         Some(i) => {
-            let e = std::str::from_utf8(&s[i + 1..]).ok().and_then(|t| t.parse::<i32>().ok()).unwrap_or(0);
+            let e = std::str::from_utf8(&s[i + 1..])
+                .ok()
+                .and_then(|t| t.parse::<i32>().ok())
+                .unwrap_or(0);
             (&s[..i], e)
         }
         None => (s, 0),
@@ -79,14 +82,39 @@ fn write_shortest(out: &mut Vec<u8>, v: f64) {
 fn write_fixed(out: &mut Vec<u8>, v: f64, p: u8) {
     let p = p.min(15);
     let scale = 10f64.powi(p as i32);
-    let scaled = (v * scale).round();
-    if scaled.abs() >= 9.0e15 {
-        // Too large for exact integer scaling: the value has no fraction
-        // digits worth keeping at this size.
-        write_shortest(out, v.round());
+    let scaled = v * scale;
+    let frac = (scaled - scaled.trunc()).abs();
+    // Fast path only where the product is exact enough to round correctly;
+    // near a tie or for large values, round the exact decimal expansion.
+    if scaled.abs() >= 1.0e12 || (frac - 0.5).abs() < 1.0e-3 {
+        let s = format!("{v:.prec$}", prec = p as usize);
+        let s = s.as_bytes();
+        let (neg, digits) = match s.first() {
+            Some(b'-') => (true, &s[1..]),
+            _ => (false, s),
+        };
+        let digits = match digits.iter().position(|&b| b == b'.') {
+            Some(dot) => {
+                let frac = trim_zeros(&digits[dot + 1..]);
+                if frac.is_empty() {
+                    &digits[..dot]
+                } else {
+                    &digits[..dot + 1 + frac.len()]
+                }
+            }
+            None => digits,
+        };
+        if digits.iter().all(|&b| b == b'0' || b == b'.') {
+            out.push(b'0');
+            return;
+        }
+        if neg {
+            out.push(b'-');
+        }
+        out.extend_from_slice(digits);
         return;
     }
-    let mut n = scaled as i64;
+    let mut n = scaled.round() as i64;
     if n == 0 {
         out.push(b'0');
         return;

@@ -24,8 +24,19 @@ impl TempFile {
         for _ in 0..100 {
             let n = COUNTER.fetch_add(1, Ordering::Relaxed);
             let path = dir.join(format!(".ngcflat-{}-{n}.tmp", std::process::id()));
-            match File::options().read(true).write(true).create_new(true).open(&path) {
-                Ok(f) => return Ok(TempFile { path, file: BufWriter::with_capacity(1 << 16, f), keep: false }),
+            match File::options()
+                .read(true)
+                .write(true)
+                .create_new(true)
+                .open(&path)
+            {
+                Ok(f) => {
+                    return Ok(TempFile {
+                        path,
+                        file: BufWriter::with_capacity(1 << 16, f),
+                        keep: false,
+                    });
+                }
                 Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
                 Err(e) => return Err(e),
             }
@@ -69,7 +80,11 @@ impl Sink {
             }
             _ => None,
         };
-        Ok(Sink { mem: Vec::with_capacity(1 << 16), spill, dest })
+        Ok(Sink {
+            mem: Vec::with_capacity(1 << 16),
+            spill,
+            dest,
+        })
     }
 
     /// Appends bytes (whole lines).

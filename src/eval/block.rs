@@ -6,13 +6,13 @@ use std::rc::Rc;
 
 use crate::diag::{ErrorKind, WarningKind};
 use crate::emit::write_number;
-use crate::parse::ast::{CommentKind, Item, Line, ParamRef, Span};
 use crate::parse::MAX_LINE;
+use crate::parse::ast::{CommentKind, Item, Line, ParamRef, Span};
 use crate::program::FileIndex;
 
+use super::Interp;
 use super::message::is_stable;
 use super::params::is_read_only;
-use super::Interp;
 
 /// How a span of the raw line is rewritten.
 enum Repl {
@@ -45,16 +45,25 @@ impl Interp<'_> {
         for item in items {
             match item {
                 Item::Word(w) => {
-                    let v = self.eval(&w.value).map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
+                    let v = self
+                        .eval(&w.value)
+                        .map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
                     let bit = 1u32 << (w.letter.wrapping_sub(b'a') as u32 & 31);
                     if w.letter == b'm' {
                         m_count += 1;
                         if m_count > 4 {
-                            return Err(self.error_in_line(ErrorKind::TooManyMWords, file, start, w.span));
+                            return Err(self.error_in_line(
+                                ErrorKind::TooManyMWords,
+                                file,
+                                start,
+                                w.span,
+                            ));
                         }
                     } else if w.letter != b'g' && w.letter.is_ascii_lowercase() {
                         if seen & bit != 0 {
-                            let k = ErrorKind::DuplicateWord { letter: w.letter as char };
+                            let k = ErrorKind::DuplicateWord {
+                                letter: w.letter as char,
+                            };
                             return Err(self.error_in_line(k, file, start, w.span));
                         }
                         seen |= bit;
@@ -67,18 +76,24 @@ impl Interp<'_> {
                 Item::Assign(a) => {
                     match &a.target {
                         ParamRef::Numbered(index) => {
-                            let i = self.param_index(index).map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
+                            let i = self
+                                .param_index(index)
+                                .map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
                             if is_read_only(i) {
                                 let k = ErrorKind::ParamReadOnly { index: i as i64 };
                                 return Err(self.error_in_line(k, file, start, a.target_span));
                             }
-                            let v = self.eval(&a.value).map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
+                            let v = self
+                                .eval(&a.value)
+                                .map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
                             num_set.push((i, v));
                         }
                         ParamRef::Named(name) => {
                             self.create_named(name, a.target_span)
                                 .map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
-                            let v = self.eval(&a.value).map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
+                            let v = self
+                                .eval(&a.value)
+                                .map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
                             named_set.push((name.clone(), v));
                         }
                     }
@@ -103,21 +118,32 @@ impl Interp<'_> {
         }
         // 3. The active comment, after the assignments.
         if let Some(c) = active {
-            let body = String::from_utf8_lossy(&raw[c.body.start as usize..c.body.end as usize]).into_owned();
+            let body = String::from_utf8_lossy(&raw[c.body.start as usize..c.body.end as usize])
+                .into_owned();
             match c.kind {
                 CommentKind::Debug | CommentKind::Print | CommentKind::Log | CommentKind::Abort => {
                     let text = self
                         .substitute(&body, c.body.start)
                         .map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
                     if c.kind == CommentKind::Abort {
-                        return Err(self.error_in_line(ErrorKind::Abort { message: text }, file, start, c.span));
+                        return Err(self.error_in_line(
+                            ErrorKind::Abort { message: text },
+                            file,
+                            start,
+                            c.span,
+                        ));
                     }
                     if !self.s.strip_comments {
                         if c.kind == CommentKind::Debug && self.params.values[5599] <= 0.0 {
                             repl.push((c.span, Repl::Remove));
                         } else {
                             if !is_stable(&text) {
-                                self.warn(WarningKind::MessageNotStable, file, start + c.span.start, start + c.span.end);
+                                self.warn(
+                                    WarningKind::MessageNotStable,
+                                    file,
+                                    start + c.span.start,
+                                    start + c.span.end,
+                                );
                             }
                             repl.push((c.body, Repl::Text(text)));
                         }
@@ -154,7 +180,9 @@ impl Interp<'_> {
                 Item::Assign(_) => false,
                 Item::Comment(c) => {
                     !self.s.strip_comments
-                        && !repl.iter().any(|(s, r)| matches!(r, Repl::Remove) && *s == c.span)
+                        && !repl
+                            .iter()
+                            .any(|(s, r)| matches!(r, Repl::Remove) && *s == c.span)
                 }
             })
             .count();
@@ -181,7 +209,10 @@ impl Interp<'_> {
     ) -> Result<(), crate::diag::Error> {
         let mut out = std::mem::take(&mut self.out);
         out.clear();
-        let trimmed_len = raw.iter().rposition(|b| !b.is_ascii_whitespace()).map_or(0, |p| p + 1);
+        let trimmed_len = raw
+            .iter()
+            .rposition(|b| !b.is_ascii_whitespace())
+            .map_or(0, |p| p + 1);
         if repl.is_empty() {
             out.extend_from_slice(&raw[..trimmed_len]);
         } else {
@@ -197,7 +228,12 @@ impl Interp<'_> {
                     Repl::Number(v) => {
                         if !write_number(&mut out, *v, self.s.precision) {
                             self.out = out;
-                            return Err(self.error_in_line(ErrorKind::Unprintable { value: *v }, file, start, *span));
+                            return Err(self.error_in_line(
+                                ErrorKind::Unprintable { value: *v },
+                                file,
+                                start,
+                                *span,
+                            ));
                         }
                     }
                     Repl::Text(t) => out.extend_from_slice(t.as_bytes()),

@@ -7,10 +7,10 @@ use std::rc::Rc;
 use crate::diag::{Error, ErrorKind, WarningKind};
 use crate::parse::ast::{Label, LineKind, OKind, OLine};
 use crate::parse::integer_value;
-use crate::program::{control_key, FileIndex};
+use crate::program::{FileIndex, control_key};
 
 use super::expr::round_half_even_int;
-use super::{Cursor, Frame, FrameKind, Interp, LabelRec, SubRec, MAX_CALL_LEVEL};
+use super::{Cursor, Frame, FrameKind, Interp, LabelRec, MAX_CALL_LEVEL, SubRec};
 
 /// What a forward search was looking for (for the error when nothing is found).
 enum Seek {
@@ -37,9 +37,15 @@ impl Interp<'_> {
     }
 
     /// Evaluates an expression of an O-line.
-    fn o_eval(&mut self, file: &Rc<FileIndex>, oidx: u32, e: &crate::parse::ast::Expr) -> Result<f64, Error> {
+    fn o_eval(
+        &mut self,
+        file: &Rc<FileIndex>,
+        oidx: u32,
+        e: &crate::parse::ast::Expr,
+    ) -> Result<f64, Error> {
         let start = file.olines[oidx as usize].start;
-        self.eval(e).map_err(|(k, s)| self.error_in_line(k, file, start, s))
+        self.eval(e)
+            .map_err(|(k, s)| self.error_in_line(k, file, start, s))
     }
 
     /// The label text of an O-line (computed labels are evaluated).
@@ -67,27 +73,51 @@ impl Interp<'_> {
         let label = self.label_text(file, oidx)?;
         let info = &file.olines[oidx as usize];
         let kind = info.kind().unwrap_or(OKind::Bare);
-        Ok(if kind.is_control() { control_key(&info.scope, &label) } else { label })
+        Ok(if kind.is_control() {
+            control_key(&info.scope, &label)
+        } else {
+            label
+        })
     }
 
     /// Moves reading to an O-line (`after`: to the line after it).
     fn goto(&mut self, file: &Rc<FileIndex>, oidx: u32, after: bool) {
         let o = &file.olines[oidx as usize];
         self.cur = if after {
-            Cursor { file: file.clone(), pos: o.next, line: o.line_idx + 1, next_o: oidx as usize + 1 }
+            Cursor {
+                file: file.clone(),
+                pos: o.next,
+                line: o.line_idx + 1,
+                next_o: oidx as usize + 1,
+            }
         } else {
-            Cursor { file: file.clone(), pos: o.start, line: o.line_idx, next_o: oidx as usize }
+            Cursor {
+                file: file.clone(),
+                pos: o.start,
+                line: o.line_idx,
+                next_o: oidx as usize,
+            }
         };
     }
 
     /// Finds the next O-line after `from` whose label key is `key`, raising
     /// the errors of the lines skipped on the way.
-    fn seek(&mut self, file: &Rc<FileIndex>, from: u32, key: &Rc<str>, what: Seek, only: &[OKind]) -> Result<u32, Error> {
+    fn seek(
+        &mut self,
+        file: &Rc<FileIndex>,
+        from: u32,
+        key: &Rc<str>,
+        what: Seek,
+        only: &[OKind],
+    ) -> Result<u32, Error> {
         let from_line = file.olines[from as usize].line_idx;
         let mut best: Option<u32> = None;
         if let Some(list) = file.occ.get(key) {
             let p = list.partition_point(|&j| j <= from);
-            best = list[p..].iter().copied().find(|&j| only.is_empty() || file.kind_of(j).is_some_and(|k| only.contains(&k)));
+            best = list[p..]
+                .iter()
+                .copied()
+                .find(|&j| only.is_empty() || file.kind_of(j).is_some_and(|k| only.contains(&k)));
         }
         if !file.dynamic.is_empty() {
             let p = file.dynamic.partition_point(|&j| j <= from);
@@ -98,7 +128,9 @@ impl Interp<'_> {
                 if !only.is_empty() && !file.kind_of(j).is_some_and(|k| only.contains(&k)) {
                     continue;
                 }
-                if file.olines[j as usize].scope != file.olines[from as usize].scope && matches!(what, Seek::Control) {
+                if file.olines[j as usize].scope != file.olines[from as usize].scope
+                    && matches!(what, Seek::Control)
+                {
                     continue;
                 }
                 if self.key_of(file, j)? == *key {
@@ -107,26 +139,33 @@ impl Interp<'_> {
                 }
             }
         }
-        let until = best.map(|b| file.olines[b as usize].line_idx).unwrap_or(u32::MAX);
+        let until = best
+            .map(|b| file.olines[b as usize].line_idx)
+            .unwrap_or(u32::MAX);
         if let Some((_, start, e)) = file.skipped_error(from_line, until) {
             return Err(self.error_in_line(e.kind.clone(), file, *start, e.span));
         }
-        if Rc::ptr_eq(file, &self.main) && self.main.percent_start {
-            if let Some(pl) = file.percent_after(from_line) {
-                if pl < until {
-                    let label = key.to_string();
-                    let (a, b) = self.osite(file, from);
-                    return Err(self.error(ErrorKind::LabelBeforePercent { label }, file, a, b));
-                }
-            }
+        if Rc::ptr_eq(file, &self.main)
+            && self.main.percent_start
+            && let Some(pl) = file.percent_after(from_line)
+            && pl < until
+        {
+            let label = key.to_string();
+            let (a, b) = self.osite(file, from);
+            return Err(self.error(ErrorKind::LabelBeforePercent { label }, file, a, b));
         }
         match best {
             Some(b) => Ok(b),
             None => {
                 let (a, b) = self.osite(file, from);
                 let kind = match what {
-                    Seek::Control => ErrorKind::MissingProgramEnd { percent: self.main.percent_start },
-                    Seek::Sub { from_line } => ErrorKind::EofSeeking { label: key.to_string(), from_line },
+                    Seek::Control => ErrorKind::MissingProgramEnd {
+                        percent: self.main.percent_start,
+                    },
+                    Seek::Sub { from_line } => ErrorKind::EofSeeking {
+                        label: key.to_string(),
+                        from_line,
+                    },
                 };
                 Err(self.error(kind, file, a, b))
             }
@@ -137,7 +176,13 @@ impl Interp<'_> {
         self.frames.last_mut().expect("frame")
     }
 
-    fn record(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Rc<str>, kind: OKind) -> Result<(), Error> {
+    fn record(
+        &mut self,
+        file: &Rc<FileIndex>,
+        oidx: u32,
+        key: &Rc<str>,
+        kind: OKind,
+    ) -> Result<(), Error> {
         let line = file.olines[oidx as usize].line_idx;
         if let Some(rec) = self.frame().labels.get(key) {
             if rec.line != line && matches!(kind, OKind::If | OKind::While | OKind::Repeat) {
@@ -149,18 +194,38 @@ impl Interp<'_> {
                 return Ok(());
             }
         }
-        self.frame().labels.insert(key.clone(), LabelRec { kind, oidx, line, repeat: -1 });
+        self.frame().labels.insert(
+            key.clone(),
+            LabelRec {
+                kind,
+                oidx,
+                line,
+                repeat: -1,
+            },
+        );
         Ok(())
     }
 
     /// The record of a label that must exist and be one of `kinds`.
-    fn expect(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Rc<str>, kinds: &[OKind], expected: &'static str) -> Result<LabelRec, Error> {
+    fn expect(
+        &mut self,
+        file: &Rc<FileIndex>,
+        oidx: u32,
+        key: &Rc<str>,
+        kinds: &[OKind],
+        expected: &'static str,
+    ) -> Result<LabelRec, Error> {
         let label = || -> String { key.rsplit('#').next().unwrap_or("").to_string() };
         match self.frame().labels.get(key).cloned() {
             None => Err(self.oerr(ErrorKind::UndefinedLabel { label: label() }, file, oidx)),
             Some(rec) if kinds.contains(&rec.kind) => Ok(rec),
             Some(rec) => Err(self.oerr(
-                ErrorKind::LabelMismatch { label: label(), expected, found: rec.kind.name(), line: rec.line + 1 },
+                ErrorKind::LabelMismatch {
+                    label: label(),
+                    expected,
+                    found: rec.kind.name(),
+                    line: rec.line + 1,
+                },
                 file,
                 oidx,
             )),
@@ -176,11 +241,18 @@ impl Interp<'_> {
     /// Evaluates a condition the reference evaluates but ngcflat skips; warns
     /// if it would fail there.
     fn probe_condition(&mut self, file: &Rc<FileIndex>, oidx: u32) {
-        if let Some(e) = self.oline(file, oidx).expr.clone() {
-            if let Err((k, _)) = self.eval(&e) {
-                let (a, b) = self.osite(file, oidx);
-                self.warn(WarningKind::QuirkSkippedCondition { message: k.to_string() }, file, a, b);
-            }
+        if let Some(e) = self.oline(file, oidx).expr.clone()
+            && let Err((k, _)) = self.eval(&e)
+        {
+            let (a, b) = self.osite(file, oidx);
+            self.warn(
+                WarningKind::QuirkSkippedCondition {
+                    message: k.to_string(),
+                },
+                file,
+                a,
+                b,
+            );
         }
     }
 
@@ -246,7 +318,11 @@ impl Interp<'_> {
                 Ok(())
             }
             OKind::While => {
-                let is_do_end = self.frame().labels.get(&key).is_some_and(|r| r.kind == OKind::Do);
+                let is_do_end = self
+                    .frame()
+                    .labels
+                    .get(&key)
+                    .is_some_and(|r| r.kind == OKind::Do);
                 let c = self.o_eval(file, oidx, o.expr.as_ref().expect("condition"))?;
                 if is_do_end {
                     let rec = self.frame().labels.get(&key).cloned().expect("do record");
@@ -277,7 +353,12 @@ impl Interp<'_> {
             }
             OKind::Repeat => {
                 self.record(file, oidx, &key, OKind::Repeat)?;
-                let count = self.frame().labels.get(&key).map(|r| r.repeat).unwrap_or(-1);
+                let count = self
+                    .frame()
+                    .labels
+                    .get(&key)
+                    .map(|r| r.repeat)
+                    .unwrap_or(-1);
                 let mut count = count;
                 if count == -1 {
                     let n = self.o_eval(file, oidx, o.expr.as_ref().expect("count"))?;
@@ -303,7 +384,7 @@ impl Interp<'_> {
                 Ok(())
             }
             OKind::Break | OKind::Continue => {
-                let expected = if o.kind == OKind::Break { "while/do" } else { "while/do" };
+                let expected = "while/do";
                 let rec = self.expect(file, oidx, &key, &[OKind::While, OKind::Do], expected)?;
                 let t = self.seek(file, oidx, &key, Seek::Control, &[])?;
                 let tkind = file.kind_of(t);
@@ -355,10 +436,22 @@ impl Interp<'_> {
             OKind::Call => self.call(file, oidx, &key),
             OKind::Bare => {
                 if self.s.fanuc_disabled {
-                    return Err(self.oerr(ErrorKind::FanucDisabled { what: "a bare O-word" }, file, oidx));
+                    return Err(self.oerr(
+                        ErrorKind::FanucDisabled {
+                            what: "a bare O-word",
+                        },
+                        file,
+                        oidx,
+                    ));
                 }
                 if self.level() > 0 {
-                    return Err(self.oerr(ErrorKind::FanucNeedsM98 { name: key.to_string() }, file, oidx));
+                    return Err(self.oerr(
+                        ErrorKind::FanucNeedsM98 {
+                            name: key.to_string(),
+                        },
+                        file,
+                        oidx,
+                    ));
                 }
                 Ok(())
             }
@@ -372,7 +465,16 @@ impl Interp<'_> {
         let found = file.kind_of(t).map(|k| k.name()).unwrap_or("?");
         let rec = self.frame().labels.get(key).cloned();
         let (expected, line) = rec.map(|r| (r.kind.name(), r.line + 1)).unwrap_or(("?", 0));
-        Err(self.oerr(ErrorKind::LabelMismatch { label, expected, found, line }, file, t))
+        Err(self.oerr(
+            ErrorKind::LabelMismatch {
+                label,
+                expected,
+                found,
+                line,
+            },
+            file,
+            t,
+        ))
     }
 
     fn skip_if(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Rc<str>) -> Result<(), Error> {
@@ -407,7 +509,14 @@ impl Interp<'_> {
     }
 
     /// Leaves a loop at its end line `t` (found by skipping).
-    fn loop_exit(&mut self, file: &Rc<FileIndex>, t: u32, key: &Rc<str>, end: OKind, _what: &str) -> Result<(), Error> {
+    fn loop_exit(
+        &mut self,
+        file: &Rc<FileIndex>,
+        t: u32,
+        key: &Rc<str>,
+        end: OKind,
+        _what: &str,
+    ) -> Result<(), Error> {
         if file.kind_of(t) != Some(end) {
             return self.stray(file, t, key);
         }
@@ -423,27 +532,66 @@ impl Interp<'_> {
     /// skip.
     fn reach_sub(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Rc<str>) -> Result<(), Error> {
         if self.level() > 0 {
-            let outer = self.frames.last().map(|f| f.name.to_string()).unwrap_or_default();
-            return Err(self.oerr(ErrorKind::NestedSubDefinition { inner: key.to_string(), outer }, file, oidx));
+            let outer = self
+                .frames
+                .last()
+                .map(|f| f.name.to_string())
+                .unwrap_or_default();
+            return Err(self.oerr(
+                ErrorKind::NestedSubDefinition {
+                    inner: key.to_string(),
+                    outer,
+                },
+                file,
+                oidx,
+            ));
         }
         if let Some(rec) = self.subs.get(key) {
             if Rc::ptr_eq(&rec.file, file) && rec.oidx == oidx {
-                return Err(self.oerr(ErrorKind::IllegalSubLocation { name: key.to_string() }, file, oidx));
+                return Err(self.oerr(
+                    ErrorKind::IllegalSubLocation {
+                        name: key.to_string(),
+                    },
+                    file,
+                    oidx,
+                ));
             }
             let first = rec.file.file.path.clone();
             let first_line = rec.file.olines[rec.oidx as usize].line_idx + 1;
-            return Err(self.oerr(ErrorKind::RedefiningSub { name: key.to_string(), first, first_line }, file, oidx));
+            return Err(self.oerr(
+                ErrorKind::RedefiningSub {
+                    name: key.to_string(),
+                    first,
+                    first_line,
+                },
+                file,
+                oidx,
+            ));
         }
-        self.subs.insert(key.clone(), SubRec { file: file.clone(), oidx });
+        self.subs.insert(
+            key.clone(),
+            SubRec {
+                file: file.clone(),
+                oidx,
+            },
+        );
         let def = file.defs.get(&oidx).cloned().expect("sub definition");
-        if let Some((j, inner)) = &def.nested {
-            if def.end.is_none_or(|e| *j < e) {
-                let k = ErrorKind::NestedSubDefinition { inner: inner.to_string(), outer: key.to_string() };
-                return Err(self.oerr(k, file, *j));
-            }
+        if let Some((j, inner)) = &def.nested
+            && def.end.is_none_or(|e| *j < e)
+        {
+            let k = ErrorKind::NestedSubDefinition {
+                inner: inner.to_string(),
+                outer: key.to_string(),
+            };
+            return Err(self.oerr(k, file, *j));
         }
-        let end_line = def.end.map(|e| file.olines[e as usize].line_idx).unwrap_or(u32::MAX);
-        if let Some((_, start, e)) = file.skipped_error(file.olines[oidx as usize].line_idx, end_line) {
+        let end_line = def
+            .end
+            .map(|e| file.olines[e as usize].line_idx)
+            .unwrap_or(u32::MAX);
+        if let Some((_, start, e)) =
+            file.skipped_error(file.olines[oidx as usize].line_idx, end_line)
+        {
             return Err(self.error_in_line(e.kind.clone(), file, *start, e.span));
         }
         // The reference evaluates valued endsub/return lines of the
@@ -469,21 +617,37 @@ impl Interp<'_> {
                 self.goto(file, e, true);
                 Ok(())
             }
-            None => Err(self.oerr(ErrorKind::UnterminatedSub { name: key.to_string() }, file, oidx)),
+            None => Err(self.oerr(
+                ErrorKind::UnterminatedSub {
+                    name: key.to_string(),
+                },
+                file,
+                oidx,
+            )),
         }
     }
 
     /// Finds a subroutine: registered, then a file on the search path, then
     /// further down the current file.
-    fn resolve(&mut self, file: &Rc<FileIndex>, oidx: u32, name: &Rc<str>) -> Result<SubRec, Error> {
+    fn resolve(
+        &mut self,
+        file: &Rc<FileIndex>,
+        oidx: u32,
+        name: &Rc<str>,
+    ) -> Result<SubRec, Error> {
         let base: Rc<str> = Rc::from(name.rsplit('/').next().unwrap_or(name));
         if let Some(rec) = self.subs.get(&base) {
             return Ok(rec.clone());
         }
-        let found = self.loader.find(name).map_err(|k| self.oerr(k, file, oidx))?;
+        let found = self
+            .loader
+            .find(name)
+            .map_err(|k| self.oerr(k, file, oidx))?;
         if let Some(sub_file) = found {
             let target = sub_file.occ.get(&base).and_then(|l| {
-                l.iter().copied().find(|&j| matches!(sub_file.kind_of(j), Some(OKind::Sub | OKind::Bare)))
+                l.iter()
+                    .copied()
+                    .find(|&j| matches!(sub_file.kind_of(j), Some(OKind::Sub | OKind::Bare)))
             });
             let Some(t) = target else {
                 let k = crate::program::not_in_file(&base, &sub_file.file);
@@ -491,31 +655,69 @@ impl Interp<'_> {
             };
             let until = sub_file.olines[t as usize].line_idx;
             if let Some((_, start, e)) = sub_file.skipped_error(0, until).or_else(|| {
-                sub_file.skip_errors.first().filter(|e| e.0 == 0 && until > 0)
+                sub_file
+                    .skip_errors
+                    .first()
+                    .filter(|e| e.0 == 0 && until > 0)
             }) {
                 let mut err = self.error_in_line(e.kind.clone(), &sub_file, *start, e.span);
                 let (a, b) = self.osite(file, oidx);
-                err.stack.insert(0, crate::diag::Site::new(&file.file, a, b));
+                err.stack
+                    .insert(0, crate::diag::Site::new(&file.file, a, b));
                 return Err(err);
             }
-            return Ok(SubRec { file: sub_file, oidx: t });
+            return Ok(SubRec {
+                file: sub_file,
+                oidx: t,
+            });
         }
         // Forward search in the current file.
         let line = file.olines[oidx as usize].line_idx;
-        let t = self.seek(file, oidx, &base, Seek::Sub { from_line: line + 1 }, &[OKind::Sub, OKind::Bare]);
+        let t = self.seek(
+            file,
+            oidx,
+            &base,
+            Seek::Sub {
+                from_line: line + 1,
+            },
+            &[OKind::Sub, OKind::Bare],
+        );
         match t {
-            Ok(t) => Ok(SubRec { file: file.clone(), oidx: t }),
+            Ok(t) => Ok(SubRec {
+                file: file.clone(),
+                oidx: t,
+            }),
             Err(e) if matches!(e.error_kind(), Some(ErrorKind::EofSeeking { .. })) => {
                 let searched = self.loader.searched();
-                Err(self.oerr(ErrorKind::SubNotFound { name: name.to_string(), searched }, file, oidx))
+                Err(self.oerr(
+                    ErrorKind::SubNotFound {
+                        name: name.to_string(),
+                        searched,
+                    },
+                    file,
+                    oidx,
+                ))
             }
             Err(e) => Err(e),
         }
     }
 
-    fn push_frame(&mut self, file: &Rc<FileIndex>, oidx: u32, kind: FrameKind, name: Rc<str>, ret: Cursor) -> Result<(), Error> {
+    fn push_frame(
+        &mut self,
+        file: &Rc<FileIndex>,
+        oidx: u32,
+        kind: FrameKind,
+        name: Rc<str>,
+        ret: Cursor,
+    ) -> Result<(), Error> {
         if self.level() + 1 > MAX_CALL_LEVEL {
-            return Err(self.oerr(ErrorKind::TooDeep { limit: MAX_CALL_LEVEL }, file, oidx));
+            return Err(self.oerr(
+                ErrorKind::TooDeep {
+                    limit: MAX_CALL_LEVEL,
+                },
+                file,
+                oidx,
+            ));
         }
         let (a, b) = self.osite(file, oidx);
         let mut f = Frame::new(kind, name);
@@ -534,18 +736,37 @@ impl Interp<'_> {
         let target = self.resolve(file, oidx, key)?;
         let base: Rc<str> = Rc::from(key.rsplit('/').next().unwrap_or(key));
         if target.file.kind_of(target.oidx) == Some(OKind::Bare) {
-            return Err(self.oerr(ErrorKind::FanucNeedsM98 { name: base.to_string() }, file, oidx));
+            return Err(self.oerr(
+                ErrorKind::FanucNeedsM98 {
+                    name: base.to_string(),
+                },
+                file,
+                oidx,
+            ));
         }
         // Recursion from inside a running repeat shares its counter in the
         // reference.
-        if self.frame().name == base && self.frame().labels.values().any(|r| r.kind == OKind::Repeat && r.repeat >= 0) {
+        if self.frame().name == base
+            && self
+                .frame()
+                .labels
+                .values()
+                .any(|r| r.kind == OKind::Repeat && r.repeat >= 0)
+        {
             let (a, b) = self.osite(file, oidx);
             self.warn(WarningKind::QuirkRepeatRecursion, file, a, b);
         }
-        self.subs.entry(base.clone()).or_insert_with(|| target.clone());
+        self.subs
+            .entry(base.clone())
+            .or_insert_with(|| target.clone());
         self.called.insert(base.clone());
         let o_info = &file.olines[oidx as usize];
-        let ret = Cursor { file: file.clone(), pos: o_info.next, line: o_info.line_idx + 1, next_o: oidx as usize + 1 };
+        let ret = Cursor {
+            file: file.clone(),
+            pos: o_info.next,
+            line: o_info.line_idx + 1,
+            next_o: oidx as usize + 1,
+        };
         self.push_frame(file, oidx, FrameKind::Call, base, ret)?;
         let mut saved = Box::new([0.0; 30]);
         saved.copy_from_slice(&self.params.values[1..31]);
@@ -564,7 +785,12 @@ impl Interp<'_> {
         Ok(())
     }
 
-    fn return_from_call(&mut self, file: &Rc<FileIndex>, oidx: u32, v: Option<f64>) -> Result<(), Error> {
+    fn return_from_call(
+        &mut self,
+        file: &Rc<FileIndex>,
+        oidx: u32,
+        v: Option<f64>,
+    ) -> Result<(), Error> {
         match v {
             Some(v) => {
                 self.value = v;
@@ -575,7 +801,12 @@ impl Interp<'_> {
                 self.value_returned = false;
             }
         }
-        if self.frame().labels.values().any(|r| r.kind == OKind::Repeat && r.repeat >= 0) {
+        if self
+            .frame()
+            .labels
+            .values()
+            .any(|r| r.kind == OKind::Repeat && r.repeat >= 0)
+        {
             let (a, b) = self.osite(file, oidx);
             self.warn(WarningKind::QuirkRepeatCount, file, a, b);
         }
@@ -583,33 +814,43 @@ impl Interp<'_> {
         if let Some(saved) = f.saved {
             self.params.values[1..31].copy_from_slice(&saved[..]);
         }
-        if f.auto_restore {
-            if let Some(m) = f.saved_modal {
-                self.restore_modal(&m)?;
-            }
+        if f.auto_restore
+            && let Some(m) = f.saved_modal
+        {
+            self.restore_modal(&m)?;
         }
         self.cur = f.ret.expect("return cursor");
         Ok(())
     }
 
     /// `M99` inside a subprogram called with M98.
-    pub(super) fn return_m99(&mut self, file: &Rc<FileIndex>, start: u32, len: u32) -> Result<(), Error> {
+    pub(super) fn return_m99(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        len: u32,
+    ) -> Result<(), Error> {
         if self.frame().kind != FrameKind::M98 {
             return Err(self.error(ErrorKind::M99InSub, file, start, start + len));
         }
         self.value = 0.0;
         self.value_returned = false;
         let f = self.frames.pop().expect("M98 frame");
-        if f.auto_restore {
-            if let Some(m) = f.saved_modal {
-                self.restore_modal(&m)?;
-            }
+        if f.auto_restore
+            && let Some(m) = f.saved_modal
+        {
+            self.restore_modal(&m)?;
         }
         self.cur = f.ret.expect("return cursor");
         Ok(())
     }
 
-    fn exec_m98(&mut self, file: &Rc<FileIndex>, oidx: u32, m: &crate::parse::ast::M98Line) -> Result<(), Error> {
+    fn exec_m98(
+        &mut self,
+        file: &Rc<FileIndex>,
+        oidx: u32,
+        m: &crate::parse::ast::M98Line,
+    ) -> Result<(), Error> {
         if self.s.fanuc_disabled {
             return Err(self.oerr(ErrorKind::FanucDisabled { what: "M98" }, file, oidx));
         }
@@ -651,12 +892,25 @@ impl Interp<'_> {
         let name: Rc<str> = Rc::from(n.to_string());
         let target = self.resolve(file, oidx, &name)?;
         if target.file.kind_of(target.oidx) == Some(OKind::Sub) {
-            return Err(self.oerr(ErrorKind::SubNeedsCall { name: name.to_string() }, file, oidx));
+            return Err(self.oerr(
+                ErrorKind::SubNeedsCall {
+                    name: name.to_string(),
+                },
+                file,
+                oidx,
+            ));
         }
-        self.subs.entry(name.clone()).or_insert_with(|| target.clone());
+        self.subs
+            .entry(name.clone())
+            .or_insert_with(|| target.clone());
         self.called.insert(name.clone());
         let info = &file.olines[oidx as usize];
-        let ret = Cursor { file: file.clone(), pos: info.start, line: info.line_idx, next_o: oidx as usize };
+        let ret = Cursor {
+            file: file.clone(),
+            pos: info.start,
+            line: info.line_idx,
+            next_o: oidx as usize,
+        };
         self.push_frame(file, oidx, FrameKind::M98, name, ret)?;
         self.goto(&target.file, target.oidx, true);
         Ok(())

@@ -6,8 +6,8 @@ use crate::diag::ErrorKind;
 use crate::parse::ast::{BinOp, Expr, ExprKind, Func, ParamRef, Span};
 use crate::parse::integer_value;
 
-use super::params::{classify, ParamClass, MAX_PARAM};
 use super::Interp;
+use super::params::{MAX_PARAM, ParamClass, classify};
 
 /// EQ/NE tolerance of LinuxCNC 2.9.
 pub const TOLERANCE_EQUAL: f64 = 0.0001;
@@ -25,11 +25,7 @@ fn check(v: f64, span: Span) -> EvalResult {
 }
 
 fn b(x: bool) -> f64 {
-    if x {
-        1.0
-    } else {
-        0.0
-    }
+    if x { 1.0 } else { 0.0 }
 }
 
 /// Binary operation; `span` is where a domain error is reported.
@@ -112,7 +108,7 @@ pub fn unary(f: Func, x: f64, span: Span) -> EvalResult {
 /// `(int)(x + (x < 0 ? -0.5 : 0.5))` as x86 computes it.
 pub fn round_half_away(x: f64) -> f64 {
     let t = (x + if x < 0.0 { -0.5 } else { 0.5 }).trunc();
-    if t >= 2147483648.0 || t < -2147483648.0 || t.is_nan() {
+    if !(-2147483648.0..2147483648.0).contains(&t) || t.is_nan() {
         -2147483648.0
     } else {
         t
@@ -143,11 +139,7 @@ impl Interp<'_> {
                 let a = self.eval_operand(&operands.0)?;
                 let c = self.eval_operand(&operands.1)?;
                 let v = binary(*op, a, c, e.span)?;
-                if *checked {
-                    check(v, e.span)
-                } else {
-                    Ok(v)
-                }
+                if *checked { check(v, e.span) } else { Ok(v) }
             }
             ExprKind::Func(f, arg) => {
                 let x = self.eval(arg)?;
@@ -195,10 +187,10 @@ impl Interp<'_> {
     }
 
     pub(crate) fn read_numbered(&mut self, i: usize, span: Span) -> EvalResult {
-        if let ParamClass::Position(axis) = classify(i) {
-            if !self.params.set[i] {
-                return self.position(axis, span);
-            }
+        if let ParamClass::Position(axis) = classify(i)
+            && !self.params.set[i]
+        {
+            return self.position(axis, span);
         }
         if !self.params.known[i] {
             let (what, why) = match classify(i) {
@@ -270,13 +262,28 @@ mod tests {
 
     #[test]
     fn domain_errors() {
-        assert_eq!(binary(BinOp::Div, 1.0, 0.0, S).unwrap_err().0, ErrorKind::DivideByZero);
-        assert_eq!(binary(BinOp::Pow, -2.0, 0.5, S).unwrap_err().0, ErrorKind::NegativePower);
+        assert_eq!(
+            binary(BinOp::Div, 1.0, 0.0, S).unwrap_err().0,
+            ErrorKind::DivideByZero
+        );
+        assert_eq!(
+            binary(BinOp::Pow, -2.0, 0.5, S).unwrap_err().0,
+            ErrorKind::NegativePower
+        );
         assert!(binary(BinOp::Mod, 1.0, 0.0, S).unwrap().is_nan());
-        assert_eq!(unary(Func::Acos, 1.5, S).unwrap_err().0, ErrorKind::AcosRange);
-        assert_eq!(unary(Func::Asin, -1.5, S).unwrap_err().0, ErrorKind::AsinRange);
+        assert_eq!(
+            unary(Func::Acos, 1.5, S).unwrap_err().0,
+            ErrorKind::AcosRange
+        );
+        assert_eq!(
+            unary(Func::Asin, -1.5, S).unwrap_err().0,
+            ErrorKind::AsinRange
+        );
         assert_eq!(unary(Func::Ln, 0.0, S).unwrap_err().0, ErrorKind::LnDomain);
-        assert_eq!(unary(Func::Sqrt, -1.0, S).unwrap_err().0, ErrorKind::SqrtNegative);
+        assert_eq!(
+            unary(Func::Sqrt, -1.0, S).unwrap_err().0,
+            ErrorKind::SqrtNegative
+        );
     }
 
     #[test]

@@ -1,14 +1,13 @@
 //! Parameter substitution in `(debug,…)`, `(print,…)`, `(log,…)` and
 //! `(abort,…)` texts, with the reference's `%d`, `%f` and `%.Nf` directives.
 
-
 use std::rc::Rc;
 
 use crate::diag::ErrorKind;
 use crate::parse::ast::Span;
 
-use super::params::MAX_PARAM;
 use super::Interp;
+use super::params::MAX_PARAM;
 
 #[derive(Clone, Copy)]
 enum Fmt {
@@ -29,7 +28,11 @@ fn push_value(out: &mut String, v: f64, fmt: Fmt) {
 impl Interp<'_> {
     /// Substitutes parameters in a message body. `base` is the body's offset
     /// in the line, for error positions.
-    pub(crate) fn substitute(&mut self, text: &str, base: u32) -> Result<String, (ErrorKind, Span)> {
+    pub(crate) fn substitute(
+        &mut self,
+        text: &str,
+        base: u32,
+    ) -> Result<String, (ErrorKind, Span)> {
         let bytes = text.as_bytes();
         let mut out = String::with_capacity(text.len() + 16);
         let mut fmt = Fmt::Decimals(6);
@@ -77,12 +80,18 @@ impl Interp<'_> {
                     let mut j = i + 1;
                     let mut n: u64 = 0;
                     while j < bytes.len() && bytes[j].is_ascii_digit() {
-                        n = n.saturating_mul(10).saturating_add((bytes[j] - b'0') as u64);
+                        n = n
+                            .saturating_mul(10)
+                            .saturating_add((bytes[j] - b'0') as u64);
                         j += 1;
                     }
                     let span = Span::new(base + i as u32, base + j as u32);
                     if (n as usize) < MAX_PARAM {
-                        let v = if n == 0 { 0.0 } else { self.read_numbered(n as usize, span)? };
+                        let v = if n == 0 {
+                            0.0
+                        } else {
+                            self.read_numbered(n as usize, span)?
+                        };
                         push_value(&mut out, v, fmt);
                     } else {
                         out.push_str("######");
@@ -94,8 +103,11 @@ impl Interp<'_> {
                         return Err((ErrorKind::UnterminatedName, at));
                     };
                     let raw_name = &text[i + 2..i + close];
-                    let name: String =
-                        raw_name.chars().filter(|c| !c.is_whitespace()).flat_map(|c| c.to_lowercase()).collect();
+                    let name: String = raw_name
+                        .chars()
+                        .filter(|c| !c.is_whitespace())
+                        .flat_map(|c| c.to_lowercase())
+                        .collect();
                     let name: Rc<str> = Rc::from(name);
                     let span = Span::new(base + i as u32, base + (i + close + 1) as u32);
                     if self.named_exists(&name, span)? {
@@ -128,4 +140,3 @@ pub fn is_stable(text: &str) -> bool {
     }
     true
 }
-

@@ -7,9 +7,9 @@ mod control;
 mod expr;
 mod message;
 mod modal;
-mod restore;
 mod named;
 pub mod params;
+mod restore;
 mod settings;
 pub mod state;
 
@@ -18,9 +18,9 @@ use std::rc::Rc;
 
 use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};
 use crate::emit::Sink;
-use crate::parse::ast::{Line, LineKind, OKind, Span};
 use crate::parse::LineParser;
-use crate::program::{next_line, FileIndex, Loader};
+use crate::parse::ast::{Line, LineKind, OKind, Span};
+use crate::program::{FileIndex, Loader, next_line};
 
 pub use settings::{Define, Settings};
 
@@ -160,11 +160,20 @@ impl<'s> Interp<'s> {
         for (k, v) in main_frame.locals.drain() {
             globals.insert(k, v);
         }
-        let mut pos = if s.zero_start { Position::zero() } else { Position::unknown() };
+        let mut pos = if s.zero_start {
+            Position::zero()
+        } else {
+            Position::unknown()
+        };
         for &(axis, v) in &s.start_position {
             pos.axes[axis] = Ok(v);
         }
-        let cur = Cursor { file: main.clone(), pos: 0, line: 0, next_o: 0 };
+        let cur = Cursor {
+            file: main.clone(),
+            pos: 0,
+            line: 0,
+            next_o: 0,
+        };
         Interp {
             s,
             loader,
@@ -206,17 +215,33 @@ impl<'s> Interp<'s> {
 
     /// The call stack as sites, innermost caller first.
     fn stack(&self) -> Vec<Site> {
-        self.frames.iter().rev().filter_map(|f| f.call_site.clone()).collect()
+        self.frames
+            .iter()
+            .rev()
+            .filter_map(|f| f.call_site.clone())
+            .collect()
     }
 
-    pub(crate) fn error(&self, kind: ErrorKind, file: &Rc<FileIndex>, start: u32, end: u32) -> Error {
+    pub(crate) fn error(
+        &self,
+        kind: ErrorKind,
+        file: &Rc<FileIndex>,
+        start: u32,
+        end: u32,
+    ) -> Error {
         let mut e = Diagnostic::error(kind, Some(Site::new(&file.file, start, end)));
         e.stack = self.stack();
         e
     }
 
     /// Error at a span of the line starting at `line_start`.
-    pub(crate) fn error_in_line(&self, kind: ErrorKind, file: &Rc<FileIndex>, line_start: u32, span: Span) -> Error {
+    pub(crate) fn error_in_line(
+        &self,
+        kind: ErrorKind,
+        file: &Rc<FileIndex>,
+        line_start: u32,
+        span: Span,
+    ) -> Error {
         self.error(kind, file, line_start + span.start, line_start + span.end)
     }
 
@@ -255,10 +280,21 @@ impl<'s> Interp<'s> {
             self.step()?;
         }
         self.finish_warnings();
-        let Interp { sink, mut warnings, loader, .. } = self;
+        let Interp {
+            sink,
+            mut warnings,
+            loader,
+            ..
+        } = self;
         warnings.extend(loader.warnings);
         sink.finish().map_err(|e| {
-            Diagnostic::error(ErrorKind::Io { path: "<output>".into(), message: e.to_string() }, None)
+            Diagnostic::error(
+                ErrorKind::Io {
+                    path: "<output>".into(),
+                    message: e.to_string(),
+                },
+                None,
+            )
         })?;
         Ok(warnings)
     }
@@ -267,13 +303,20 @@ impl<'s> Interp<'s> {
         // Subs defined in the main file and never called.
         let main = self.main.clone();
         for (i, o) in main.olines.iter().enumerate() {
-            if o.kind() == Some(OKind::Sub) {
-                if let Some(k) = &o.key {
-                    if !self.called.contains(k) && main.defs.contains_key(&(i as u32)) {
-                        let end = o.start + o.line_len();
-                        self.warn(WarningKind::UnusedSub { name: k.to_string() }, &main, o.start, end);
-                    }
-                }
+            if o.kind() == Some(OKind::Sub)
+                && let Some(k) = &o.key
+                && !self.called.contains(k)
+                && main.defs.contains_key(&(i as u32))
+            {
+                let end = o.start + o.line_len();
+                self.warn(
+                    WarningKind::UnusedSub {
+                        name: k.to_string(),
+                    },
+                    &main,
+                    o.start,
+                    end,
+                );
             }
         }
     }
@@ -285,9 +328,17 @@ impl<'s> Interp<'s> {
                 Some((l, n, f)) => (Some(l.to_string()), Some(*n), f.clone()),
                 None => (None, None, self.cur.file.clone()),
             };
-            let kind = ErrorKind::StepLimit { limit: self.s.max_steps, label, line: line.map(|n| n + 1) };
+            let kind = ErrorKind::StepLimit {
+                limit: self.s.max_steps,
+                label,
+                line: line.map(|n| n + 1),
+            };
             let site = match (&self.last_loop, line) {
-                (Some(_), Some(n)) => file.olines.iter().find(|o| o.line_idx == n).map(|o| (o.start, o.start + o.line_len())),
+                (Some(_), Some(n)) => file
+                    .olines
+                    .iter()
+                    .find(|o| o.line_idx == n)
+                    .map(|o| (o.start, o.start + o.line_len())),
                 _ => None,
             };
             let (a, b) = site.unwrap_or((self.current_line_start, self.current_line_start));
@@ -311,12 +362,12 @@ impl<'s> Interp<'s> {
         self.current_line_idx = line_idx;
         self.cur.pos = next as u32;
         self.cur.line += 1;
-        if let Some(o) = file.olines.get(self.cur.next_o) {
-            if o.line_idx == line_idx {
-                let oidx = self.cur.next_o as u32;
-                self.cur.next_o += 1;
-                return self.exec_oline(&file, oidx);
-            }
+        if let Some(o) = file.olines.get(self.cur.next_o)
+            && o.line_idx == line_idx
+        {
+            let oidx = self.cur.next_o as u32;
+            self.cur.next_o += 1;
+            return self.exec_oline(&file, oidx);
         }
         let raw = &data[start..end];
         let line = if file.keeps(line_idx) {
@@ -335,13 +386,25 @@ impl<'s> Interp<'s> {
         self.exec_line(&file, start as u32, raw, &line)
     }
 
-    fn parse_line(&mut self, file: &Rc<FileIndex>, start: u32, raw: &[u8], terminated: bool) -> Result<Line, Error> {
+    fn parse_line(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        raw: &[u8],
+        terminated: bool,
+    ) -> Result<Line, Error> {
         self.parser
             .parse(raw, terminated)
             .map_err(|e| self.error_in_line(e.kind, file, start, e.span))
     }
 
-    fn exec_line(&mut self, file: &Rc<FileIndex>, start: u32, raw: &[u8], line: &Line) -> Result<(), Error> {
+    fn exec_line(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        raw: &[u8],
+        line: &Line,
+    ) -> Result<(), Error> {
         match &line.kind {
             LineKind::Blank => Ok(()),
             LineKind::Percent => {
@@ -363,10 +426,21 @@ impl<'s> Interp<'s> {
     fn end_of_file(&mut self, file: &Rc<FileIndex>) -> Result<(), Error> {
         let end = file.file.data.len() as u32;
         if self.level() > 0 && !Rc::ptr_eq(file, &self.main) {
-            let name = self.frames.last().map(|f| f.name.to_string()).unwrap_or_default();
+            let name = self
+                .frames
+                .last()
+                .map(|f| f.name.to_string())
+                .unwrap_or_default();
             return Err(self.error(ErrorKind::UnterminatedSub { name }, file, end, end));
         }
-        Err(self.error(ErrorKind::MissingProgramEnd { percent: self.main.percent_start }, file, end, end))
+        Err(self.error(
+            ErrorKind::MissingProgramEnd {
+                percent: self.main.percent_start,
+            },
+            file,
+            end,
+            end,
+        ))
     }
 
     /// Writes one finished output line.
@@ -378,10 +452,27 @@ impl<'s> Interp<'s> {
                 None => (None, None, self.cur.file.clone()),
             };
             let at = self.current_line_start;
-            return Err(self.error(ErrorKind::OutputLimit { limit: self.s.max_output_lines, label, line }, &file, at, at));
+            return Err(self.error(
+                ErrorKind::OutputLimit {
+                    limit: self.s.max_output_lines,
+                    label,
+                    line,
+                },
+                &file,
+                at,
+                at,
+            ));
         }
         let r = self.sink.write(bytes).and_then(|_| self.sink.write(b"\n"));
-        r.map_err(|e| Diagnostic::error(ErrorKind::Io { path: "<output>".into(), message: e.to_string() }, None))
+        r.map_err(|e| {
+            Diagnostic::error(
+                ErrorKind::Io {
+                    path: "<output>".into(),
+                    message: e.to_string(),
+                },
+                None,
+            )
+        })
     }
 }
 

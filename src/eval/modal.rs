@@ -5,9 +5,9 @@ use std::rc::Rc;
 use crate::diag::Error;
 use crate::program::FileIndex;
 
+use super::Interp;
 use super::block::Words;
 use super::state::Unknown;
-use super::Interp;
 
 const LINEAR: [bool; 9] = [true, true, true, false, false, false, true, true, true];
 
@@ -43,7 +43,13 @@ impl Interp<'_> {
 
     /// Applies the line's words to the model. Returns true when the line ends
     /// the program.
-    pub(super) fn apply_words(&mut self, _file: &Rc<FileIndex>, _start: u32, words: &Words, m99: bool) -> Result<bool, Error> {
+    pub(super) fn apply_words(
+        &mut self,
+        _file: &Rc<FileIndex>,
+        _start: u32,
+        words: &Words,
+        m99: bool,
+    ) -> Result<bool, Error> {
         let mut gs: Vec<i32> = Vec::new();
         let mut ends = m99;
         let mut axis_words: Vec<(usize, f64)> = Vec::new();
@@ -112,9 +118,20 @@ impl Interp<'_> {
         let mut special = None;
         for &g in &gs {
             match g {
-                0 | 10 | 20 | 30 | 50 | 51 | 52 | 330 | 331 | 382..=385 | 730 | 740 | 760 | 810..=890 => {
-                    self.modal.motion = g
-                }
+                0
+                | 10
+                | 20
+                | 30
+                | 50
+                | 51
+                | 52
+                | 330
+                | 331
+                | 382..=385
+                | 730
+                | 740
+                | 760
+                | 810..=890 => self.modal.motion = g,
                 800 => self.modal.motion = 800,
                 170 | 180 | 190 | 171 | 181 | 191 => self.modal.plane = g,
                 200 => self.set_units(false),
@@ -127,13 +144,16 @@ impl Interp<'_> {
                 400 => self.modal.ccomp = 400,
                 410 | 411 => self.modal.ccomp = 410,
                 420 | 421 => self.modal.ccomp = 420,
-                430 | 431 | 432 => {
+                430..=432 => {
                     self.modal.tool_offset = true;
                     self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "a tool length offset (G43)");
                 }
                 490 => {
                     if self.modal.tool_offset {
-                        self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "cancelling the tool length offset (G49)");
+                        self.forget(
+                            &[0, 1, 2, 3, 4, 5, 6, 7, 8],
+                            "cancelling the tool length offset (G49)",
+                        );
                     }
                     self.modal.tool_offset = false;
                 }
@@ -155,7 +175,9 @@ impl Interp<'_> {
                     };
                     self.select_cs(cs);
                 }
-                100 | 280 | 281 | 300 | 301 | 530 | 920 | 921 | 922 | 923 | 520 => special = Some(g),
+                100 | 280 | 281 | 300 | 301 | 530 | 920 | 921 | 922 | 923 | 520 => {
+                    special = Some(g)
+                }
                 _ => {}
             }
         }
@@ -193,8 +215,11 @@ impl Interp<'_> {
             Some(923) => self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "G92.3"),
             Some(100) => self.g10(l_word, p_word, r_word, &axis_words),
             Some(280) | Some(300) => {
-                let axes: Vec<usize> =
-                    if axis_words.is_empty() { (0..9).collect() } else { axis_words.iter().map(|a| a.0).collect() };
+                let axes: Vec<usize> = if axis_words.is_empty() {
+                    (0..9).collect()
+                } else {
+                    axis_words.iter().map(|a| a.0).collect()
+                };
                 self.forget(&axes, "G28/G30 (moves to a home position)");
             }
             Some(530) => {
@@ -220,10 +245,8 @@ impl Interp<'_> {
         }
         let f = if metric { 25.4 } else { 1.0 / 25.4 };
         for (a, lin) in LINEAR.iter().enumerate() {
-            if *lin {
-                if let Ok(p) = &mut self.pos.axes[a] {
-                    *p *= f;
-                }
+            if *lin && let Ok(p) = &mut self.pos.axes[a] {
+                *p *= f;
             }
         }
         self.modal.metric = metric;

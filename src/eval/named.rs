@@ -6,16 +6,12 @@ use std::rc::Rc;
 use crate::diag::ErrorKind;
 use crate::parse::ast::Span;
 
-use super::expr::EvalResult;
-use super::state::{Unknown, AXES};
 use super::Interp;
+use super::expr::EvalResult;
+use super::state::{AXES, Unknown};
 
 fn flag(x: bool) -> f64 {
-    if x {
-        1.0
-    } else {
-        0.0
-    }
+    if x { 1.0 } else { 0.0 }
 }
 
 /// Splits `_ini[section]name`.
@@ -38,7 +34,12 @@ impl Interp<'_> {
             "_task" => 0.0,
             "_vmajor" => 2.9,
             "_vminor" => 0.0,
-            "_metric_machine" => match self.s.ini.as_ref().and_then(|i| i.get("TRAJ", "LINEAR_UNITS")) {
+            "_metric_machine" => match self
+                .s
+                .ini
+                .as_ref()
+                .and_then(|i| i.get("TRAJ", "LINEAR_UNITS"))
+            {
                 None => -1.0,
                 Some(u) => flag(!u.to_ascii_lowercase().starts_with("inch")),
             },
@@ -97,22 +98,22 @@ impl Interp<'_> {
                 }));
             }
             _ => {
-                if let Some(axis) = name.strip_prefix('_').filter(|a| a.len() == 1) {
-                    if let Some(i) = AXES.iter().position(|&c| c == axis.as_bytes()[0]) {
-                        return Some(self.position(i, span));
-                    }
+                if let Some(axis) = name.strip_prefix('_').filter(|a| a.len() == 1)
+                    && let Some(i) = AXES.iter().position(|&c| c == axis.as_bytes()[0])
+                {
+                    return Some(self.position(i, span));
                 }
-                if let Some(axis) = name.strip_prefix("_abs_").filter(|a| a.len() == 1) {
-                    if AXES.contains(&axis.as_bytes()[0]) {
-                        return Some(Err((
-                            ErrorKind::RuntimeParam {
-                                what: format!("#<{name}> (machine position)"),
-                                why: "machine coordinates depend on homing and offsets".into(),
-                                hint: "a program that does not read it".into(),
-                            },
-                            span,
-                        )));
-                    }
+                if let Some(axis) = name.strip_prefix("_abs_").filter(|a| a.len() == 1)
+                    && AXES.contains(&axis.as_bytes()[0])
+                {
+                    return Some(Err((
+                        ErrorKind::RuntimeParam {
+                            what: format!("#<{name}> (machine position)"),
+                            why: "machine coordinates depend on homing and offsets".into(),
+                            hint: "a program that does not read it".into(),
+                        },
+                        span,
+                    )));
                 }
                 if name.starts_with("_hal[") {
                     return Some(Err((
@@ -128,7 +129,12 @@ impl Interp<'_> {
                     let found = self.s.ini.as_ref().and_then(|i| i.get_upper(sec, key));
                     return Some(match found.and_then(|v| v.trim().parse::<f64>().ok()) {
                         Some(v) => Ok(v),
-                        None => Err((ErrorKind::NamedUndefined { name: name.to_string() }, span)),
+                        None => Err((
+                            ErrorKind::NamedUndefined {
+                                name: name.to_string(),
+                            },
+                            span,
+                        )),
                     });
                 }
                 return None;
@@ -184,7 +190,9 @@ impl Interp<'_> {
                     | "_current_pocket"
                     | "_selected_pocket"
             ) || (name.len() == 2 && AXES.contains(&name.as_bytes()[1]))
-                || (name.len() == 6 && name.starts_with("_abs_") && AXES.contains(&name.as_bytes()[5]))
+                || (name.len() == 6
+                    && name.starts_with("_abs_")
+                    && AXES.contains(&name.as_bytes()[5]))
                 || name.starts_with("_ini[")
                 || name.starts_with("_hal["))
     }
@@ -193,16 +201,30 @@ impl Interp<'_> {
     pub(crate) fn position(&self, axis: usize, span: Span) -> EvalResult {
         if self.modal.ccomp != 400 {
             let why = "cutter radius compensation is on".to_string();
-            return Err((ErrorKind::UnknownPosition { axis: AXES[axis] as char, why }, span));
+            return Err((
+                ErrorKind::UnknownPosition {
+                    axis: AXES[axis] as char,
+                    why,
+                },
+                span,
+            ));
         }
         match &self.pos.axes[axis] {
             Ok(v) => Ok(*v),
             Err(why) => {
                 let why = match why {
-                    Unknown::Start => "the program has not moved it to an absolute position yet".to_string(),
+                    Unknown::Start => {
+                        "the program has not moved it to an absolute position yet".to_string()
+                    }
                     Unknown::After(what, line) => format!("{what} at line {line} made it unknown"),
                 };
-                Err((ErrorKind::UnknownPosition { axis: AXES[axis] as char, why }, span))
+                Err((
+                    ErrorKind::UnknownPosition {
+                        axis: AXES[axis] as char,
+                        why,
+                    },
+                    span,
+                ))
             }
         }
     }
@@ -229,11 +251,20 @@ impl Interp<'_> {
         match self.named_table(name).get(name) {
             Some(v) => Ok(*v),
             None if defining => Ok(0.0),
-            None => Err((ErrorKind::NamedUndefined { name: name.to_string() }, span)),
+            None => Err((
+                ErrorKind::NamedUndefined {
+                    name: name.to_string(),
+                },
+                span,
+            )),
         }
     }
 
-    pub(crate) fn named_exists(&mut self, name: &Rc<str>, span: Span) -> Result<bool, (ErrorKind, Span)> {
+    pub(crate) fn named_exists(
+        &mut self,
+        name: &Rc<str>,
+        span: Span,
+    ) -> Result<bool, (ErrorKind, Span)> {
         if name.starts_with("_ini[") || name.starts_with("_hal[") {
             return Ok(self.predefined(name, span).is_some_and(|r| r.is_ok()));
         }
@@ -244,9 +275,20 @@ impl Interp<'_> {
     }
 
     /// Creates a named parameter (value 0) when its setting is parsed.
-    pub(crate) fn create_named(&mut self, name: &Rc<str>, span: Span) -> Result<(), (ErrorKind, Span)> {
-        if self.is_predefined(name) || (name.as_ref() == "n_args" && self.s.oword_nargs && self.level() > 0) {
-            return Err((ErrorKind::NamedReadOnly { name: name.to_string() }, span));
+    pub(crate) fn create_named(
+        &mut self,
+        name: &Rc<str>,
+        span: Span,
+    ) -> Result<(), (ErrorKind, Span)> {
+        if self.is_predefined(name)
+            || (name.as_ref() == "n_args" && self.s.oword_nargs && self.level() > 0)
+        {
+            return Err((
+                ErrorKind::NamedReadOnly {
+                    name: name.to_string(),
+                },
+                span,
+            ));
         }
         let t = self.named_table(name);
         if !t.contains_key(name) {

@@ -20,15 +20,31 @@ pub fn classify(i: usize) -> ParamClass {
     match i {
         5061..=5069 => ParamClass::Runtime("probe result", "it is written by G38 probing"),
         5070 => ParamClass::Runtime("probe success flag", "it is written by G38 probing"),
-        5161..=5169 => ParamClass::Runtime("G28 home position", "it comes from the machine's parameter file"),
-        5181..=5189 => ParamClass::Runtime("G30 home position", "it comes from the machine's parameter file"),
-        5210..=5219 => ParamClass::Runtime("G92 offset", "it comes from the machine's parameter file"),
-        5220 => ParamClass::Runtime("active coordinate system", "it comes from the machine's parameter file"),
-        5221..=5390 => ParamClass::Runtime("coordinate system offset", "it comes from the machine's parameter file"),
+        5161..=5169 => ParamClass::Runtime(
+            "G28 home position",
+            "it comes from the machine's parameter file",
+        ),
+        5181..=5189 => ParamClass::Runtime(
+            "G30 home position",
+            "it comes from the machine's parameter file",
+        ),
+        5210..=5219 => {
+            ParamClass::Runtime("G92 offset", "it comes from the machine's parameter file")
+        }
+        5220 => ParamClass::Runtime(
+            "active coordinate system",
+            "it comes from the machine's parameter file",
+        ),
+        5221..=5390 => ParamClass::Runtime(
+            "coordinate system offset",
+            "it comes from the machine's parameter file",
+        ),
         5399 => ParamClass::Runtime("M66 input value", "it is read from a machine input"),
         5400..=5413 => ParamClass::ReadOnlyRuntime("tool data", "it comes from the tool table"),
         5420..=5428 => ParamClass::Position(i - 5420),
-        5600 | 5601 => ParamClass::Runtime("toolchanger status", "it is reported by the toolchanger"),
+        5600 | 5601 => {
+            ParamClass::Runtime("toolchanger status", "it is reported by the toolchanger")
+        }
         _ => ParamClass::Plain,
     }
 }

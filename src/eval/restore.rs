@@ -3,8 +3,8 @@
 
 use crate::diag::Error;
 
-use super::state::Modal;
 use super::Interp;
+use super::state::Modal;
 
 impl Interp<'_> {
     /// Writes the words that bring the machine from the current state to
@@ -13,7 +13,11 @@ impl Interp<'_> {
         let cur = self.modal.clone();
         let mut words: Vec<String> = Vec::new();
         if cur.metric != saved.metric {
-            words.push(if saved.metric { "G21".into() } else { "G20".into() });
+            words.push(if saved.metric {
+                "G21".into()
+            } else {
+                "G20".into()
+            });
         }
         if cur.plane != saved.plane {
             words.push(gcode(saved.plane));
@@ -22,10 +26,18 @@ impl Interp<'_> {
             words.push("G40".into());
         }
         if cur.absolute != saved.absolute {
-            words.push(if saved.absolute { "G90".into() } else { "G91".into() });
+            words.push(if saved.absolute {
+                "G90".into()
+            } else {
+                "G91".into()
+            });
         }
         if cur.ijk_absolute != saved.ijk_absolute {
-            words.push(if saved.ijk_absolute { "G90.1".into() } else { "G91.1".into() });
+            words.push(if saved.ijk_absolute {
+                "G90.1".into()
+            } else {
+                "G91.1".into()
+            });
         }
         if cur.feed_mode != saved.feed_mode {
             words.push(gcode(saved.feed_mode));
@@ -39,10 +51,18 @@ impl Interp<'_> {
             });
         }
         if cur.retract_r != saved.retract_r {
-            words.push(if saved.retract_r { "G99".into() } else { "G98".into() });
+            words.push(if saved.retract_r {
+                "G99".into()
+            } else {
+                "G98".into()
+            });
         }
         if cur.css != saved.css {
-            words.push(if saved.css { "G96".into() } else { "G97".into() });
+            words.push(if saved.css {
+                "G96".into()
+            } else {
+                "G97".into()
+            });
         }
         if cur.path != saved.path {
             words.push(gcode(saved.path));
@@ -58,7 +78,10 @@ impl Interp<'_> {
             words.push(format!("S{}", String::from_utf8_lossy(&b)));
         }
         if cur.spindle != saved.spindle {
-            words.push(format!("M{}", if saved.spindle == 0 { 5 } else { saved.spindle }));
+            words.push(format!(
+                "M{}",
+                if saved.spindle == 0 { 5 } else { saved.spindle }
+            ));
         }
         if cur.mist != saved.mist || cur.flood != saved.flood {
             if !saved.mist && !saved.flood {

@@ -106,10 +106,14 @@ pub struct Position {
 
 impl Position {
     pub fn unknown() -> Position {
-        Position { axes: std::array::from_fn(|_| Err(Unknown::Start)) }
+        Position {
+            axes: std::array::from_fn(|_| Err(Unknown::Start)),
+        }
     }
 
     pub fn zero() -> Position {
-        Position { axes: std::array::from_fn(|_| Ok(0.0)) }
+        Position {
+            axes: std::array::from_fn(|_| Ok(0.0)),
+        }
     }
 }

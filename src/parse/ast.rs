@@ -196,7 +196,10 @@ impl OKind {
 
     /// Control labels are scoped per subroutine; sub/call/return are global.
     pub fn is_control(self) -> bool {
-        !matches!(self, OKind::Sub | OKind::EndSub | OKind::Call | OKind::Return | OKind::Bare)
+        !matches!(
+            self,
+            OKind::Sub | OKind::EndSub | OKind::Call | OKind::Return | OKind::Bare
+        )
     }
 }
 

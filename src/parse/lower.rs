@@ -17,7 +17,6 @@ pub struct Lowerer<'n> {
 }
 
 impl Lowerer<'_> {
-
     fn raw_end(&self, pair: &Pair<'_, Rule>) -> u32 {
         // Offset just after the last processed byte of the pair.
         let e = pair.as_span().end();
@@ -53,7 +52,11 @@ impl Lowerer<'_> {
                 r => unreachable!("{r:?} in lower_line"),
             }
         }
-        Ok(Line { kind, block_delete, line_number })
+        Ok(Line {
+            kind,
+            block_delete,
+            line_number,
+        })
     }
 
     fn lower_items(&self, pair: Pair<'_, Rule>) -> Result<Vec<Item>, LowerError> {
@@ -80,7 +83,12 @@ impl Lowerer<'_> {
         let vp = it.next().expect("value");
         let literal = vp.as_rule() == Rule::number;
         let value = self.lower_value(vp)?;
-        Ok(Word { letter, span, value, literal })
+        Ok(Word {
+            letter,
+            span,
+            value,
+            literal,
+        })
     }
 
     fn lower_assignment(&self, p: Pair<'_, Rule>) -> Result<Assign, LowerError> {
@@ -90,20 +98,32 @@ impl Lowerer<'_> {
         let target_span = self.tight_span(&tp);
         let target = self.lower_param_target(tp)?;
         let value = self.lower_value(it.next().expect("value"))?;
-        Ok(Assign { target, target_span, value, span })
+        Ok(Assign {
+            target,
+            target_span,
+            value,
+            span,
+        })
     }
 
     fn lower_comment(&self, p: Pair<'_, Rule>) -> Comment {
         let span = self.tight_span(&p);
         if p.as_rule() == Rule::semi_comment {
-            return Comment { kind: CommentKind::Semicolon, span, body: span };
+            return Comment {
+                kind: CommentKind::Semicolon,
+                span,
+                body: span,
+            };
         }
         let inner = p.into_inner().next().expect("comment_text");
         let text = inner.as_str();
         let text_start = self.norm.raw_offset(inner.as_span().start());
         let trimmed = text.trim_start_matches([' ', '\t']);
         let lead = (text.len() - trimmed.len()) as u32;
-        let lower = trimmed.get(..trimmed.len().min(10)).unwrap_or("").to_ascii_lowercase();
+        let lower = trimmed
+            .get(..trimmed.len().min(10))
+            .unwrap_or("")
+            .to_ascii_lowercase();
         let keywords: [(&str, CommentKind); 10] = [
             ("msg,", CommentKind::Msg),
             ("debug,", CommentKind::Debug),
@@ -120,13 +140,25 @@ impl Lowerer<'_> {
             if lower.starts_with(kw) {
                 let body_start = text_start + lead + kw.len() as u32;
                 let body_end = text_start + text.len() as u32;
-                return Comment { kind, span, body: Span::new(body_start, body_end) };
+                return Comment {
+                    kind,
+                    span,
+                    body: Span::new(body_start, body_end),
+                };
             }
         }
         if trimmed.eq_ignore_ascii_case("logclose") {
-            return Comment { kind: CommentKind::LogClose, span, body: span };
+            return Comment {
+                kind: CommentKind::LogClose,
+                span,
+                body: span,
+            };
         }
-        Comment { kind: CommentKind::Plain, span, body: span }
+        Comment {
+            kind: CommentKind::Plain,
+            span,
+            body: span,
+        }
     }
 
     fn lower_param_target(&self, p: Pair<'_, Rule>) -> Result<ParamRef, LowerError> {
@@ -277,7 +309,12 @@ impl Lowerer<'_> {
             Rule::o_return => OKind::Return,
             Rule::o_bare => OKind::Bare,
             Rule::o_unknown => {
-                return Err((ErrorKind::UnknownOCommand { word: cp.as_str().to_string() }, cmd_span));
+                return Err((
+                    ErrorKind::UnknownOCommand {
+                        word: cp.as_str().to_string(),
+                    },
+                    cmd_span,
+                ));
             }
             r => unreachable!("{r:?} in lower_o_line"),
         };
@@ -312,7 +349,10 @@ impl Lowerer<'_> {
         };
         if let (Some(keyword), None) = (needs_bracket, &expr) {
             let end = cmd_end;
-            exec_error = Some((ErrorKind::MissingBracket { keyword }, Span::new(end, end + 1)));
+            exec_error = Some((
+                ErrorKind::MissingBracket { keyword },
+                Span::new(end, end + 1),
+            ));
         }
         let trail = it.next().expect("o_trail");
         for q in trail.into_inner() {
@@ -320,18 +360,27 @@ impl Lowerer<'_> {
                 Rule::paren_comment | Rule::semi_comment => has_comment = true,
                 Rule::o_garbage => {
                     if !q.as_str().is_empty() && exec_error.is_none() {
-                        let kind = if kind == OKind::Call && q.as_str().starts_with(|c: char| c != '[') {
-                            ErrorKind::CallArgNotBracketed
-                        } else {
-                            ErrorKind::UnexpectedAfterOWord
-                        };
+                        let kind =
+                            if kind == OKind::Call && q.as_str().starts_with(|c: char| c != '[') {
+                                ErrorKind::CallArgNotBracketed
+                            } else {
+                                ErrorKind::UnexpectedAfterOWord
+                            };
                         exec_error = Some((kind, self.tight_span(&q)));
                     }
                 }
                 r => unreachable!("{r:?} in lower_o_trail"),
             }
         }
-        Ok(OLine { label, label_span, kind, expr, args, has_comment, exec_error })
+        Ok(OLine {
+            label,
+            label_span,
+            kind,
+            expr,
+            args,
+            has_comment,
+            exec_error,
+        })
     }
 
     fn lower_m98_line(&self, p: Pair<'_, Rule>) -> Result<M98Line, LowerError> {
@@ -344,13 +393,22 @@ impl Lowerer<'_> {
                     b'p' if pw.is_none() => pw = Some(w.value.clone()),
                     b'l' if lw.is_none() => lw = Some(w.value.clone()),
                     b'p' | b'l' => {
-                        return Err((ErrorKind::DuplicateWord { letter: w.letter as char }, w.value.span))
+                        return Err((
+                            ErrorKind::DuplicateWord {
+                                letter: w.letter as char,
+                            },
+                            w.value.span,
+                        ));
                     }
                     _ => {}
                 }
             }
         }
-        Ok(M98Line { p: pw, l: lw, items })
+        Ok(M98Line {
+            p: pw,
+            l: lw,
+            items,
+        })
     }
 }
 
@@ -359,19 +417,28 @@ fn reduce(operands: &mut Vec<Expr>, ops: &mut Vec<BinOp>) {
     let b = operands.pop().expect("right operand");
     let a = operands.pop().expect("left operand");
     let span = Span::new(a.span.start, b.span.end);
-    operands.push(Expr { kind: ExprKind::Bin(op, Box::new((a, b)), false), span });
+    operands.push(Expr {
+        kind: ExprKind::Bin(op, Box::new((a, b)), false),
+        span,
+    });
 }
 
 /// Reads a number lexeme (`-1.5`, `.5`, `+3.`).
 pub fn parse_number(text: &str) -> Result<f64, ErrorKind> {
     let digits = text.trim_start_matches(['+', '-']);
     if digits.bytes().filter(|&b| b == b'.').count() > 1 {
-        return Err(ErrorKind::TrailingNumber { text: text.to_string() });
+        return Err(ErrorKind::TrailingNumber {
+            text: text.to_string(),
+        });
     }
     if !digits.bytes().any(|b| b.is_ascii_digit()) {
-        return Err(ErrorKind::BadNumber { text: text.to_string() });
+        return Err(ErrorKind::BadNumber {
+            text: text.to_string(),
+        });
     }
-    text.parse::<f64>().map_err(|_| ErrorKind::BadNumber { text: text.to_string() })
+    text.parse::<f64>().map_err(|_| ErrorKind::BadNumber {
+        text: text.to_string(),
+    })
 }
 
 /// The reference's integer rule: within 0.0001 of an integer.

@@ -12,7 +12,7 @@ pub use lower::{integer_value, parse_number};
 use crate::diag::ErrorKind;
 use ast::{Line, LineKind, Span};
 use grammar::{NgcParser, Rule};
-use normalize::{normalize, Normalized};
+use normalize::{Normalized, normalize};
 
 /// The longest raw line the reference accepts (without the newline).
 pub const MAX_LINE: usize = 252;
@@ -29,7 +29,11 @@ pub struct LineError {
 
 impl LineError {
     fn new(kind: ErrorKind, span: Span, when_skipped: bool) -> LineError {
-        LineError { kind, span, when_skipped }
+        LineError {
+            kind,
+            span,
+            when_skipped,
+        }
     }
 }
 
@@ -49,10 +53,16 @@ fn describe(rules: &[Rule]) -> String {
     for r in rules {
         match r {
             Rule::binop => add("an operator or ']'"),
-            Rule::number | Rule::param | Rule::bracket | Rule::unary_minus | Rule::unary_plus
-            | Rule::atan | Rule::exists | Rule::unary_fn | Rule::fn_name | Rule::named => {
-                add("a value (number, #parameter, [expression] or function)")
-            }
+            Rule::number
+            | Rule::param
+            | Rule::bracket
+            | Rule::unary_minus
+            | Rule::unary_plus
+            | Rule::atan
+            | Rule::exists
+            | Rule::unary_fn
+            | Rule::fn_name
+            | Rule::named => add("a value (number, #parameter, [expression] or function)"),
             Rule::word | Rule::letter => add("a word (letter and value)"),
             Rule::assignment => add("a parameter setting"),
             Rule::paren_comment | Rule::semi_comment | Rule::comment_text => add("a comment"),
@@ -89,16 +99,27 @@ impl LineParser {
         }
         let text = self.norm.text.as_str();
         if text.is_empty() {
-            return Ok(Line { kind: LineKind::Blank, block_delete: false, line_number: None });
+            return Ok(Line {
+                kind: LineKind::Blank,
+                block_delete: false,
+                line_number: None,
+            });
         }
         if text == "%" {
-            return Ok(Line { kind: LineKind::Percent, block_delete: false, line_number: None });
+            return Ok(Line {
+                kind: LineKind::Percent,
+                block_delete: false,
+                line_number: None,
+            });
         }
         match NgcParser::parse(Rule::line, text) {
             Ok(mut pairs) => {
                 let pair = pairs.next().expect("line");
                 let lowerer = lower::Lowerer { norm: &self.norm };
-                let is_o = pair.clone().into_inner().any(|p| p.as_rule() == Rule::o_line);
+                let is_o = pair
+                    .clone()
+                    .into_inner()
+                    .any(|p| p.as_rule() == Rule::o_line);
                 lowerer
                     .lower_line(pair)
                     .map_err(|(kind, span)| LineError::new(kind, span, is_o))
@@ -113,17 +134,24 @@ impl LineParser {
                 let bytes = text.as_bytes();
                 // An O-line the grammar rejects is malformed even when skipped.
                 let start = text.trim_start_matches('/');
-                let start = start.trim_start_matches(|c: char| c == 'n' || c.is_ascii_digit() || c == '.');
+                let start =
+                    start.trim_start_matches(|c: char| c == 'n' || c.is_ascii_digit() || c == '.');
                 let is_o = start.starts_with('o');
                 if pos < bytes.len() {
                     let c = bytes[pos];
                     if !is_gcode_char(c) || c == b'%' || c == b'o' || c == b'n' {
                         let ch = text[pos..].chars().next().unwrap_or('?');
-                        return Err(LineError::new(ErrorKind::BadCharacter { ch, byte: c }, span, is_o));
+                        return Err(LineError::new(
+                            ErrorKind::BadCharacter { ch, byte: c },
+                            span,
+                            is_o,
+                        ));
                     }
                 }
                 let expected = match &e.variant {
-                    pest::error::ErrorVariant::ParsingError { positives, .. } => describe(positives),
+                    pest::error::ErrorVariant::ParsingError { positives, .. } => {
+                        describe(positives)
+                    }
                     pest::error::ErrorVariant::CustomError { message } => message.clone(),
                 };
                 Err(LineError::new(ErrorKind::Syntax { expected }, span, is_o))

@@ -79,7 +79,13 @@ pub fn normalize(raw: &[u8], out: &mut Normalized) -> Result<(), LexError> {
             let pos = e.utf8_error().valid_up_to();
             let raw_pos = out.map[pos];
             let byte = e.as_bytes()[pos];
-            return Err((ErrorKind::BadCharacter { ch: byte as char, byte }, raw_pos));
+            return Err((
+                ErrorKind::BadCharacter {
+                    ch: byte as char,
+                    byte,
+                },
+                raw_pos,
+            ));
         }
     }
     Ok(())
@@ -99,7 +105,10 @@ mod tests {
     fn folds_blanks_and_case_outside_comments() {
         assert_eq!(norm("G0 X 1 0"), "g0x10");
         assert_eq!(norm("G0 (Keep Case) X1"), "g0(Keep Case)x1");
-        assert_eq!(norm("#<P a R am > = 1 ; Rest Here"), "#<param>=1; Rest Here");
+        assert_eq!(
+            norm("#<P a R am > = 1 ; Rest Here"),
+            "#<param>=1; Rest Here"
+        );
         assert_eq!(norm("\tG1\r"), "g1");
     }
 
@@ -115,8 +124,14 @@ mod tests {
     #[test]
     fn comment_errors() {
         let mut n = Normalized::default();
-        assert!(matches!(normalize(b"(a (b))", &mut n), Err((ErrorKind::NestedComment, 3))));
-        assert!(matches!(normalize(b"G0 (open", &mut n), Err((ErrorKind::UnclosedComment, 3))));
+        assert!(matches!(
+            normalize(b"(a (b))", &mut n),
+            Err((ErrorKind::NestedComment, 3))
+        ));
+        assert!(matches!(
+            normalize(b"G0 (open", &mut n),
+            Err((ErrorKind::UnclosedComment, 3))
+        ));
         assert!(normalize(b"; ( unbalanced", &mut n).is_ok());
     }
 }

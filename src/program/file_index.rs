@@ -137,10 +137,10 @@ impl FileIndex {
                         }
                     }
                 }
-            } else if raw.len() + terminated as usize > crate::parse::MAX_LINE + 1 {
-                if let Err(e) = parser.parse(raw, terminated) {
-                    skip_errors.push((idx, pos as u32, e));
-                }
+            } else if raw.len() + terminated as usize > crate::parse::MAX_LINE + 1
+                && let Err(e) = parser.parse(raw, terminated)
+            {
+                skip_errors.push((idx, pos as u32, e));
             }
             if first_nonblank.is_none() && raw.iter().any(|b| !b.is_ascii_whitespace()) {
                 first_nonblank = Some(idx);
@@ -171,14 +171,18 @@ impl FileIndex {
                 info.scope = current_def.clone().unwrap_or_else(|| Rc::from(""));
                 current_def = None;
             }
-            if let Some(d) = &current_def {
-                if o.kind != OKind::Sub || label.as_ref() != Some(d) {
-                    info.scope = d.clone();
-                }
+            if let Some(d) = &current_def
+                && (o.kind != OKind::Sub || label.as_ref() != Some(d))
+            {
+                info.scope = d.clone();
             }
             match label {
                 Some(l) => {
-                    let key = if o.kind.is_control() { control_key(&info.scope, &l) } else { l };
+                    let key = if o.kind.is_control() {
+                        control_key(&info.scope, &l)
+                    } else {
+                        l
+                    };
                     occ.entry(key.clone()).or_default().push(i as u32);
                     info.key = Some(key);
                 }
@@ -192,7 +196,11 @@ impl FileIndex {
             let (Some(OKind::Sub), Some(key)) = (info.kind(), &info.key) else {
                 continue;
             };
-            let mut def = SubDefInfo { end: None, nested: None, valued: Vec::new() };
+            let mut def = SubDefInfo {
+                end: None,
+                nested: None,
+                valued: Vec::new(),
+            };
             for (j, other) in olines.iter().enumerate().skip(i + 1) {
                 let Some(k) = other.kind() else { continue };
                 if matches!(k, OKind::Sub | OKind::Bare) {
@@ -228,7 +236,9 @@ impl FileIndex {
         }
         // Loop bodies.
         for (i, info) in olines.iter().enumerate() {
-            let (Some(kind), Some(key)) = (info.kind(), &info.key) else { continue };
+            let (Some(kind), Some(key)) = (info.kind(), &info.key) else {
+                continue;
+            };
             let end_kind = match kind {
                 OKind::While => OKind::EndWhile,
                 OKind::Do => OKind::While,
@@ -237,7 +247,10 @@ impl FileIndex {
             };
             if let Some(list) = occ.get(key) {
                 let p = list.partition_point(|&j| j as usize <= i);
-                if let Some(&j) = list[p..].iter().find(|&&j| olines[j as usize].kind() == Some(end_kind)) {
+                if let Some(&j) = list[p..]
+                    .iter()
+                    .find(|&&j| olines[j as usize].kind() == Some(end_kind))
+                {
                     keep.push((info.line_idx, olines[j as usize].line_idx));
                 }
             }
@@ -326,7 +339,12 @@ fn quick_is_candidate(raw: &[u8]) -> bool {
     }
     if rest.len() >= 3 && rest[0].eq_ignore_ascii_case(&b'm') {
         // m98 / m 9 8 with blanks.
-        let compact: Vec<u8> = rest.iter().filter(|b| !matches!(b, b' ' | b'\t')).take(3).copied().collect();
+        let compact: Vec<u8> = rest
+            .iter()
+            .filter(|b| !matches!(b, b' ' | b'\t'))
+            .take(3)
+            .copied()
+            .collect();
         if compact.eq_ignore_ascii_case(b"m98") {
             return true;
         }
@@ -336,5 +354,8 @@ fn quick_is_candidate(raw: &[u8]) -> bool {
 
 /// Error for a sub file that lacks its sub.
 pub fn not_in_file(name: &str, file: &SourceFile) -> ErrorKind {
-    ErrorKind::SubNotInFile { name: name.to_string(), file: file.path.clone() }
+    ErrorKind::SubNotInFile {
+        name: name.to_string(),
+        file: file.path.clone(),
+    }
 }

@@ -41,7 +41,10 @@ impl Ini {
 
     /// First value of `name` in `section`.
     pub fn get(&self, section: &str, name: &str) -> Option<&str> {
-        self.entries.iter().find(|(s, k, _)| s == section && k == name).map(|(_, _, v)| v.as_str())
+        self.entries
+            .iter()
+            .find(|(s, k, _)| s == section && k == name)
+            .map(|(_, _, v)| v.as_str())
     }
 
     /// Lookup for `#<_ini[section]name>`: both upper-cased.
@@ -55,7 +58,11 @@ impl Ini {
 
     pub fn flag(&self, section: &str, name: &str) -> bool {
         self.get(section, name)
-            .and_then(|v| v.split_whitespace().next().map(|w| w.parse::<f64>().map(|x| x != 0.0).unwrap_or(false)))
+            .and_then(|v| {
+                v.split_whitespace()
+                    .next()
+                    .map(|w| w.parse::<f64>().map(|x| x != 0.0).unwrap_or(false))
+            })
             .unwrap_or(false)
     }
 }

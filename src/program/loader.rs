@@ -33,10 +33,16 @@ pub struct Loader {
 pub fn check_name(name: &str) -> Result<(), ErrorKind> {
     let bad = name.is_empty()
         || name.starts_with('/')
-        || name.split('/').any(|c| c.is_empty() || c == "." || c == "..")
-        || !name.bytes().all(|b| b.is_ascii_alphanumeric() || b"_-./".contains(&b));
+        || name
+            .split('/')
+            .any(|c| c.is_empty() || c == "." || c == "..")
+        || !name
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b"_-./".contains(&b));
     if bad {
-        Err(ErrorKind::UnsafeSubName { name: name.to_string() })
+        Err(ErrorKind::UnsafeSubName {
+            name: name.to_string(),
+        })
     } else {
         Ok(())
     }
@@ -44,17 +50,23 @@ pub fn check_name(name: &str) -> Result<(), ErrorKind> {
 
 impl Loader {
     pub fn new(path: SearchPath, main_dir: Option<PathBuf>) -> Loader {
-        Loader { path, main_dir, by_path: HashMap::new(), by_name: HashMap::new(), warnings: Vec::new() }
+        Loader {
+            path,
+            main_dir,
+            by_path: HashMap::new(),
+            by_name: HashMap::new(),
+            warnings: Vec::new(),
+        }
     }
 
     /// Folders searched, in order.
     pub fn searched(&self) -> Vec<PathBuf> {
         let mut v: Vec<PathBuf> = self.path.dirs.clone();
         v.extend(self.path.recursive.iter().cloned());
-        if self.path.program_dir {
-            if let Some(d) = &self.main_dir {
-                v.push(d.clone());
-            }
+        if self.path.program_dir
+            && let Some(d) = &self.main_dir
+        {
+            v.push(d.clone());
         }
         v
     }
@@ -69,19 +81,23 @@ impl Loader {
         }
         for root in &self.path.recursive {
             let base = Path::new(file_name).file_name().map(|s| s.to_owned());
-            for entry in walkdir::WalkDir::new(root).follow_links(true).into_iter().filter_map(Result::ok) {
+            for entry in walkdir::WalkDir::new(root)
+                .follow_links(true)
+                .into_iter()
+                .filter_map(Result::ok)
+            {
                 if entry.file_type().is_file() && Some(entry.file_name().to_owned()) == base {
                     found.push(entry.path().to_path_buf());
                     break;
                 }
             }
         }
-        if self.path.program_dir {
-            if let Some(d) = &self.main_dir {
-                let p = d.join(file_name);
-                if p.is_file() {
-                    found.push(p);
-                }
+        if self.path.program_dir
+            && let Some(d) = &self.main_dir
+        {
+            let p = d.join(file_name);
+            if p.is_file() {
+                found.push(p);
             }
         }
         found
@@ -120,8 +136,15 @@ impl Loader {
         if let Some(f) = self.by_path.get(&canon) {
             return Ok(f.clone());
         }
-        let data = std::fs::read(p).map_err(|e| ErrorKind::Io { path: p.to_path_buf(), message: e.to_string() })?;
-        let file = Arc::new(SourceFile::new(p.to_path_buf(), p.display().to_string(), data));
+        let data = std::fs::read(p).map_err(|e| ErrorKind::Io {
+            path: p.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        let file = Arc::new(SourceFile::new(
+            p.to_path_buf(),
+            p.display().to_string(),
+            data,
+        ));
         let index = Rc::new(FileIndex::build(file));
         self.by_path.insert(canon, index.clone());
         Ok(index)

@@ -6,6 +6,6 @@ pub mod ini;
 mod loader;
 mod source_file;
 
-pub use file_index::{control_key, next_line, not_in_file, FileIndex, OInfo, SubDefInfo};
-pub use loader::{check_name, Loader, SearchPath};
+pub use file_index::{FileIndex, OInfo, SubDefInfo, control_key, next_line, not_in_file};
+pub use loader::{Loader, SearchPath, check_name};
 pub use source_file::SourceFile;

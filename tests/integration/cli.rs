@@ -1,0 +1,118 @@
+//! Command-line behaviour: exit codes, stdin, atomic -o, closed pipes.
+
+use std::process::{Command, Stdio};
+
+use crate::{bin, ngcflat};
+
+fn tmp() -> tempfile::TempDir {
+    tempfile::tempdir().expect("tempdir")
+}
+
+#[test]
+fn exit_codes() {
+    let d = tmp();
+    std::fs::write(d.path().join("good.ngc"), "G0 X1\nM2\n").unwrap();
+    std::fs::write(d.path().join("bad.ngc"), "G0 X[1/0]\nM2\n").unwrap();
+    // (args, expected exit code)
+    let cases: &[(&[&str], i32)] = &[
+        (&["good.ngc"], 0),
+        (&["bad.ngc"], 1),
+        (&["missing.ngc"], 2),
+        (&["--no-such-option", "good.ngc"], 2),
+        (&["--version"], 0),
+        (&["--help"], 0),
+        (&["check", "good.ngc"], 0),
+        (&["check", "good.ngc", "bad.ngc"], 1),
+    ];
+    for (args, want) in cases {
+        let args: Vec<String> = args.iter().map(|s| s.to_string()).collect();
+        let out = ngcflat(d.path(), &args, None);
+        assert_eq!(
+            out.status.code(),
+            Some(*want),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
+#[test]
+fn reads_stdin() {
+    let d = tmp();
+    for args in [vec![], vec!["-".to_string()]] {
+        let out = ngcflat(d.path(), &args, Some(b"#1=2\nG1 X[#1*3] F100\nM2\n"));
+        assert_eq!(String::from_utf8_lossy(&out.stdout), "G1 X6 F100\nM2\n");
+    }
+}
+
+#[test]
+fn error_writes_nothing_to_stdout() {
+    let d = tmp();
+    let prog = "o1 repeat [1000]\nG1 X1 F1\no1 endrepeat\nG0 X[1/0]\nM2\n";
+    let out = ngcflat(d.path(), &[], Some(prog.as_bytes()));
+    assert_eq!(out.status.code(), Some(1));
+    assert!(out.stdout.is_empty());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("<stdin>:4:"), "{err}");
+}
+
+#[test]
+fn output_file_is_atomic() {
+    let d = tmp();
+    let target = d.path().join("out.ngc");
+    std::fs::write(&target, "OLD\n").unwrap();
+    std::fs::write(d.path().join("bad.ngc"), "G0 X1\nG0 X[SQRT[-1]]\nM2\n").unwrap();
+    std::fs::write(d.path().join("good.ngc"), "G0 X[1+1]\nM2\n").unwrap();
+    let out = ngcflat(
+        d.path(),
+        &["-o".into(), "out.ngc".into(), "bad.ngc".into()],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "OLD\n");
+    let out = ngcflat(
+        d.path(),
+        &["-o".into(), "out.ngc".into(), "good.ngc".into()],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "G0 X2\nM2\n");
+    let leftovers: Vec<_> = std::fs::read_dir(d.path())
+        .unwrap()
+        .filter_map(Result::ok)
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left behind");
+}
+
+#[test]
+fn closed_pipe_is_success() {
+    let prog = "o1 repeat [200000]\nG1 X1 Y2 Z3 F100\no1 endrepeat\nM2\n";
+    let d = tmp();
+    std::fs::write(d.path().join("big.ngc"), prog).unwrap();
+    let mut child = Command::new(bin())
+        .current_dir(d.path())
+        .arg("big.ngc")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdout = child.stdout.take().unwrap();
+    let mut buf = [0u8; 64];
+    use std::io::Read;
+    let n = stdout.read(&mut buf).unwrap();
+    assert!(n > 0);
+    drop(stdout);
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        out.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -1,0 +1,253 @@
+//! Fixture programs under `fixtures/`:
+//!
+//! * `ok/**/*.ngc` flatten successfully; the output is snapshotted and must
+//!   give rs274 the same machine commands as the original.
+//! * `err/**/*.ngc` are refused by both ngcflat and rs274; the diagnostic is
+//!   snapshotted in every message format.
+//! * `refuse/**/*.ngc` are refused by ngcflat by design (runtime-only values,
+//!   limits, unsafe names...); diagnostics snapshotted, no rs274 comparison.
+//!
+//! A fixture may have `NAME.args` beside it (extra arguments, relative to
+//! the fixture's folder). Folders named `subs` hold subroutine files, not
+//! fixtures. Adding a case is adding a file.
+
+use std::path::{Path, PathBuf};
+
+use crate::oracle;
+
+pub fn read_args(ngc: &Path) -> Vec<String> {
+    let args = ngc.with_extension("args");
+    match std::fs::read_to_string(args) {
+        Ok(t) => t.split_whitespace().map(str::to_string).collect(),
+        Err(_) => Vec::new(),
+    }
+}
+
+fn is_fixture(p: &Path) -> bool {
+    p.extension().is_some_and(|e| e == "ngc") && !p.components().any(|c| c.as_os_str() == "subs")
+}
+
+fn category(p: &Path) -> &'static str {
+    let s = p.to_string_lossy();
+    if s.contains("/err/") {
+        "err"
+    } else if s.contains("/refuse/") {
+        "refuse"
+    } else {
+        "ok"
+    }
+}
+
+fn run_fixture(path: &Path, extra: &[&str]) -> (i32, String, String) {
+    let dir = path.parent().expect("dir");
+    let mut args = read_args(path);
+    args.extend(extra.iter().map(|s| s.to_string()));
+    args.push(
+        path.file_name()
+            .expect("name")
+            .to_string_lossy()
+            .into_owned(),
+    );
+    let out = crate::ngcflat(dir, &args, None);
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn fixture_snapshots() {
+    insta::glob!("../../fixtures", "**/*.ngc", |path| {
+        if !is_fixture(path) {
+            return;
+        }
+        let cat = category(path);
+        let (code, stdout, stderr) = run_fixture(path, &[]);
+        let mut snap = format!(
+            "args: {:?}\nexit: {code}\n--- stdout\n{stdout}--- stderr\n{stderr}",
+            read_args(path)
+        );
+        match cat {
+            "ok" => assert_eq!(code, 0, "{} should flatten:\n{stderr}", path.display()),
+            _ => {
+                assert_eq!(
+                    code,
+                    1,
+                    "{} should be refused:\n{stdout}{stderr}",
+                    path.display()
+                );
+                assert!(stdout.is_empty(), "{}: output on error", path.display());
+                for f in ["short", "json", "github"] {
+                    let (_, _, e) = run_fixture(path, &["--message-format", f]);
+                    snap.push_str(&format!("--- stderr ({f})\n{e}"));
+                }
+            }
+        }
+        insta::assert_snapshot!(snap);
+    });
+}
+
+/// Turns relative folders of an INI into absolute ones (rs274 reads them
+/// relative to its working folder) and drops them for `isolated`.
+fn derive_ini(ini: &Path, isolated: bool) -> String {
+    let text = std::fs::read_to_string(ini).expect("read ini");
+    let base = ini.parent().expect("ini dir");
+    let mut out = String::new();
+    let mut lines = text.lines().peekable();
+    while let Some(line) = lines.next() {
+        let mut line = line.to_string();
+        while line.trim_end().ends_with('\\') {
+            let l = line.trim_end();
+            line = l[..l.len() - 1].to_string();
+            if let Some(n) = lines.next() {
+                line.push_str(n.trim());
+            }
+        }
+        let key = line.split('=').next().unwrap_or("").trim().to_string();
+        if matches!(
+            key.as_str(),
+            "SUBROUTINE_PATH" | "PROGRAM_PREFIX" | "WIZARD_ROOT"
+        ) {
+            if isolated {
+                continue;
+            }
+            let value = line.split_once('=').map(|x| x.1).unwrap_or("").trim();
+            let abs: Vec<String> = value
+                .split(':')
+                .filter(|s| !s.is_empty())
+                .map(|s| {
+                    let p = Path::new(s.trim());
+                    if p.is_absolute() {
+                        p.to_path_buf()
+                    } else {
+                        base.join(p)
+                    }
+                    .display()
+                    .to_string()
+                })
+                .collect();
+            out.push_str(&format!("{key} = {}\n", abs.join(":")));
+        } else {
+            out.push_str(&line);
+            out.push('\n');
+        }
+    }
+    out
+}
+
+/// Differential check of one fixture; Err describes the mismatch, Ok(None)
+/// passes, Ok(Some(reason)) was not comparable.
+pub fn differential(path: &Path) -> Result<Option<String>, String> {
+    let cat = category(path);
+    if cat == "refuse" {
+        return Ok(Some("refused by design".into()));
+    }
+    let dir = path.parent().expect("dir");
+    let args = read_args(path);
+    let mut sub_dirs: Vec<PathBuf> = Vec::new();
+    let mut ini_a = String::new();
+    let mut ini_b = String::new();
+    let mut var = None;
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "-I" | "--subroutine-path" => {
+                sub_dirs.push(dir.join(it.next().expect("-I value")));
+            }
+            "--ini" => {
+                let ini = dir.join(it.next().expect("--ini value"));
+                ini_a = derive_ini(&ini, false);
+                ini_b = derive_ini(&ini, true);
+            }
+            "--var-file" => var = Some(dir.join(it.next().expect("--var-file value"))),
+            "-D" | "--define" | "--precision" | "--start-position" => {
+                return Ok(Some(format!("{a} has no rs274 equivalent")));
+            }
+            _ => {}
+        }
+    }
+    let ini_orig = format!("{}{}", oracle::ini_with(&sub_dirs, ""), ini_a);
+    let program = std::fs::read(path).expect("read fixture");
+    let a = oracle::run(&program, &ini_orig, var.as_deref());
+    let (code, stdout, stderr) = run_fixture(path, &["--zero-start"]);
+    match cat {
+        "err" => {
+            if a.ok {
+                return Err(format!(
+                    "rs274 accepts the original, but it is filed under err/ (ngcflat exit {code})"
+                ));
+            }
+            if code == 0 {
+                return Err(format!(
+                    "rs274 rejects the original ({}) but ngcflat flattens it",
+                    a.stderr.trim()
+                ));
+            }
+            Ok(None)
+        }
+        _ => {
+            if !a.ok {
+                return Err(format!("rs274 rejects the original: {}", a.stderr.trim()));
+            }
+            if code != 0 {
+                return Err(format!("ngcflat refuses it: {stderr}"));
+            }
+            let b = oracle::run(stdout.as_bytes(), &ini_b, var.as_deref());
+            if !b.ok {
+                return Err(format!(
+                    "rs274 rejects the flattened output: {}",
+                    b.stderr.trim()
+                ));
+            }
+            oracle::compare(&a.lines, &b.lines, 1e-4).map(|_| None)
+        }
+    }
+}
+
+pub fn all_fixtures() -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = walkdir::WalkDir::new(crate::root().join("fixtures"))
+        .sort_by_file_name()
+        .into_iter()
+        .filter_map(Result::ok)
+        .map(|e| e.into_path())
+        .filter(|p| is_fixture(p))
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn fixtures_match_rs274() {
+    if !oracle::available("fixtures_match_rs274") {
+        return;
+    }
+    let files = all_fixtures();
+    let failures = std::sync::Mutex::new(Vec::new());
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    std::thread::scope(|s| {
+        for _ in 0..4 {
+            s.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(f) = files.get(i) else { break };
+                    if let Err(e) = differential(f) {
+                        failures
+                            .lock()
+                            .unwrap()
+                            .push(format!("{}: {e}", f.display()));
+                    }
+                }
+            });
+        }
+    });
+    let failures = failures.into_inner().unwrap();
+    assert!(
+        failures.is_empty(),
+        "{} of {} fixtures differ from rs274:\n{}",
+        failures.len(),
+        files.len(),
+        failures.join("\n")
+    );
+    eprintln!("{} fixtures agree with rs274", files.len());
+}
