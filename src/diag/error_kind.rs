@@ -133,6 +133,10 @@ pub enum ErrorKind {
     FanucDisabled { what: &'static str },
     /// `o<x> sub` with no `o<x> endsub` before the end of file.
     UnterminatedSub { name: String },
+    /// `G0 G1 X1`, `G1 X1 F0`, `M3 M4`: a block the reference refuses.
+    Semantic { message: String },
+    /// `M72` with no `M70`/`M73` before it in this call level.
+    NoSavedContext,
     /// `(abort, tool broke)`
     Abort { message: String },
     // ------------------------------------------------------------ limits and output
@@ -228,6 +232,8 @@ impl ErrorKind {
             FanucDisabled { .. } => "E0325",
             UnterminatedSub { .. } => "E0326",
             Abort { .. } => "E0327",
+            NoSavedContext => "E0328",
+            Semantic { .. } => "E0013",
             OutputLineTooLong { .. } => "E0401",
             StepLimit { .. } => "E0402",
             OutputLimit { .. } => "E0403",
@@ -401,6 +407,11 @@ impl fmt::Display for ErrorKind {
             FanucDisabled { what } => write!(f, "{what} used but DISABLE_FANUC_STYLE_SUB is set"),
             UnterminatedSub { name } => write!(f, "subroutine o<{name}> has no endsub"),
             Abort { message } => write!(f, "program aborted: {message}"),
+            Semantic { message } => write!(f, "{message}"),
+            NoSavedContext => write!(
+                f,
+                "M72 without a state saved by M70 or M73 at this call level"
+            ),
             OutputLineTooLong { len } => {
                 write!(
                     f,

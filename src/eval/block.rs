@@ -41,6 +41,8 @@ impl Interp<'_> {
         let mut active = None;
         let mut seen = 0u32;
         let mut m_count = 0;
+        let mut context_ops: Vec<(u8, Span)> = Vec::new();
+        let mut word_spans: Vec<Span> = Vec::with_capacity(8);
         // 1. Read the line: every value sees the parameters as they were.
         for item in items {
             match item {
@@ -69,7 +71,12 @@ impl Interp<'_> {
                         seen |= bit;
                     }
                     words.push((w.letter, v));
-                    if !w.literal {
+                    word_spans.push(w.span);
+                    if w.letter == b'm' && matches!(v, 70.0 | 71.0 | 72.0 | 73.0) {
+                        // Context save/restore: replaced by explicit words.
+                        context_ops.push((v as u8, w.span));
+                        repl.push((w.span, Repl::Remove));
+                    } else if !w.literal {
                         repl.push((w.value.span, Repl::Number(v)));
                     }
                 }
@@ -107,6 +114,15 @@ impl Interp<'_> {
                         repl.push((c.span, Repl::Remove));
                     }
                 }
+            }
+        }
+        // The reference checks the block before acting on it.
+        if !words.is_empty() {
+            if let Err((k, at)) = super::validate::check_block(&words, &self.modal) {
+                let span = at
+                    .and_then(|i| word_spans.get(i).copied())
+                    .unwrap_or(Span::new(0, raw.len() as u32));
+                return Err(self.error_in_line(k, file, start, span));
             }
         }
         // 2. Assignments: numbered in order, then named in order.
@@ -176,7 +192,7 @@ impl Interp<'_> {
         let kept = items
             .iter()
             .filter(|i| match i {
-                Item::Word(_) => true,
+                Item::Word(w) => !context_ops.iter().any(|(_, s)| *s == w.span),
                 Item::Assign(_) => false,
                 Item::Comment(c) => {
                     !self.s.strip_comments
@@ -191,6 +207,9 @@ impl Interp<'_> {
         }
         // 6. State.
         let ends = self.apply_words(file, start, &words, m99)?;
+        for (op, span) in context_ops {
+            self.context_op(op, file, start, span)?;
+        }
         if ends {
             if self.main.percent_start {
                 self.emit_raw(b"%")?;

@@ -12,6 +12,7 @@ pub mod params;
 mod restore;
 mod settings;
 pub mod state;
+mod validate;
 
 use std::collections::{HashMap, HashSet};
 use std::rc::Rc;

@@ -1,24 +1,64 @@
 //! M70–M73: saving modal state and bringing it back with explicit words,
 //! since the controllers ngcflat writes for do not know these codes.
 
-use crate::diag::Error;
+use std::rc::Rc;
+
+use crate::diag::{Error, ErrorKind};
+use crate::parse::ast::Span;
+use crate::program::FileIndex;
 
 use super::Interp;
 use super::state::Modal;
 
 impl Interp<'_> {
+    /// M70 save, M71 invalidate, M72 restore, M73 save and restore on return.
+    pub(super) fn context_op(
+        &mut self,
+        op: u8,
+        file: &Rc<FileIndex>,
+        start: u32,
+        span: Span,
+    ) -> Result<(), Error> {
+        match op {
+            70 | 73 => {
+                let m = self.modal.clone();
+                let nested = self.frames.len() > 1;
+                let f = self.frames.last_mut().expect("frame");
+                f.saved_modal = Some(m);
+                f.auto_restore = op == 73 && nested;
+            }
+            71 => {
+                let f = self.frames.last_mut().expect("frame");
+                f.saved_modal = None;
+                f.auto_restore = false;
+            }
+            _ => {
+                let saved = self.frames.last().and_then(|f| f.saved_modal.clone());
+                match saved {
+                    Some(m) => self.restore_modal(&m)?,
+                    None => {
+                        return Err(self.error_in_line(
+                            ErrorKind::NoSavedContext,
+                            file,
+                            start,
+                            span,
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Writes the words that bring the machine from the current state to
     /// `saved`, and adopts it. Writes nothing if nothing changed.
     pub(super) fn restore_modal(&mut self, saved: &Modal) -> Result<(), Error> {
         let cur = self.modal.clone();
-        let mut words: Vec<String> = Vec::new();
+        // Units come first, on their own line, as in the reference.
         if cur.metric != saved.metric {
-            words.push(if saved.metric {
-                "G21".into()
-            } else {
-                "G20".into()
-            });
+            self.emit_raw(if saved.metric { b"G21" } else { b"G20" })?;
         }
+        let mut words: Vec<String> = Vec::new();
         if cur.plane != saved.plane {
             words.push(gcode(saved.plane));
         }
@@ -50,6 +90,9 @@ impl Interp<'_> {
                 n => format!("G{}", 53 + n),
             });
         }
+        if cur.tool_offset != saved.tool_offset && !saved.tool_offset {
+            words.push("G49".into());
+        }
         if cur.retract_r != saved.retract_r {
             words.push(if saved.retract_r {
                 "G99".into()
@@ -57,25 +100,23 @@ impl Interp<'_> {
                 "G98".into()
             });
         }
-        if cur.css != saved.css {
-            words.push(if saved.css {
-                "G96".into()
-            } else {
-                "G97".into()
-            });
+        if cur.css != saved.css && !saved.css {
+            words.push("G97".into());
         }
         if cur.path != saved.path {
+            // The reference restores G64 without its P and Q.
             words.push(gcode(saved.path));
         }
-        if cur.feed != saved.feed {
+        let number = |v: f64, p| {
             let mut b = Vec::new();
-            crate::emit::write_number(&mut b, saved.feed, self.s.precision);
-            words.push(format!("F{}", String::from_utf8_lossy(&b)));
+            crate::emit::write_number(&mut b, v, p);
+            String::from_utf8_lossy(&b).into_owned()
+        };
+        if cur.feed != saved.feed {
+            words.push(format!("F{}", number(saved.feed, self.s.precision)));
         }
         if cur.speed != saved.speed {
-            let mut b = Vec::new();
-            crate::emit::write_number(&mut b, saved.speed, self.s.precision);
-            words.push(format!("S{}", String::from_utf8_lossy(&b)));
+            words.push(format!("S{}", number(saved.speed, self.s.precision)));
         }
         if cur.spindle != saved.spindle {
             words.push(format!(
@@ -83,28 +124,32 @@ impl Interp<'_> {
                 if saved.spindle == 0 { 5 } else { saved.spindle }
             ));
         }
-        if cur.mist != saved.mist || cur.flood != saved.flood {
-            if !saved.mist && !saved.flood {
-                words.push("M9".into());
-            } else {
-                if cur.mist || cur.flood {
-                    words.push("M9".into());
-                }
-                if saved.mist {
-                    words.push("M7".into());
-                }
-                if saved.flood {
-                    words.push("M8".into());
-                }
-            }
-        }
         if !words.is_empty() {
             let line = words.join(" ");
             self.emit_raw(line.as_bytes())?;
         }
+        // Coolant: turn on what was on; M9 only when both were off.
+        if saved.mist && !cur.mist {
+            self.emit_raw(b"M7")?;
+        }
+        if saved.flood && !cur.flood {
+            self.emit_raw(b"M8")?;
+        }
+        if !saved.mist && !saved.flood && (cur.mist || cur.flood) {
+            self.emit_raw(b"M9")?;
+        }
         let motion = self.modal.motion;
+        let (mist, flood) = (
+            self.modal.mist || saved.mist,
+            self.modal.flood || saved.flood,
+        );
+        let both_off = !saved.mist && !saved.flood;
         self.modal = saved.clone();
         self.modal.motion = motion;
+        if !both_off {
+            self.modal.mist = mist;
+            self.modal.flood = flood;
+        }
         Ok(())
     }
 }

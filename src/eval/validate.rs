@@ -1,0 +1,290 @@
+//! The G-code checks the reference makes on every block before running it:
+//! known codes, modal-group conflicts, words without a code that uses them,
+//! feed rates, arcs. A program LinuxCNC would reject is rejected here too,
+//! with the word that is wrong.
+
+use crate::diag::ErrorKind;
+
+use super::state::Modal;
+
+/// Modal group of a G-code (×10), or None for an unknown code.
+fn g_group(g: i32) -> Option<u8> {
+    Some(match g {
+        0
+        | 10
+        | 20
+        | 30
+        | 50
+        | 51
+        | 52
+        | 53
+        | 330
+        | 331
+        | 382..=385
+        | 730
+        | 740
+        | 760
+        | 800..=890 => 1,
+        40 | 100 | 280 | 281 | 300 | 301 | 520 | 530 | 920..=923 => 0,
+        170 | 180 | 190 | 171 | 181 | 191 => 2,
+        900 | 910 => 3,
+        901 | 911 => 4,
+        930 | 940 | 950 => 5,
+        200 | 210 => 6,
+        400 | 410 | 411 | 420 | 421 => 7,
+        430 | 431 | 432 | 490 => 8,
+        980 | 990 => 10,
+        540 | 550 | 560 | 570 | 580 | 590 | 591 | 592 | 593 => 12,
+        610 | 611 | 640 => 13,
+        960 | 970 => 14,
+        70 | 80 => 15,
+        700 | 710 | 720 => 1,
+        _ => return None,
+    })
+}
+
+/// Modal group of an M-code, or None for an unknown code.
+fn m_group(m: i64) -> Option<u8> {
+    Some(match m {
+        0 | 1 | 2 | 30 | 60 => 4,
+        6 | 61 => 6,
+        3 | 4 | 5 => 7,
+        7 | 8 | 9 => 8,
+        48..=53 => 9,
+        19 => 7,
+        62..=68 => 5,
+        70..=73 => 10,
+        98 | 99 => 4,
+        _ => return None,
+    })
+}
+
+/// Groups of G-codes that take axis words.
+fn g_uses_axes(g: i32) -> bool {
+    matches!(g, 100 | 280 | 300 | 520 | 920)
+}
+
+/// Checks a block. `words` are (letter, value) in line order; returns the
+/// error and the index of the word it concerns.
+pub fn check_block(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind, Option<usize>)> {
+    let bad = |msg: &str, at: Option<usize>| {
+        Err((
+            ErrorKind::Semantic {
+                message: msg.to_string(),
+            },
+            at,
+        ))
+    };
+    let mut gseen: [Option<usize>; 16] = [None; 16];
+    let mut mseen: [Option<usize>; 16] = [None; 16];
+    let mut gs: Vec<(i32, usize)> = Vec::new();
+    let mut ms: Vec<(i64, usize)> = Vec::new();
+    let mut has = [None::<usize>; 128];
+    for (i, &(l, v)) in words.iter().enumerate() {
+        match l {
+            b'g' => {
+                let g10 = (v * 10.0).round();
+                if v < 0.0 || v >= 100.0 {
+                    return bad("G-code out of range", Some(i));
+                }
+                if (v * 10.0 - g10).abs() > 0.0001 {
+                    return bad("unknown G-code", Some(i));
+                }
+                let g = g10 as i32;
+                let Some(grp) = g_group(g) else {
+                    return bad(
+                        &format!("unknown G-code G{}", crate::emit::number_string(v, None)),
+                        Some(i),
+                    );
+                };
+                if gseen[grp as usize].is_some() {
+                    return bad("two G-codes from the same modal group", Some(i));
+                }
+                gseen[grp as usize] = Some(i);
+                gs.push((g, i));
+            }
+            b'm' => {
+                if v.fract() != 0.0 || v < 0.0 {
+                    return bad("unknown M-code", Some(i));
+                }
+                let m = v as i64;
+                if m > 199 {
+                    return bad(&format!("M-code greater than 199: M{m}"), Some(i));
+                }
+                let Some(grp) = m_group(m) else {
+                    return bad(&format!("unknown M-code M{m}"), Some(i));
+                };
+                if mseen[grp as usize].is_some() {
+                    return bad("two M-codes from the same modal group", Some(i));
+                }
+                mseen[grp as usize] = Some(i);
+                ms.push((m, i));
+            }
+            _ => {
+                if (l as usize) < 128 {
+                    has[l as usize] = Some(i);
+                }
+            }
+        }
+    }
+    let g_on = |codes: &[i32]| gs.iter().any(|(g, _)| codes.contains(g));
+    let m_on = |codes: &[i64]| ms.iter().any(|(m, _)| codes.contains(m));
+    let axis_word = b"xyzabcuvw".iter().find_map(|&c| has[c as usize]);
+    let motion_here = gs.iter().find(|(g, _)| g_group(*g) == Some(1)).map(|x| x.0);
+    let axis_g0 = gs.iter().find(|(g, _)| g_uses_axes(*g)).map(|x| x.0);
+    if let (Some(_), Some(_), Some(i)) = (motion_here, axis_g0, axis_word) {
+        if motion_here != Some(800) {
+            return bad("two G-codes that both use axis values", Some(i));
+        }
+    }
+    let motion = motion_here.unwrap_or(modal.motion);
+    if let Some(i) = axis_word {
+        if axis_g0.is_none() {
+            if motion == 800 {
+                return bad(
+                    if motion_here == Some(800) {
+                        "axis values with G80"
+                    } else {
+                        "axis values without a G-code that uses them"
+                    },
+                    Some(i),
+                );
+            }
+        }
+    }
+    if (has[b'@' as usize].is_some() || has[b'^' as usize].is_some())
+        && (has[b'x' as usize].is_some() || has[b'y' as usize].is_some())
+    {
+        return bad(
+            "polar coordinates and X/Y words together",
+            has[b'@' as usize].or(has[b'^' as usize]),
+        );
+    }
+    for &(l, v) in words {
+        if l == b'f' && v < 0.0 {
+            return bad("negative F word", None);
+        }
+        if l == b's' && v < 0.0 {
+            return bad("negative spindle speed", None);
+        }
+        if l == b't' && v < 0.0 {
+            return bad("negative tool number", None);
+        }
+    }
+    // Words that need a code to use them.
+    let arcish = g_on(&[20, 30, 50, 51, 100, 331, 760, 870])
+        || (motion_here.is_none()
+            && matches!(modal.motion, 20 | 30 | 50 | 51 | 331 | 760 | 870)
+            && axis_word.is_some());
+    let uses = |letter: u8, ok: bool, msg: &str| -> Result<(), (ErrorKind, Option<usize>)> {
+        match has[letter as usize] {
+            Some(i) if !ok => bad(msg, Some(i)),
+            _ => Ok(()),
+        }
+    };
+    uses(
+        b'i',
+        arcish || (motion == 20 || motion == 30),
+        "I word with no G2, G3, G5, G5.1, G10, G33.1, G76 or G87 to use it",
+    )?;
+    uses(
+        b'j',
+        arcish || (motion == 20 || motion == 30),
+        "J word with no G2, G3, G5, G5.1, G10, G76 or G87 to use it",
+    )?;
+    uses(
+        b'k',
+        arcish || matches!(motion, 20 | 30 | 330 | 331 | 760 | 870),
+        "K word with no G2, G3, G33, G33.1, G76 or G87 to use it",
+    )?;
+    let canned = matches!(motion, 730 | 740 | 760 | 810..=890);
+    uses(
+        b'r',
+        matches!(motion, 20 | 30) || canned || g_on(&[100]) || axis_g0 == Some(100),
+        "R word with no G-code that uses it",
+    )?;
+    uses(
+        b'p',
+        g_on(&[20, 30, 40, 100, 640, 50, 52, 760, 820, 860, 880, 890])
+            || matches!(motion, 20 | 30 | 820 | 860 | 880 | 890)
+            || m_on(&[50, 51, 52, 53, 62, 63, 64, 65, 66, 98]),
+        "P word with no G-code or M-code to use it",
+    )?;
+    uses(
+        b'q',
+        g_on(&[50, 100, 640, 730, 760, 830])
+            || matches!(motion, 730 | 830)
+            || m_on(&[19, 66, 67, 68, 61]),
+        "Q word with no G-code or M-code to use it",
+    )?;
+    uses(
+        b'h',
+        g_on(&[430, 432, 760]),
+        "H word with no G43 or G76 to use it",
+    )?;
+    uses(
+        b'd',
+        g_on(&[410, 411, 420, 421, 960]),
+        "D word with no G41, G42 or G96 to use it",
+    )?;
+    uses(
+        b'e',
+        g_on(&[760]) || m_on(&[66, 67, 68]),
+        "E word with no G76, M66, M67 or M68 to use it",
+    )?;
+    uses(
+        b'l',
+        g_on(&[100, 410, 420, 760]) || canned || m_on(&[66, 98]) || g_on(&[52, 53]),
+        "L word with no G10, canned cycle or M66 to use it",
+    )?;
+    uses(
+        b'$',
+        m_on(&[3, 4, 5, 19, 51]) || g_on(&[330, 331, 760, 950, 960, 970]),
+        "$ word with no spindle code to use it",
+    )?;
+    // Codes that need words.
+    if g_on(&[40]) && has[b'p' as usize].is_none() {
+        return bad(
+            "dwell time missing with G4",
+            gs.iter().find(|g| g.0 == 40).map(|g| g.1),
+        );
+    }
+    if g_on(&[960]) && has[b's' as usize].is_none() {
+        return bad("S word missing with G96", None);
+    }
+    if m_on(&[62, 63, 64, 65]) && has[b'p' as usize].is_none() {
+        return bad("no valid P word with M62-M65", None);
+    }
+    if m_on(&[66]) && has[b'p' as usize].is_none() && has[b'e' as usize].is_none() {
+        return bad("M66 needs a P or an E word", None);
+    }
+    if m_on(&[61]) && has[b'q' as usize].is_none() {
+        return bad("M61 needs a Q word (tool number)", None);
+    }
+    // Motion needing a feed rate.
+    let moves = motion_here.is_some() || axis_word.is_some();
+    if moves && axis_g0.is_none() && matches!(motion, 10 | 20 | 30 | 50 | 51 | 730 | 810..=890) {
+        let feed = words.iter().rev().find(|w| w.0 == b'f').map(|w| w.1);
+        let inverse =
+            gs.iter().any(|g| g.0 == 930) || (modal.feed_mode == 930 && !g_on(&[940, 950]));
+        if inverse {
+            if feed.is_none() && axis_word.is_some() {
+                return bad("F word missing with an inverse time move", None);
+            }
+        } else if feed.unwrap_or(modal.feed) == 0.0 {
+            return bad("cannot move at zero feed rate", None);
+        }
+        if matches!(motion, 20 | 30) && axis_word.is_some() {
+            let arc = ["i", "j", "k", "r"]
+                .iter()
+                .any(|c| has[c.as_bytes()[0] as usize].is_some());
+            if !arc {
+                return bad("R, I, J and K words all missing for arc", None);
+            }
+        }
+    }
+    if motion_here.is_some_and(|m| matches!(m, 330 | 331)) && has[b'k' as usize].is_none() {
+        return bad("K word missing with G33", None);
+    }
+    Ok(())
+}
