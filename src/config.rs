@@ -286,6 +286,16 @@ impl CommonArgs {
             }
             settings.fanuc_disabled = ini.flag("RS274NGC", "DISABLE_FANUC_STYLE_SUB");
             settings.oword_nargs = ini.flag("RS274NGC", "OWORD_NARGS");
+            settings.machine_metric = ini.get("TRAJ", "LINEAR_UNITS").is_some_and(|u| {
+                matches!(
+                    u.to_ascii_lowercase().as_str(),
+                    "mm" | "metric" | "millimeter" | "millimetre"
+                )
+            });
+            settings.uvw_axes = ini.get("TRAJ", "COORDINATES").is_some_and(|c| {
+                c.chars()
+                    .any(|ch| matches!(ch.to_ascii_uppercase(), 'U' | 'V' | 'W'))
+            });
             settings.ini = Some(ini);
         }
         search.dirs = prefixes.into_iter().chain(dirs).collect();

@@ -47,6 +47,18 @@ impl Interp<'_> {
         for item in items {
             match item {
                 Item::Word(w) => {
+                    if matches!(w.letter, b'u' | b'v' | b'w') && !self.s.uvw_axes {
+                        let k = ErrorKind::BadCharacter {
+                            ch: w.letter as char,
+                            byte: w.letter,
+                        };
+                        return Err(self.error_in_line(
+                            k,
+                            file,
+                            start,
+                            Span::new(w.span.start, w.span.start + 1),
+                        ));
+                    }
                     let v = self
                         .eval(&w.value)
                         .map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
@@ -152,6 +164,10 @@ impl Interp<'_> {
                     if !self.s.strip_comments {
                         if c.kind == CommentKind::Debug && self.params.values[5599] <= 0.0 {
                             repl.push((c.span, Repl::Remove));
+                        } else if c.kind == CommentKind::Debug {
+                            // As (msg,...) the text is shown exactly as
+                            // substituted and never read for parameters again.
+                            repl.push((c.span, Repl::Text(format!("(MSG,{text})"))));
                         } else {
                             if !is_stable(&text) {
                                 self.warn(

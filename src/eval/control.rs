@@ -172,6 +172,25 @@ impl Interp<'_> {
         }
     }
 
+    /// Like `seek`, but passes over `break`/`continue` lines of the same
+    /// loop, which do nothing while the loop is being left.
+    fn seek_loop_end(
+        &mut self,
+        file: &Rc<FileIndex>,
+        from: u32,
+        key: &Rc<str>,
+    ) -> Result<u32, Error> {
+        let mut at = from;
+        loop {
+            let t = self.seek(file, at, key, Seek::Control, &[])?;
+            if matches!(file.kind_of(t), Some(OKind::Break | OKind::Continue)) {
+                at = t;
+                continue;
+            }
+            return Ok(t);
+        }
+    }
+
     fn frame(&mut self) -> &mut Frame {
         self.frames.last_mut().expect("frame")
     }
@@ -342,7 +361,7 @@ impl Interp<'_> {
                 if c != 0.0 {
                     return Ok(());
                 }
-                let t = self.seek(file, oidx, &key, Seek::Control, &[])?;
+                let t = self.seek_loop_end(file, oidx, &key)?;
                 self.loop_exit(file, t, &key, OKind::EndWhile, "while")
             }
             OKind::EndWhile => {
@@ -373,7 +392,7 @@ impl Interp<'_> {
                     if let Some(r) = self.frame().labels.get_mut(&key) {
                         r.repeat = -1;
                     }
-                    let t = self.seek(file, oidx, &key, Seek::Control, &[])?;
+                    let t = self.seek_loop_end(file, oidx, &key)?;
                     self.loop_exit(file, t, &key, OKind::EndRepeat, "repeat")
                 }
             }
@@ -386,7 +405,7 @@ impl Interp<'_> {
             OKind::Break | OKind::Continue => {
                 let expected = "while/do";
                 let rec = self.expect(file, oidx, &key, &[OKind::While, OKind::Do], expected)?;
-                let t = self.seek(file, oidx, &key, Seek::Control, &[])?;
+                let t = self.seek_loop_end(file, oidx, &key)?;
                 let tkind = file.kind_of(t);
                 match (rec.kind, tkind, o.kind) {
                     (OKind::While, Some(OKind::EndWhile), OKind::Break) => {

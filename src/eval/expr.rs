@@ -192,6 +192,19 @@ impl Interp<'_> {
         {
             return self.position(axis, span);
         }
+        if let ParamClass::Refreshed(what, why) = classify(i) {
+            if self.s.zero_start {
+                return Ok(0.0);
+            }
+            return Err((
+                ErrorKind::RuntimeParam {
+                    what: format!("#{i} ({what})"),
+                    why: why.to_string(),
+                    hint: "--zero-start (reads 0)".to_string(),
+                },
+                span,
+            ));
+        }
         if !self.params.known[i] {
             let (what, why) = match classify(i) {
                 ParamClass::Runtime(w, y) | ParamClass::ReadOnlyRuntime(w, y) => (w, y),

@@ -15,7 +15,8 @@ enum Fmt {
 }
 
 fn push_value(out: &mut String, v: f64, fmt: Fmt) {
-    let v = if v.abs() < 1e-6 { 0.0 } else { v };
+    // LinuxCNC 2.9 prints values closer to 0 than 0.0001 as 0.
+    let v = if v.abs() < 1e-4 { 0.0 } else { v };
     let Fmt::Decimals(n) = fmt;
     let s = format!("{v:.n$}");
     if s.len() >= 30 {
@@ -75,7 +76,8 @@ impl Interp<'_> {
             }
             let at = Span::new(base + i as u32, base + i as u32 + 1);
             match bytes.get(i + 1) {
-                None => return Err((ErrorKind::UnterminatedName, at)),
+                // LinuxCNC 2.9 drops a '#' at the very end.
+                None => break,
                 Some(d) if d.is_ascii_digit() => {
                     let mut j = i + 1;
                     let mut n: u64 = 0;
@@ -100,7 +102,9 @@ impl Interp<'_> {
                 }
                 Some(b'<') => {
                     let Some(close) = text[i..].find('>') else {
-                        return Err((ErrorKind::UnterminatedName, at));
+                        // LinuxCNC 2.9 ends the message at an unterminated name.
+                        let _ = at;
+                        break;
                     };
                     let raw_name = &text[i + 2..i + close];
                     let name: String = raw_name

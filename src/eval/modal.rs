@@ -27,18 +27,58 @@ impl Interp<'_> {
         }
     }
 
-    /// G5x offset of coordinate system `cs` (1–9) on an axis, if known.
-    fn g5x_offset(&self, cs: i32, axis: usize) -> Option<f64> {
-        let i = 5221 + 20 * (cs as usize - 1) + axis;
-        self.params.known[i].then(|| self.params.values[i])
+    /// Factor from machine units (parameter storage) to program units.
+    fn to_prog(&self, axis: usize) -> f64 {
+        if !LINEAR[axis] || self.s.machine_metric == self.modal.metric {
+            1.0
+        } else if self.s.machine_metric {
+            1.0 / 25.4
+        } else {
+            25.4
+        }
     }
 
+    /// A length parameter in program units, if known.
+    fn param_prog(&self, i: usize, axis: usize) -> Option<f64> {
+        self.params.known[i].then(|| self.params.values[i] * self.to_prog(axis))
+    }
+
+    fn set_param_prog(&mut self, i: usize, axis: usize, v: Option<f64>) {
+        match v {
+            Some(v) => {
+                let f = self.to_prog(axis);
+                self.params.assign(i, v / f)
+            }
+            None => self.params.known[i] = false,
+        }
+    }
+
+    /// G5x offset of coordinate system `cs` (1–9) on an axis, program units.
+    fn g5x_offset(&self, cs: i32, axis: usize) -> Option<f64> {
+        self.param_prog(5221 + 20 * (cs as usize - 1) + axis, axis)
+    }
+
+    /// Applied G92 offset, program units.
     fn g92_offset(&self, axis: usize) -> Option<f64> {
-        let i = 5211 + axis;
         if self.params.known[5210] && self.params.values[5210] == 0.0 {
             return Some(0.0);
         }
-        self.params.known[i].then(|| self.params.values[i])
+        self.param_prog(5211 + axis, axis)
+    }
+
+    /// Machine position (without tool offsets), program units.
+    fn machine_pos(&self, axis: usize) -> Option<f64> {
+        let p = self.pos.axes[axis].as_ref().ok()?;
+        Some(p + self.g5x_offset(self.modal.coord_index, axis)? + self.g92_offset(axis)?)
+    }
+
+    /// Sets the position from a machine position (program units).
+    fn from_machine(&mut self, axis: usize, m: Option<f64>, what: &'static str) {
+        let line = self.line_no();
+        let v = m.and_then(|m| {
+            Some(m - self.g5x_offset(self.modal.coord_index, axis)? - self.g92_offset(axis)?)
+        });
+        self.pos.axes[axis] = v.ok_or(Unknown::After(what, line));
     }
 
     /// Applies the line's words to the model. Returns true when the line ends
@@ -181,50 +221,66 @@ impl Interp<'_> {
                 _ => {}
             }
         }
-        let line = self.line_no();
+        let _ = self.line_no();
         match special {
             Some(920) => {
                 for &(a, v) in &axis_words {
-                    // The position becomes the given value; the offset
-                    // becomes known only if the position was.
-                    let old = self.pos.axes[a].clone();
-                    let old_off = self.g92_offset(a);
-                    match (old, old_off) {
-                        (Ok(p), Some(o)) => self.params.assign(5211 + a, p + o - v),
-                        _ => self.params.known[5211 + a] = false,
-                    }
+                    // The position becomes the given value; the offset is
+                    // known only if the machine position was.
+                    let m = self.machine_pos(a);
+                    let g5x = self.g5x_offset(self.modal.coord_index, a);
+                    let off = m.zip(g5x).map(|(m, o)| m - o - v);
+                    self.set_param_prog(5211 + a, a, off);
                     self.pos.axes[a] = Ok(v);
                 }
                 self.params.assign(5210, 1.0);
             }
             Some(921) | Some(922) => {
-                for a in 0..9 {
-                    let off = self.g92_offset(a);
-                    match (&self.pos.axes[a], off) {
-                        (Ok(p), Some(o)) => self.pos.axes[a] = Ok(p + o),
-                        _ => self.pos.axes[a] = Err(Unknown::After("G92.1/G92.2", line)),
-                    }
-                }
+                let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
                 if special == Some(921) {
                     for a in 0..9 {
                         self.params.assign(5211 + a, 0.0);
                     }
                 }
                 self.params.assign(5210, 0.0);
+                for (a, m) in machine.into_iter().enumerate() {
+                    self.from_machine(a, m, "G92.1/G92.2");
+                }
             }
-            Some(923) => self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "G92.3"),
+            Some(923) => {
+                let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
+                self.params.assign(5210, 1.0);
+                for (a, m) in machine.into_iter().enumerate() {
+                    self.from_machine(a, m, "G92.3");
+                }
+            }
             Some(100) => self.g10(l_word, p_word, r_word, &axis_words),
             Some(280) | Some(300) => {
+                let base = if special == Some(280) { 5161 } else { 5181 };
                 let axes: Vec<usize> = if axis_words.is_empty() {
                     (0..9).collect()
                 } else {
                     axis_words.iter().map(|a| a.0).collect()
                 };
-                self.forget(&axes, "G28/G30 (moves to a home position)");
+                for a in axes {
+                    let home = self.param_prog(base + a, a);
+                    self.from_machine(a, home, "G28/G30 (a move to a home position)");
+                }
+            }
+            Some(281) | Some(301) => {
+                let base = if special == Some(281) { 5161 } else { 5181 };
+                for a in 0..9 {
+                    let m = self.machine_pos(a);
+                    self.set_param_prog(base + a, a, m);
+                }
             }
             Some(530) => {
-                let axes: Vec<usize> = axis_words.iter().map(|a| a.0).collect();
-                self.forget(&axes, "a G53 machine-coordinate move");
+                if self.modal.ccomp != 400 {
+                    self.forget(&[0, 1, 2], "cutter radius compensation");
+                }
+                for &(a, v) in &axis_words {
+                    self.from_machine(a, Some(v), "a G53 machine-coordinate move");
+                }
             }
             Some(_) => {}
             None => {
@@ -253,19 +309,14 @@ impl Interp<'_> {
     }
 
     fn select_cs(&mut self, cs: i32) {
-        let old = self.modal.coord_index;
-        if old != cs {
-            let line = self.line_no();
-            for a in 0..9 {
-                let (o, n) = (self.g5x_offset(old, a), self.g5x_offset(cs, a));
-                match (&self.pos.axes[a], o, n) {
-                    (Ok(p), Some(o), Some(n)) => self.pos.axes[a] = Ok(p + o - n),
-                    _ => self.pos.axes[a] = Err(Unknown::After("a coordinate system change", line)),
-                }
-            }
-        }
+        let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
         self.modal.coord_index = cs;
         self.params.assign(5220, cs as f64);
+        for (a, m) in machine.into_iter().enumerate() {
+            if self.pos.axes[a].is_ok() {
+                self.from_machine(a, m, "a coordinate system change");
+            }
+        }
     }
 
     fn g10(&mut self, l: Option<f64>, p: Option<f64>, r: Option<f64>, axis_words: &[(usize, f64)]) {
@@ -275,35 +326,27 @@ impl Interp<'_> {
             Some(n) => n.clamp(1, 9),
         };
         let base = 5221 + 20 * (cs as usize - 1);
-        let line = self.line_no();
+        let active = cs == self.modal.coord_index;
         match l {
-            Some(2) => {
+            Some(2) | Some(20) => {
                 for &(a, v) in axis_words {
-                    let old = self.g5x_offset(cs, a);
-                    if cs == self.modal.coord_index {
-                        match (&self.pos.axes[a], old) {
-                            (Ok(pos), Some(o)) => self.pos.axes[a] = Ok(pos + o - v),
-                            _ => self.pos.axes[a] = Err(Unknown::After("G10 L2", line)),
+                    let m = self.machine_pos(a);
+                    let new_off = if l == Some(2) {
+                        Some(v)
+                    } else {
+                        m.zip(self.g92_offset(a)).map(|(m, g)| m - g - v)
+                    };
+                    self.set_param_prog(base + a, a, new_off);
+                    if active {
+                        if l == Some(20) {
+                            self.pos.axes[a] = Ok(v);
+                        } else {
+                            self.from_machine(a, m, "G10 L2 on the active coordinate system");
                         }
                     }
-                    self.params.assign(base + a, v);
                 }
                 if let Some(r) = r {
                     self.params.assign(base + 9, r);
-                }
-            }
-            Some(20) => {
-                for &(a, v) in axis_words {
-                    let old = self.g5x_offset(cs, a);
-                    if cs == self.modal.coord_index {
-                        match (&self.pos.axes[a], old) {
-                            (Ok(pos), Some(o)) => self.params.assign(base + a, pos + o - v),
-                            _ => self.params.known[base + a] = false,
-                        }
-                        self.pos.axes[a] = Ok(v);
-                    } else {
-                        self.params.known[base + a] = false;
-                    }
                 }
             }
             _ => {

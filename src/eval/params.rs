@@ -12,6 +12,8 @@ pub enum ParamClass {
     Runtime(&'static str, &'static str),
     /// Current position, answered from the position model.
     Position(usize),
+    /// Overwritten by the machine before every line: assignments do not stick.
+    Refreshed(&'static str, &'static str),
     /// Tool table and toolchanger data: read-only in LinuxCNC.
     ReadOnlyRuntime(&'static str, &'static str),
 }

@@ -3,6 +3,7 @@
 
 mod cli;
 mod fixtures;
+mod generated;
 mod oracle;
 mod props;
 

@@ -1,10 +1,340 @@
 //! Property tests: arbitrary input never panics; flattening is idempotent;
-//! the number formatter round-trips.
+//! the number formatter round-trips. Robustness table: hostile inputs (huge
+//! lines, deep nesting, many labels, runaway loops and recursion, bad bytes)
+//! end with a clear result within bounded time.
+
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
 
 use proptest::prelude::*;
 
-use ngcflat::emit::number_string;
+use ngcflat::diag::{Error, MessageFormat, render};
+use ngcflat::emit::{Destination, number_string};
 use ngcflat::eval::Settings;
+use ngcflat::parse::LineParser;
+use ngcflat::program::{SearchPath, SourceFile};
+
+/// Small limits, so that runaway programs stop quickly.
+fn small_limits() -> Settings {
+    Settings {
+        max_steps: 10_000,
+        max_output_lines: 10_000,
+        ..Settings::default()
+    }
+}
+
+/// Flattens raw bytes (not necessarily UTF-8) and throws the output away. The
+/// source is named like stdin so that no folder is searched for subroutines.
+fn flatten_bytes(data: Vec<u8>, settings: &Settings) -> Result<(), Error> {
+    let src = SourceFile::new("<stdin>".into(), "<stdin>".into(), data);
+    ngcflat::flatten(src, settings, &SearchPath::default(), Destination::Discard).map(|_| ())
+}
+
+/// Renders a result in every format (rendering must not panic either).
+fn render_all(r: &Result<(), Error>) {
+    if let Err(e) = r {
+        for f in [
+            MessageFormat::Human,
+            MessageFormat::Short,
+            MessageFormat::Json,
+            MessageFormat::Github,
+        ] {
+            let _ = render(e, f, false);
+        }
+    }
+}
+
+/// Pieces of G-code for the structured never-panic property.
+const TOKENS: &[&str] = &[
+    "G0",
+    "G1",
+    "G2",
+    "G3",
+    "G4",
+    "G10",
+    "L2",
+    "L20",
+    "G17",
+    "G18",
+    "G20",
+    "G21",
+    "G28",
+    "G38.2",
+    "G40",
+    "G41",
+    "G43",
+    "G53",
+    "G54",
+    "G64",
+    "G81",
+    "G90",
+    "G91",
+    "G92",
+    "G93",
+    "M2",
+    "M3",
+    "M6",
+    "M30",
+    "M66",
+    "M70",
+    "M72",
+    "M98",
+    "M99",
+    "X",
+    "Y",
+    "Z",
+    "I",
+    "J",
+    "K",
+    "R",
+    "P",
+    "Q",
+    "L",
+    "F",
+    "S",
+    "T",
+    "N10",
+    "E",
+    "@",
+    "^",
+    "$",
+    "/",
+    "%",
+    "1",
+    "0",
+    "-1",
+    ".5",
+    "1e9",
+    "99999999999",
+    "5400",
+    "5601",
+    "5602",
+    "#",
+    "#1",
+    "#5063",
+    "#<a>",
+    "#<_value>",
+    "#<_x>",
+    "#<_hal[x]>",
+    "#<_ini[a]b>",
+    "#<",
+    ">",
+    "##1",
+    "=",
+    "[",
+    "]",
+    "[1]",
+    "[0]",
+    "**",
+    "*",
+    "/",
+    "+",
+    "-",
+    "MOD",
+    "EQ",
+    "NE",
+    "GT",
+    "LT",
+    "AND",
+    "OR",
+    "XOR",
+    "ABS",
+    "ACOS",
+    "ASIN",
+    "SQRT",
+    "LN",
+    "EXP",
+    "ROUND",
+    "FIX",
+    "FUP",
+    "ATAN[1]/[0]",
+    "EXISTS[#<a>]",
+    "o100",
+    "o<s>",
+    "o#1",
+    "o[1]",
+    "sub",
+    "endsub",
+    "call",
+    "do",
+    "while",
+    "endwhile",
+    "repeat",
+    "endrepeat",
+    "if",
+    "elseif",
+    "else",
+    "endif",
+    "break",
+    "continue",
+    "return",
+    "(",
+    ")",
+    ";",
+    "(debug,",
+    "(print,",
+    "(log,",
+    "(logopen,x)",
+    "(abort,",
+    "(msg,",
+    "%d",
+    "%lf",
+    " ",
+    "\t",
+    "\r",
+];
+
+fn token_line() -> impl Strategy<Value = String> {
+    proptest::collection::vec((proptest::sample::select(TOKENS), any::<bool>()), 0..12).prop_map(
+        |toks| {
+            let mut s = String::new();
+            for (t, space) in toks {
+                s.push_str(t);
+                if space {
+                    s.push(' ');
+                }
+            }
+            s
+        },
+    )
+}
+
+// ---------------------------------------------------------------- simple valid programs
+
+const VARS: usize = 3;
+
+#[derive(Debug, Clone)]
+enum Expr {
+    Num(i32, u8),
+    Var(usize),
+    Bin(&'static str, Box<Expr>, Box<Expr>),
+    /// `[a / [ABS[b] + 1]]`: never divides by zero.
+    SafeDiv(Box<Expr>, Box<Expr>),
+    Fn(&'static str, Box<Expr>),
+}
+
+impl Expr {
+    fn text(&self) -> String {
+        match self {
+            Expr::Num(n, d) => {
+                if *d == 0 {
+                    n.to_string()
+                } else {
+                    format!("{n}.{d}")
+                }
+            }
+            Expr::Var(v) => format!("#<v{v}>"),
+            Expr::Bin(op, a, b) => format!("[{} {op} {}]", a.text(), b.text()),
+            Expr::SafeDiv(a, b) => format!("[{} / [ABS[{}] + 1]]", a.text(), b.text()),
+            Expr::Fn(f, a) => format!("{f}[{}]", a.text()),
+        }
+    }
+}
+
+fn expr() -> impl Strategy<Value = Expr> {
+    let leaf = prop_oneof![
+        (-50i32..50, 0u8..10).prop_map(|(n, d)| Expr::Num(n, d)),
+        (0..VARS).prop_map(Expr::Var),
+    ];
+    leaf.prop_recursive(2, 8, 2, |inner| {
+        prop_oneof![
+            (
+                proptest::sample::select(&["+", "-", "*", "MOD", "GT", "AND"][..]),
+                inner.clone(),
+                inner.clone()
+            )
+                .prop_map(|(op, a, b)| Expr::Bin(op, Box::new(a), Box::new(b))),
+            (inner.clone(), inner.clone())
+                .prop_map(|(a, b)| Expr::SafeDiv(Box::new(a), Box::new(b))),
+            (
+                proptest::sample::select(&["ABS", "ROUND", "FIX", "FUP", "SIN", "COS"][..]),
+                inner
+            )
+                .prop_map(|(f, a)| Expr::Fn(f, Box::new(a))),
+        ]
+    })
+}
+
+#[derive(Debug, Clone)]
+enum Stmt {
+    Assign(usize, Expr),
+    Move(bool, Expr, Expr),
+    Comment(String),
+    Debug(usize),
+    If(Expr, Vec<Stmt>, Vec<Stmt>),
+    While(u8, Vec<Stmt>),
+    Repeat(u8, Vec<Stmt>),
+}
+
+fn stmt() -> impl Strategy<Value = Stmt> {
+    let leaf = prop_oneof![
+        (0..VARS, expr()).prop_map(|(v, e)| Stmt::Assign(v, e)),
+        (any::<bool>(), expr(), expr()).prop_map(|(g0, x, y)| Stmt::Move(g0, x, y)),
+        "[a-zA-Z0-9 ,.]{0,20}".prop_map(Stmt::Comment),
+        (0..VARS).prop_map(Stmt::Debug),
+    ];
+    leaf.prop_recursive(3, 24, 4, |inner| {
+        let body = proptest::collection::vec(inner, 0..4);
+        prop_oneof![
+            (expr(), body.clone(), body.clone()).prop_map(|(c, t, e)| Stmt::If(c, t, e)),
+            (0u8..4, body.clone()).prop_map(|(n, b)| Stmt::While(n, b)),
+            (0u8..4, body).prop_map(|(n, b)| Stmt::Repeat(n, b)),
+        ]
+    })
+}
+
+fn render_stmts(stmts: &[Stmt], label: &mut u32, out: &mut String) {
+    for s in stmts {
+        match s {
+            Stmt::Assign(v, e) => out.push_str(&format!("#<v{v}> = {}\n", e.text())),
+            Stmt::Move(g0, x, y) => out.push_str(&format!(
+                "G{} X{} Y{}\n",
+                if *g0 { 0 } else { 1 },
+                x.text(),
+                y.text()
+            )),
+            Stmt::Comment(c) => out.push_str(&format!("({c})\n")),
+            Stmt::Debug(v) => out.push_str(&format!("(debug, v is #<v{v}>)\n")),
+            Stmt::If(c, then, els) => {
+                *label += 1;
+                let l = *label;
+                out.push_str(&format!("o{l} if [{}]\n", c.text()));
+                render_stmts(then, label, out);
+                if !els.is_empty() {
+                    out.push_str(&format!("o{l} else\n"));
+                    render_stmts(els, label, out);
+                }
+                out.push_str(&format!("o{l} endif\n"));
+            }
+            Stmt::While(n, body) => {
+                *label += 1;
+                let l = *label;
+                out.push_str(&format!("#<w{l}> = 0\no{l} while [#<w{l}> LT {n}]\n"));
+                render_stmts(body, label, out);
+                out.push_str(&format!("#<w{l}> = [#<w{l}> + 1]\no{l} endwhile\n"));
+            }
+            Stmt::Repeat(n, body) => {
+                *label += 1;
+                let l = *label;
+                out.push_str(&format!("o{l} repeat [{n}]\n"));
+                render_stmts(body, label, out);
+                out.push_str(&format!("o{l} endrepeat\n"));
+            }
+        }
+    }
+}
+
+fn program() -> impl Strategy<Value = String> {
+    proptest::collection::vec(stmt(), 0..8).prop_map(|stmts| {
+        let mut out = String::from("G21 G90 F300\n");
+        for v in 0..VARS {
+            out.push_str(&format!("#<v{v}> = {v}\n"));
+        }
+        render_stmts(&stmts, &mut 100, &mut out);
+        out.push_str("M2\n");
+        out
+    })
+}
 
 proptest! {
     #[test]
@@ -27,7 +357,216 @@ proptest! {
     #[test]
     fn arbitrary_bytes_never_panic(data in proptest::collection::vec(any::<u8>(), 0..400)) {
         let text = String::from_utf8_lossy(&data);
-        let settings = Settings { max_steps: 10_000, max_output_lines: 10_000, ..Settings::default() };
-        let _ = ngcflat::flatten_str(&text, &settings);
+        let _ = ngcflat::flatten_str(&text, &small_limits());
+        // The same bytes unmodified (invalid UTF-8 included), line by line
+        // and as a program.
+        let mut parser = LineParser::default();
+        for line in data.split(|&b| b == b'\n') {
+            let _ = parser.parse(line, true);
+            let _ = parser.parse(line, false);
+        }
+        render_all(&flatten_bytes(data, &small_limits()));
     }
+
+    #[test]
+    fn token_lines_never_panic(lines in proptest::collection::vec(token_line(), 0..10)) {
+        let mut parser = LineParser::default();
+        for line in &lines {
+            let _ = parser.parse(line.as_bytes(), true);
+        }
+        let text = lines.join("\n");
+        let settings = Settings { zero_start: true, ..small_limits() };
+        render_all(&flatten_bytes(text.clone().into_bytes(), &settings));
+        render_all(&flatten_bytes(text.into_bytes(), &small_limits()));
+    }
+
+    #[test]
+    fn flattening_is_idempotent(prog in program()) {
+        let settings = small_limits();
+        // Programs that go wrong (an over-long line, a value too large to
+        // print) are not what this property is about.
+        if let Ok(once) = ngcflat::flatten_str(&prog, &settings) {
+            let twice = ngcflat::flatten_str(&once, &settings);
+            prop_assert!(twice.is_ok(), "output of\n{prog}\nis refused: {twice:?}\noutput:\n{once}");
+            let twice = twice.unwrap();
+            prop_assert_eq!(&twice, &once, "program:\n{}", prog);
+        }
+    }
+}
+
+/// Simple valid programs flatten in the vast majority of cases, so that the
+/// idempotence property tests something.
+#[test]
+fn generated_programs_mostly_flatten() {
+    use proptest::strategy::ValueTree;
+    use proptest::test_runner::TestRunner;
+    let mut runner = TestRunner::deterministic();
+    let strategy = program();
+    let mut ok = 0;
+    let mut failures = Vec::new();
+    for _ in 0..100 {
+        let prog = strategy.new_tree(&mut runner).unwrap().current();
+        match ngcflat::flatten_str(&prog, &small_limits()) {
+            Ok(_) => ok += 1,
+            Err(e) => failures.push(format!("{}\n{prog}", e.message())),
+        }
+    }
+    assert!(
+        ok >= 90,
+        "only {ok} of 100 flattened; e.g.\n{}",
+        failures[0]
+    );
+}
+
+// ---------------------------------------------------------------- robustness table
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Want {
+    Ok,
+    Err,
+    /// Err with this diagnostic code.
+    Code(&'static str),
+}
+
+fn repeat_lines(n: usize, f: impl Fn(usize) -> String) -> Vec<u8> {
+    let mut s = String::new();
+    for i in 0..n {
+        s.push_str(&f(i));
+    }
+    s.into_bytes()
+}
+
+/// Deterministic pseudo-random bytes.
+fn noise(n: usize, seed: u64) -> Vec<u8> {
+    let mut x = seed;
+    (0..n)
+        .map(|_| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x as u8
+        })
+        .collect()
+}
+
+type Input = fn() -> Vec<u8>;
+
+/// (name, input, max_steps, expected). Each case must finish in well under
+/// `CASE_TIMEOUT` and must not panic.
+#[rustfmt::skip]
+const CASES: &[(&str, Input, u64, Want)] = &[
+    ("empty input", || Vec::new(), 10_000, Want::Ok),
+    ("only blanks and newlines", || b"\n \t\r\n\n".to_vec(), 10_000, Want::Ok),
+    ("only percent", || b"%\n".to_vec(), 10_000, Want::Ok),
+    ("1 MB single line", || [b"G1 X".as_slice(), &vec![b'1'; 1 << 20]].concat(), 10_000, Want::Code("E0001")),
+    ("1 MB comment line", || [b"(".as_slice(), &vec![b'a'; 1 << 20], b")\nM2\n"].concat(), 10_000, Want::Code("E0001")),
+    ("1 MB line, no newline at all", || vec![b'G'; 1 << 20], 10_000, Want::Code("E0001")),
+    ("1 MB of newlines", || vec![b'\n'; 1 << 20], 10_000, Want::Ok),
+    ("10 000-deep brackets", || [b"#1 = ".as_slice(), &vec![b'['; 10_000], b"1", &vec![b']'; 10_000], b"\nM2\n"].concat(), 10_000, Want::Code("E0001")),
+    ("10 000 unclosed brackets", || [b"G1 X".as_slice(), &vec![b'['; 10_000]].concat(), 10_000, Want::Code("E0001")),
+    ("deepest brackets that fit a line", || [b"#1=".as_slice(), &vec![b'['; 120], b"1", &vec![b']'; 120], b"\nM2\n"].concat(), 10_000, Want::Ok),
+    ("deep unary minus chain", || [b"#1=".as_slice(), &vec![b'-'; 240], b"1\nM2\n"].concat(), 10_000, Want::Ok),
+    ("deep function nesting", || [b"#1=".as_slice(), &b"abs[".repeat(50), b"1", &vec![b']'; 50], b"\nM2\n"].concat(), 10_000, Want::Ok),
+    ("deep parameter indirection", || [b"#1=1\n#2=".as_slice(), &vec![b'#'; 240], b"1\nM2\n"].concat(), 10_000, Want::Ok),
+    ("a million distinct if/endif labels", || repeat_lines(1_000_000, |i| format!("o{i} if [0]\no{i} endif\n")), 10_000_000, Want::Ok),
+    ("20 000 subs without endsub", || repeat_lines(20_000, |i| format!("o{i} sub\n")), 10_000, Want::Err),
+    ("20 000 whiles with one label, no endwhile", || repeat_lines(20_000, |_| "o1 while [0]\n".to_string()), 10_000, Want::Err),
+    ("10 000-deep nested ifs", || [repeat_lines(10_000, |i| format!("o{i} if [1]\n")), repeat_lines(10_000, |i| format!("o{} endif\n", 9_999 - i)), b"M2\n".to_vec()].concat(), 10_000_000, Want::Ok),
+    ("10 000-deep nested repeats", || [repeat_lines(10_000, |i| format!("o{i} repeat [1]\n")), repeat_lines(10_000, |i| format!("o{} endrepeat\n", 9_999 - i)), b"M2\n".to_vec()].concat(), 10_000_000, Want::Ok),
+    ("100 000 named parameters", || repeat_lines(100_000, |i| format!("#<p{i}> = {i}\n")), 10_000, Want::Ok),
+    ("repeat [1e9] (an E word, not an exponent)", || b"o1 repeat [1e9]\nG1 X1\no1 endrepeat\nM2\n".to_vec(), 10_000, Want::Err),
+    ("repeat a billion times", || b"o1 repeat [1000000000]\no1 endrepeat\nM2\n".to_vec(), 10_000, Want::Code("E0402")),
+    ("repeat a billion times, with output", || b"o1 repeat [1000000000]\nG1 X1\no1 endrepeat\nM2\n".to_vec(), 10_000_000, Want::Code("E0403")),
+    ("repeat 1e300 times", || [b"o1 repeat [1".as_slice(), &vec![b'0'; 240], b"]\no1 endrepeat\nM2\n"].concat(), 10_000, Want::Err),
+    ("infinite while [1]", || b"o1 while [1]\no1 endwhile\nM2\n".to_vec(), 10_000, Want::Code("E0402")),
+    ("infinite do-while", || b"o1 do\no1 while [1]\nM2\n".to_vec(), 10_000, Want::Code("E0402")),
+    ("infinite while with a continue", || b"o1 while [1]\no1 continue\no1 endwhile\nM2\n".to_vec(), 10_000, Want::Code("E0402")),
+    ("runaway recursion", || b"o<r> sub\no<r> call\no<r> endsub\no<r> call\nM2\n".to_vec(), 10_000, Want::Err),
+    ("runaway recursion through numbered subs", || b"o100 sub\no100 call\no100 endsub\no100 call\nM2\n".to_vec(), 10_000, Want::Err),
+    ("runaway M98 recursion", || b"O100\nM98 P100\nM99\n".to_vec(), 10_000, Want::Err),
+    ("mutual recursion", || b"o1 sub\no2 call\no1 endsub\no2 sub\no1 call\no2 endsub\no1 call\nM2\n".to_vec(), 10_000, Want::Err),
+    ("call of an unknown file sub", || b"o<no_such_sub_file> call\nM2\n".to_vec(), 10_000, Want::Err),
+    ("call with a path-like name", || b"o<../../etc/passwd> call\nM2\n".to_vec(), 10_000, Want::Err),
+    ("invalid UTF-8 in a comment", || b"(\xff\xfe\xc3\x28)\nG1 X1\nM2\n".to_vec(), 10_000, Want::Ok),
+    ("invalid UTF-8 in a debug comment", || b"#1=2\n(debug,\xff #1 \xc3)\nM2\n".to_vec(), 10_000, Want::Ok),
+    ("invalid UTF-8 in a named parameter", || b"#<\xff\xfe>=1\nM2\n".to_vec(), 10_000, Want::Err),
+    ("invalid UTF-8 outside comments", || b"G1 X\xff1\nM2\n".to_vec(), 10_000, Want::Err),
+    ("truncated UTF-8 at end of file", || b"G1 X1 (\xe2\x82".to_vec(), 10_000, Want::Err),
+    ("NUL bytes", || b"G1\0X1\nM2\n".to_vec(), 10_000, Want::Err),
+    ("NUL in a comment", || b"(a\0b)\nM2\n".to_vec(), 10_000, Want::Ok),
+    ("CR-only line endings", || b"G0 X1\rG1 Y2\rM2\r".to_vec(), 10_000, Want::Err),
+    ("CR-only line endings, 1 000 lines", || repeat_lines(1_000, |i| format!("G1 X{i}\r")), 10_000, Want::Code("E0001")),
+    ("CRLF line endings", || b"G0 X1\r\nG1 Y2\r\nM2\r\n".to_vec(), 10_000, Want::Ok),
+    ("1 MB of binary noise", || noise(1 << 20, 0x9e37_79b9_7f4a_7c15), 10_000, Want::Err),
+    ("1 MB of short noise lines", || noise(1 << 20, 7).chunks(40).flat_map(|c| [c, b"\n"].concat()).collect(), 10_000, Want::Err),
+    ("number too large to print", || [b"G1 X".as_slice(), &vec![b'9'; 240], b"\nM2\n"].concat(), 10_000, Want::Err),
+    ("overflow to infinity", || b"#1 = [10 ** 400]\nG1 X#1\nM2\n".to_vec(), 10_000, Want::Err),
+    ("NaN from sqrt of negative", || b"G1 X[SQRT[-1]]\nM2\n".to_vec(), 10_000, Want::Err),
+    ("division by zero", || b"G1 X[1/0]\nM2\n".to_vec(), 10_000, Want::Err),
+    ("parameter number out of range", || b"#99999999999999999999 = 1\nM2\n".to_vec(), 10_000, Want::Err),
+    ("negative parameter number", || b"#-1 = 1\nM2\n".to_vec(), 10_000, Want::Err),
+    ("unclosed named parameter", || b"#<abc = 1\nM2\n".to_vec(), 10_000, Want::Err),
+    ("unclosed comment", || b"G1 X1 (abc\nM2\n".to_vec(), 10_000, Want::Err),
+    ("nested comment", || b"G1 X1 (a (b) c)\nM2\n".to_vec(), 10_000, Want::Err),
+    ("endsub without sub", || b"o1 endsub\nM2\n".to_vec(), 10_000, Want::Err),
+    ("endwhile without while", || b"o1 endwhile\nM2\n".to_vec(), 10_000, Want::Err),
+    ("dynamic label loop", || b"#1=1\no#1 while [1]\no#1 endwhile\nM2\n".to_vec(), 10_000, Want::Err),
+    ("abort comment", || b"(abort, stop here)\nM2\n".to_vec(), 10_000, Want::Err),
+];
+
+const CASE_TIMEOUT: Duration = Duration::from_secs(60);
+
+fn outcome(r: &Result<(), Error>) -> String {
+    match r {
+        Ok(()) => "Ok".to_string(),
+        Err(e) => format!("Err {}: {}", e.code(), e.message()),
+    }
+}
+
+#[test]
+fn hostile_inputs_end_cleanly() {
+    let mut failures = Vec::new();
+    for &(name, input, max_steps, want) in CASES {
+        let (tx, rx) = mpsc::channel();
+        let started = Instant::now();
+        // A thread of its own: a hang is reported as such instead of stalling
+        // the suite, and the (smaller) stack of a spawned thread must suffice.
+        std::thread::Builder::new()
+            .name(name.to_string())
+            .spawn(move || {
+                let settings = Settings {
+                    max_steps,
+                    max_output_lines: 10_000,
+                    ..Settings::default()
+                };
+                let r = flatten_bytes(input(), &settings);
+                render_all(&r);
+                let _ = tx.send(r);
+            })
+            .expect("spawn");
+        let r = match rx.recv_timeout(CASE_TIMEOUT) {
+            Ok(r) => r,
+            Err(mpsc::RecvTimeoutError::Timeout) => {
+                failures.push(format!("{name}: no result after {CASE_TIMEOUT:?} (hang)"));
+                continue;
+            }
+            Err(mpsc::RecvTimeoutError::Disconnected) => {
+                failures.push(format!("{name}: panicked"));
+                continue;
+            }
+        };
+        let elapsed = started.elapsed();
+        let good = match (want, &r) {
+            (Want::Ok, Ok(())) | (Want::Err, Err(_)) => true,
+            (Want::Code(c), Err(e)) => e.code() == c,
+            _ => false,
+        };
+        if !good {
+            failures.push(format!("{name}: want {want:?}, got {}", outcome(&r)));
+        }
+        if std::env::var_os("NGCFLAT_PRINT_CASES").is_some() {
+            eprintln!("{elapsed:>10.2?}  {name}: {}", outcome(&r));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
