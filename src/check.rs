@@ -69,28 +69,29 @@ fn sub_file_name(index: &FileIndex) -> Option<String> {
     if first.kind() != Some(OKind::Sub) {
         return None;
     }
-    if let Some(n) = index.first_nonblank
-        && n < first.line_idx
-    {
+    if index.first_nonblank.is_some_and(|n| n < first.line_idx) {
         // Only comment lines may come before it.
-        let data = &index.file.data;
-        let mut pos = 0usize;
         let mut parser = crate::parse::LineParser::default();
-        for _ in 0..first.line_idx {
-            let (end, next, term) = crate::program::next_line(data, pos);
-            match parser.parse(&data[pos..end], term) {
+        let mut only_comments = true;
+        let _ = index.file.scan_lines(|idx, _, raw, term| {
+            if idx >= first.line_idx || !only_comments {
+                return;
+            }
+            match parser.parse(raw, term) {
                 Ok(l) => {
                     if let LineKind::Items(items) = &l.kind
                         && items
                             .iter()
                             .any(|i| !matches!(i, crate::parse::ast::Item::Comment(_)))
                     {
-                        return None;
+                        only_comments = false;
                     }
                 }
-                Err(_) => return None,
+                Err(_) => only_comments = false,
             }
-            pos = next;
+        });
+        if !only_comments {
+            return None;
         }
     }
     first.key.as_ref().map(|k| k.to_string())
@@ -102,12 +103,8 @@ pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
         Ok(s) => s,
         Err(e) => return vec![*e],
     };
-    let data = source.data.clone();
-    let probe = FileIndex::build(std::sync::Arc::new(crate::program::SourceFile::new(
-        path.to_path_buf(),
-        path.display().to_string(),
-        data.clone(),
-    )));
+    let source = std::sync::Arc::new(source);
+    let probe = FileIndex::build(source.clone());
     let mut settings = cfg.settings.clone();
     settings.warnings = true;
     let result = if let Some(name) = sub_file_name(&probe) {
@@ -130,7 +127,11 @@ pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
         );
         crate::flatten(src, &settings, &search, Destination::Discard)
     } else {
-        crate::flatten(source, &settings, &cfg.search, Destination::Discard)
+        drop(probe);
+        match std::sync::Arc::try_unwrap(source) {
+            Ok(source) => crate::flatten(source, &settings, &cfg.search, Destination::Discard),
+            Err(_) => return Vec::new(),
+        }
     };
     match result {
         Ok(w) => w,

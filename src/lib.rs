@@ -12,7 +12,7 @@ pub mod eval;
 pub mod parse;
 pub mod program;
 
-use std::io::{IsTerminal, Read};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::rc::Rc;
@@ -25,44 +25,22 @@ use program::{FileIndex, Loader, SearchPath, SourceFile};
 
 /// Reads a program from a path (`-` is stdin).
 pub fn read_source(path: Option<&Path>) -> Result<SourceFile, Error> {
-    match path {
-        None => read_stdin(),
-        Some(p) if p.as_os_str() == "-" => read_stdin(),
-        Some(p) => {
-            let data = std::fs::read(p).map_err(|e| {
-                Diagnostic::error(
-                    ErrorKind::Io {
-                        path: p.to_path_buf(),
-                        message: e.to_string(),
-                    },
-                    None,
-                )
-            })?;
-            Ok(SourceFile::new(
-                p.to_path_buf(),
-                p.display().to_string(),
-                data,
-            ))
-        }
-    }
-}
-
-fn read_stdin() -> Result<SourceFile, Error> {
-    let mut data = Vec::new();
-    std::io::stdin().read_to_end(&mut data).map_err(|e| {
+    let io_err = |path: PathBuf, e: std::io::Error| {
         Diagnostic::error(
             ErrorKind::Io {
-                path: "<stdin>".into(),
+                path,
                 message: e.to_string(),
             },
             None,
         )
-    })?;
-    Ok(SourceFile::new(
-        PathBuf::from("<stdin>"),
-        "<stdin>".into(),
-        data,
-    ))
+    };
+    match path {
+        Some(p) if p.as_os_str() != "-" => {
+            SourceFile::open(p).map_err(|e| io_err(p.to_path_buf(), e))
+        }
+        _ => SourceFile::read_stream(std::io::stdin().lock(), "<stdin>")
+            .map_err(|e| io_err(PathBuf::from("<stdin>"), e)),
+    }
 }
 
 /// Flattens one program. On success returns the warnings; the output has

@@ -86,8 +86,10 @@ pub enum ErrorKind {
     /// `o1 while [0]` ... `o1 endif`
     LabelMismatch {
         label: String,
-        expected: &'static str,
-        found: &'static str,
+        /// Keyword of the offending line.
+        here: &'static str,
+        /// Keyword the label was opened with.
+        opened: &'static str,
         line: u32,
     },
     /// `o1 sub` inside another sub definition.
@@ -324,17 +326,12 @@ impl fmt::Display for ErrorKind {
             UndefinedLabel { label } => write!(f, "label o{label} has not been opened"),
             LabelMismatch {
                 label,
-                expected,
-                found,
+                here,
+                opened,
                 line,
             } => write!(
                 f,
-                "o{label} is a '{found}' (line {line}), not a{} '{expected}'",
-                if expected.starts_with(['a', 'e', 'i', 'o', 'u']) {
-                    "n"
-                } else {
-                    ""
-                }
+                "'o{label} {here}' does not match 'o{label} {opened}' at line {line}"
             ),
             NestedSubDefinition { inner, outer } => {
                 write!(

@@ -11,7 +11,7 @@ use crate::parse::ast::{CommentKind, Item, Line, ParamRef, Span};
 use crate::program::FileIndex;
 
 use super::Interp;
-use super::message::is_stable;
+use super::message::{is_stable, stabilize};
 use super::params::is_read_only;
 
 /// How a span of the raw line is rewritten.
@@ -129,13 +129,13 @@ impl Interp<'_> {
             }
         }
         // The reference checks the block before acting on it.
-        if !words.is_empty() {
-            if let Err((k, at)) = super::validate::check_block(&words, &self.modal) {
-                let span = at
-                    .and_then(|i| word_spans.get(i).copied())
-                    .unwrap_or(Span::new(0, raw.len() as u32));
-                return Err(self.error_in_line(k, file, start, span));
-            }
+        if !words.is_empty()
+            && let Err((k, at)) = super::validate::check_block(&words, &self.modal)
+        {
+            let span = at
+                .and_then(|i| word_spans.get(i).copied())
+                .unwrap_or(Span::new(0, raw.len() as u32));
+            return Err(self.error_in_line(k, file, start, span));
         }
         // 2. Assignments: numbered in order, then named in order.
         for (i, v) in num_set {
@@ -169,6 +169,7 @@ impl Interp<'_> {
                             // substituted and never read for parameters again.
                             repl.push((c.span, Repl::Text(format!("(MSG,{text})"))));
                         } else {
+                            let text = stabilize(&text);
                             if !is_stable(&text) {
                                 self.warn(
                                     WarningKind::MessageNotStable,
@@ -299,5 +300,68 @@ impl Interp<'_> {
         let r = self.emit_raw(&out);
         self.out = out;
         r
+    }
+}
+
+impl Interp<'_> {
+    /// Runs a plain line (literal words only) scanned by the fast path.
+    /// `None` sends the line to the grammar instead.
+    pub(super) fn exec_plain(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        raw: &[u8],
+        fw: &[super::fast::FastWord],
+    ) -> Option<Result<(), crate::diag::Error>> {
+        let mut words = std::mem::take(&mut self.words_buf);
+        words.clear();
+        let mut seen = 0u32;
+        let mut m_count = 0;
+        for w in fw {
+            match w.letter {
+                b'u' | b'v' | b'w' if !self.s.uvw_axes => return None,
+                b'm' => {
+                    if matches!(w.value, 70.0 | 71.0 | 72.0 | 73.0 | 98.0 | 99.0) {
+                        return None;
+                    }
+                    m_count += 1;
+                    if m_count > 4 {
+                        return None;
+                    }
+                }
+                b'g' => {}
+                l => {
+                    let bit = 1u32 << ((l - b'a') as u32 & 31);
+                    if seen & bit != 0 {
+                        return None;
+                    }
+                    seen |= bit;
+                }
+            }
+            words.push((w.letter, w.value));
+        }
+        let r = (|| {
+            if let Err((k, at)) = super::validate::check_block(&words, &self.modal) {
+                let span = at
+                    .and_then(|i| fw.get(i))
+                    .map(|w| Span::new(w.start as u32, w.end as u32))
+                    .unwrap_or(Span::new(0, raw.len() as u32));
+                return Err(self.error_in_line(k, file, start, span));
+            }
+            let trimmed = raw
+                .iter()
+                .rposition(|b| !b.is_ascii_whitespace())
+                .map_or(0, |p| p + 1);
+            self.emit_raw(&raw[..trimmed])?;
+            if self.apply_words(file, start, &words, false)? {
+                if self.main.percent_start {
+                    self.emit_raw(b"%")?;
+                }
+                self.ended = true;
+            }
+            Ok(())
+        })();
+        self.words_buf = words;
+        Some(r)
     }
 }

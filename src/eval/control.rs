@@ -232,7 +232,7 @@ impl Interp<'_> {
         oidx: u32,
         key: &Rc<str>,
         kinds: &[OKind],
-        expected: &'static str,
+        _expected: &'static str,
     ) -> Result<LabelRec, Error> {
         let label = || -> String { key.rsplit('#').next().unwrap_or("").to_string() };
         match self.frame().labels.get(key).cloned() {
@@ -241,8 +241,8 @@ impl Interp<'_> {
             Some(rec) => Err(self.oerr(
                 ErrorKind::LabelMismatch {
                     label: label(),
-                    expected,
-                    found: rec.kind.name(),
+                    here: self.oline(file, oidx).kind.name(),
+                    opened: rec.kind.name(),
                     line: rec.line + 1,
                 },
                 file,
@@ -308,6 +308,9 @@ impl Interp<'_> {
             }
             OKind::ElseIf | OKind::Else => {
                 self.expect(file, oidx, &key, &[OKind::If], "if")?;
+                if o.kind == OKind::ElseIf {
+                    self.probe_condition(file, oidx);
+                }
                 // A branch was taken: go to the endif.
                 let mut at = oidx;
                 loop {
@@ -409,6 +412,10 @@ impl Interp<'_> {
                 let tkind = file.kind_of(t);
                 match (rec.kind, tkind, o.kind) {
                     (OKind::While, Some(OKind::EndWhile), OKind::Break) => {
+                        if let Some(first_line) = self.ref_stale_continue.take() {
+                            let (a, b) = self.osite(file, t);
+                            self.warn(WarningKind::QuirkStaleContinue { first_line }, file, a, b);
+                        }
                         self.ref_stale_break = Some(file.olines[oidx as usize].line_idx + 1);
                         self.goto(file, t, true);
                         Ok(())
@@ -483,12 +490,19 @@ impl Interp<'_> {
         let label = key.rsplit('#').next().unwrap_or("").to_string();
         let found = file.kind_of(t).map(|k| k.name()).unwrap_or("?");
         let rec = self.frame().labels.get(key).cloned();
-        let (expected, line) = rec.map(|r| (r.kind.name(), r.line + 1)).unwrap_or(("?", 0));
+        if let Some(r) = &rec
+            && file.kind_of(t) == Some(r.kind)
+            && matches!(r.kind, OKind::If | OKind::While | OKind::Repeat)
+        {
+            let first_line = r.line + 1;
+            return Err(self.oerr(ErrorKind::DuplicateLabel { label, first_line }, file, t));
+        }
+        let (opened, line) = rec.map(|r| (r.kind.name(), r.line + 1)).unwrap_or(("?", 0));
         Err(self.oerr(
             ErrorKind::LabelMismatch {
                 label,
-                expected,
-                found,
+                here: found,
+                opened,
                 line,
             },
             file,
@@ -617,16 +631,20 @@ impl Interp<'_> {
         // definition while skipping it, setting #<_value>.
         self.defining = true;
         for &j in &def.valued {
-            let e = self.oline(file, j).expr.clone().expect("value");
-            let r = self.o_eval(file, j, &e);
-            match r {
-                Ok(v) => {
-                    self.value = v;
-                    self.value_returned = true;
-                }
-                Err(e) => {
-                    self.defining = false;
-                    return Err(e);
+            match self.oline(file, j).expr.clone() {
+                Some(e) => match self.o_eval(file, j, &e) {
+                    Ok(v) => {
+                        self.value = v;
+                        self.value_returned = true;
+                    }
+                    Err(e) => {
+                        self.defining = false;
+                        return Err(e);
+                    }
+                },
+                None => {
+                    self.value = 0.0;
+                    self.value_returned = false;
                 }
             }
         }
@@ -685,6 +703,12 @@ impl Interp<'_> {
                     .insert(0, crate::diag::Site::new(&file.file, a, b));
                 return Err(err);
             }
+            if sub_file.m99_lines.first().is_some_and(|&l| l < until) {
+                // The reference reads M99 lines while seeking, which clears
+                // #<_value>.
+                self.value = 0.0;
+                self.value_returned = false;
+            }
             return Ok(SubRec {
                 file: sub_file,
                 oidx: t,
@@ -702,10 +726,16 @@ impl Interp<'_> {
             &[OKind::Sub, OKind::Bare],
         );
         match t {
-            Ok(t) => Ok(SubRec {
-                file: file.clone(),
-                oidx: t,
-            }),
+            Ok(t) => {
+                if file.m99_between(line, file.olines[t as usize].line_idx) {
+                    self.value = 0.0;
+                    self.value_returned = false;
+                }
+                Ok(SubRec {
+                    file: file.clone(),
+                    oidx: t,
+                })
+            }
             Err(e) if matches!(e.error_kind(), Some(ErrorKind::EofSeeking { .. })) => {
                 let searched = self.loader.searched();
                 Err(self.oerr(

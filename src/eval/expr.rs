@@ -65,8 +65,6 @@ pub fn binary(op: BinOp, a: f64, c: f64, span: Span) -> EvalResult {
     })
 }
 
-const DEG: f64 = std::f64::consts::PI / 180.0;
-
 /// One-argument function.
 pub fn unary(f: Func, x: f64, span: Span) -> EvalResult {
     Ok(match f {
@@ -75,17 +73,17 @@ pub fn unary(f: Func, x: f64, span: Span) -> EvalResult {
             if !(-1.0..=1.0).contains(&x) {
                 return Err((ErrorKind::AcosRange, span));
             }
-            x.acos() / DEG
+            super::degrees::to_degrees(x.acos())
         }
         Func::Asin => {
             if !(-1.0..=1.0).contains(&x) {
                 return Err((ErrorKind::AsinRange, span));
             }
-            x.asin() / DEG
+            super::degrees::to_degrees(x.asin())
         }
-        Func::Cos => (x * DEG).cos(),
-        Func::Sin => (x * DEG).sin(),
-        Func::Tan => (x * DEG).tan(),
+        Func::Cos => super::degrees::cos_deg(x),
+        Func::Sin => super::degrees::sin_deg(x),
+        Func::Tan => super::degrees::tan_deg(x),
         Func::Exp => x.exp(),
         Func::Fix => x.floor(),
         Func::Fup => x.ceil(),
@@ -148,7 +146,7 @@ impl Interp<'_> {
             ExprKind::Atan(args) => {
                 let y = self.eval(&args.0)?;
                 let x = self.eval(&args.1)?;
-                check(y.atan2(x) / DEG, e.span)
+                check(super::degrees::to_degrees(y.atan2(x)), e.span)
             }
             ExprKind::Exists(p) => Ok(b(self.param_exists(p, e.span)?)),
         }

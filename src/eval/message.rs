@@ -133,10 +133,27 @@ impl Interp<'_> {
 }
 
 /// Whether a substituted text reads back unchanged (no directives left).
+/// Makes a substituted text read back unchanged: a `#` that would start a
+/// parameter (or end the text, which LinuxCNC mishandles) is followed by a
+/// `%d` directive, which prints nothing and keeps the `#` literal.
+pub fn stabilize(text: &str) -> String {
+    let b = text.as_bytes();
+    let mut out = String::with_capacity(text.len() + 4);
+    for (i, ch) in text.char_indices() {
+        out.push(ch);
+        if ch == '#' && matches!(b.get(i + 1), None | Some(b'<') | Some(b'0'..=b'9')) {
+            out.push_str("%d");
+        }
+    }
+    out
+}
+
 pub fn is_stable(text: &str) -> bool {
     let b = text.as_bytes();
     for (i, &c) in b.iter().enumerate() {
         match c {
+            // A directive right after a '#' is the neutraliser of `stabilize`.
+            b'%' if i > 0 && b[i - 1] == b'#' => {}
             b'%' if matches!(b.get(i + 1), Some(b'd' | b'f' | b'.')) => return false,
             b'#' if matches!(b.get(i + 1), None | Some(b'<') | Some(b'0'..=b'9')) => return false,
             _ => {}

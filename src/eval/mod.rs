@@ -4,7 +4,9 @@
 
 mod block;
 mod control;
+mod degrees;
 mod expr;
+mod fast;
 mod message;
 mod modal;
 mod named;
@@ -21,7 +23,7 @@ use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};
 use crate::emit::Sink;
 use crate::parse::LineParser;
 use crate::parse::ast::{Line, LineKind, OKind, Span};
-use crate::program::{FileIndex, Loader, next_line};
+use crate::program::{FileIndex, Loader, Window, next_line};
 
 pub use settings::{Define, Settings};
 
@@ -134,6 +136,9 @@ pub struct Interp<'s> {
     current_line_idx: u32,
     /// Warnings already given, to report each site once.
     warned: HashSet<(&'static str, usize, u32)>,
+    window: Window,
+    fast_words: Vec<fast::FastWord>,
+    words_buf: Vec<(u8, f64)>,
 }
 
 fn file_key(f: &Rc<FileIndex>) -> usize {
@@ -207,6 +212,9 @@ impl<'s> Interp<'s> {
             current_line_start: 0,
             current_line_idx: 0,
             warned: HashSet::new(),
+            window: Window::default(),
+            fast_words: Vec::with_capacity(16),
+            words_buf: Vec::with_capacity(16),
         }
     }
 
@@ -261,17 +269,20 @@ impl<'s> Interp<'s> {
     /// Runs the program to its end and releases the output.
     pub fn run(mut self) -> Result<Vec<Diagnostic>, Error> {
         let main = self.main.clone();
+        if let Some(e) = &main.read_error {
+            let k = ErrorKind::Io {
+                path: main.file.path.clone(),
+                message: e.clone(),
+            };
+            return Err(Diagnostic::error(k, None));
+        }
         match main.first_nonblank {
             None => return Err(self.error(ErrorKind::EmptyProgram, &main, 0, 0)),
             Some(first) => {
                 if main.percent_start {
                     self.emit_raw(b"%")?;
                     // Continue after the opening % line.
-                    let mut pos = 0usize;
-                    for _ in 0..=first {
-                        pos = next_line(&main.file.data, pos).1;
-                    }
-                    self.cur.pos = pos as u32;
+                    self.cur.pos = main.first_nonblank_next;
                     self.cur.line = first + 1;
                     self.cur.next_o = main.oline_at_or_after(first + 1);
                 }
@@ -352,39 +363,81 @@ impl<'s> Interp<'s> {
     fn step(&mut self) -> Result<(), Error> {
         self.count_step()?;
         let file = self.cur.file.clone();
-        let data: &[u8] = &file.file.data;
-        let start = self.cur.pos as usize;
-        if start >= data.len() {
+        let start = self.cur.pos;
+        if start as u64 >= file.file.len() {
             return self.end_of_file(&file);
         }
-        let (end, next, terminated) = next_line(data, start);
         let line_idx = self.cur.line;
-        self.current_line_start = start as u32;
+        self.current_line_start = start;
         self.current_line_idx = line_idx;
-        self.cur.pos = next as u32;
-        self.cur.line += 1;
         if let Some(o) = file.olines.get(self.cur.next_o)
             && o.line_idx == line_idx
         {
             let oidx = self.cur.next_o as u32;
             self.cur.next_o += 1;
+            self.cur.pos = o.next;
+            self.cur.line += 1;
             return self.exec_oline(&file, oidx);
         }
-        let raw = &data[start..end];
+        let mut window = std::mem::take(&mut self.window);
+        let r = self.step_line(&file, start, line_idx, &mut window);
+        self.window = window;
+        r
+    }
+
+    fn step_line(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        line_idx: u32,
+        window: &mut Window,
+    ) -> Result<(), Error> {
+        let (raw, next, terminated): (&[u8], u32, bool) = match file.file.memory() {
+            Some(data) => {
+                let (end, next, t) = next_line(data, start as usize);
+                (&data[start as usize..end], next as u32, t)
+            }
+            None => {
+                let l = window.line(&file.file, start).map_err(|e| {
+                    Diagnostic::error(
+                        ErrorKind::Io {
+                            path: file.file.path.clone(),
+                            message: e.to_string(),
+                        },
+                        None,
+                    )
+                })?;
+                let next = l.next;
+                let t = l.terminated;
+                (window.bytes(&l), next, t)
+            }
+        };
+        self.cur.pos = next;
+        self.cur.line += 1;
+        let mut fw = std::mem::take(&mut self.fast_words);
+        if fast::scan(raw, &mut fw) && !fw.is_empty() {
+            let r = self.exec_plain(file, start, raw, &fw);
+            self.fast_words = fw;
+            if let Some(r) = r {
+                return r;
+            }
+        } else {
+            self.fast_words = fw;
+        }
         let line = if file.keeps(line_idx) {
-            let key = (file_key(&file), line_idx);
+            let key = (file_key(file), line_idx);
             match self.cache.get(&key) {
                 Some(l) => l.clone(),
                 None => {
-                    let l = Rc::new(self.parse_line(&file, start as u32, raw, terminated)?);
+                    let l = Rc::new(self.parse_line(file, start, raw, terminated)?);
                     self.cache.insert(key, l.clone());
                     l
                 }
             }
         } else {
-            Rc::new(self.parse_line(&file, start as u32, raw, terminated)?)
+            Rc::new(self.parse_line(file, start, raw, terminated)?)
         };
-        self.exec_line(&file, start as u32, raw, &line)
+        self.exec_line(file, start, raw, &line)
     }
 
     fn parse_line(
@@ -425,7 +478,7 @@ impl<'s> Interp<'s> {
     }
 
     fn end_of_file(&mut self, file: &Rc<FileIndex>) -> Result<(), Error> {
-        let end = file.file.data.len() as u32;
+        let end = file.file.len() as u32;
         if self.level() > 0 && !Rc::ptr_eq(file, &self.main) {
             let name = self
                 .frames

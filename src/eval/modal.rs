@@ -73,7 +73,7 @@ impl Interp<'_> {
     }
 
     /// Sets the position from a machine position (program units).
-    fn from_machine(&mut self, axis: usize, m: Option<f64>, what: &'static str) {
+    fn set_from_machine(&mut self, axis: usize, m: Option<f64>, what: &'static str) {
         let line = self.line_no();
         let v = m.and_then(|m| {
             Some(m - self.g5x_offset(self.modal.coord_index, axis)? - self.g92_offset(axis)?)
@@ -244,14 +244,14 @@ impl Interp<'_> {
                 }
                 self.params.assign(5210, 0.0);
                 for (a, m) in machine.into_iter().enumerate() {
-                    self.from_machine(a, m, "G92.1/G92.2");
+                    self.set_from_machine(a, m, "G92.1/G92.2");
                 }
             }
             Some(923) => {
                 let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
                 self.params.assign(5210, 1.0);
                 for (a, m) in machine.into_iter().enumerate() {
-                    self.from_machine(a, m, "G92.3");
+                    self.set_from_machine(a, m, "G92.3");
                 }
             }
             Some(100) => self.g10(l_word, p_word, r_word, &axis_words),
@@ -264,7 +264,7 @@ impl Interp<'_> {
                 };
                 for a in axes {
                     let home = self.param_prog(base + a, a);
-                    self.from_machine(a, home, "G28/G30 (a move to a home position)");
+                    self.set_from_machine(a, home, "G28/G30 (a move to a home position)");
                 }
             }
             Some(281) | Some(301) => {
@@ -279,7 +279,7 @@ impl Interp<'_> {
                     self.forget(&[0, 1, 2], "cutter radius compensation");
                 }
                 for &(a, v) in &axis_words {
-                    self.from_machine(a, Some(v), "a G53 machine-coordinate move");
+                    self.set_from_machine(a, Some(v), "a G53 machine-coordinate move");
                 }
             }
             Some(_) => {}
@@ -314,7 +314,7 @@ impl Interp<'_> {
         self.params.assign(5220, cs as f64);
         for (a, m) in machine.into_iter().enumerate() {
             if self.pos.axes[a].is_ok() {
-                self.from_machine(a, m, "a coordinate system change");
+                self.set_from_machine(a, m, "a coordinate system change");
             }
         }
     }
@@ -341,7 +341,7 @@ impl Interp<'_> {
                         if l == Some(20) {
                             self.pos.axes[a] = Ok(v);
                         } else {
-                            self.from_machine(a, m, "G10 L2 on the active coordinate system");
+                            self.set_from_machine(a, m, "G10 L2 on the active coordinate system");
                         }
                     }
                 }

@@ -44,9 +44,10 @@ pub fn classify(i: usize) -> ParamClass {
         5399 => ParamClass::Runtime("M66 input value", "it is read from a machine input"),
         5400..=5413 => ParamClass::ReadOnlyRuntime("tool data", "it comes from the tool table"),
         5420..=5428 => ParamClass::Position(i - 5420),
-        5600 | 5601 => {
-            ParamClass::Runtime("toolchanger status", "it is reported by the toolchanger")
-        }
+        5600 | 5601 => ParamClass::Refreshed(
+            "toolchanger status",
+            "it is refreshed from the toolchanger before every line",
+        ),
         _ => ParamClass::Plain,
     }
 }

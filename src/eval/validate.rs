@@ -48,8 +48,8 @@ fn m_group(m: i64) -> Option<u8> {
     Some(match m {
         0 | 1 | 2 | 30 | 60 => 4,
         6 | 61 => 6,
-        3 | 4 | 5 => 7,
-        7 | 8 | 9 => 8,
+        3..=5 => 7,
+        7..=9 => 8,
         48..=53 => 9,
         19 => 7,
         62..=68 => 5,
@@ -84,7 +84,7 @@ pub fn check_block(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind,
         match l {
             b'g' => {
                 let g10 = (v * 10.0).round();
-                if v < 0.0 || v >= 100.0 {
+                if !(0.0..100.0).contains(&v) {
                     return bad("G-code out of range", Some(i));
                 }
                 if (v * 10.0 - g10).abs() > 0.0001 {
@@ -132,25 +132,24 @@ pub fn check_block(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind,
     let axis_word = b"xyzabcuvw".iter().find_map(|&c| has[c as usize]);
     let motion_here = gs.iter().find(|(g, _)| g_group(*g) == Some(1)).map(|x| x.0);
     let axis_g0 = gs.iter().find(|(g, _)| g_uses_axes(*g)).map(|x| x.0);
-    if let (Some(_), Some(_), Some(i)) = (motion_here, axis_g0, axis_word) {
-        if motion_here != Some(800) {
-            return bad("two G-codes that both use axis values", Some(i));
-        }
+    if let (Some(_), Some(_), Some(i)) = (motion_here, axis_g0, axis_word)
+        && motion_here != Some(800)
+    {
+        return bad("two G-codes that both use axis values", Some(i));
     }
     let motion = motion_here.unwrap_or(modal.motion);
-    if let Some(i) = axis_word {
-        if axis_g0.is_none() {
-            if motion == 800 {
-                return bad(
-                    if motion_here == Some(800) {
-                        "axis values with G80"
-                    } else {
-                        "axis values without a G-code that uses them"
-                    },
-                    Some(i),
-                );
-            }
-        }
+    if let Some(i) = axis_word
+        && axis_g0.is_none()
+        && motion == 800
+    {
+        return bad(
+            if motion_here == Some(800) {
+                "axis values with G80"
+            } else {
+                "axis values without a G-code that uses them"
+            },
+            Some(i),
+        );
     }
     if (has[b'@' as usize].is_some() || has[b'^' as usize].is_some())
         && (has[b'x' as usize].is_some() || has[b'y' as usize].is_some())

@@ -70,25 +70,48 @@ pub fn normalize(raw: &[u8], out: &mut Normalized) -> Result<(), LexError> {
         return Err((ErrorKind::UnclosedComment, start as u32));
     }
     out.map.push(raw.len() as u32);
-    // Non-UTF-8 bytes cannot be valid G-code outside comments; inside comments
-    // they are kept. Replace invalid sequences so the parser sees a bad
-    // character at the right place.
-    match String::from_utf8(bytes) {
-        Ok(s) => out.text = s,
-        Err(e) => {
-            let pos = e.utf8_error().valid_up_to();
-            let raw_pos = out.map[pos];
-            let byte = e.as_bytes()[pos];
-            return Err((
-                ErrorKind::BadCharacter {
-                    ch: byte as char,
-                    byte,
-                },
-                raw_pos,
-            ));
+    // Bytes that are not UTF-8 are kept (as '?') inside comments, whose raw
+    // text is what gets written; outside comments they are bad characters.
+    loop {
+        match std::str::from_utf8(&bytes) {
+            Ok(_) => break,
+            Err(e) => {
+                let pos = e.valid_up_to();
+                let raw_pos = out.map[pos] as usize;
+                if in_comment(&bytes, pos) {
+                    let len = e.error_len().unwrap_or(bytes.len() - pos);
+                    for b in &mut bytes[pos..pos + len] {
+                        *b = b'?';
+                    }
+                } else {
+                    let byte = raw[raw_pos];
+                    return Err((
+                        ErrorKind::BadCharacter {
+                            ch: byte as char,
+                            byte,
+                        },
+                        raw_pos as u32,
+                    ));
+                }
+            }
         }
     }
+    out.text = String::from_utf8(bytes).unwrap_or_default();
     Ok(())
+}
+
+/// Whether byte `pos` of a processed line lies inside a comment.
+fn in_comment(processed: &[u8], pos: usize) -> bool {
+    let mut paren = false;
+    for &b in &processed[..pos] {
+        match b {
+            b'(' if !paren => paren = true,
+            b')' if paren => paren = false,
+            b';' if !paren => return true,
+            _ => {}
+        }
+    }
+    paren
 }
 
 #[cfg(test)]
@@ -133,5 +156,11 @@ mod tests {
             Err((ErrorKind::UnclosedComment, 3))
         ));
         assert!(normalize(b"; ( unbalanced", &mut n).is_ok());
+        assert!(normalize(b"G0 (\xff\xfe) X1", &mut n).is_ok());
+        assert!(normalize(b"G0 ;\xc3", &mut n).is_ok());
+        assert!(matches!(
+            normalize(b"G0 X1 \xc3", &mut n),
+            Err((ErrorKind::BadCharacter { .. }, 6))
+        ));
     }
 }

@@ -49,13 +49,19 @@ pub struct SubDefInfo {
     pub end: Option<u32>,
     /// A `sub` or bare O line inside the definition: (O-line index, name).
     pub nested: Option<(u32, Rc<str>)>,
-    /// `return`/`endsub` lines with the same label and a value, in order.
+    /// `return`/`endsub` lines with the same label, in order (the reference
+    /// reads them while skipping the definition: a value sets `#<_value>`,
+    /// none clears it).
     pub valued: Vec<u32>,
 }
 
 #[derive(Debug)]
 pub struct FileIndex {
     pub file: Arc<SourceFile>,
+    /// The file could not be read to its end.
+    pub read_error: Option<String>,
+    /// Offset of the line after the first non-blank one.
+    pub first_nonblank_next: u32,
     pub olines: Vec<OInfo>,
     /// Static label key → O-line indices in file order.
     pub occ: HashMap<Rc<str>, Vec<u32>>,
@@ -65,6 +71,9 @@ pub struct FileIndex {
     pub skip_errors: Vec<(u32, u32, LineError)>,
     /// Line indices of `%` lines.
     pub percent_lines: Vec<u32>,
+    /// Line indices of lines starting with `M99` (the reference reads them
+    /// while seeking a subroutine, which clears `#<_value>`).
+    pub m99_lines: Vec<u32>,
     /// Sub definition details, by O-line index of the `sub` line.
     pub defs: HashMap<u32, SubDefInfo>,
     /// Line ranges (first, last) of loop bodies and sub definitions: lines in
@@ -85,13 +94,7 @@ pub fn control_key(scope: &str, label: &str) -> Rc<str> {
     Rc::from(s)
 }
 
-/// Splits `data` into lines: (start, end without terminator, next start, terminated).
-pub fn next_line(data: &[u8], start: usize) -> (usize, usize, bool) {
-    match memchr::memchr(b'\n', &data[start..]) {
-        Some(i) => (start + i, start + i + 1, true),
-        None => (data.len(), data.len(), false),
-    }
-}
+pub use super::source_file::next_line;
 
 impl FileIndex {
     pub fn build(file: Arc<SourceFile>) -> FileIndex {
@@ -99,15 +102,20 @@ impl FileIndex {
         let mut olines = Vec::new();
         let mut skip_errors = Vec::new();
         let mut percent_lines = Vec::new();
+        let mut m99_lines = Vec::new();
         let mut first_nonblank = None;
+        let mut first_nonblank_next = 0u32;
         let mut percent_start = false;
-        let data: &[u8] = &file.data;
-        let mut pos = 0usize;
-        let mut idx = 0u32;
         let mut current_def: Option<Rc<str>> = None;
-        while pos < data.len() {
-            let (end, next, terminated) = next_line(data, pos);
-            let raw = &data[pos..end];
+        let mut count = 0u32;
+        let mut last_end = 0u32;
+        let scanned = file.scan_lines(|idx, pos, raw, terminated| {
+            count = idx + 1;
+            let next = pos + raw.len() as u32 + terminated as u32;
+            last_end = next;
+            if starts_with_m99(raw) {
+                m99_lines.push(idx);
+            }
             if quick_is_candidate(raw) {
                 match parser.parse(raw, terminated) {
                     Ok(line) => match &line.kind {
@@ -119,13 +127,12 @@ impl FileIndex {
                             percent_lines.push(idx);
                         }
                         LineKind::O(_) | LineKind::M98(_) => {
-                            let scope: Rc<str> = Rc::from("");
                             olines.push(OInfo {
                                 line_idx: idx,
-                                start: pos as u32,
-                                next: next as u32,
+                                start: pos,
+                                next,
                                 line: Rc::new(line),
-                                scope,
+                                scope: Rc::from(""),
                                 key: None,
                             });
                         }
@@ -133,21 +140,23 @@ impl FileIndex {
                     },
                     Err(e) => {
                         if e.when_skipped {
-                            skip_errors.push((idx, pos as u32, e));
+                            skip_errors.push((idx, pos, e));
                         }
                     }
                 }
             } else if raw.len() + terminated as usize > crate::parse::MAX_LINE + 1
                 && let Err(e) = parser.parse(raw, terminated)
             {
-                skip_errors.push((idx, pos as u32, e));
+                skip_errors.push((idx, pos, e));
             }
             if first_nonblank.is_none() && raw.iter().any(|b| !b.is_ascii_whitespace()) {
                 first_nonblank = Some(idx);
+                first_nonblank_next = next;
             }
-            pos = next;
-            idx += 1;
-        }
+        });
+        let _ = last_end;
+        let idx = count;
+        let read_error = scanned.err().map(|e| e.to_string());
         let line_count = idx;
         // Scopes and keys.
         let mut occ: HashMap<Rc<str>, Vec<u32>> = HashMap::new();
@@ -189,9 +198,16 @@ impl FileIndex {
                 None => dynamic.push(i as u32),
             }
         }
-        // Sub definitions.
+        // Sub definitions: each is matched through its own label's
+        // occurrences, so the work is linear in the number of O-lines.
         let mut defs = HashMap::new();
         let mut keep = Vec::new();
+        let sub_lines: Vec<u32> = olines
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| matches!(o.kind(), Some(OKind::Sub | OKind::Bare)))
+            .map(|(j, _)| j as u32)
+            .collect();
         for (i, info) in olines.iter().enumerate() {
             let (Some(OKind::Sub), Some(key)) = (info.kind(), &info.key) else {
                 continue;
@@ -201,31 +217,30 @@ impl FileIndex {
                 nested: None,
                 valued: Vec::new(),
             };
-            for (j, other) in olines.iter().enumerate().skip(i + 1) {
-                let Some(k) = other.kind() else { continue };
-                if matches!(k, OKind::Sub | OKind::Bare) {
-                    if def.nested.is_none() {
-                        let name = other.key.clone().unwrap_or_else(|| Rc::from("?"));
-                        def.nested = Some((j as u32, name));
+            if let Some(list) = occ.get(key) {
+                let p = list.partition_point(|&j| j as usize <= i);
+                for &j in &list[p..] {
+                    match olines[j as usize].kind() {
+                        Some(OKind::EndSub) => {
+                            def.valued.push(j);
+                            def.end = Some(j);
+                            break;
+                        }
+                        Some(OKind::Return) => def.valued.push(j),
+                        Some(OKind::Sub | OKind::Bare) => break,
+                        _ => {}
                     }
-                    if other.key.as_ref() == Some(key) {
-                        break;
-                    }
-                    continue;
                 }
-                if other.key.as_ref() != Some(key) {
-                    continue;
-                }
-                if k == OKind::EndSub {
-                    if other.o().is_some_and(|o| o.expr.is_some()) {
-                        def.valued.push(j as u32);
-                    }
-                    def.end = Some(j as u32);
-                    break;
-                }
-                if k == OKind::Return && other.o().is_some_and(|o| o.expr.is_some()) {
-                    def.valued.push(j as u32);
-                }
+            }
+            let q = sub_lines.partition_point(|&j| j as usize <= i);
+            if let Some(&j) = sub_lines.get(q)
+                && def.end.is_none_or(|e| j < e)
+            {
+                let name = olines[j as usize]
+                    .key
+                    .clone()
+                    .unwrap_or_else(|| Rc::from("?"));
+                def.nested = Some((j, name));
             }
             if let Some(e) = def.end {
                 keep.push((info.line_idx, olines[e as usize].line_idx));
@@ -234,24 +249,26 @@ impl FileIndex {
             }
             defs.insert(i as u32, def);
         }
-        // Loop bodies.
-        for (i, info) in olines.iter().enumerate() {
-            let (Some(kind), Some(key)) = (info.kind(), &info.key) else {
-                continue;
-            };
-            let end_kind = match kind {
-                OKind::While => OKind::EndWhile,
-                OKind::Do => OKind::While,
-                OKind::Repeat => OKind::EndRepeat,
-                _ => continue,
-            };
-            if let Some(list) = occ.get(key) {
-                let p = list.partition_point(|&j| j as usize <= i);
-                if let Some(&j) = list[p..]
-                    .iter()
-                    .find(|&&j| olines[j as usize].kind() == Some(end_kind))
-                {
-                    keep.push((info.line_idx, olines[j as usize].line_idx));
+        // Loop bodies: one backward pass per label finds each opener's closer.
+        for list in occ.values() {
+            let (mut next_endwhile, mut next_while, mut next_endrepeat) = (None, None, None);
+            for &j in list.iter().rev() {
+                let info = &olines[j as usize];
+                let closer = match info.kind() {
+                    Some(OKind::While) => next_endwhile,
+                    Some(OKind::Do) => next_while,
+                    Some(OKind::Repeat) => next_endrepeat,
+                    _ => None,
+                };
+                if let Some(c) = closer {
+                    let c: u32 = c;
+                    keep.push((info.line_idx, olines[c as usize].line_idx));
+                }
+                match info.kind() {
+                    Some(OKind::EndWhile) => next_endwhile = Some(j),
+                    Some(OKind::While) => next_while = Some(j),
+                    Some(OKind::EndRepeat) => next_endrepeat = Some(j),
+                    _ => {}
                 }
             }
         }
@@ -265,11 +282,14 @@ impl FileIndex {
         }
         FileIndex {
             file,
+            read_error,
+            first_nonblank_next,
             olines,
             occ,
             dynamic,
             skip_errors,
             percent_lines,
+            m99_lines,
             defs,
             keep: merged,
             percent_start,
@@ -350,6 +370,35 @@ fn quick_is_candidate(raw: &[u8]) -> bool {
         }
     }
     memchr::memchr(b'(', raw).is_some()
+}
+
+fn starts_with_m99(raw: &[u8]) -> bool {
+    let compact: Vec<u8> = raw
+        .iter()
+        .filter(|b| !matches!(b, b' ' | b'\t'))
+        .take(12)
+        .map(|b| b.to_ascii_lowercase())
+        .collect();
+    let mut t: &[u8] = &compact;
+    if let [b'/', rest @ ..] = t {
+        t = rest;
+    }
+    if let [b'n', rest @ ..] = t {
+        let d = rest
+            .iter()
+            .take_while(|b| b.is_ascii_digit() || **b == b'.')
+            .count();
+        t = &rest[d..];
+    }
+    t.starts_with(b"m99") && !t.get(3).is_some_and(|b| b.is_ascii_digit() || *b == b'.')
+}
+
+impl FileIndex {
+    /// Whether an `M99` line lies strictly between two line indices.
+    pub fn m99_between(&self, after: u32, before: u32) -> bool {
+        let p = self.m99_lines.partition_point(|&l| l <= after);
+        self.m99_lines.get(p).is_some_and(|&l| l < before)
+    }
 }
 
 /// Error for a sub file that lacks its sub.

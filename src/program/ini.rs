@@ -47,13 +47,11 @@ impl Ini {
             .map(|(_, _, v)| v.as_str())
     }
 
-    /// Lookup for `#<_ini[section]name>`: both upper-cased.
+    /// Lookup for `#<_ini[section]name>`: both upper-cased, then matched
+    /// exactly (so a key written `Count` in the file is not found, as in
+    /// LinuxCNC).
     pub fn get_upper(&self, section: &str, name: &str) -> Option<&str> {
-        let (s, n) = (section.to_ascii_uppercase(), name.to_ascii_uppercase());
-        self.entries
-            .iter()
-            .find(|(sec, k, _)| sec.to_ascii_uppercase() == s && k.to_ascii_uppercase() == n)
-            .map(|(_, _, v)| v.as_str())
+        self.get(&section.to_ascii_uppercase(), &name.to_ascii_uppercase())
     }
 
     pub fn flag(&self, section: &str, name: &str) -> bool {
@@ -79,6 +77,8 @@ mod tests {
         assert_eq!(ini.get("RS274NGC", "SUBROUTINE_PATH"), Some("a:b:c"));
         assert_eq!(ini.get("DISPLAY", "PROGRAM_PREFIX"), Some("~/nc"));
         assert_eq!(ini.get_upper("display", "program_prefix"), Some("~/nc"));
+        let mixed = Ini::parse("[SEC]\nCount = 3\n");
+        assert_eq!(mixed.get_upper("sec", "count"), None);
         assert_eq!(ini.get("DISPLAY", "NOPE"), None);
     }
 }

@@ -8,4 +8,4 @@ mod source_file;
 
 pub use file_index::{FileIndex, OInfo, SubDefInfo, control_key, next_line, not_in_file};
 pub use loader::{Loader, SearchPath, check_name};
-pub use source_file::SourceFile;
+pub use source_file::{IN_MEMORY_LIMIT, SourceFile, Window, WindowLine};

@@ -1,7 +1,27 @@
-//! A source file: its path and its bytes.
+//! A source file: its path and its bytes, held in memory when small and read
+//! from disk in windows when large, so a big program streams through in
+//! bounded memory.
 
 use std::borrow::Cow;
+use std::fs::File;
+use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
+
+/// Files up to this size are kept in memory.
+pub const IN_MEMORY_LIMIT: u64 = 8 << 20;
+/// Bytes read from disk at a time.
+const CHUNK: usize = 1 << 20;
+/// Longest line kept whole; longer lines are errors anyway.
+const LONG_LINE: usize = 4096;
+
+#[derive(Debug)]
+enum Text {
+    Memory(Vec<u8>),
+    /// Read from `path` on demand; `temp` files are removed on drop.
+    Disk {
+        temp: bool,
+    },
+}
 
 #[derive(Debug)]
 pub struct SourceFile {
@@ -9,24 +29,304 @@ pub struct SourceFile {
     pub path: PathBuf,
     /// Name shown in diagnostics.
     pub name: String,
-    pub data: Vec<u8>,
+    text: Text,
+    len: u64,
+}
+
+impl Drop for SourceFile {
+    fn drop(&mut self) {
+        if let Text::Disk { temp: true } = self.text {
+            let _ = std::fs::remove_file(&self.path);
+        }
+    }
 }
 
 impl SourceFile {
+    /// An in-memory source.
     pub fn new(path: PathBuf, name: String, data: Vec<u8>) -> SourceFile {
-        SourceFile { path, name, data }
+        let len = data.len() as u64;
+        SourceFile {
+            path,
+            name,
+            text: Text::Memory(data),
+            len,
+        }
+    }
+
+    /// Opens a file: small files are read, large ones streamed.
+    pub fn open(path: &Path) -> io::Result<SourceFile> {
+        let meta = std::fs::metadata(path)?;
+        let name = path.display().to_string();
+        if !meta.is_file() || meta.len() <= IN_MEMORY_LIMIT {
+            let data = std::fs::read(path)?;
+            return Ok(SourceFile::new(path.to_path_buf(), name, data));
+        }
+        check_size(meta.len())?;
+        Ok(SourceFile {
+            path: path.to_path_buf(),
+            name,
+            text: Text::Disk { temp: false },
+            len: meta.len(),
+        })
+    }
+
+    /// Reads a stream; spills to a temporary file when it is large.
+    pub fn read_stream(mut input: impl Read, name: &str) -> io::Result<SourceFile> {
+        let mut data = Vec::new();
+        (&mut input)
+            .take(IN_MEMORY_LIMIT + 1)
+            .read_to_end(&mut data)?;
+        if data.len() as u64 <= IN_MEMORY_LIMIT {
+            return Ok(SourceFile::new(PathBuf::from(name), name.to_string(), data));
+        }
+        let path = std::env::temp_dir().join(format!(
+            ".ngcflat-in-{}-{}.ngc",
+            std::process::id(),
+            unique()
+        ));
+        let mut f = File::create(&path)?;
+        f.write_all(&data)?;
+        let copied = io::copy(&mut input, &mut f)?;
+        let len = data.len() as u64 + copied;
+        check_size(len)?;
+        Ok(SourceFile {
+            path,
+            name: name.to_string(),
+            text: Text::Disk { temp: true },
+            len,
+        })
     }
 
     pub fn display_name(&self) -> String {
         self.name.clone()
     }
 
+    pub fn len(&self) -> u64 {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The bytes, when held in memory.
+    pub fn memory(&self) -> Option<&[u8]> {
+        match &self.text {
+            Text::Memory(d) => Some(d),
+            Text::Disk { .. } => None,
+        }
+    }
+
+    /// All bytes (read from disk for streamed files; for diagnostics).
     pub fn bytes(&self) -> Cow<'_, [u8]> {
-        Cow::Borrowed(&self.data)
+        match &self.text {
+            Text::Memory(d) => Cow::Borrowed(d),
+            Text::Disk { .. } => Cow::Owned(std::fs::read(&self.path).unwrap_or_default()),
+        }
     }
 
     /// Folder of the file (for the last step of the subroutine search).
     pub fn dir(&self) -> Option<&Path> {
         self.path.parent()
+    }
+
+    /// Calls `f(index, start, raw, terminated)` for every line, in order.
+    pub fn scan_lines(&self, mut f: impl FnMut(u32, u32, &[u8], bool)) -> io::Result<()> {
+        match &self.text {
+            Text::Memory(data) => {
+                let mut pos = 0usize;
+                let mut idx = 0u32;
+                while pos < data.len() {
+                    let (end, next, term) = next_line(data, pos);
+                    f(idx, pos as u32, &data[pos..end], term);
+                    pos = next;
+                    idx += 1;
+                }
+                Ok(())
+            }
+            Text::Disk { .. } => {
+                let mut file = File::open(&self.path)?;
+                let mut buf = vec![0u8; CHUNK];
+                let mut carry: Vec<u8> = Vec::new();
+                let mut carry_len = 0u64; // true length of the partial line
+                let mut line_start = 0u64;
+                let mut chunk_base = 0u64;
+                let mut idx = 0u32;
+                loop {
+                    let n = file.read(&mut buf)?;
+                    if n == 0 {
+                        break;
+                    }
+                    let base = chunk_base;
+                    chunk_base += n as u64;
+                    let chunk = &buf[..n];
+                    let mut p = 0usize;
+                    while p < n {
+                        match memchr::memchr(b'\n', &chunk[p..]) {
+                            Some(i) => {
+                                if carry_len == 0 {
+                                    f(idx, line_start as u32, &chunk[p..p + i], true);
+                                } else {
+                                    let room = LONG_LINE.saturating_sub(carry.len());
+                                    carry.extend_from_slice(&chunk[p..p + i.min(room)]);
+                                    f(idx, line_start as u32, &carry, true);
+                                    carry.clear();
+                                    carry_len = 0;
+                                }
+                                line_start = base + (p + i + 1) as u64;
+                                p += i + 1;
+                                idx += 1;
+                            }
+                            None => {
+                                let rest = &chunk[p..];
+                                let room = LONG_LINE.saturating_sub(carry.len());
+                                carry.extend_from_slice(&rest[..rest.len().min(room)]);
+                                carry_len += rest.len() as u64;
+                                p = n;
+                            }
+                        }
+                    }
+                }
+                if carry_len > 0 || !carry.is_empty() {
+                    f(idx, line_start as u32, &carry, false);
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+fn check_size(len: u64) -> io::Result<()> {
+    if len > u32::MAX as u64 {
+        return Err(io::Error::other(
+            "programs larger than 4 GiB are not supported",
+        ));
+    }
+    Ok(())
+}
+
+fn unique() -> u64 {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static N: AtomicU64 = AtomicU64::new(0);
+    N.fetch_add(1, Ordering::Relaxed)
+}
+
+/// Splits `data` at `start`: (end without terminator, next start, terminated).
+pub fn next_line(data: &[u8], start: usize) -> (usize, usize, bool) {
+    match memchr::memchr(b'\n', &data[start..]) {
+        Some(i) => (start + i, start + i + 1, true),
+        None => (data.len(), data.len(), false),
+    }
+}
+
+/// Random access to the lines of a streamed file through a window of it.
+#[derive(Default)]
+pub struct Window {
+    file: Option<File>,
+    buf: Vec<u8>,
+    /// File offset of `buf[0]`.
+    start: u64,
+}
+
+/// One line read through a window: bytes are `buf[a..b]`.
+pub struct WindowLine {
+    pub a: usize,
+    pub b: usize,
+    pub next: u32,
+    pub terminated: bool,
+}
+
+impl Window {
+    pub fn bytes(&self, l: &WindowLine) -> &[u8] {
+        &self.buf[l.a..l.b]
+    }
+
+    fn fill(&mut self, src: &SourceFile, at: u64) -> io::Result<()> {
+        if self.file.is_none() {
+            self.file = Some(File::open(&src.path)?);
+        }
+        let f = self.file.as_mut().expect("file");
+        f.seek(SeekFrom::Start(at))?;
+        self.buf.resize(CHUNK, 0);
+        let mut got = 0;
+        while got < CHUNK {
+            let n = f.read(&mut self.buf[got..])?;
+            if n == 0 {
+                break;
+            }
+            got += n;
+        }
+        self.buf.truncate(got);
+        self.start = at;
+        Ok(())
+    }
+
+    /// The line starting at file offset `pos`.
+    pub fn line(&mut self, src: &SourceFile, pos: u32) -> io::Result<WindowLine> {
+        let pos64 = pos as u64;
+        let len = src.len();
+        let inside = pos64 >= self.start && pos64 < self.start + self.buf.len() as u64;
+        if !inside {
+            self.fill(src, pos64)?;
+        }
+        let mut a = (pos64 - self.start) as usize;
+        if let Some(i) = memchr::memchr(b'\n', &self.buf[a..]) {
+            return Ok(WindowLine {
+                a,
+                b: a + i,
+                next: pos + i as u32 + 1,
+                terminated: true,
+            });
+        }
+        // The line runs past the window: refill from its start.
+        if a > 0 && self.start + self.buf.len() as u64 != len {
+            self.fill(src, pos64)?;
+            a = 0;
+            if let Some(i) = memchr::memchr(b'\n', &self.buf[a..]) {
+                return Ok(WindowLine {
+                    a,
+                    b: a + i,
+                    next: pos + i as u32 + 1,
+                    terminated: true,
+                });
+            }
+        }
+        if self.start + self.buf.len() as u64 >= len {
+            // Last line, no terminator.
+            let b = self.buf.len();
+            return Ok(WindowLine {
+                a,
+                b,
+                next: len as u32,
+                terminated: false,
+            });
+        }
+        // A line longer than the window: an error anyway; find its end.
+        let mut scan = self.start + self.buf.len() as u64;
+        let keep = self.buf.len().min(a + LONG_LINE);
+        let f = self.file.as_mut().expect("file");
+        f.seek(SeekFrom::Start(scan))?;
+        let mut tmp = vec![0u8; CHUNK];
+        loop {
+            let n = f.read(&mut tmp)?;
+            if n == 0 {
+                return Ok(WindowLine {
+                    a,
+                    b: keep,
+                    next: len as u32,
+                    terminated: false,
+                });
+            }
+            if let Some(i) = memchr::memchr(b'\n', &tmp[..n]) {
+                let next = (scan + i as u64 + 1) as u32;
+                return Ok(WindowLine {
+                    a,
+                    b: keep,
+                    next,
+                    terminated: true,
+                });
+            }
+            scan += n as u64;
+        }
     }
 }

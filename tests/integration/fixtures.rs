@@ -182,7 +182,12 @@ pub fn differential(path: &Path) -> Result<Option<String>, String> {
     let ini_orig = format!("{}{}", oracle::ini_with(&sub_dirs, ""), ini_a);
     let program = std::fs::read(path).expect("read fixture");
     let a = oracle::run(&program, &ini_orig, var.as_deref());
-    let (code, stdout, stderr) = run_fixture(path, &["--zero-start"]);
+    let zero: &[&str] = if args.iter().any(|a| a == "--zero-start") {
+        &[]
+    } else {
+        &["--zero-start"]
+    };
+    let (code, stdout, stderr) = run_fixture(path, zero);
     match cat {
         "err" => {
             if a.ok {

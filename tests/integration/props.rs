@@ -380,6 +380,13 @@ proptest! {
         render_all(&flatten_bytes(text.into_bytes(), &small_limits()));
     }
 
+}
+
+proptest! {
+    // Each case flattens twice through temporary files: fewer cases keep the
+    // suite fast.
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
     #[test]
     fn flattening_is_idempotent(prog in program()) {
         let settings = small_limits();
@@ -404,18 +411,14 @@ fn generated_programs_mostly_flatten() {
     let strategy = program();
     let mut ok = 0;
     let mut failures = Vec::new();
-    for _ in 0..100 {
+    for _ in 0..40 {
         let prog = strategy.new_tree(&mut runner).unwrap().current();
         match ngcflat::flatten_str(&prog, &small_limits()) {
             Ok(_) => ok += 1,
             Err(e) => failures.push(format!("{}\n{prog}", e.message())),
         }
     }
-    assert!(
-        ok >= 90,
-        "only {ok} of 100 flattened; e.g.\n{}",
-        failures[0]
-    );
+    assert!(ok >= 36, "only {ok} of 40 flattened; e.g.\n{}", failures[0]);
 }
 
 // ---------------------------------------------------------------- robustness table
@@ -455,39 +458,42 @@ type Input = fn() -> Vec<u8>;
 /// `CASE_TIMEOUT` and must not panic.
 #[rustfmt::skip]
 const CASES: &[(&str, Input, u64, Want)] = &[
-    ("empty input", || Vec::new(), 10_000, Want::Ok),
-    ("only blanks and newlines", || b"\n \t\r\n\n".to_vec(), 10_000, Want::Ok),
-    ("only percent", || b"%\n".to_vec(), 10_000, Want::Ok),
+    ("empty input", || Vec::new(), 10_000, Want::Code("E0319")),
+    ("only blanks and newlines", || b"\n \t\r\n\n".to_vec(), 10_000, Want::Code("E0319")),
+    ("only percent", || b"%\n".to_vec(), 10_000, Want::Code("E0318")),
+    ("percent-delimited empty program", || b"%\n%\n".to_vec(), 10_000, Want::Ok),
     ("1 MB single line", || [b"G1 X".as_slice(), &vec![b'1'; 1 << 20]].concat(), 10_000, Want::Code("E0001")),
     ("1 MB comment line", || [b"(".as_slice(), &vec![b'a'; 1 << 20], b")\nM2\n"].concat(), 10_000, Want::Code("E0001")),
     ("1 MB line, no newline at all", || vec![b'G'; 1 << 20], 10_000, Want::Code("E0001")),
-    ("1 MB of newlines", || vec![b'\n'; 1 << 20], 10_000, Want::Ok),
+    ("100 000 empty lines", || vec![b'\n'; 100_000], 10_000, Want::Code("E0319")),
     ("10 000-deep brackets", || [b"#1 = ".as_slice(), &vec![b'['; 10_000], b"1", &vec![b']'; 10_000], b"\nM2\n"].concat(), 10_000, Want::Code("E0001")),
     ("10 000 unclosed brackets", || [b"G1 X".as_slice(), &vec![b'['; 10_000]].concat(), 10_000, Want::Code("E0001")),
-    ("deepest brackets that fit a line", || [b"#1=".as_slice(), &vec![b'['; 120], b"1", &vec![b']'; 120], b"\nM2\n"].concat(), 10_000, Want::Ok),
+    ("deepest brackets that fit a line", || [b"#1=".as_slice(), &[b'['; 120], b"1", &[b']'; 120], b"\nM2\n"].concat(), 10_000, Want::Ok),
     ("deep unary minus chain", || [b"#1=".as_slice(), &vec![b'-'; 240], b"1\nM2\n"].concat(), 10_000, Want::Ok),
-    ("deep function nesting", || [b"#1=".as_slice(), &b"abs[".repeat(50), b"1", &vec![b']'; 50], b"\nM2\n"].concat(), 10_000, Want::Ok),
+    ("deep function nesting", || [b"#1=".as_slice(), &b"abs[".repeat(40), b"1", &[b']'; 40], b"\nM2\n"].concat(), 10_000, Want::Ok),
     ("deep parameter indirection", || [b"#1=1\n#2=".as_slice(), &vec![b'#'; 240], b"1\nM2\n"].concat(), 10_000, Want::Ok),
-    ("a million distinct if/endif labels", || repeat_lines(1_000_000, |i| format!("o{i} if [0]\no{i} endif\n")), 10_000_000, Want::Ok),
-    ("20 000 subs without endsub", || repeat_lines(20_000, |i| format!("o{i} sub\n")), 10_000, Want::Err),
-    ("20 000 whiles with one label, no endwhile", || repeat_lines(20_000, |_| "o1 while [0]\n".to_string()), 10_000, Want::Err),
-    ("10 000-deep nested ifs", || [repeat_lines(10_000, |i| format!("o{i} if [1]\n")), repeat_lines(10_000, |i| format!("o{} endif\n", 9_999 - i)), b"M2\n".to_vec()].concat(), 10_000_000, Want::Ok),
-    ("10 000-deep nested repeats", || [repeat_lines(10_000, |i| format!("o{i} repeat [1]\n")), repeat_lines(10_000, |i| format!("o{} endrepeat\n", 9_999 - i)), b"M2\n".to_vec()].concat(), 10_000_000, Want::Ok),
-    ("100 000 named parameters", || repeat_lines(100_000, |i| format!("#<p{i}> = {i}\n")), 10_000, Want::Ok),
+    ("2 000 distinct if/endif labels", || [repeat_lines(2_000, |i| format!("o{i} if [0]\no{i} endif\n")), b"M2\n".to_vec()].concat(), 10_000_000, Want::Ok),
+    ("2 000 distinct sub definitions and calls", || [repeat_lines(2_000, |i| format!("o{i} sub\no{i} endsub\no{i} call\n")), b"M2\n".to_vec()].concat(), 10_000_000, Want::Ok),
+    ("2 000-deep nested ifs", || [repeat_lines(2_000, |i| format!("o{i} if [1]\n")), repeat_lines(2_000, |i| format!("o{} endif\n", 1_999 - i)), b"M2\n".to_vec()].concat(), 10_000_000, Want::Ok),
+    ("2 000-deep nested repeats", || [repeat_lines(2_000, |i| format!("o{i} repeat [1]\n")), repeat_lines(2_000, |i| format!("o{} endrepeat\n", 1_999 - i)), b"M2\n".to_vec()].concat(), 10_000_000, Want::Ok),
+    ("2 000 named parameters", || [repeat_lines(2_000, |i| format!("#<p{i}> = {i}\n")), b"M2\n".to_vec()].concat(), 10_000_000, Want::Ok),
+    ("20 000 lines hit a 10 000 step limit", || repeat_lines(20_000, |i| format!("#<p{i}> = {i}\n")), 10_000, Want::Code("E0402")),
     ("repeat [1e9] (an E word, not an exponent)", || b"o1 repeat [1e9]\nG1 X1\no1 endrepeat\nM2\n".to_vec(), 10_000, Want::Err),
     ("repeat a billion times", || b"o1 repeat [1000000000]\no1 endrepeat\nM2\n".to_vec(), 10_000, Want::Code("E0402")),
-    ("repeat a billion times, with output", || b"o1 repeat [1000000000]\nG1 X1\no1 endrepeat\nM2\n".to_vec(), 10_000_000, Want::Code("E0403")),
+    ("repeat a billion times, with output", || b"o1 repeat [1000000000]\nG1 X1 F100\no1 endrepeat\nM2\n".to_vec(), 10_000_000, Want::Code("E0403")),
     ("repeat 1e300 times", || [b"o1 repeat [1".as_slice(), &vec![b'0'; 240], b"]\no1 endrepeat\nM2\n"].concat(), 10_000, Want::Err),
     ("infinite while [1]", || b"o1 while [1]\no1 endwhile\nM2\n".to_vec(), 10_000, Want::Code("E0402")),
     ("infinite do-while", || b"o1 do\no1 while [1]\nM2\n".to_vec(), 10_000, Want::Code("E0402")),
     ("infinite while with a continue", || b"o1 while [1]\no1 continue\no1 endwhile\nM2\n".to_vec(), 10_000, Want::Code("E0402")),
     ("runaway recursion", || b"o<r> sub\no<r> call\no<r> endsub\no<r> call\nM2\n".to_vec(), 10_000, Want::Err),
     ("runaway recursion through numbered subs", || b"o100 sub\no100 call\no100 endsub\no100 call\nM2\n".to_vec(), 10_000, Want::Err),
-    ("runaway M98 recursion", || b"O100\nM98 P100\nM99\n".to_vec(), 10_000, Want::Err),
+    ("runaway M98 recursion", || b"M98 P100\nM30\nO100\nM98 P100\nM99\n".to_vec(), 10_000, Want::Err),
     ("mutual recursion", || b"o1 sub\no2 call\no1 endsub\no2 sub\no1 call\no2 endsub\no1 call\nM2\n".to_vec(), 10_000, Want::Err),
     ("call of an unknown file sub", || b"o<no_such_sub_file> call\nM2\n".to_vec(), 10_000, Want::Err),
     ("call with a path-like name", || b"o<../../etc/passwd> call\nM2\n".to_vec(), 10_000, Want::Err),
-    ("invalid UTF-8 in a comment", || b"(\xff\xfe\xc3\x28)\nG1 X1\nM2\n".to_vec(), 10_000, Want::Ok),
+    // These two fail until fuzz.md F3 is fixed: comment bytes are refused
+    // "outside a comment".
+    ("invalid UTF-8 in a comment", || b"(\xff\xfe\xc3)\nG1 X1 F100\nM2\n".to_vec(), 10_000, Want::Ok),
     ("invalid UTF-8 in a debug comment", || b"#1=2\n(debug,\xff #1 \xc3)\nM2\n".to_vec(), 10_000, Want::Ok),
     ("invalid UTF-8 in a named parameter", || b"#<\xff\xfe>=1\nM2\n".to_vec(), 10_000, Want::Err),
     ("invalid UTF-8 outside comments", || b"G1 X\xff1\nM2\n".to_vec(), 10_000, Want::Err),
@@ -496,10 +502,11 @@ const CASES: &[(&str, Input, u64, Want)] = &[
     ("NUL in a comment", || b"(a\0b)\nM2\n".to_vec(), 10_000, Want::Ok),
     ("CR-only line endings", || b"G0 X1\rG1 Y2\rM2\r".to_vec(), 10_000, Want::Err),
     ("CR-only line endings, 1 000 lines", || repeat_lines(1_000, |i| format!("G1 X{i}\r")), 10_000, Want::Code("E0001")),
-    ("CRLF line endings", || b"G0 X1\r\nG1 Y2\r\nM2\r\n".to_vec(), 10_000, Want::Ok),
-    ("1 MB of binary noise", || noise(1 << 20, 0x9e37_79b9_7f4a_7c15), 10_000, Want::Err),
-    ("1 MB of short noise lines", || noise(1 << 20, 7).chunks(40).flat_map(|c| [c, b"\n"].concat()).collect(), 10_000, Want::Err),
-    ("number too large to print", || [b"G1 X".as_slice(), &vec![b'9'; 240], b"\nM2\n"].concat(), 10_000, Want::Err),
+    ("CRLF line endings", || b"G0 X1\r\nG1 Y2 F100\r\nM2\r\n".to_vec(), 10_000, Want::Ok),
+    ("64 KB of binary noise", || noise(1 << 16, 0x9e37_79b9_7f4a_7c15), 10_000, Want::Err),
+    ("64 KB of short noise lines", || noise(1 << 16, 7).chunks(40).flat_map(|c| [c, b"\n"].concat()).collect(), 10_000, Want::Err),
+    ("240-digit number", || [b"G1 F100 X".as_slice(), &vec![b'9'; 240], b"\nM2\n"].concat(), 10_000, Want::Ok),
+    ("number too long to print", || b"#1 = [10 ** 300]\nG1 F100 X#1\nM2\n".to_vec(), 10_000, Want::Err),
     ("overflow to infinity", || b"#1 = [10 ** 400]\nG1 X#1\nM2\n".to_vec(), 10_000, Want::Err),
     ("NaN from sqrt of negative", || b"G1 X[SQRT[-1]]\nM2\n".to_vec(), 10_000, Want::Err),
     ("division by zero", || b"G1 X[1/0]\nM2\n".to_vec(), 10_000, Want::Err),
@@ -512,9 +519,17 @@ const CASES: &[(&str, Input, u64, Want)] = &[
     ("endwhile without while", || b"o1 endwhile\nM2\n".to_vec(), 10_000, Want::Err),
     ("dynamic label loop", || b"#1=1\no#1 while [1]\no#1 endwhile\nM2\n".to_vec(), 10_000, Want::Err),
     ("abort comment", || b"(abort, stop here)\nM2\n".to_vec(), 10_000, Want::Err),
+    // Last: a case that times out leaves its thread running, which would
+    // slow the cases after it.
+    // Fails (hang) until fuzz.md F1 is fixed: quadratic sub-definition scan.
+    ("30 000 subs without endsub", || repeat_lines(30_000, |i| format!("o{i} sub\n")), 10_000, Want::Err),
+    // Fail (hang) until fuzz.md F2 is fixed: quadratic loop-body scan.
+    ("30 000 whiles with one label, no endwhile", || repeat_lines(30_000, |_| "o1 while [0]\n".to_string()), 10_000, Want::Err),
+    ("50 000 dos with one label", || repeat_lines(50_000, |_| "o1 do\n".to_string()), 10_000, Want::Err),
+    ("50 000 repeats with one label, one endrepeat", || [repeat_lines(50_000, |_| "o1 repeat [0]\n".to_string()), b"o1 endrepeat\nM2\n".to_vec()].concat(), 10_000, Want::Err),
 ];
 
-const CASE_TIMEOUT: Duration = Duration::from_secs(60);
+const CASE_TIMEOUT: Duration = Duration::from_secs(10);
 
 fn outcome(r: &Result<(), Error>) -> String {
     match r {
@@ -569,4 +584,21 @@ fn hostile_inputs_end_cleanly() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The full-size version of the label case above (fuzz.md F5: about 30 s in
+/// a release build): `cargo test --release -- --ignored a_million_labels`.
+#[test]
+#[ignore]
+fn a_million_labels() {
+    let data = [
+        repeat_lines(1_000_000, |i| format!("o{i} if [0]\no{i} endif\n")),
+        b"M2\n".to_vec(),
+    ]
+    .concat();
+    let settings = Settings {
+        max_steps: 100_000_000,
+        ..small_limits()
+    };
+    assert!(flatten_bytes(data, &settings).is_ok());
 }

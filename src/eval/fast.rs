@@ -1,0 +1,191 @@
+//! Fast path for plain lines: words made of a letter and a literal number,
+//! optional block delete and line number, blanks between items. Such lines
+//! need no evaluation and are written exactly as read. Anything else goes to
+//! the grammar. A property test checks this scanner against the grammar on
+//! every line it accepts.
+
+/// A word of a plain line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FastWord {
+    pub letter: u8,
+    pub value: f64,
+    pub start: u16,
+    pub end: u16,
+}
+
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// Parses `[+-]digits[.digits]` exactly as `str::parse::<f64>` would.
+pub fn parse_decimal(t: &[u8]) -> Option<f64> {
+    let (neg, body) = match t.first()? {
+        b'-' => (true, &t[1..]),
+        b'+' => (false, &t[1..]),
+        _ => (false, t),
+    };
+    let mut mant: u64 = 0;
+    let mut digits = 0u32;
+    let mut frac = 0i32;
+    let mut seen_dot = false;
+    let mut any = false;
+    for &c in body {
+        match c {
+            b'0'..=b'9' => {
+                any = true;
+                if mant == 0 && c == b'0' {
+                    if seen_dot {
+                        frac += 1;
+                    }
+                    continue;
+                }
+                digits += 1;
+                if digits > 19 {
+                    return slow(t);
+                }
+                mant = mant * 10 + (c - b'0') as u64;
+                if seen_dot {
+                    frac += 1;
+                }
+            }
+            b'.' if !seen_dot => seen_dot = true,
+            _ => return None,
+        }
+    }
+    if !any {
+        return None;
+    }
+    if mant > (1u64 << 53) || frac > 22 {
+        return slow(t);
+    }
+    let v = mant as f64 / POW10[frac as usize];
+    Some(if neg { -v } else { v })
+}
+
+fn slow(t: &[u8]) -> Option<f64> {
+    std::str::from_utf8(t).ok()?.parse().ok()
+}
+
+/// Scans a plain line into `out`. Returns false when the line needs the
+/// grammar (expressions, parameters, comments, O-words, unusual forms).
+pub fn scan(raw: &[u8], out: &mut Vec<FastWord>) -> bool {
+    out.clear();
+    if raw.len() > crate::parse::MAX_LINE || raw.len() >= u16::MAX as usize {
+        return false;
+    }
+    let n = raw.len();
+    let mut i = 0;
+    let skip = |i: &mut usize| {
+        while *i < n && matches!(raw[*i], b' ' | b'\t' | b'\r') {
+            *i += 1;
+        }
+    };
+    skip(&mut i);
+    if i < n && raw[i] == b'/' {
+        i += 1;
+        skip(&mut i);
+    }
+    if i < n && (raw[i] | 0x20) == b'n' {
+        i += 1;
+        skip(&mut i);
+        let s = i;
+        while i < n && raw[i].is_ascii_digit() {
+            i += 1;
+        }
+        if i == s {
+            return false;
+        }
+        if i < n && raw[i] == b'.' {
+            i += 1;
+            while i < n && raw[i].is_ascii_digit() {
+                i += 1;
+            }
+        }
+        if i < n && matches!(raw[i], b' ' | b'\t') {
+            // Blanks inside a line number: leave it to the grammar.
+            let mut j = i;
+            while j < n && matches!(raw[j], b' ' | b'\t' | b'\r') {
+                j += 1;
+            }
+            if j < n && (raw[j].is_ascii_digit() || raw[j] == b'.') {
+                return false;
+            }
+        }
+        skip(&mut i);
+    }
+    while i < n {
+        let c = raw[i] | 0x20;
+        if !c.is_ascii_lowercase() || c == b'n' || c == b'o' || !raw[i].is_ascii_alphabetic() {
+            return false;
+        }
+        let start = i;
+        i += 1;
+        skip(&mut i);
+        let s = i;
+        if i < n && matches!(raw[i], b'+' | b'-') {
+            i += 1;
+        }
+        while i < n && (raw[i].is_ascii_digit() || raw[i] == b'.') {
+            i += 1;
+        }
+        let Some(value) = parse_decimal(&raw[s..i]) else {
+            return false;
+        };
+        let end = i;
+        let after = i;
+        skip(&mut i);
+        if i > after && i < n && (raw[i].is_ascii_digit() || raw[i] == b'.') {
+            // Blanks inside a number.
+            return false;
+        }
+        out.push(FastWord {
+            letter: c,
+            value,
+            start: start as u16,
+            end: end as u16,
+        });
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decimals_match_std() {
+        for t in [
+            "0",
+            "-0",
+            "1.5",
+            "+.5",
+            "5.",
+            "-12.3456",
+            "0.1",
+            "123456789.123456789",
+            "0.000000000000000000000001",
+        ] {
+            assert_eq!(parse_decimal(t.as_bytes()), t.parse::<f64>().ok(), "{t}");
+        }
+        for t in [".", "", "1.2.3", "-", "1e3"] {
+            assert_eq!(parse_decimal(t.as_bytes()), None, "{t}");
+        }
+    }
+
+    #[test]
+    fn plain_lines() {
+        let mut v = Vec::new();
+        assert!(scan(b"G1 X10.5 Y-2 F300", &mut v));
+        assert_eq!(v.len(), 4);
+        assert_eq!((v[1].letter, v[1].value), (b'x', 10.5));
+        assert!(scan(b"N10 g0 x 1", &mut v));
+        assert!(scan(b"/G0X1Y2\r", &mut v));
+        assert!(scan(b"", &mut v) && v.is_empty());
+        for l in [
+            "G1 X#1", "G1 X[1]", "G0 (c)", "G0 ; c", "o1 if", "G0 X1 0", "%", "X--1", "G0 X.",
+        ] {
+            assert!(!scan(l.as_bytes(), &mut v), "{l}");
+        }
+    }
+}
