@@ -777,13 +777,21 @@ impl Interp<'_> {
     }
 
     fn call(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Rc<str>) -> Result<(), Error> {
-        let o = self.oline(file, oidx).clone();
-        let mut args = Vec::with_capacity(o.args.len());
-        for a in &o.args {
-            args.push(self.o_eval(file, oidx, a)?);
+        let line = file.olines[oidx as usize].line.clone();
+        let LineKind::O(o) = &line.kind else {
+            unreachable!("call on a non-O line")
+        };
+        let mut argv = [0f64; 30];
+        let nargs = o.args.len().min(30);
+        for (slot, a) in argv.iter_mut().zip(&o.args) {
+            *slot = self.o_eval(file, oidx, a)?;
         }
         let target = self.resolve(file, oidx, key)?;
-        let base: Rc<str> = Rc::from(key.rsplit('/').next().unwrap_or(key));
+        let base: Rc<str> = if key.contains('/') {
+            Rc::from(key.rsplit('/').next().unwrap_or(key))
+        } else {
+            key.clone()
+        };
         if target.file.kind_of(target.oidx) == Some(OKind::Bare) {
             return Err(self.oerr(
                 ErrorKind::FanucNeedsM98 {
@@ -819,11 +827,9 @@ impl Interp<'_> {
         self.push_frame(file, oidx, FrameKind::Call, base, ret)?;
         let mut saved = Box::new([0.0; 30]);
         saved.copy_from_slice(&self.params.values[1..31]);
-        for i in 0..30 {
-            self.params.values[i + 1] = args.get(i).copied().unwrap_or(0.0);
-            self.params.set[i + 1] = true;
-        }
-        let nargs = args.len() as f64;
+        self.params.values[1..31].copy_from_slice(&argv);
+        self.params.set[1..31].fill(true);
+        let nargs = nargs as f64;
         let oword_nargs = self.s.oword_nargs;
         let f = self.frame();
         f.saved = Some(saved);

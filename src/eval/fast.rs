@@ -123,14 +123,39 @@ pub fn scan(raw: &[u8], out: &mut Vec<FastWord>) -> bool {
         i += 1;
         skip(&mut i);
         let s = i;
+        let neg = i < n && raw[i] == b'-';
         if i < n && matches!(raw[i], b'+' | b'-') {
             i += 1;
         }
-        while i < n && (raw[i].is_ascii_digit() || raw[i] == b'.') {
+        // Digits are accumulated while scanning; unusual numbers are
+        // re-read by the exact parser.
+        let mut mant: u64 = 0;
+        let mut frac: u32 = 0;
+        let mut digits = 0u32;
+        let mut dots = 0u32;
+        while i < n {
+            let c = raw[i];
+            if c.is_ascii_digit() {
+                mant = mant.wrapping_mul(10).wrapping_add((c - b'0') as u64);
+                digits += 1;
+                frac += dots;
+            } else if c == b'.' {
+                dots += 1;
+            } else {
+                break;
+            }
             i += 1;
         }
-        let Some(value) = parse_decimal(&raw[s..i]) else {
+        let value = if digits == 0 || dots > 1 {
             return false;
+        } else if digits <= 15 && frac <= 22 {
+            let v = mant as f64 / POW10[frac as usize];
+            if neg { -v } else { v }
+        } else {
+            match parse_decimal(&raw[s..i]) {
+                Some(v) => v,
+                None => return false,
+            }
         };
         let end = i;
         let after = i;
@@ -170,6 +195,63 @@ mod tests {
         }
         for t in [".", "", "1.2.3", "-", "1e3"] {
             assert_eq!(parse_decimal(t.as_bytes()), None, "{t}");
+        }
+    }
+
+    use crate::parse::ast::{ExprKind, Item, LineKind};
+    use proptest::prelude::*;
+
+    /// Words of a line as the grammar reads them (None if it is not a
+    /// line of literal words).
+    fn grammar_words(raw: &[u8]) -> Option<Vec<(u8, f64)>> {
+        let line = crate::parse::LineParser::default().parse(raw, true).ok()?;
+        match line.kind {
+            LineKind::Blank => Some(Vec::new()),
+            LineKind::Items(items) => items
+                .iter()
+                .map(|i| match i {
+                    Item::Word(w) => match w.value.kind {
+                        ExprKind::Num(v) => Some((w.letter, v)),
+                        _ => None,
+                    },
+                    _ => None,
+                })
+                .collect(),
+            _ => None,
+        }
+    }
+
+    proptest! {
+        /// Every line the fast path accepts reads the same through the
+        /// grammar: same letters, same values, bit for bit.
+        #[test]
+        fn fast_path_agrees_with_grammar(
+            parts in proptest::collection::vec(
+                prop_oneof![
+                    "[gGxXyYzZfFsSmMtTiIjJkKpPrR]",
+                    "[+-]?[0-9]{0,6}(\\.[0-9]{0,8})?",
+                    "[ \t]{0,2}",
+                    "[nN][0-9]{1,4}",
+                    "/",
+                    "[#\\[\\]()oO%;]",
+                ],
+                0..14,
+            )
+        ) {
+            let line: String = parts.concat();
+            let mut out = Vec::new();
+            if scan(line.as_bytes(), &mut out) {
+                let fast: Vec<(u8, u64)> = out.iter().map(|w| (w.letter, w.value.to_bits())).collect();
+                let slow = grammar_words(line.as_bytes());
+                prop_assert!(slow.is_some(), "fast path accepted {line:?}, grammar did not");
+                let slow: Vec<(u8, u64)> = slow.unwrap().iter().map(|&(l, v)| (l, v.to_bits())).collect();
+                prop_assert_eq!(fast, slow, "{:?}", line);
+            }
+        }
+
+        #[test]
+        fn decimal_parser_is_exact(t in "[+-]?[0-9]{1,20}(\\.[0-9]{0,25})?") {
+            prop_assert_eq!(parse_decimal(t.as_bytes()).map(f64::to_bits), t.parse::<f64>().ok().map(f64::to_bits));
         }
     }
 

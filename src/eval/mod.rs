@@ -7,6 +7,7 @@ mod control;
 mod degrees;
 mod expr;
 mod fast;
+mod fx_hasher;
 mod message;
 mod modal;
 mod named;
@@ -16,7 +17,9 @@ mod settings;
 pub mod state;
 mod validate;
 
-use std::collections::{HashMap, HashSet};
+use std::collections::HashSet;
+
+use fx_hasher::FxMap;
 use std::rc::Rc;
 
 use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};
@@ -68,8 +71,8 @@ pub struct Frame {
     pub ret: Option<Cursor>,
     pub call_site: Option<Site>,
     pub saved: Option<Box<[f64; 30]>>,
-    pub locals: HashMap<Rc<str>, f64>,
-    pub labels: HashMap<Rc<str>, LabelRec>,
+    pub locals: FxMap<Rc<str>, f64>,
+    pub labels: FxMap<Rc<str>, LabelRec>,
     /// Pending passes of an `M98 ... L` on the given line of this frame.
     pub m98_loop: Option<(u32, i64)>,
     /// Modal state saved by M70/M73; `auto` restores it on return (M73).
@@ -85,8 +88,8 @@ impl Frame {
             ret: None,
             call_site: None,
             saved: None,
-            locals: HashMap::new(),
-            labels: HashMap::new(),
+            locals: FxMap::default(),
+            labels: FxMap::default(),
             m98_loop: None,
             saved_modal: None,
             auto_restore: false,
@@ -106,7 +109,7 @@ pub struct Interp<'s> {
     pub loader: Loader,
     main: Rc<FileIndex>,
     params: Params,
-    globals: HashMap<Rc<str>, f64>,
+    globals: FxMap<Rc<str>, f64>,
     frames: Vec<Frame>,
     value: f64,
     value_returned: bool,
@@ -117,7 +120,7 @@ pub struct Interp<'s> {
     out_lines: u64,
     steps: u64,
     pub warnings: Vec<Diagnostic>,
-    subs: HashMap<Rc<str>, SubRec>,
+    subs: FxMap<Rc<str>, SubRec>,
     called: HashSet<Rc<str>>,
     modal: Modal,
     pos: Position,
@@ -129,7 +132,7 @@ pub struct Interp<'s> {
     ref_stale_continue: Option<u32>,
     last_loop: Option<(Rc<str>, u32, Rc<FileIndex>)>,
     parser: LineParser,
-    cache: HashMap<(usize, u32), Rc<Line>>,
+    cache: FxMap<(usize, u32), Rc<Line>>,
     out: Vec<u8>,
     ended: bool,
     current_line_start: u32,
@@ -148,7 +151,7 @@ fn file_key(f: &Rc<FileIndex>) -> usize {
 impl<'s> Interp<'s> {
     pub fn new(s: &'s Settings, loader: Loader, main: Rc<FileIndex>, sink: Sink) -> Interp<'s> {
         let mut params = Params::new(s.zero_start);
-        let mut globals = HashMap::new();
+        let mut globals = FxMap::default();
         let mut main_frame = Frame::new(FrameKind::Main, Rc::from(""));
         for d in &s.defines {
             match d {
@@ -195,7 +198,7 @@ impl<'s> Interp<'s> {
             out_lines: 0,
             steps: 0,
             warnings: Vec::new(),
-            subs: HashMap::new(),
+            subs: FxMap::default(),
             called: HashSet::new(),
             modal: Modal::default(),
             pos,
@@ -206,7 +209,7 @@ impl<'s> Interp<'s> {
             ref_stale_continue: None,
             last_loop: None,
             parser: LineParser::default(),
-            cache: HashMap::new(),
+            cache: FxMap::default(),
             out: Vec::with_capacity(256),
             ended: false,
             current_line_start: 0,

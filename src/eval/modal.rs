@@ -90,15 +90,22 @@ impl Interp<'_> {
         words: &Words,
         m99: bool,
     ) -> Result<bool, Error> {
-        let mut gs: Vec<i32> = Vec::new();
+        let mut gbuf = [0i32; 16];
+        let mut gn = 0;
         let mut ends = m99;
-        let mut axis_words: Vec<(usize, f64)> = Vec::new();
+        let mut abuf = [(0usize, 0f64); 9];
+        let mut an = 0;
         let mut p_word = None;
         let mut l_word = None;
         let mut r_word = None;
         for &(l, v) in words {
             match l {
-                b'g' => gs.push((v * 10.0).round() as i32),
+                b'g' => {
+                    if gn < gbuf.len() {
+                        gbuf[gn] = (v * 10.0).round() as i32;
+                        gn += 1;
+                    }
+                }
                 b'f' => self.modal.feed = v,
                 b's' => self.modal.speed = v,
                 b't' => self.selected_tool = Some(v),
@@ -136,11 +143,16 @@ impl Interp<'_> {
                 }
                 _ => {
                     if let Some(a) = axis_index(l) {
-                        axis_words.push((a, v));
+                        if an < abuf.len() {
+                            abuf[an] = (a, v);
+                            an += 1;
+                        }
                     }
                 }
             }
         }
+        let gs = &gbuf[..gn];
+        let axis_words = &abuf[..an];
         // P words after M50.. on the same line: apply in a second pass.
         for &(l, v) in words {
             if l == b'm' {
@@ -156,7 +168,7 @@ impl Interp<'_> {
             }
         }
         let mut special = None;
-        for &g in &gs {
+        for &g in gs {
             match g {
                 0
                 | 10
@@ -224,7 +236,7 @@ impl Interp<'_> {
         let _ = self.line_no();
         match special {
             Some(920) => {
-                for &(a, v) in &axis_words {
+                for &(a, v) in axis_words {
                     // The position becomes the given value; the offset is
                     // known only if the machine position was.
                     let m = self.machine_pos(a);
@@ -254,7 +266,7 @@ impl Interp<'_> {
                     self.set_from_machine(a, m, "G92.3");
                 }
             }
-            Some(100) => self.g10(l_word, p_word, r_word, &axis_words),
+            Some(100) => self.g10(l_word, p_word, r_word, axis_words),
             Some(280) | Some(300) => {
                 let base = if special == Some(280) { 5161 } else { 5181 };
                 let axes: Vec<usize> = if axis_words.is_empty() {
@@ -278,14 +290,14 @@ impl Interp<'_> {
                 if self.modal.ccomp != 400 {
                     self.forget(&[0, 1, 2], "cutter radius compensation");
                 }
-                for &(a, v) in &axis_words {
+                for &(a, v) in axis_words {
                     self.set_from_machine(a, Some(v), "a G53 machine-coordinate move");
                 }
             }
             Some(_) => {}
             None => {
                 if !axis_words.is_empty() {
-                    self.move_to(&axis_words);
+                    self.move_to(axis_words);
                 }
             }
         }

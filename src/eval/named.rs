@@ -229,7 +229,7 @@ impl Interp<'_> {
         }
     }
 
-    fn named_table(&mut self, name: &str) -> &mut std::collections::HashMap<Rc<str>, f64> {
+    fn named_table(&mut self, name: &str) -> &mut super::fx_hasher::FxMap<Rc<str>, f64> {
         if name.starts_with('_') || self.frames.len() == 1 {
             &mut self.globals
         } else {

@@ -67,6 +67,64 @@ fn g_uses_axes(g: i32) -> bool {
 /// Checks a block. `words` are (letter, value) in line order; returns the
 /// error and the index of the word it concerns.
 pub fn check_block(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind, Option<usize>)> {
+    if simple_block_ok(words, modal) {
+        return Ok(());
+    }
+    full_check(words, modal)
+}
+
+const fn bit(c: u8) -> u32 {
+    1 << (c - b'a')
+}
+
+/// Fast acceptance of the most common blocks (G0/G1 moves with axis, F and
+/// S words). Anything it does not clearly accept goes to the full check.
+#[inline]
+fn simple_block_ok(words: &[(u8, f64)], modal: &Modal) -> bool {
+    const SIMPLE: u32 = bit(b'g')
+        | bit(b'x')
+        | bit(b'y')
+        | bit(b'z')
+        | bit(b'a')
+        | bit(b'b')
+        | bit(b'c')
+        | bit(b'f')
+        | bit(b's');
+    const AXES: u32 = bit(b'x') | bit(b'y') | bit(b'z') | bit(b'a') | bit(b'b') | bit(b'c');
+    let mut mask = 0u32;
+    let mut g = None;
+    let mut feed = None;
+    for &(l, v) in words {
+        if !l.is_ascii_lowercase() {
+            return false;
+        }
+        let b = bit(l);
+        if b & SIMPLE == 0 || (mask & b != 0) {
+            return false;
+        }
+        mask |= b;
+        match l {
+            b'g' => g = Some(v),
+            b'f' | b's' if v < 0.0 => return false,
+            b'f' => feed = Some(v),
+            _ => {}
+        }
+    }
+    let motion = match g {
+        None => modal.motion,
+        Some(v) if v == 0.0 => 0,
+        Some(v) if v == 1.0 => 10,
+        Some(_) => return false,
+    };
+    let moves = mask & AXES != 0 || g.is_some();
+    match motion {
+        0 => true,
+        10 => !moves || (modal.feed_mode != 930 && feed.unwrap_or(modal.feed) != 0.0),
+        _ => !moves && mask & AXES == 0 && false,
+    }
+}
+
+fn full_check(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind, Option<usize>)> {
     let bad = |msg: &str, at: Option<usize>| {
         Err((
             ErrorKind::Semantic {
@@ -77,9 +135,12 @@ pub fn check_block(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind,
     };
     let mut gseen: [Option<usize>; 16] = [None; 16];
     let mut mseen: [Option<usize>; 16] = [None; 16];
-    let mut gs: Vec<(i32, usize)> = Vec::new();
-    let mut ms: Vec<(i64, usize)> = Vec::new();
-    let mut has = [None::<usize>; 128];
+    // Fixed-size scratch: this runs for every line.
+    let mut gbuf = [(0i32, 0usize); 16];
+    let mut gn = 0;
+    let mut mbuf = [(0i64, 0usize); 16];
+    let mut mn = 0;
+    let mut has = [None::<u8>; 128];
     for (i, &(l, v)) in words.iter().enumerate() {
         match l {
             b'g' => {
@@ -101,7 +162,8 @@ pub fn check_block(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind,
                     return bad("two G-codes from the same modal group", Some(i));
                 }
                 gseen[grp as usize] = Some(i);
-                gs.push((g, i));
+                gbuf[gn] = (g, i);
+                gn += 1;
             }
             b'm' => {
                 if v.fract() != 0.0 || v < 0.0 {
@@ -118,18 +180,25 @@ pub fn check_block(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind,
                     return bad("two M-codes from the same modal group", Some(i));
                 }
                 mseen[grp as usize] = Some(i);
-                ms.push((m, i));
+                if mn == mbuf.len() {
+                    return bad("too many M-codes", Some(i));
+                }
+                mbuf[mn] = (m, i);
+                mn += 1;
             }
             _ => {
                 if (l as usize) < 128 {
-                    has[l as usize] = Some(i);
+                    has[l as usize] = Some(i.min(255) as u8);
                 }
             }
         }
     }
+    let gs = &gbuf[..gn];
+    let ms = &mbuf[..mn];
+    let has_at = |c: u8| has[c as usize].map(usize::from);
     let g_on = |codes: &[i32]| gs.iter().any(|(g, _)| codes.contains(g));
     let m_on = |codes: &[i64]| ms.iter().any(|(m, _)| codes.contains(m));
-    let axis_word = b"xyzabcuvw".iter().find_map(|&c| has[c as usize]);
+    let axis_word = b"xyzabcuvw".iter().find_map(|&c| has_at(c));
     let motion_here = gs.iter().find(|(g, _)| g_group(*g) == Some(1)).map(|x| x.0);
     let axis_g0 = gs.iter().find(|(g, _)| g_uses_axes(*g)).map(|x| x.0);
     if let (Some(_), Some(_), Some(i)) = (motion_here, axis_g0, axis_word)
@@ -151,12 +220,12 @@ pub fn check_block(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind,
             Some(i),
         );
     }
-    if (has[b'@' as usize].is_some() || has[b'^' as usize].is_some())
-        && (has[b'x' as usize].is_some() || has[b'y' as usize].is_some())
+    if (has_at(b'@').is_some() || has_at(b'^').is_some())
+        && (has_at(b'x').is_some() || has_at(b'y').is_some())
     {
         return bad(
             "polar coordinates and X/Y words together",
-            has[b'@' as usize].or(has[b'^' as usize]),
+            has_at(b'@').or(has_at(b'^')),
         );
     }
     for &(l, v) in words {
@@ -176,7 +245,7 @@ pub fn check_block(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind,
             && matches!(modal.motion, 20 | 30 | 50 | 51 | 331 | 760 | 870)
             && axis_word.is_some());
     let uses = |letter: u8, ok: bool, msg: &str| -> Result<(), (ErrorKind, Option<usize>)> {
-        match has[letter as usize] {
+        match has_at(letter) {
             Some(i) if !ok => bad(msg, Some(i)),
             _ => Ok(()),
         }
@@ -242,22 +311,22 @@ pub fn check_block(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind,
         "$ word with no spindle code to use it",
     )?;
     // Codes that need words.
-    if g_on(&[40]) && has[b'p' as usize].is_none() {
+    if g_on(&[40]) && has_at(b'p').is_none() {
         return bad(
             "dwell time missing with G4",
             gs.iter().find(|g| g.0 == 40).map(|g| g.1),
         );
     }
-    if g_on(&[960]) && has[b's' as usize].is_none() {
+    if g_on(&[960]) && has_at(b's').is_none() {
         return bad("S word missing with G96", None);
     }
-    if m_on(&[62, 63, 64, 65]) && has[b'p' as usize].is_none() {
+    if m_on(&[62, 63, 64, 65]) && has_at(b'p').is_none() {
         return bad("no valid P word with M62-M65", None);
     }
-    if m_on(&[66]) && has[b'p' as usize].is_none() && has[b'e' as usize].is_none() {
+    if m_on(&[66]) && has_at(b'p').is_none() && has_at(b'e').is_none() {
         return bad("M66 needs a P or an E word", None);
     }
-    if m_on(&[61]) && has[b'q' as usize].is_none() {
+    if m_on(&[61]) && has_at(b'q').is_none() {
         return bad("M61 needs a Q word (tool number)", None);
     }
     // Motion needing a feed rate.
@@ -282,7 +351,7 @@ pub fn check_block(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind,
             }
         }
     }
-    if motion_here.is_some_and(|m| matches!(m, 330 | 331)) && has[b'k' as usize].is_none() {
+    if motion_here.is_some_and(|m| matches!(m, 330 | 331)) && has_at(b'k').is_none() {
         return bad("K word missing with G33", None);
     }
     Ok(())
