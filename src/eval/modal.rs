@@ -142,11 +142,11 @@ impl Interp<'_> {
                     }
                 }
                 _ => {
-                    if let Some(a) = axis_index(l) {
-                        if an < abuf.len() {
-                            abuf[an] = (a, v);
-                            an += 1;
-                        }
+                    if let Some(a) = axis_index(l)
+                        && an < abuf.len()
+                    {
+                        abuf[an] = (a, v);
+                        an += 1;
                     }
                 }
             }

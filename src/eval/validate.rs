@@ -112,15 +112,15 @@ fn simple_block_ok(words: &[(u8, f64)], modal: &Modal) -> bool {
     }
     let motion = match g {
         None => modal.motion,
-        Some(v) if v == 0.0 => 0,
-        Some(v) if v == 1.0 => 10,
+        Some(0.0) => 0,
+        Some(1.0) => 10,
         Some(_) => return false,
     };
     let moves = mask & AXES != 0 || g.is_some();
     match motion {
         0 => true,
         10 => !moves || (modal.feed_mode != 930 && feed.unwrap_or(modal.feed) != 0.0),
-        _ => !moves && mask & AXES == 0 && false,
+        _ => false,
     }
 }
 
