@@ -129,29 +129,42 @@ fn exit_for(e: &Diagnostic) -> ExitCode {
 
 /// The command-line program.
 pub fn run(cli: config::Cli) -> ExitCode {
+    match run_cli(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            // Usage and configuration problems: exit status 2.
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// The CLI edge: configuration problems become `anyhow` errors with context;
+/// program problems are diagnostics.
+fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
+    use anyhow::Context as _;
     let env_path = std::env::var("NGCFLAT_SUBROUTINE_PATH").ok();
     match cli.command {
-        Some(config::Command::Check(args)) => match args.common.to_config(env_path) {
-            Ok(cfg) => check::run(&args.paths, &args.ext, args.deny_warnings, &cfg),
-            Err(k) => {
-                report(&[*Diagnostic::error(k, None)], MessageFormat::Human);
-                ExitCode::from(2)
-            }
-        },
+        Some(config::Command::Check(args)) => {
+            let cfg = args
+                .common
+                .to_config(env_path)
+                .map_err(anyhow::Error::msg)
+                .context("invalid configuration")?;
+            Ok(check::run(&args.paths, &args.ext, args.deny_warnings, &cfg))
+        }
         None => {
             let args = cli.flatten;
-            let cfg = match args.common.to_config(env_path) {
-                Ok(c) => c,
-                Err(k) => {
-                    report(&[*Diagnostic::error(k, None)], MessageFormat::Human);
-                    return ExitCode::from(2);
-                }
-            };
+            let cfg = args
+                .common
+                .to_config(env_path)
+                .map_err(anyhow::Error::msg)
+                .context("invalid configuration")?;
             let source = match read_source(args.file.as_deref()) {
                 Ok(s) => s,
                 Err(e) => {
                     report(&[*e], cfg.format);
-                    return ExitCode::from(2);
+                    return Ok(ExitCode::from(2));
                 }
             };
             let dest = match args.output {
@@ -161,12 +174,12 @@ pub fn run(cli: config::Cli) -> ExitCode {
             match flatten(source, &cfg.settings, &cfg.search, dest) {
                 Ok(warnings) => {
                     report(&warnings, cfg.format);
-                    ExitCode::SUCCESS
+                    Ok(ExitCode::SUCCESS)
                 }
                 Err(e) => {
                     let code = exit_for(&e);
                     report(&[*e], cfg.format);
-                    code
+                    Ok(code)
                 }
             }
         }

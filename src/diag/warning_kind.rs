@@ -13,6 +13,8 @@ pub enum WarningKind {
     UnusedSub { name: String },
     /// `#7` read in the main program before anything assigned it.
     ReadBeforeSet { index: i64 },
+    /// `o1 if [1] ... o1 endif` then `o1 do`: one label for two blocks.
+    LabelReused { first_line: u32 },
     /// Lines after `M2` that can never run.
     UnreachableAfterEnd { line: u32 },
     /// A sub file found in two folders of the search path.
@@ -49,6 +51,7 @@ impl WarningKind {
             UnusedSub { .. } => "W0002",
             ReadBeforeSet { .. } => "W0003",
             UnreachableAfterEnd { .. } => "W0004",
+            LabelReused { .. } => "W0007",
             ShadowedSubFile { .. } => "W0005",
             MessageNotStable => "W0006",
             QuirkSkippedCondition { .. } => "W0101",
@@ -72,6 +75,10 @@ impl fmt::Display for WarningKind {
             ReadBeforeSet { index } => write!(
                 f,
                 "parameter #{index} is read before anything sets it (reads 0)"
+            ),
+            LabelReused { first_line } => write!(
+                f,
+                "label already used for another block at line {first_line}; give each block its own label"
             ),
             UnreachableAfterEnd { line } => {
                 write!(f, "code after the program end (line {line}) never runs")

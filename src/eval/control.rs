@@ -203,7 +203,7 @@ impl Interp<'_> {
         kind: OKind,
     ) -> Result<(), Error> {
         let line = file.olines[oidx as usize].line_idx;
-        if let Some(rec) = self.frame().labels.get(key) {
+        if let Some(rec) = self.frame().labels.get(key).cloned() {
             if rec.line != line && matches!(kind, OKind::If | OKind::While | OKind::Repeat) {
                 let first_line = rec.line + 1;
                 let label = self.label_text(file, oidx)?.to_string();
@@ -211,6 +211,11 @@ impl Interp<'_> {
             }
             if rec.line == line && rec.kind == kind {
                 return Ok(());
+            }
+            if rec.line != line {
+                let (a, b) = self.osite(file, oidx);
+                let first_line = rec.line + 1;
+                self.warn(WarningKind::LabelReused { first_line }, file, a, b);
             }
         }
         self.frame().labels.insert(

@@ -315,8 +315,9 @@ impl<'s> Interp<'s> {
     }
 
     fn finish_warnings(&mut self) {
-        // Subs defined in the main file and never called.
         let main = self.main.clone();
+        self.warn_unreachable(&main);
+        // Subs defined in the main file and never called.
         for (i, o) in main.olines.iter().enumerate() {
             if o.kind() == Some(OKind::Sub)
                 && let Some(k) = &o.key
@@ -333,6 +334,58 @@ impl<'s> Interp<'s> {
                     end,
                 );
             }
+        }
+    }
+
+    /// Code after the program end that is not a subroutine definition
+    /// never runs.
+    fn warn_unreachable(&mut self, main: &Rc<FileIndex>) {
+        if !self.s.warnings || !Rc::ptr_eq(&self.cur.file, main) {
+            return;
+        }
+        let Some(data) = main.file.memory() else {
+            return;
+        };
+        let mut inside: Vec<(u32, u32)> = Vec::new();
+        for (&s, d) in &main.defs {
+            let a = main.olines[s as usize].line_idx;
+            let b = d
+                .end
+                .map(|e| main.olines[e as usize].line_idx)
+                .unwrap_or(u32::MAX);
+            inside.push((a, b));
+        }
+        let mut pos = self.cur.pos as usize;
+        let mut idx = self.cur.line;
+        let mut parser = LineParser::default();
+        while pos < data.len() {
+            let (end, next, term) = next_line(data, pos);
+            let raw = &data[pos..end];
+            let in_def = inside.iter().any(|&(a, b)| idx >= a && idx <= b);
+            if !in_def {
+                let dead = match parser.parse(raw, term) {
+                    Ok(l) => match &l.kind {
+                        LineKind::Blank | LineKind::Percent => false,
+                        LineKind::Items(items) => items
+                            .iter()
+                            .any(|i| !matches!(i, crate::parse::ast::Item::Comment(_))),
+                        _ => true,
+                    },
+                    Err(_) => true,
+                };
+                if dead {
+                    let (a, b) = (pos as u32, end as u32);
+                    self.warn(
+                        WarningKind::UnreachableAfterEnd { line: idx + 1 },
+                        main,
+                        a,
+                        b,
+                    );
+                    return;
+                }
+            }
+            pos = next;
+            idx += 1;
         }
     }
 

@@ -38,7 +38,7 @@ fn g_group(g: i32) -> Option<u8> {
         610 | 611 | 640 => 13,
         960 | 970 => 14,
         70 | 80 => 15,
-        700 | 710 | 720 => 1,
+        700 | 710 | 711 | 712 | 720 | 721 | 722 => 1,
         _ => return None,
     })
 }
@@ -160,6 +160,15 @@ fn full_check(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind, Opti
                 };
                 if gseen[grp as usize].is_some() {
                     return bad("two G-codes from the same modal group", Some(i));
+                }
+                if matches!(g, 700 | 710 | 711 | 712 | 720 | 721 | 722) {
+                    // The lathe cycles run a contour subroutine named by Q;
+                    // a flattened program has no subroutines left.
+                    let what = format!(
+                        "G{} (lathe cycle with a contour subroutine) cannot be flattened: the controller would need the subroutine; rewrite the cycle as moves",
+                        crate::emit::number_string(v, None)
+                    );
+                    return Err((ErrorKind::Unsupported { what }, Some(i)));
                 }
                 gseen[grp as usize] = Some(i);
                 gbuf[gn] = (g, i);
