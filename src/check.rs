@@ -35,7 +35,10 @@ pub fn collect(paths: &[PathBuf], exts: &[String]) -> (Vec<PathBuf>, Vec<Diagnos
                             .and_then(|x| x.to_str())
                             .map(str::to_ascii_lowercase);
                         if e.file_type().is_file()
-                            && ext.is_some_and(|x| exts.iter().any(|w| w.eq_ignore_ascii_case(&x)))
+                            && ext.is_some_and(|x| {
+                                exts.iter()
+                                    .any(|w| w.trim_start_matches('.').eq_ignore_ascii_case(&x))
+                            })
                         {
                             files.push(e.into_path());
                         }
@@ -94,7 +97,19 @@ fn sub_file_name(index: &FileIndex) -> Option<String> {
             return None;
         }
     }
-    first.key.as_ref().map(|k| k.to_string())
+    // LinuxCNC's rule: name.ngc holds o<name> sub. A program that merely
+    // starts with a definition is a program.
+    let stem = index
+        .file
+        .path
+        .file_stem()?
+        .to_string_lossy()
+        .to_ascii_lowercase();
+    first
+        .key
+        .as_ref()
+        .filter(|k| k.as_ref() == stem)
+        .map(|k| k.to_string())
 }
 
 /// Checks one program; returns its diagnostics.
@@ -166,6 +181,9 @@ pub fn run(paths: &[PathBuf], exts: &[String], deny_warnings: bool, cfg: &Config
     for (_, mut d) in results {
         all.append(&mut d);
     }
+    // A path given on the command line that cannot be read is a usage
+    // error (exit 2); problems met while walking folders are errors (1).
+    let io_error = paths.iter().any(|p| !p.exists());
     let errors = all.iter().filter(|d| d.level() == Level::Error).count();
     let warnings = all.iter().filter(|d| d.level() == Level::Warning).count();
     crate::report(&all, cfg.format);
@@ -175,7 +193,9 @@ pub fn run(paths: &[PathBuf], exts: &[String], deny_warnings: bool, cfg: &Config
         errors,
         warnings
     );
-    if errors > 0 || (deny_warnings && warnings > 0) {
+    if io_error {
+        ExitCode::from(2)
+    } else if errors > 0 || (deny_warnings && warnings > 0) {
         ExitCode::from(1)
     } else {
         ExitCode::SUCCESS

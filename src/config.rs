@@ -92,6 +92,10 @@ pub struct CommonArgs {
     /// LinuxCNC parameter (.var) file with numbered parameters.
     #[arg(long, value_name = "FILE")]
     pub var_file: Option<PathBuf>,
+    /// LinuxCNC tool table (`T1 P1 Z0.5 D0.125` lines, machine units): tool
+    /// data for #5400-#5413 and for the position after G43.
+    #[arg(long, value_name = "FILE")]
+    pub tool_table: Option<PathBuf>,
     /// Set a parameter before the run: `-D 5063=-1.25` (numbered),
     /// `-D depth=3` (named), `-D _depth=3` (global). Overrides the var file.
     #[arg(short = 'D', long = "define", value_name = "PARAM=VALUE")]
@@ -170,6 +174,9 @@ pub fn parse_define(text: &str) -> Result<Define, ErrorKind> {
         }
         return Ok(Define::Numbered(i, v));
     }
+    if k.starts_with(|c: char| c.is_ascii_digit() || c == '.') {
+        return Err(bad());
+    }
     let name: String = k
         .chars()
         .filter(|c| !c.is_whitespace())
@@ -205,11 +212,11 @@ pub fn read_var_file(path: &Path) -> Result<Vec<Define>, ErrorKind> {
                 text: t.to_string(),
             });
         };
-        if i <= last {
-            return Err(ErrorKind::VarFileOrder { index: i });
-        }
         if !(1..crate::eval::params::MAX_PARAM as i64).contains(&i) {
             return Err(ErrorKind::ParamOutOfRange { index: i });
+        }
+        if i <= last {
+            return Err(ErrorKind::VarFileOrder { index: i });
         }
         last = i;
         out.push(Define::Numbered(i as usize, v));
@@ -218,6 +225,16 @@ pub fn read_var_file(path: &Path) -> Result<Vec<Define>, ErrorKind> {
 }
 
 impl CommonArgs {
+    /// The requested diagnostic format.
+    pub fn format(&self) -> MessageFormat {
+        match self.message_format {
+            FormatArg::Human => MessageFormat::Human,
+            FormatArg::Short => MessageFormat::Short,
+            FormatArg::Json => MessageFormat::Json,
+            FormatArg::Github => MessageFormat::Github,
+        }
+    }
+
     /// Builds the configuration; `env_path` is $NGCFLAT_SUBROUTINE_PATH.
     pub fn to_config(&self, env_path: Option<String>) -> Result<Config, ErrorKind> {
         let mut settings = Settings {
@@ -301,6 +318,17 @@ impl CommonArgs {
         search.dirs = prefixes.into_iter().chain(dirs).collect();
         if let Some(v) = &var_file {
             settings.defines.extend(read_var_file(v)?);
+        }
+        if let Some(t) = &self.tool_table {
+            let text = std::fs::read_to_string(t).map_err(|e| ErrorKind::Io {
+                path: t.clone(),
+                message: e.to_string(),
+            })?;
+            settings.tool_table =
+                crate::eval::tools::parse_tool_table(&text).map_err(|m| ErrorKind::Io {
+                    path: t.clone(),
+                    message: m,
+                })?;
         }
         for d in &self.define {
             settings.defines.push(parse_define(d)?);

@@ -139,27 +139,29 @@ pub fn run(cli: config::Cli) -> ExitCode {
     }
 }
 
+fn setup_error(k: ErrorKind, format: MessageFormat) -> ExitCode {
+    report(&[*Diagnostic::error(k, None)], format);
+    ExitCode::from(2)
+}
+
 /// The CLI edge: configuration problems become `anyhow` errors with context;
 /// program problems are diagnostics.
 fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
-    use anyhow::Context as _;
     let env_path = std::env::var("NGCFLAT_SUBROUTINE_PATH").ok();
     match cli.command {
         Some(config::Command::Check(args)) => {
-            let cfg = args
-                .common
-                .to_config(env_path)
-                .map_err(anyhow::Error::msg)
-                .context("invalid configuration")?;
+            let cfg = match args.common.to_config(env_path) {
+                Ok(c) => c,
+                Err(k) => return Ok(setup_error(k, args.common.format())),
+            };
             Ok(check::run(&args.paths, &args.ext, args.deny_warnings, &cfg))
         }
         None => {
             let args = cli.flatten;
-            let cfg = args
-                .common
-                .to_config(env_path)
-                .map_err(anyhow::Error::msg)
-                .context("invalid configuration")?;
+            let cfg = match args.common.to_config(env_path) {
+                Ok(c) => c,
+                Err(k) => return Ok(setup_error(k, args.common.format())),
+            };
             let source = match read_source(args.file.as_deref()) {
                 Ok(s) => s,
                 Err(e) => {

@@ -341,7 +341,15 @@ impl Interp<'_> {
                 Ok(())
             }
             OKind::Do => {
-                self.record(file, oidx, &key, OKind::Do)?;
+                // The reference records a do label only on first sight.
+                match self.frame().labels.get(&key).cloned() {
+                    Some(rec) if rec.oidx != oidx => {
+                        let (a, b) = self.osite(file, oidx);
+                        let first_line = rec.line + 1;
+                        self.warn(WarningKind::LabelReused { first_line }, file, a, b);
+                    }
+                    _ => self.record(file, oidx, &key, OKind::Do)?,
+                }
                 Ok(())
             }
             OKind::While => {

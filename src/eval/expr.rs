@@ -203,6 +203,11 @@ impl Interp<'_> {
                 span,
             ));
         }
+        if (5400..=5413).contains(&i)
+            && let Some(v) = self.tool_param(i)
+        {
+            return Ok(v);
+        }
         if !self.params.known[i] {
             let (what, why) = match classify(i) {
                 ParamClass::Runtime(w, y) | ParamClass::ReadOnlyRuntime(w, y) => (w, y),
@@ -217,7 +222,7 @@ impl Interp<'_> {
                 span,
             ));
         }
-        if !self.params.set[i] && self.s.warnings && self.level() == 0 && (31..5000).contains(&i) {
+        if !self.params.set[i] && self.s.warnings && self.level() == 0 && (1..5000).contains(&i) {
             let file = self.cur.file.clone();
             let at = self.current_line_start;
             self.warn(

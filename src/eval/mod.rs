@@ -15,6 +15,7 @@ pub mod params;
 mod restore;
 mod settings;
 pub mod state;
+pub mod tools;
 mod validate;
 
 use std::collections::HashSet;
@@ -142,6 +143,13 @@ pub struct Interp<'s> {
     window: Window,
     fast_words: Vec<fast::FastWord>,
     words_buf: Vec<(u8, f64)>,
+    tools: FxMap<i64, tools::ToolData>,
+    tools_known: bool,
+    unknown_tools: HashSet<i64>,
+    /// Applied tool length offset, machine units.
+    tlo: Option<[f64; 9]>,
+    /// An XY rotation was set (not modelled).
+    rotated: bool,
 }
 
 fn file_key(f: &Rc<FileIndex>) -> usize {
@@ -202,7 +210,11 @@ impl<'s> Interp<'s> {
             called: HashSet::new(),
             modal: Modal::default(),
             pos,
-            current_tool: if s.zero_start { Some(0.0) } else { None },
+            current_tool: if s.zero_start || !s.tool_table.is_empty() {
+                Some(0.0)
+            } else {
+                None
+            },
             selected_tool: if s.zero_start { Some(0.0) } else { None },
             executed_if: true,
             ref_stale_break: None,
@@ -218,6 +230,11 @@ impl<'s> Interp<'s> {
             window: Window::default(),
             fast_words: Vec::with_capacity(16),
             words_buf: Vec::with_capacity(16),
+            tools: s.tool_table.iter().copied().collect(),
+            tools_known: s.zero_start,
+            unknown_tools: HashSet::new(),
+            tlo: Some([0.0; 9]),
+            rotated: false,
         }
     }
 
@@ -340,7 +357,7 @@ impl<'s> Interp<'s> {
     /// Code after the program end that is not a subroutine definition
     /// never runs.
     fn warn_unreachable(&mut self, main: &Rc<FileIndex>) {
-        if !self.s.warnings || !Rc::ptr_eq(&self.cur.file, main) {
+        if !self.s.warnings || !Rc::ptr_eq(&self.cur.file, main) || self.frames.len() > 1 {
             return;
         }
         let Some(data) = main.file.memory() else {
@@ -358,10 +375,24 @@ impl<'s> Interp<'s> {
         let mut pos = self.cur.pos as usize;
         let mut idx = self.cur.line;
         let mut parser = LineParser::default();
+        let mut in_fanuc = false;
         while pos < data.len() {
             let (end, next, term) = next_line(data, pos);
             let raw = &data[pos..end];
-            let in_def = inside.iter().any(|&(a, b)| idx >= a && idx <= b);
+            // Fanuc-style O<n> ... M99 subprograms after the end are called
+            // with M98, not unreachable.
+            let o = main.oline_at_or_after(idx);
+            if main
+                .olines
+                .get(o)
+                .is_some_and(|l| l.line_idx == idx && l.kind() == Some(OKind::Bare))
+            {
+                in_fanuc = true;
+            }
+            let in_def = in_fanuc || inside.iter().any(|&(a, b)| idx >= a && idx <= b);
+            if in_fanuc && main.m99_lines.binary_search(&idx).is_ok() {
+                in_fanuc = false;
+            }
             if !in_def {
                 let dead = match parser.parse(raw, term) {
                     Ok(l) => match &l.kind {

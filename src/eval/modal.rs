@@ -2,7 +2,7 @@
 
 use std::rc::Rc;
 
-use crate::diag::Error;
+use crate::diag::{Error, ErrorKind};
 use crate::program::FileIndex;
 
 use super::Interp;
@@ -28,7 +28,7 @@ impl Interp<'_> {
     }
 
     /// Factor from machine units (parameter storage) to program units.
-    fn to_prog(&self, axis: usize) -> f64 {
+    pub(super) fn to_prog(&self, axis: usize) -> f64 {
         if !LINEAR[axis] || self.s.machine_metric == self.modal.metric {
             1.0
         } else if self.s.machine_metric {
@@ -72,6 +72,13 @@ impl Interp<'_> {
         Some(p + self.g5x_offset(self.modal.coord_index, axis)? + self.g92_offset(axis)?)
     }
 
+    /// Absolute machine position including the tool length offset, program
+    /// units (for `#<_abs_x>`...).
+    pub(super) fn abs_position(&self, axis: usize) -> Option<f64> {
+        let tlo = self.tlo?[axis] * self.to_prog(axis);
+        Some(self.machine_pos(axis)? + tlo)
+    }
+
     /// Sets the position from a machine position (program units).
     fn set_from_machine(&mut self, axis: usize, m: Option<f64>, what: &'static str) {
         let line = self.line_no();
@@ -96,6 +103,9 @@ impl Interp<'_> {
         let mut abuf = [(0usize, 0f64); 9];
         let mut an = 0;
         let mut p_word = None;
+        let mut h_word = None;
+        let mut q_word = None;
+        let mut dynamic_tlo = false;
         let mut l_word = None;
         let mut r_word = None;
         for &(l, v) in words {
@@ -110,6 +120,8 @@ impl Interp<'_> {
                 b's' => self.modal.speed = v,
                 b't' => self.selected_tool = Some(v),
                 b'p' => p_word = Some(v),
+                b'h' => h_word = Some(v),
+                b'q' => q_word = Some(v),
                 b'l' => l_word = Some(v),
                 b'r' => r_word = Some(v),
                 b'm' => {
@@ -120,6 +132,7 @@ impl Interp<'_> {
                         40 => self.modal.spindle = 4,
                         50 => self.modal.spindle = 0,
                         60 => self.current_tool = self.selected_tool,
+                        610 => self.current_tool = q_word,
                         70 => self.modal.mist = true,
                         80 => self.modal.flood = true,
                         90 => {
@@ -168,7 +181,13 @@ impl Interp<'_> {
             }
         }
         let mut special = None;
+        let other_motion = gs
+            .iter()
+            .any(|&g| g != 800 && super::validate::is_motion(g));
         for &g in gs {
+            if g == 800 && other_motion {
+                continue;
+            }
             match g {
                 0
                 | 10
@@ -196,17 +215,33 @@ impl Interp<'_> {
                 400 => self.modal.ccomp = 400,
                 410 | 411 => self.modal.ccomp = 410,
                 420 | 421 => self.modal.ccomp = 420,
-                430..=432 => {
+                430 | 432 => {
                     self.modal.tool_offset = true;
-                    self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "a tool length offset (G43)");
+                    let tool = h_word.or(self.current_tool);
+                    let data = tool.and_then(|t| self.tool(t));
+                    let new = match (g, data) {
+                        (430, Some(d)) => Some(d.offsets),
+                        (_, Some(d)) => self
+                            .tlo
+                            .map(|old| std::array::from_fn(|a| old[a] + d.offsets[a])),
+                        _ => None,
+                    };
+                    self.set_tlo(
+                        new,
+                        "a tool length offset (G43) of a tool whose data is unknown",
+                    );
+                }
+                431 => {
+                    self.modal.tool_offset = true;
+                    let mut new = [0.0; 9];
+                    for &(a, v) in axis_words {
+                        new[a] = v / self.to_prog(a);
+                    }
+                    self.set_tlo(Some(new), "G43.1");
+                    dynamic_tlo = true;
                 }
                 490 => {
-                    if self.modal.tool_offset {
-                        self.forget(
-                            &[0, 1, 2, 3, 4, 5, 6, 7, 8],
-                            "cancelling the tool length offset (G49)",
-                        );
-                    }
+                    self.set_tlo(Some([0.0; 9]), "G49");
                     self.modal.tool_offset = false;
                 }
                 610 | 611 | 640 => {
@@ -259,6 +294,19 @@ impl Interp<'_> {
                     self.set_from_machine(a, m, "G92.1/G92.2");
                 }
             }
+            Some(520) => {
+                // G52: a local offset kept in the G92 parameters.
+                let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
+                for &(a, v) in axis_words {
+                    self.set_param_prog(5211 + a, a, Some(v));
+                }
+                self.params.assign(5210, 1.0);
+                for (a, m) in machine.into_iter().enumerate() {
+                    if self.pos.axes[a].is_ok() {
+                        self.set_from_machine(a, m, "G52");
+                    }
+                }
+            }
             Some(923) => {
                 let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
                 self.params.assign(5210, 1.0);
@@ -266,7 +314,10 @@ impl Interp<'_> {
                     self.set_from_machine(a, m, "G92.3");
                 }
             }
-            Some(100) => self.g10(l_word, p_word, r_word, axis_words),
+            Some(100) => match l_word.map(|v| v.round() as i32) {
+                Some(l @ (1 | 10 | 11)) => self.g10_tool(l, p_word, r_word, words, axis_words),
+                _ => self.g10(l_word, p_word, r_word, axis_words),
+            },
             Some(280) | Some(300) => {
                 let base = if special == Some(280) { 5161 } else { 5181 };
                 let axes: Vec<usize> = if axis_words.is_empty() {
@@ -296,7 +347,11 @@ impl Interp<'_> {
             }
             Some(_) => {}
             None => {
-                if !axis_words.is_empty() {
+                if !axis_words.is_empty() && !dynamic_tlo {
+                    if let Err(k) = self.check_motion(words, axis_words) {
+                        let (a, b) = (_start, _start);
+                        return Err(self.error(k, _file, a, b));
+                    }
                     self.move_to(axis_words);
                 }
             }
@@ -341,6 +396,11 @@ impl Interp<'_> {
         let active = cs == self.modal.coord_index;
         match l {
             Some(2) | Some(20) => {
+                if r.is_some_and(|r| r != 0.0) {
+                    // XY rotation is not modelled: positions become unknown.
+                    self.rotated = true;
+                    self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "an XY rotation (G10 R)");
+                }
                 for &(a, v) in axis_words {
                     let m = self.machine_pos(a);
                     let new_off = if l == Some(2) {
@@ -367,16 +427,142 @@ impl Interp<'_> {
         }
     }
 
+    /// G38.x: results only the machine knows. With --zero-start, as the
+    /// standalone interpreter: the probe does not trip, #5061.. hold the
+    /// target, and the position is the target backed off 0.254 mm.
+    fn probe(&mut self, axis_words: &[(usize, f64)]) {
+        if !self.s.zero_start {
+            self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "a probing move");
+            for i in 5061..=5070 {
+                self.params.known[i] = false;
+            }
+            return;
+        }
+        let start: Vec<Option<f64>> = (0..9)
+            .map(|a| self.pos.axes[a].as_ref().ok().copied())
+            .collect();
+        let mut target = start.clone();
+        for &(a, v) in axis_words {
+            target[a] = if self.modal.absolute {
+                Some(v)
+            } else {
+                start[a].map(|s| s + v)
+            };
+        }
+        let backoff = if self.modal.metric { 0.254 } else { 0.01 };
+        let dist: f64 = (0..3)
+            .map(|a| match (start[a], target[a]) {
+                (Some(s), Some(t)) => (t - s) * (t - s),
+                _ => 0.0,
+            })
+            .sum::<f64>()
+            .sqrt();
+        let line = self.line_no();
+        for a in 0..9 {
+            match target[a] {
+                Some(t) => {
+                    self.params.assign(5061 + a, t);
+                    let back = match start[a] {
+                        Some(s) if a < 3 && dist > 0.0 => (t - s) / dist * backoff,
+                        _ => 0.0,
+                    };
+                    self.pos.axes[a] = Ok(t - back);
+                }
+                None => {
+                    self.params.known[5061 + a] = false;
+                    self.pos.axes[a] = Err(Unknown::After("a probing move", line));
+                }
+            }
+        }
+        self.params.assign(5070, 0.0);
+    }
+
+    /// Checks the reference makes with the start position: arc geometry and
+    /// probe distance. Skipped where the position is not known.
+    fn check_motion(&self, words: &Words, axis_words: &[(usize, f64)]) -> Result<(), ErrorKind> {
+        let motion = self.modal.motion;
+        let start = |a: usize| self.pos.axes[a].as_ref().ok().copied();
+        let end = |a: usize| -> Option<f64> {
+            match axis_words.iter().find(|w| w.0 == a) {
+                Some(&(_, v)) if self.modal.absolute => Some(v),
+                Some(&(_, v)) => start(a).map(|s| s + v),
+                None => start(a),
+            }
+        };
+        let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
+        let bad = |m: &str| ErrorKind::Semantic {
+            message: m.to_string(),
+        };
+        match motion {
+            20 | 30 => {
+                let (a0, a1, c0, c1) = match self.modal.plane {
+                    180 | 181 => (2, 0, b'k', b'i'),
+                    190 | 191 => (1, 2, b'j', b'k'),
+                    _ => (0, 1, b'i', b'j'),
+                };
+                let (Some(sx), Some(sy), Some(ex), Some(ey)) =
+                    (start(a0), start(a1), end(a0), end(a1))
+                else {
+                    return Ok(());
+                };
+                if let Some(r) = word(b'r') {
+                    let chord = ((ex - sx).powi(2) + (ey - sy).powi(2)).sqrt();
+                    if chord < 1e-12 {
+                        return Err(bad("current point same as end point of arc"));
+                    }
+                    if 2.0 * r.abs() < chord * (1.0 - 1e-9) - 1e-9 {
+                        return Err(bad("arc radius too small to reach end point"));
+                    }
+                    return Ok(());
+                }
+                let (ci, cj) = (word(c0).unwrap_or(0.0), word(c1).unwrap_or(0.0));
+                let (cx, cy) = if self.modal.ijk_absolute {
+                    (ci, cj)
+                } else {
+                    (sx + ci, sy + cj)
+                };
+                let r1 = ((sx - cx).powi(2) + (sy - cy).powi(2)).sqrt();
+                let r2 = ((ex - cx).powi(2) + (ey - cy).powi(2)).sqrt();
+                let abs_err = (r2 - r1).abs();
+                let abs_tol = if self.modal.metric { 0.0285 } else { 0.00285 };
+                if abs_err > abs_tol && abs_err > 0.0011 * r1.max(r2) {
+                    return Err(bad(&format!(
+                        "radius to end of arc differs from radius to start (r1={r1:.4} r2={r2:.4})"
+                    )));
+                }
+                if r1 < 1e-12 {
+                    return Err(bad("zero-radius arc"));
+                }
+            }
+            382 | 384 => {
+                // Axes without a word do not move, known or not.
+                let d: f64 = axis_words
+                    .iter()
+                    .filter(|w| w.0 < 3)
+                    .filter_map(|w| Some((end(w.0)? - start(w.0)?).powi(2)))
+                    .sum::<f64>()
+                    .sqrt();
+                let known = axis_words
+                    .iter()
+                    .all(|w| start(w.0).is_some() || (self.modal.absolute && w.0 >= 3));
+                if known && d < 1e-7 {
+                    return Err(bad("start point too close to probe point"));
+                }
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
     fn move_to(&mut self, axis_words: &[(usize, f64)]) {
+        if self.rotated {
+            self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "an XY rotation (G10 R)");
+            return;
+        }
         let line = self.line_no();
         let motion = self.modal.motion;
         match motion {
-            382..=385 => {
-                self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "a probing move");
-                for i in 5061..=5070 {
-                    self.params.known[i] = self.s.zero_start;
-                }
-            }
+            382..=385 => self.probe(axis_words),
             730 | 740 | 760 | 810..=890 | 330 | 331 => {
                 // Canned cycles and threading end at positions that depend on
                 // retract rules and machine state.

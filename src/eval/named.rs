@@ -104,13 +104,20 @@ impl Interp<'_> {
                     return Some(self.position(i, span));
                 }
                 if let Some(axis) = name.strip_prefix("_abs_").filter(|a| a.len() == 1)
+                    && let Some(i) = AXES.iter().position(|&c| c == axis.as_bytes()[0])
+                    && let Some(v) = self.abs_position(i)
+                {
+                    return Some(Ok(v));
+                }
+                if let Some(axis) = name.strip_prefix("_abs_").filter(|a| a.len() == 1)
                     && AXES.contains(&axis.as_bytes()[0])
                 {
                     return Some(Err((
                         ErrorKind::RuntimeParam {
                             what: format!("#<{name}> (machine position)"),
                             why: "machine coordinates depend on homing and offsets".into(),
-                            hint: "a program that does not read it".into(),
+                            hint: "--zero-start, or offsets and a position set by the program"
+                                .into(),
                         },
                         span,
                     )));
@@ -266,6 +273,9 @@ impl Interp<'_> {
         span: Span,
     ) -> Result<bool, (ErrorKind, Span)> {
         if name.starts_with("_ini[") || name.starts_with("_hal[") {
+            if self.globals.contains_key(name) {
+                return Ok(true);
+            }
             return Ok(self.predefined(name, span).is_some_and(|r| r.is_ok()));
         }
         if self.is_predefined(name) {
@@ -280,7 +290,10 @@ impl Interp<'_> {
         name: &Rc<str>,
         span: Span,
     ) -> Result<(), (ErrorKind, Span)> {
-        if self.is_predefined(name)
+        // An `_ini[...]` name the INI does not have is an ordinary global.
+        let ini_missing =
+            name.starts_with("_ini[") && self.predefined(name, span).is_none_or(|r| r.is_err());
+        if (self.is_predefined(name) && !ini_missing)
             || (name.as_ref() == "n_args" && self.s.oword_nargs && self.level() > 0)
         {
             return Err((

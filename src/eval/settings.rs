@@ -34,6 +34,8 @@ pub struct Settings {
     /// home parameters are stored in machine units. Without an INI they are
     /// inches, as in LinuxCNC's standalone interpreter.
     pub machine_metric: bool,
+    /// Tools from a LinuxCNC tool table file.
+    pub tool_table: Vec<(i64, super::tools::ToolData)>,
     /// Collect warnings (check mode and stderr notes).
     pub warnings: bool,
 }
@@ -54,6 +56,7 @@ impl Default for Settings {
             warnings: true,
             uvw_axes: false,
             machine_metric: false,
+            tool_table: Vec::new(),
         }
     }
 }

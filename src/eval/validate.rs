@@ -59,6 +59,11 @@ fn m_group(m: i64) -> Option<u8> {
     })
 }
 
+/// Whether a G-code (×10) is a motion code.
+pub fn is_motion(g: i32) -> bool {
+    g_group(g) == Some(1)
+}
+
 /// Groups of G-codes that take axis words.
 fn g_uses_axes(g: i32) -> bool {
     matches!(g, 100 | 280 | 300 | 520 | 920)
@@ -158,8 +163,21 @@ fn full_check(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind, Opti
                         Some(i),
                     );
                 };
-                if gseen[grp as usize].is_some() {
+                // G80 may share a line with another motion code (which wins).
+                let g80_pair = grp == 1 && gseen[1].is_some_and(|j| g == 800 || words[j].1 == 80.0);
+                if gseen[grp as usize].is_some() && !g80_pair {
                     return bad("two G-codes from the same modal group", Some(i));
+                }
+                if g80_pair && g == 800 {
+                    continue;
+                }
+                if g80_pair {
+                    // Replace the G80 recorded before.
+                    if let Some(k) = gbuf[..gn].iter().position(|x| x.0 == 800) {
+                        gbuf[k] = (g, i);
+                        gseen[1] = Some(i);
+                        continue;
+                    }
                 }
                 if matches!(g, 700 | 710 | 711 | 712 | 720 | 721 | 722) {
                     // The lathe cycles run a contour subroutine named by Q;
@@ -209,6 +227,69 @@ fn full_check(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind, Opti
     let m_on = |codes: &[i64]| ms.iter().any(|(m, _)| codes.contains(m));
     let axis_word = b"xyzabcuvw".iter().find_map(|&c| has_at(c));
     let motion_here = gs.iter().find(|(g, _)| g_group(*g) == Some(1)).map(|x| x.0);
+    // NURBS control points (G5.2 ... G5.3).
+    let nurbs = motion_here.unwrap_or(modal.motion) == 52;
+    if nurbs && axis_word.is_some() {
+        if has_at(b'x').is_none() || has_at(b'y').is_none() {
+            return bad(
+                "both X and Y are needed for a NURBS control point",
+                axis_word,
+            );
+        }
+        if !words.iter().any(|w| w.0 == b'p' && w.1 > 0.0) {
+            return bad(
+                "a positive weight P is needed for every NURBS control point",
+                axis_word,
+            );
+        }
+    }
+    if nurbs
+        && motion_here.is_none()
+        && axis_word.is_none()
+        && let Some(i) = has_at(b'p')
+    {
+        return bad("P word with no G-code or M-code to use it", Some(i));
+    }
+    // Motion codes that need axis words, and their required words.
+    if let Some(m) = motion_here {
+        let needs_axes = matches!(m, 382..=385 | 730 | 760 | 810..=890);
+        if needs_axes && axis_word.is_none() && !matches!(m, 760) {
+            return bad("all axes missing with motion code", None);
+        }
+        if matches!(m, 820 | 860 | 880 | 890) && has_at(b'p').is_none() {
+            return bad("dwell time P word missing with G82/G86/G88/G89", None);
+        }
+        if matches!(m, 730 | 830) && has_at(b'q').is_none() {
+            return bad("Q word missing with G73/G83", None);
+        }
+        if m == 760 && has_at(b'p').is_none() {
+            return bad("P word missing with G76", None);
+        }
+        if matches!(m, 730 | 810..=890) {
+            let (depth, name) = match modal.plane {
+                180 | 181 => (b'y', "Y"),
+                190 | 191 => (b'x', "X"),
+                _ => (b'z', "Z"),
+            };
+            if has_at(depth).is_none() {
+                return bad(&format!("{name} value unspecified in canned cycle"), None);
+            }
+            if let Some(i) = [b'a', b'b', b'c'].iter().find_map(|&c| has_at(c)) {
+                return bad("cannot put a rotary axis word in a canned cycle", Some(i));
+            }
+        }
+        if matches!(m, 20 | 30)
+            && ![b'i', b'j', b'k', b'r']
+                .iter()
+                .any(|&c| has_at(c).is_some())
+        {
+            return bad("R, I, J and K words all missing for arc", None);
+        }
+        if matches!(m, 330 | 331) && modal.spindle == 0 && !ms.iter().any(|x| matches!(x.0, 3 | 4))
+        {
+            return bad("spindle not turning in G33", None);
+        }
+    }
     let axis_g0 = gs.iter().find(|(g, _)| g_uses_axes(*g)).map(|x| x.0);
     if let (Some(_), Some(_), Some(i)) = (motion_here, axis_g0, axis_word)
         && motion_here != Some(800)
@@ -277,14 +358,14 @@ fn full_check(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind, Opti
     let canned = matches!(motion, 730 | 740 | 760 | 810..=890);
     uses(
         b'r',
-        matches!(motion, 20 | 30) || canned || g_on(&[100]) || axis_g0 == Some(100),
+        matches!(motion, 20 | 30) || canned || g_on(&[100]) || axis_g0 == Some(100) || m_on(&[19]),
         "R word with no G-code that uses it",
     )?;
     uses(
         b'p',
         g_on(&[20, 30, 40, 100, 640, 50, 52, 760, 820, 860, 880, 890])
-            || matches!(motion, 20 | 30 | 820 | 860 | 880 | 890)
-            || m_on(&[50, 51, 52, 53, 62, 63, 64, 65, 66, 98]),
+            || matches!(motion, 20 | 30 | 52 | 820 | 860 | 880 | 890)
+            || m_on(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98]),
         "P word with no G-code or M-code to use it",
     )?;
     uses(
@@ -319,6 +400,15 @@ fn full_check(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind, Opti
         m_on(&[3, 4, 5, 19, 51]) || g_on(&[330, 331, 760, 950, 960, 970]),
         "$ word with no spindle code to use it",
     )?;
+    // Whole numbers.
+    for (i, &(l, v)) in words.iter().enumerate() {
+        if matches!(l, b't' | b'h') && crate::parse::integer_value(v).is_err() {
+            return Err((ErrorKind::NonInteger { value: v }, Some(i)));
+        }
+        if l == b'd' && g_on(&[410, 420]) && v.fract() != 0.0 {
+            return bad("G41/G42 need a whole-number D word", Some(i));
+        }
+    }
     // Codes that need words.
     if g_on(&[40]) && has_at(b'p').is_none() {
         return bad(

@@ -1,7 +1,9 @@
 //! The one integration-test crate: fixture snapshots, the differential suite
 //! against rs274, CLI behaviour, property tests and generated programs.
 
+mod check;
 mod cli;
+mod config;
 mod fixtures;
 mod generated;
 mod oracle;

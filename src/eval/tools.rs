@@ -1,0 +1,183 @@
+//! The tool table as far as the program can know it: loaded from a
+//! LinuxCNC tool table file, assumed all zero with --zero-start, and written
+//! by the program itself (G10 L1/L10/L11). Tool data is kept in machine
+//! units, as LinuxCNC stores it.
+
+use super::Interp;
+use super::state::Unknown;
+
+/// One tool: offsets X..W, diameter, front and back angle, orientation.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ToolData {
+    pub offsets: [f64; 9],
+    pub diameter: f64,
+    pub front: f64,
+    pub back: f64,
+    pub orientation: f64,
+}
+
+/// Reads a LinuxCNC tool table (`T1 P1 Z0.5 D0.125 ;comment` per line).
+pub fn parse_tool_table(text: &str) -> Result<Vec<(i64, ToolData)>, String> {
+    let mut out = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let line = line.split(';').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let mut tool = None;
+        let mut data = ToolData::default();
+        for word in line.split_whitespace() {
+            let (letter, value) = word.split_at(1);
+            let letter = letter.to_ascii_lowercase();
+            let v: f64 = value.parse().map_err(|_| {
+                format!(
+                    "tool table line {}: '{word}' is not a letter and a number",
+                    n + 1
+                )
+            })?;
+            match letter.as_str() {
+                "t" => tool = Some(v as i64),
+                "p" => {}
+                "d" => data.diameter = v,
+                "i" => data.front = v,
+                "j" => data.back = v,
+                "q" => data.orientation = v,
+                l => match super::state::AXES
+                    .iter()
+                    .position(|&c| c as char == l.chars().next().unwrap_or(' '))
+                {
+                    Some(a) => data.offsets[a] = v,
+                    None => {
+                        return Err(format!("tool table line {}: unknown word '{word}'", n + 1));
+                    }
+                },
+            }
+        }
+        let t = tool.ok_or_else(|| format!("tool table line {}: no T word", n + 1))?;
+        out.push((t, data));
+    }
+    Ok(out)
+}
+
+impl Interp<'_> {
+    /// Data of a tool, if the program can know it.
+    pub(super) fn tool(&self, t: f64) -> Option<ToolData> {
+        let t = t.round() as i64;
+        if self.unknown_tools.contains(&t) {
+            return None;
+        }
+        match self.tools.get(&t) {
+            Some(d) => Some(*d),
+            None if self.tools_known => Some(ToolData::default()),
+            None => None,
+        }
+    }
+
+    /// A tool-data parameter #5400..#5413.
+    pub(super) fn tool_param(&self, i: usize) -> Option<f64> {
+        let current = self.current_tool?;
+        if i == 5400 {
+            return Some(current);
+        }
+        let d = self.tool(current)?;
+        Some(match i {
+            5401..=5409 => d.offsets[i - 5401],
+            5410 => d.diameter,
+            5411 => d.front,
+            5412 => d.back,
+            _ => d.orientation,
+        })
+    }
+
+    /// Applies a new tool length offset (machine units), moving the
+    /// program position the other way.
+    pub(super) fn set_tlo(&mut self, new: Option<[f64; 9]>, what: &'static str) {
+        let line = self.current_line_idx + 1;
+        for a in 0..9 {
+            let f = self.to_prog(a);
+            let ok = match (&self.pos.axes[a], self.tlo, new) {
+                (Ok(p), Some(old), Some(n)) => Some(p + (old[a] - n[a]) * f),
+                _ => None,
+            };
+            self.pos.axes[a] = ok.ok_or(Unknown::After(what, line));
+        }
+        self.tlo = new;
+    }
+
+    /// G10 L1/L10/L11: the program writes the tool table.
+    pub(super) fn g10_tool(
+        &mut self,
+        l: i32,
+        p: Option<f64>,
+        r: Option<f64>,
+        words: &[(u8, f64)],
+        axis_words: &[(usize, f64)],
+    ) {
+        let Some(t) = p.map(|v| v.round() as i64) else {
+            return;
+        };
+        let mut d = self.tool(t as f64);
+        for &(a, v) in axis_words {
+            let f = self.to_prog(a);
+            let value = match l {
+                1 => Some(v),
+                10 => self.pos.axes[a]
+                    .as_ref()
+                    .ok()
+                    .zip(self.tlo)
+                    .map(|(pos, tlo)| pos + tlo[a] * f - v),
+                _ => {
+                    // L11: relative to G59.3 instead of the current system.
+                    let cur = self.modal.coord_index;
+                    let g5x = |cs: i32, this: &Self| {
+                        this.params.known[5221 + 20 * (cs as usize - 1) + a]
+                            .then(|| this.params.values[5221 + 20 * (cs as usize - 1) + a] * f)
+                    };
+                    let g92 = if self.params.values[5210] == 0.0 {
+                        Some(0.0)
+                    } else {
+                        self.params.known[5211 + a].then(|| self.params.values[5211 + a] * f)
+                    };
+                    match (
+                        self.pos.axes[a].as_ref().ok(),
+                        self.tlo,
+                        g5x(cur, self),
+                        g5x(9, self),
+                        g92,
+                    ) {
+                        (Some(pos), Some(tlo), Some(oc), Some(o9), Some(g)) => {
+                            Some(pos + tlo[a] * f + oc + g - o9 - v)
+                        }
+                        _ => None,
+                    }
+                }
+            };
+            match (value, d.as_mut()) {
+                (Some(v), Some(data)) => data.offsets[a] = v / f,
+                _ => d = None,
+            }
+        }
+        for &(l, v) in words {
+            if let Some(data) = d.as_mut() {
+                match l {
+                    b'i' => data.front = v,
+                    b'j' => data.back = v,
+                    b'q' => data.orientation = v,
+                    _ => {}
+                }
+            }
+        }
+        if let (Some(r), Some(data)) = (r, d.as_mut()) {
+            data.diameter = 2.0 * r / self.to_prog(0);
+        }
+        match d {
+            Some(data) => {
+                self.tools.insert(t, data);
+            }
+            None => {
+                self.tools.remove(&t);
+                self.unknown_tools.insert(t);
+            }
+        }
+    }
+}
