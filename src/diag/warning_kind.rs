@@ -35,12 +35,11 @@ pub enum WarningKind {
     QuirkRepeatCount,
     /// Recursion from inside a `repeat`: the reference shares the counter.
     QuirkRepeatRecursion,
+    /// `o1 continue` then `o1 break` in the same loop body: the reference
+    /// acts on the skipped break.
+    QuirkSkippedBreak,
     /// `M98 P.. L0`: the reference leaks a call frame.
     QuirkL0,
-    /// A sub definition reached inside another called sub (2.9 runs on).
-    QuirkNestedSubInCall,
-    /// `o1 endsub [5]` evaluated while the definition is skipped.
-    QuirkDefinitionValue,
 }
 
 impl WarningKind {
@@ -60,8 +59,7 @@ impl WarningKind {
             QuirkRepeatCount => "W0104",
             QuirkRepeatRecursion => "W0105",
             QuirkL0 => "W0106",
-            QuirkNestedSubInCall => "W0107",
-            QuirkDefinitionValue => "W0108",
+            QuirkSkippedBreak => "W0109",
         }
     }
 }
@@ -111,20 +109,19 @@ impl fmt::Display for WarningKind {
             ),
             QuirkRepeatCount => write!(
                 f,
-                "return from inside a repeat: LinuxCNC keeps the remaining count for the next call; ngcflat starts fresh"
+                "a repeat left early (return, break, continue) keeps its remaining count in LinuxCNC; ngcflat starts it afresh"
             ),
             QuirkRepeatRecursion => write!(
                 f,
                 "recursive call inside a repeat: LinuxCNC shares one counter across the calls; ngcflat counts each call"
             ),
+            QuirkSkippedBreak => write!(
+                f,
+                "LinuxCNC acts on this break although a continue skips over it, leaving the loop; ngcflat continues the loop"
+            ),
             QuirkL0 => write!(
                 f,
                 "M98 with L0: LinuxCNC leaves a call frame behind; ngcflat does not"
-            ),
-            QuirkNestedSubInCall => write!(f, "sub definition inside a called subroutine"),
-            QuirkDefinitionValue => write!(
-                f,
-                "LinuxCNC sets #<_value> from this endsub/return while skipping the definition"
             ),
         }
     }

@@ -28,7 +28,21 @@ impl Interp<'_> {
 
     fn osite(&self, file: &Rc<FileIndex>, oidx: u32) -> (u32, u32) {
         let o = &file.olines[oidx as usize];
-        (o.start, o.start + o.line_len())
+        let end = o.start + o.line_len();
+        // Point at the O-word, not at the indentation before it.
+        let lead = file.file.memory().map_or(0, |d| {
+            d[o.start as usize..end as usize]
+                .iter()
+                .take_while(|b| matches!(b, b' ' | b'\t'))
+                .count() as u32
+        });
+        let mut e = end;
+        if let Some(d) = file.file.memory() {
+            while e > o.start + lead && matches!(d[e as usize - 1], b' ' | b'\t' | b'\r') {
+                e -= 1;
+            }
+        }
+        (o.start + lead, e)
     }
 
     fn oerr(&self, kind: ErrorKind, file: &Rc<FileIndex>, oidx: u32) -> Error {
@@ -181,8 +195,13 @@ impl Interp<'_> {
         key: &Rc<str>,
     ) -> Result<u32, Error> {
         let mut at = from;
+        let from_continue = file.kind_of(from) == Some(OKind::Continue);
         loop {
             let t = self.seek(file, at, key, Seek::Control, &[])?;
+            if from_continue && file.kind_of(t) == Some(OKind::Break) {
+                let (a, b) = self.osite(file, t);
+                self.warn(WarningKind::QuirkSkippedBreak, file, a, b);
+            }
             if matches!(file.kind_of(t), Some(OKind::Break | OKind::Continue)) {
                 at = t;
                 continue;
@@ -395,6 +414,15 @@ impl Interp<'_> {
                     .map(|r| r.repeat)
                     .unwrap_or(-1);
                 let mut count = count;
+                // Reached from its endrepeat, the loop goes on; reached any
+                // other way it starts afresh (the reference would continue a
+                // count left over by a jump out of the loop).
+                let again = self.repeat_again.take() == Some(oidx);
+                if !again && count != -1 {
+                    let (a, b) = self.osite(file, oidx);
+                    self.warn(WarningKind::QuirkRepeatCount, file, a, b);
+                    count = -1;
+                }
                 if count == -1 {
                     let n = self.o_eval(file, oidx, o.expr.as_ref().expect("count"))?;
                     count = round_half_even_int(n);
@@ -415,6 +443,7 @@ impl Interp<'_> {
             OKind::EndRepeat => {
                 let rec = self.expect(file, oidx, &key, &[OKind::Repeat], "repeat")?;
                 self.note_loop(file, rec.oidx, &key);
+                self.repeat_again = Some(rec.oidx);
                 self.goto(file, rec.oidx, false);
                 Ok(())
             }
@@ -644,6 +673,8 @@ impl Interp<'_> {
         // definition while skipping it, setting #<_value>.
         self.defining = true;
         for &j in &def.valued {
+            self.current_line_idx = file.olines[j as usize].line_idx;
+            self.current_line_start = file.olines[j as usize].start;
             match self.oline(file, j).expr.clone() {
                 Some(e) => match self.o_eval(file, j, &e) {
                     Ok(v) => {

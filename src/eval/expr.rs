@@ -68,7 +68,14 @@ pub fn binary(op: BinOp, a: f64, c: f64, span: Span) -> EvalResult {
 /// One-argument function.
 pub fn unary(f: Func, x: f64, span: Span) -> EvalResult {
     Ok(match f {
-        Func::Abs => x.abs(),
+        // As the reference computes it: -0 stays -0 (ATAN cares).
+        Func::Abs => {
+            if x < 0.0 {
+                -x
+            } else {
+                x
+            }
+        }
         Func::Acos => {
             if !(-1.0..=1.0).contains(&x) {
                 return Err((ErrorKind::AcosRange, span));

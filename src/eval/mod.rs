@@ -150,6 +150,8 @@ pub struct Interp<'s> {
     tlo: Option<[f64; 9]>,
     /// An XY rotation was set (not modelled).
     rotated: bool,
+    /// The repeat line (O-line index) an endrepeat just jumped back to.
+    repeat_again: Option<u32>,
 }
 
 fn file_key(f: &Rc<FileIndex>) -> usize {
@@ -235,6 +237,7 @@ impl<'s> Interp<'s> {
             unknown_tools: HashSet::new(),
             tlo: Some([0.0; 9]),
             rotated: false,
+            repeat_again: None,
         }
     }
 

@@ -1405,14 +1405,24 @@ impl Gen {
     }
 
     fn jump(&mut self, c: &mut Ctx) -> Stmt {
-        let targets: Vec<usize> = (0..c.loops.len())
+        // A jump out of a repeat leaves rs274's per-label counter stale (a
+        // documented deviation), so targets are loops inside the innermost
+        // repeat only.
+        let floor = c
+            .loops
+            .iter()
+            .rposition(|l| l.kind == LoopKind::Repeat)
+            .map_or(0, |r| r + 1);
+        let targets: Vec<usize> = (floor..c.loops.len())
             .filter(|&i| c.loops[i].kind != LoopKind::Repeat)
             .collect();
         if targets.is_empty() {
             return self.line(c);
         }
         let t = *self.rng.pick(&targets);
-        let brk = self.rng.chance(0.5);
+        // rs274 acts on a break that a continue skips over (a documented
+        // deviation), so no break follows a continue to the same loop.
+        let brk = self.rng.chance(0.5) && !c.loops[t].has_cont;
         if brk {
             c.loops[t].has_break = true;
         } else {
