@@ -418,7 +418,7 @@ impl fmt::Display for ErrorKind {
             StepLimit { limit, label, line } => {
                 write!(
                     f,
-                    "more than {limit} lines executed; runaway loop or recursion?"
+                    "more than {limit} O-word lines executed; runaway loop or recursion?"
                 )?;
                 limit_site(f, label, line)?;
                 write!(f, " (raise with --max-steps)")

@@ -24,6 +24,28 @@ enum Repl {
 /// Evaluated words of the line: (letter, value).
 pub type Words = Vec<(u8, f64)>;
 
+/// Per-line buffers kept between lines.
+#[derive(Default)]
+pub struct Scratch {
+    words: Words,
+    repl: Vec<(Span, Repl)>,
+    num_set: Vec<(usize, f64)>,
+    named_set: Vec<(Rc<str>, f64)>,
+    context_ops: Vec<(u8, Span)>,
+    word_spans: Vec<Span>,
+}
+
+impl Scratch {
+    fn clear(&mut self) {
+        self.words.clear();
+        self.repl.clear();
+        self.num_set.clear();
+        self.named_set.clear();
+        self.context_ops.clear();
+        self.word_spans.clear();
+    }
+}
+
 impl Interp<'_> {
     pub(super) fn exec_items(
         &mut self,
@@ -33,16 +55,35 @@ impl Interp<'_> {
         line: &Line,
         items: &[Item],
     ) -> Result<(), crate::diag::Error> {
+        // Scratch buffers are reused from line to line.
+        let mut scratch = std::mem::take(&mut self.scratch);
+        let r = self.exec_items_with(file, start, raw, line, items, &mut scratch);
+        self.scratch = scratch;
+        r
+    }
+
+    fn exec_items_with(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        raw: &[u8],
+        line: &Line,
+        items: &[Item],
+        scratch: &mut Scratch,
+    ) -> Result<(), crate::diag::Error> {
         let _ = line;
-        let mut words: Words = Vec::with_capacity(8);
-        let mut repl: Vec<(Span, Repl)> = Vec::new();
-        let mut num_set: Vec<(usize, f64)> = Vec::new();
-        let mut named_set: Vec<(Rc<str>, f64)> = Vec::new();
+        scratch.clear();
+        let Scratch {
+            words,
+            repl,
+            num_set,
+            named_set,
+            context_ops,
+            word_spans,
+        } = scratch;
         let mut active = None;
         let mut seen = 0u32;
         let mut m_count = 0;
-        let mut context_ops: Vec<(u8, Span)> = Vec::new();
-        let mut word_spans: Vec<Span> = Vec::with_capacity(8);
         // 1. Read the line: every value sees the parameters as they were.
         for item in items {
             match item {
@@ -138,11 +179,11 @@ impl Interp<'_> {
             return Err(self.error_in_line(k, file, start, span));
         }
         // 2. Assignments: numbered in order, then named in order.
-        for (i, v) in num_set {
+        for &(i, v) in num_set.iter() {
             self.params.assign(i, v);
         }
-        for (n, v) in named_set {
-            self.set_named(&n, v);
+        for (n, v) in named_set.iter() {
+            self.set_named(n, *v);
         }
         // 3. The active comment, after the assignments.
         if let Some(c) = active {
@@ -224,7 +265,7 @@ impl Interp<'_> {
         }
         // 6. State.
         let ends = self.apply_words(file, start, &words, m99)?;
-        for (op, span) in context_ops {
+        for &(op, span) in context_ops.iter() {
             self.context_op(op, file, start, span)?;
         }
         if ends {

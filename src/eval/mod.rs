@@ -152,6 +152,7 @@ pub struct Interp<'s> {
     rotated: bool,
     /// The repeat line (O-line index) an endrepeat just jumped back to.
     repeat_again: Option<u32>,
+    scratch: block::Scratch,
 }
 
 fn file_key(f: &Rc<FileIndex>) -> usize {
@@ -238,6 +239,7 @@ impl<'s> Interp<'s> {
             tlo: Some([0.0; 9]),
             rotated: false,
             repeat_again: None,
+            scratch: block::Scratch::default(),
         }
     }
 
@@ -451,7 +453,6 @@ impl<'s> Interp<'s> {
 
     /// Reads and runs one line.
     fn step(&mut self) -> Result<(), Error> {
-        self.count_step()?;
         let file = self.cur.file.clone();
         let start = self.cur.pos;
         if start as u64 >= file.file.len() {
@@ -463,6 +464,9 @@ impl<'s> Interp<'s> {
         if let Some(o) = file.olines.get(self.cur.next_o)
             && o.line_idx == line_idx
         {
+            // Loops and calls all pass through O-lines: counting them bounds
+            // any runaway, while straight code runs uncounted.
+            self.count_step()?;
             let oidx = self.cur.next_o as u32;
             self.cur.next_o += 1;
             self.cur.pos = o.next;

@@ -477,7 +477,8 @@ const CASES: &[(&str, Input, u64, Want)] = &[
     ("2 000-deep nested ifs", || [repeat_lines(2_000, |i| format!("o{i} if [1]\n")), repeat_lines(2_000, |i| format!("o{} endif\n", 1_999 - i)), b"M2\n".to_vec()].concat(), 10_000_000, Want::Ok),
     ("2 000-deep nested repeats", || [repeat_lines(2_000, |i| format!("o{i} repeat [1]\n")), repeat_lines(2_000, |i| format!("o{} endrepeat\n", 1_999 - i)), b"M2\n".to_vec()].concat(), 10_000_000, Want::Ok),
     ("2 000 named parameters", || [repeat_lines(2_000, |i| format!("#<p{i}> = {i}\n")), b"M2\n".to_vec()].concat(), 10_000_000, Want::Ok),
-    ("20 000 lines hit a 10 000 step limit", || repeat_lines(20_000, |i| format!("#<p{i}> = {i}\n")), 10_000, Want::Code("E0402")),
+    // Straight code is not counted by the step limit (only O-lines are).
+    ("20 000 straight lines pass a 10 000 step limit", || repeat_lines(20_000, |i| format!("#<p{i}> = {i}\n")), 10_000, Want::Code("E0318")),
     ("repeat [1e9] (an E word, not an exponent)", || b"o1 repeat [1e9]\nG1 X1\no1 endrepeat\nM2\n".to_vec(), 10_000, Want::Err),
     ("repeat a billion times", || b"o1 repeat [1000000000]\no1 endrepeat\nM2\n".to_vec(), 10_000, Want::Code("E0402")),
     ("repeat a billion times, with output", || b"o1 repeat [1000000000]\nG1 X1 F100\no1 endrepeat\nM2\n".to_vec(), 10_000_000, Want::Code("E0403")),
