@@ -171,7 +171,7 @@ impl Interp<'_> {
         }
         // The reference checks the block before acting on it.
         if !words.is_empty()
-            && let Err((k, at)) = super::validate::check_block(&words, &self.modal)
+            && let Err((k, at)) = super::validate::check_block(words, &self.modal)
         {
             let span = at
                 .and_then(|i| word_spans.get(i).copied())
@@ -261,10 +261,10 @@ impl Interp<'_> {
             })
             .count();
         if kept > 0 {
-            self.write_line(file, start, raw, &repl)?;
+            self.write_line(file, start, raw, repl)?;
         }
         // 6. State.
-        let ends = self.apply_words(file, start, &words, m99)?;
+        let ends = self.apply_words(file, start, words, m99)?;
         for &(op, span) in context_ops.iter() {
             self.context_op(op, file, start, span)?;
         }
