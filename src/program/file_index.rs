@@ -359,13 +359,13 @@ fn quick_is_candidate(raw: &[u8]) -> bool {
     }
     if rest.len() >= 3 && rest[0].eq_ignore_ascii_case(&b'm') {
         // m98 / m 9 8 with blanks.
-        let compact: Vec<u8> = rest
-            .iter()
-            .filter(|b| !matches!(b, b' ' | b'\t'))
-            .take(3)
-            .copied()
-            .collect();
-        if compact.eq_ignore_ascii_case(b"m98") {
+        let mut compact = [0u8; 3];
+        let mut n = 0;
+        for &b in rest.iter().filter(|b| !matches!(b, b' ' | b'\t')).take(3) {
+            compact[n] = b;
+            n += 1;
+        }
+        if compact[..n].eq_ignore_ascii_case(b"m98") {
             return true;
         }
     }
@@ -373,13 +373,18 @@ fn quick_is_candidate(raw: &[u8]) -> bool {
 }
 
 fn starts_with_m99(raw: &[u8]) -> bool {
-    let compact: Vec<u8> = raw
-        .iter()
-        .filter(|b| !matches!(b, b' ' | b'\t'))
-        .take(12)
-        .map(|b| b.to_ascii_lowercase())
-        .collect();
-    let mut t: &[u8] = &compact;
+    // Cheap reject: the first non-blank byte must be '/', 'n' or 'm'.
+    match raw.iter().find(|b| !matches!(b, b' ' | b'\t')) {
+        Some(b'/' | b'n' | b'N' | b'm' | b'M') => {}
+        _ => return false,
+    }
+    let mut buf = [0u8; 12];
+    let mut n = 0;
+    for &b in raw.iter().filter(|b| !matches!(b, b' ' | b'\t')).take(12) {
+        buf[n] = b.to_ascii_lowercase();
+        n += 1;
+    }
+    let mut t: &[u8] = &buf[..n];
     if let [b'/', rest @ ..] = t {
         t = rest;
     }
