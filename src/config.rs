@@ -108,7 +108,7 @@ pub struct CommonArgs {
     pub strip_comments: bool,
     /// Stop after this many executed O-word lines (runaway loops and
     /// recursion; straight code is not counted).
-    #[arg(long, value_name = "N", default_value_t = 20_000_000)]
+    #[arg(long, value_name = "N", default_value_t = 100_000_000)]
     pub max_steps: u64,
     /// Stop when the output grows beyond this many lines.
     #[arg(long, value_name = "N", default_value_t = 50_000_000)]

@@ -45,7 +45,7 @@ impl Default for Settings {
         Settings {
             precision: None,
             strip_comments: false,
-            max_steps: 20_000_000,
+            max_steps: 100_000_000,
             max_output_lines: 50_000_000,
             zero_start: false,
             start_position: Vec::new(),
