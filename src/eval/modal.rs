@@ -189,21 +189,8 @@ impl Interp<'_> {
                 continue;
             }
             match g {
-                0
-                | 10
-                | 20
-                | 30
-                | 50
-                | 51
-                | 52
-                | 330
-                | 331
-                | 382..=385
-                | 730
-                | 740
-                | 760
-                | 810..=890 => self.modal.motion = g,
-                800 => self.modal.motion = 800,
+                // G5.3 ends a NURBS block without choosing a motion.
+                g if g != 53 && super::validate::is_motion(g) => self.modal.motion = g,
                 170 | 180 | 190 | 171 | 181 | 191 => self.modal.plane = g,
                 200 => self.set_units(false),
                 210 => self.set_units(true),
