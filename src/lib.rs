@@ -99,7 +99,9 @@ pub fn flatten_str(text: &str, settings: &Settings) -> Result<String, Error> {
         &SearchPath::default(),
         Destination::File(out.clone()),
     );
-    let r = r.map(|_| std::fs::read_to_string(&out).unwrap_or_default());
+    // Comments may carry bytes that are not UTF-8: keep them visible.
+    let r =
+        r.map(|_| String::from_utf8_lossy(&std::fs::read(&out).unwrap_or_default()).into_owned());
     let _ = std::fs::remove_file(&out);
     r
 }
