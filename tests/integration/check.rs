@@ -3,31 +3,8 @@
 //! errors in file subroutines, and one fixture per warning kind.
 
 use std::collections::BTreeMap;
-use std::path::Path;
 
-use crate::{ngcflat, root};
-
-fn tmp() -> tempfile::TempDir {
-    tempfile::tempdir().expect("tempdir")
-}
-
-/// Writes `text` to `dir/rel`, creating folders.
-fn put(dir: &Path, rel: &str, text: &str) {
-    let p = dir.join(rel);
-    std::fs::create_dir_all(p.parent().expect("parent")).expect("mkdir");
-    std::fs::write(p, text).expect("write");
-}
-
-/// Runs ngcflat in `dir`; returns (exit code, stdout, stderr).
-fn run(dir: &Path, args: &[&str]) -> (i32, String, String) {
-    let args: Vec<String> = args.iter().map(|s| s.to_string()).collect();
-    let out = ngcflat(dir, &args, None);
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use crate::{put, root, run, tmp};
 
 /// The last line of stderr: the summary `N files, E errors, W warnings`.
 fn summary(stderr: &str) -> &str {

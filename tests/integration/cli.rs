@@ -2,11 +2,7 @@
 
 use std::process::{Command, Stdio};
 
-use crate::{bin, ngcflat};
-
-fn tmp() -> tempfile::TempDir {
-    tempfile::tempdir().expect("tempdir")
-}
+use crate::{bin, ngcflat, tmp};
 
 #[test]
 fn exit_codes() {

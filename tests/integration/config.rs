@@ -4,18 +4,7 @@
 use std::path::Path;
 use std::process::{Command, Stdio};
 
-use crate::{bin, ngcflat};
-
-fn tmp() -> tempfile::TempDir {
-    tempfile::tempdir().expect("tempdir")
-}
-
-/// Writes `text` to `dir/rel`, creating folders.
-fn put(dir: &Path, rel: &str, text: &str) {
-    let p = dir.join(rel);
-    std::fs::create_dir_all(p.parent().expect("parent")).expect("mkdir");
-    std::fs::write(p, text).expect("write");
-}
+use crate::{bin, ngcflat, outcome, put, run, tmp};
 
 /// A subroutine file `folder/name.ngc` that prints where it was found.
 fn sub(dir: &Path, folder: &str, name: &str) {
@@ -24,16 +13,6 @@ fn sub(dir: &Path, folder: &str, name: &str) {
         &format!("{folder}/{name}.ngc"),
         &format!("o<{name}> sub\n  (print, {name} from {folder})\no<{name}> endsub\n"),
     );
-}
-
-fn run(dir: &Path, args: &[&str]) -> (i32, String, String) {
-    let args: Vec<String> = args.iter().map(|s| s.to_string()).collect();
-    let out = ngcflat(dir, &args, None);
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
 }
 
 /// Like `run`, with extra environment variables.
@@ -46,11 +25,7 @@ fn run_env(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> (i32, String, Str
         .stdin(Stdio::null())
         .output()
         .expect("run ngcflat");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    outcome(out)
 }
 
 const MISSING: &str = "subroutine o<nosuch> is not defined and no file nosuch.ngc was found";

@@ -52,12 +52,7 @@ fn run_fixture(path: &Path, extra: &[&str]) -> (i32, String, String) {
             .to_string_lossy()
             .into_owned(),
     );
-    let out = crate::ngcflat(dir, &args, None);
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    crate::outcome(crate::ngcflat(dir, &args, None))
 }
 
 #[test]
