@@ -15,6 +15,7 @@ pub mod params;
 mod restore;
 mod settings;
 pub mod state;
+mod straight;
 pub mod tools;
 mod validate;
 
@@ -474,6 +475,34 @@ impl<'s> Interp<'s> {
             return self.exec_oline(&file, oidx);
         }
         let mut window = std::mem::take(&mut self.window);
+        if self.s.plain_runs {
+            let stop = file
+                .olines
+                .get(self.cur.next_o)
+                .map_or(u32::MAX, |o| o.line_idx);
+            let run = match file.file.memory() {
+                Some(data) => {
+                    self.straight_run(&file, &data[start as usize..], start, line_idx, stop)
+                }
+                None => match window.from(&file.file, start) {
+                    Ok(buf) => self.straight_run(&file, buf, start, line_idx, stop),
+                    Err(e) => Err(Diagnostic::error(
+                        ErrorKind::Io {
+                            path: file.file.path.clone(),
+                            message: e.to_string(),
+                        },
+                        None,
+                    )),
+                },
+            };
+            match run {
+                Ok(0) => {}
+                other => {
+                    self.window = window;
+                    return other.map(|_| ());
+                }
+            }
+        }
         let r = self.step_line(&file, start, line_idx, &mut window);
         self.window = window;
         r

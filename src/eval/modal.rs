@@ -466,7 +466,11 @@ impl Interp<'_> {
 
     /// Checks the reference makes with the start position: arc geometry and
     /// probe distance. Skipped where the position is not known.
-    fn check_motion(&self, words: &Words, axis_words: &[(usize, f64)]) -> Result<(), ErrorKind> {
+    pub(super) fn check_motion(
+        &self,
+        words: &[(u8, f64)],
+        axis_words: &[(usize, f64)],
+    ) -> Result<(), ErrorKind> {
         let motion = self.modal.motion;
         let start = |a: usize| self.pos.axes[a].as_ref().ok().copied();
         let end = |a: usize| -> Option<f64> {

@@ -38,6 +38,9 @@ pub struct Settings {
     pub tool_table: Vec<(i64, super::tools::ToolData)>,
     /// Collect warnings (check mode and stderr notes).
     pub warnings: bool,
+    /// Runs of plain lines take the batched straight-line loop. Off only to
+    /// check that loop against the line-by-line path.
+    pub plain_runs: bool,
 }
 
 impl Default for Settings {
@@ -54,6 +57,7 @@ impl Default for Settings {
             ini: None,
             defines: Vec::new(),
             warnings: true,
+            plain_runs: true,
             uvw_axes: false,
             machine_metric: false,
             tool_table: Vec::new(),

@@ -107,12 +107,9 @@ impl FileIndex {
         let mut first_nonblank_next = 0u32;
         let mut percent_start = false;
         let mut current_def: Option<Rc<str>> = None;
-        let mut count = 0u32;
-        let mut last_end = 0u32;
-        let scanned = file.scan_lines(|idx, pos, raw, terminated| {
-            count = idx + 1;
-            let next = pos + raw.len() as u32 + terminated as u32;
-            last_end = next;
+        let scanned = file.scan_marked_lines(crate::parse::MAX_LINE + 1, |m, raw| {
+            let (idx, pos, terminated) = (m.idx, m.start as u32, m.terminated);
+            let next = (m.end + terminated as u64) as u32;
             if starts_with_m99(raw) {
                 m99_lines.push(idx);
             }
@@ -154,10 +151,10 @@ impl FileIndex {
                 first_nonblank_next = next;
             }
         });
-        let _ = last_end;
-        let idx = count;
-        let read_error = scanned.err().map(|e| e.to_string());
-        let line_count = idx;
+        let (line_count, read_error) = match scanned {
+            Ok(n) => (n, None),
+            Err(e) => (0, Some(e.to_string())),
+        };
         // Scopes and keys.
         let mut occ: HashMap<Rc<str>, Vec<u32>> = HashMap::new();
         let mut dynamic = Vec::new();

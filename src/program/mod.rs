@@ -4,6 +4,7 @@
 mod file_index;
 pub mod ini;
 mod loader;
+mod marked_lines;
 mod source_file;
 
 pub use file_index::{FileIndex, OInfo, SubDefInfo, control_key, next_line, not_in_file};

@@ -7,6 +7,8 @@ use std::fs::File;
 use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+use super::marked_lines::{Marked, MarkedLines};
+
 /// Files up to this size are kept in memory.
 pub const IN_MEMORY_LIMIT: u64 = 8 << 20;
 /// Bytes read from disk at a time.
@@ -128,6 +130,65 @@ impl SourceFile {
     /// Folder of the file (for the last step of the subroutine search).
     pub fn dir(&self) -> Option<&Path> {
         self.path.parent()
+    }
+
+    /// Calls `f(line, raw)` for the lines [`MarkedLines`] hands on (lines
+    /// with `o`, `m` or `%`, lines longer than `long`, leading blank lines),
+    /// in order; `raw` is cut at 4096 bytes. Returns the number of lines.
+    pub fn scan_marked_lines(
+        &self,
+        long: usize,
+        mut f: impl FnMut(Marked, &[u8]),
+    ) -> io::Result<u32> {
+        let mut s = MarkedLines::new(long);
+        match &self.text {
+            Text::Memory(data) => {
+                let mut hit = |m: Marked| f(m, &data[m.start as usize..m.end as usize]);
+                s.feed(data, 0, &mut hit);
+                Ok(s.finish(data.len() as u64, &mut hit))
+            }
+            Text::Disk { .. } => {
+                let mut file = File::open(&self.path)?;
+                let mut buf = vec![0u8; CHUNK];
+                // The part of the current line read in earlier chunks.
+                let mut carry: Vec<u8> = Vec::new();
+                let mut base = 0u64;
+                loop {
+                    let n = file.read(&mut buf)?;
+                    if n == 0 {
+                        break;
+                    }
+                    let chunk = &buf[..n];
+                    let mut hit = |m: Marked| {
+                        let end = (m.end - base) as usize;
+                        if m.start >= base {
+                            f(m, &chunk[(m.start - base) as usize..end]);
+                        } else {
+                            let mut raw = carry.clone();
+                            let room = LONG_LINE.saturating_sub(raw.len());
+                            raw.extend_from_slice(&chunk[..end.min(room)]);
+                            f(m, &raw);
+                        }
+                    };
+                    s.feed(chunk, base, &mut hit);
+                    let ls = s.line_start();
+                    let end = base + n as u64;
+                    if ls >= end {
+                        carry.clear();
+                    } else if ls >= base {
+                        carry.clear();
+                        let rest = &chunk[(ls - base) as usize..];
+                        carry.extend_from_slice(&rest[..rest.len().min(LONG_LINE)]);
+                    } else {
+                        let room = LONG_LINE.saturating_sub(carry.len());
+                        carry.extend_from_slice(&chunk[..n.min(room)]);
+                    }
+                    base = end;
+                }
+                let mut hit = |m: Marked| f(m, &carry);
+                Ok(s.finish(base, &mut hit))
+            }
+        }
     }
 
     /// Calls `f(index, start, raw, terminated)` for every line, in order.
@@ -259,6 +320,16 @@ impl Window {
         self.buf.truncate(got);
         self.start = at;
         Ok(())
+    }
+
+    /// The window's bytes from file offset `pos` on (refilled if `pos` is
+    /// outside it); they may end inside a line.
+    pub fn from(&mut self, src: &SourceFile, pos: u32) -> io::Result<&[u8]> {
+        let pos64 = pos as u64;
+        if pos64 < self.start || pos64 >= self.start + self.buf.len() as u64 {
+            self.fill(src, pos64)?;
+        }
+        Ok(&self.buf[(pos64 - self.start) as usize..])
     }
 
     /// The line starting at file offset `pos`.

@@ -606,3 +606,123 @@ fn a_million_labels() {
     };
     assert!(flatten_bytes(data, &settings).is_ok());
 }
+
+/// A line of the kind the straight-line loop reads (mostly valid), a line
+/// that changes a mode it depends on, or a near miss that must take the
+/// general path.
+fn plain_line() -> impl Strategy<Value = String> {
+    let num = (-40i32..40, 0u32..10_000, 0usize..6).prop_map(|(a, f, d)| match d {
+        0 => format!("{a}"),
+        1 => format!("{a}."),
+        _ => format!("{a}.{:0width$}", f % 10u32.pow(d as u32 - 1), width = d - 1),
+    });
+    let motion = prop_oneof![
+        6 => Just(""), 6 => Just("G1"), 4 => Just("G0"), 1 => Just("G2"), 1 => Just("G3"),
+        1 => Just("g01"), 1 => Just("G00"), 1 => Just("G1.0"),
+    ];
+    let axes = proptest::sample::subsequence(vec!["X", "Y", "Z", "A", "x", "z"], 0..=4);
+    let axes = (axes, proptest::collection::vec(num.clone(), 4)).prop_map(|(ls, ns)| {
+        let mut seen = String::new();
+        let mut out = Vec::new();
+        for (l, n) in ls.iter().zip(ns) {
+            let up = l.to_ascii_uppercase();
+            if !seen.contains(&up) {
+                seen.push_str(&up);
+                out.push(format!("{l}{n}"));
+            }
+        }
+        out
+    });
+    let arc = prop_oneof![
+        1 => Just(Vec::new()),
+        6 => Just(vec!["R100".to_string()]),
+        1 => (num.clone(), num.clone()).prop_map(|(i, j)| vec![format!("I{i}"), format!("J{j}")]),
+        1 => num.clone().prop_map(|i| vec![format!("i{i}")]),
+        1 => (num.clone(), num.clone()).prop_map(|(i, j)| vec![format!("I{i}"), format!("j{j}"), "P1".into()]),
+    ];
+    let feed = prop_oneof![
+        3 => Just(String::new()),
+        8 => (1u32..3000).prop_map(|f| format!("F{f}")),
+        1 => Just("F0".to_string()),
+    ];
+    let speed = prop_oneof![
+        4 => Just(String::new()),
+        1 => (0u32..20000).prop_map(|s| format!("S{s}")),
+    ];
+    let number = prop_oneof![
+        4 => Just(String::new()),
+        2 => (1u32..99_999).prop_map(|n| format!("N{n}")),
+        1 => (100_000u32..200_000).prop_map(|n| format!("N{n}")),
+    ];
+    let blank = prop_oneof![4 => Just(" "), 2 => Just(""), 1 => Just("  "), 1 => Just("\t")];
+    let ending = prop_oneof![8 => Just(""), 1 => Just(" "), 1 => Just("\r"), 1 => Just(" \t\r")];
+    let line = (motion, axes, arc, feed, speed, any::<bool>())
+        .prop_flat_map(|(m, axes, arc, f, s, shuffle)| {
+            let mut ws: Vec<String> = vec![m.to_string()];
+            ws.extend(axes);
+            if m.starts_with("G2") || m.starts_with("G3") {
+                ws.extend(arc);
+            }
+            ws.push(f);
+            ws.push(s);
+            ws.retain(|w| !w.is_empty());
+            let n = ws.len();
+            let ws = Just(ws);
+            if shuffle {
+                ws.prop_shuffle().boxed()
+            } else {
+                ws.boxed()
+            }
+            .prop_map(move |ws| (ws, n))
+        })
+        .prop_flat_map(move |(ws, n)| (Just(ws), proptest::collection::vec(blank.clone(), n)))
+        .prop_map(|(ws, bs)| {
+            ws.iter()
+                .zip(bs)
+                .map(|(w, b)| format!("{w}{b}"))
+                .collect::<String>()
+        });
+    prop_oneof![
+        40 => (number, line, ending).prop_map(|(n, w, e)| {
+            let sep = if n.is_empty() { "" } else { " " };
+            format!("{n}{sep}{}{e}", w.trim_end())
+        }),
+        4 => prop_oneof![
+            Just("G91"), Just("G90"), Just("G20"), Just("G21"), Just("G18"), Just("G17"),
+            Just("G93"), Just("G94"), Just("G41 D0"), Just("G40"), Just("G10 L2 P1 R30"),
+            Just("G10 L2 P1 X1"), Just("G92 X3"), Just("G55"), Just("G54"), Just("G80"),
+            Just("M3 S100"), Just(""), Just("G2.5"), Just("G4 P0"),
+        ].prop_map(String::from),
+        1 => prop_oneof![
+            Just("G1 X1 (c)"), Just(" G1 X1"), Just("G1 X1 0"), Just("G1 X1 X2"), Just("#1 = 2"),
+            Just("G1 X#1"), Just("o1 if [1]"), Just("o1 endif"), Just("F-1"), Just("S-2"),
+            Just("X1.1234567890123456"), Just("X-.5 Y+2"), Just("G1 K1"), Just("G1 I1"),
+        ].prop_map(String::from),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// The straight-line loop and the line-by-line path give the same
+    /// output, the same state (read back at the end) and the same errors.
+    #[test]
+    fn straight_line_loop_matches_line_by_line(
+        lines in proptest::collection::vec(plain_line(), 0..24),
+        zero_start in any::<bool>(),
+    ) {
+        let mut prog = format!("F500\n{}", lines.join("\n"));
+        prog.push_str(
+            "\n(debug, #5420 #5421 #5422 #5423 #<_feed> #<_rpm> #<_motion_mode> #<_plane>)\nM2\n",
+        );
+        let on = Settings { zero_start, ..small_limits() };
+        let off = Settings { plain_runs: false, ..on.clone() };
+        let show = |r: Result<String, Error>| match r {
+            Ok(s) => s,
+            Err(e) => format!("error: {}", render(&e, MessageFormat::Short, false)),
+        };
+        let fast = show(ngcflat::flatten_str(&prog, &on));
+        let slow = show(ngcflat::flatten_str(&prog, &off));
+        prop_assert_eq!(fast, slow, "program:\n{}", prog);
+    }
+}

@@ -1,0 +1,540 @@
+//! The straight-line loop: runs of the commonest CAM lines (`G0`/`G1` moves
+//! with axis, `F` and `S` words, optional line number) go through one tight
+//! loop that finds line ends, reads numbers, updates the state model and
+//! copies the input bytes to the output in blocks. Any line it does not
+//! fully understand ends the run and takes the general path, which gives the
+//! same result line by line; a property test compares the two.
+
+use std::rc::Rc;
+
+use crate::diag::Error;
+use crate::program::FileIndex;
+
+use super::Interp;
+use super::fast::FastWord;
+
+/// Word slots: G, X, Y, Z, A, B, C, F, S (the fast set), then I, J, K, R, P
+/// (lines with these take the block checks).
+const G: usize = 0;
+const F: usize = 7;
+const S: usize = 8;
+const NONE: u8 = 0xff;
+const AXIS_MASK: u32 = 0b111_1110;
+const FAST_MASK: u32 = 0b1_1111_1111;
+const I: usize = 9;
+const J: usize = 10;
+const R: usize = 12;
+/// Words a G2/G3 line in the XY plane may have on the fast path.
+const ARC_MASK: u32 =
+    1 << G | 1 << 1 | 1 << 2 | 1 << 3 | 1 << F | 1 << S | 1 << I | 1 << J | 1 << R;
+const LETTERS: [u8; 14] = *b"gxyzabcfsijkrp";
+
+const fn slot_table() -> [u8; 256] {
+    let mut t = [NONE; 256];
+    let mut i = 0;
+    while i < LETTERS.len() {
+        t[LETTERS[i] as usize] = i as u8;
+        t[LETTERS[i].to_ascii_uppercase() as usize] = i as u8;
+        i += 1;
+    }
+    t
+}
+
+static SLOT: [u8; 256] = slot_table();
+
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// Output bytes gathered before they are handed to the sink.
+const BATCH: usize = 1 << 16;
+
+const NO_WORD: FastWord = FastWord {
+    letter: 0,
+    value: 0.0,
+    start: 0,
+    end: 0,
+};
+
+/// One line read by [`read_line`].
+struct Plain {
+    mask: u32,
+    /// Values by slot.
+    vals: [f64; 14],
+    /// Words in line order, spans relative to the line start.
+    words: [FastWord; 14],
+    count: usize,
+    /// End of the text to write (without trailing blanks and terminator).
+    text_end: usize,
+    /// Start of the next line.
+    next: usize,
+}
+
+#[inline(always)]
+fn is_blank(c: u8) -> bool {
+    matches!(c, b' ' | b'\t' | b'\r')
+}
+
+const LO7: u64 = 0x7f7f_7f7f_7f7f_7f7f;
+
+const fn splat(b: u8) -> u64 {
+    0x0101_0101_0101_0101 * b as u64
+}
+
+const POW10_INT: [u64; 9] = [
+    1,
+    10,
+    100,
+    1_000,
+    10_000,
+    100_000,
+    1_000_000,
+    10_000_000,
+    100_000_000,
+];
+
+/// Number of leading ASCII digits among the 8 bytes of `w` (first byte
+/// lowest).
+#[inline(always)]
+fn leading_digits(w: u64) -> u32 {
+    let x = ((w & splat(0xf0)) ^ splat(0x30))
+        | ((w & splat(0x0f)).wrapping_add(splat(0x06)) & splat(0xf0));
+    // High bit of every byte that is not a digit.
+    let non = ((x & LO7).wrapping_add(LO7) | x) & splat(0x80);
+    non.trailing_zeros() / 8
+}
+
+/// Value of the first `len` (1–8) digit bytes of `w`.
+#[inline(always)]
+fn digits_value(w: u64, len: u32) -> u64 {
+    let d = w.wrapping_sub(splat(b'0')) << (8 * (8 - len));
+    let d = (d.wrapping_mul(10).wrapping_add(d >> 8)) & 0x00ff_00ff_00ff_00ff;
+    let d = (d.wrapping_mul(100).wrapping_add(d >> 16)) & 0x0000_ffff_0000_ffff;
+    (d.wrapping_mul(10_000).wrapping_add(d >> 32)) & 0xffff_ffff
+}
+
+#[inline(always)]
+fn load8(buf: &[u8], i: usize) -> u64 {
+    u64::from_le_bytes(buf[i..i + 8].try_into().expect("8 bytes"))
+}
+
+/// Reads `digits[.digits]` at `buf[i..]` eight bytes at a time, without a
+/// branch per digit. `None` for anything unusual (long numbers, the end of
+/// the buffer); [`number_slow`] then decides.
+#[inline(always)]
+fn number(buf: &[u8], i: usize) -> Option<(f64, usize)> {
+    if i + 16 > buf.len() {
+        return None;
+    }
+    let w = load8(buf, i);
+    let n1 = leading_digits(w);
+    if n1 == 8 {
+        return None;
+    }
+    let int = if n1 == 0 { 0 } else { digits_value(w, n1) };
+    let j = i + n1 as usize;
+    if buf[j] != b'.' {
+        return (n1 > 0).then_some((int as f64, j));
+    }
+    let w2 = load8(buf, j + 1);
+    let n2 = leading_digits(w2);
+    if n2 == 8 || n1 + n2 == 0 || n1 + n2 > 15 {
+        return None;
+    }
+    let frac = if n2 == 0 { 0 } else { digits_value(w2, n2) };
+    let mant = int * POW10_INT[n2 as usize] + frac;
+    Some((mant as f64 / POW10[n2 as usize], j + 1 + n2 as usize))
+}
+
+/// Reads `digits[.digits]` at `buf[i..]` a byte at a time; exact for up to
+/// 15 digits, `None` beyond (the general path then reads it).
+fn number_slow(buf: &[u8], mut i: usize) -> Option<(f64, usize)> {
+    let mut mant = 0u64;
+    let mut digits = 0u32;
+    let mut frac = 0u32;
+    let mut dot = 0u32;
+    while let Some(&c) = buf.get(i) {
+        let d = c.wrapping_sub(b'0');
+        if d < 10 {
+            mant = mant.wrapping_mul(10).wrapping_add(d as u64);
+            digits += 1;
+            frac += dot;
+        } else if c == b'.' && dot == 0 {
+            dot = 1;
+        } else {
+            break;
+        }
+        i += 1;
+    }
+    if digits == 0 || digits > 15 || frac > 22 {
+        return None;
+    }
+    Some((mant as f64 / POW10[frac as usize], i))
+}
+
+/// Reads the line at `buf[line..]` into `p` if it is a line of slot words,
+/// each at most once, ending in a newline. False sends the line to the
+/// general path.
+#[inline(always)]
+fn read_line(buf: &[u8], line: usize, p: &mut Plain) -> bool {
+    let at = |j: usize| buf.get(j).copied().unwrap_or(0);
+    let mut i = line;
+    p.mask = 0;
+    p.count = 0;
+    // Optional line number: N and 1–5 digits, then blanks.
+    if at(i) | 0x20 == b'n' {
+        i += 1;
+        let s = i;
+        while at(i).is_ascii_digit() {
+            i += 1;
+        }
+        if i == s || i - s > 5 || !matches!(at(i), b' ' | b'\t') {
+            return false;
+        }
+        while matches!(at(i), b' ' | b'\t') {
+            i += 1;
+        }
+    }
+    loop {
+        let slot = SLOT[at(i) as usize];
+        if slot == NONE {
+            return false;
+        }
+        let word_start = i;
+        i += 1;
+        let neg = at(i) == b'-';
+        if matches!(at(i), b'-' | b'+') {
+            i += 1;
+        }
+        let v = match number(buf, i) {
+            Some((v, end)) => {
+                i = end;
+                v
+            }
+            None => {
+                let (v, end) = match number_slow(buf, i) {
+                    Some(r) => r,
+                    None => return false,
+                };
+                i = end;
+                v
+            }
+        };
+        let bit = 1u32 << slot;
+        if p.mask & bit != 0 {
+            return false;
+        }
+        p.mask |= bit;
+        let v = if neg { -v } else { v };
+        p.vals[slot as usize] = v;
+        p.words[p.count] = FastWord {
+            letter: LETTERS[slot as usize],
+            value: v,
+            start: (word_start - line) as u16,
+            end: (i - line) as u16,
+        };
+        p.count += 1;
+        let text_end = i;
+        while is_blank(at(i)) {
+            i += 1;
+        }
+        match at(i) {
+            b'\n' if i - line <= crate::parse::MAX_LINE => {
+                p.text_end = text_end;
+                p.next = i + 1;
+                return true;
+            }
+            c if SLOT[c as usize] != NONE => {}
+            _ => return false,
+        }
+    }
+}
+
+impl Interp<'_> {
+    /// Runs plain lines from `buf` (the file's bytes from offset `base`),
+    /// stopping before line `stop_line`. Returns the number of lines run; 0
+    /// means the first line needs the general path.
+    pub(super) fn straight_run(
+        &mut self,
+        file: &Rc<FileIndex>,
+        buf: &[u8],
+        base: u32,
+        first_line: u32,
+        stop_line: u32,
+    ) -> Result<u32, Error> {
+        if !self.s.plain_runs || self.rotated || self.modal.ccomp != 400 || self.ended {
+            return Ok(0);
+        }
+        let max_lines = stop_line.saturating_sub(first_line);
+        let mut lines = 0u32;
+        let mut emitted = 0u64;
+        let mut i = 0usize;
+        let mut last_start = 0usize;
+        // Input bytes [batch_start, i) are output as they are.
+        let mut batch_start = 0usize;
+        let p = &mut Plain {
+            mask: 0,
+            vals: [0.0; 14],
+            words: [NO_WORD; 14],
+            count: 0,
+            text_end: 0,
+            next: 0,
+        };
+        while lines < max_lines && self.out_lines + emitted < self.s.max_output_lines {
+            if buf.get(i) == Some(&b'\n') {
+                // Blank line: nothing to write.
+                self.flush_batch(&buf[batch_start..i])?;
+                last_start = i;
+                i += 1;
+                batch_start = i;
+                lines += 1;
+                continue;
+            }
+            if !read_line(buf, i, p) {
+                break;
+            }
+            if !self.fast_line(p) {
+                // Other words or modes: the block checks and the full
+                // state update, still without the grammar.
+                self.flush_batch(&buf[batch_start..i])?;
+                self.out_lines += emitted;
+                emitted = 0;
+                self.current_line_start = base + i as u32;
+                self.current_line_idx = first_line + lines;
+                let raw = &buf[i..p.next - 1];
+                match self.exec_plain(file, base + i as u32, raw, &p.words[..p.count]) {
+                    None => break,
+                    Some(r) => r?,
+                }
+                batch_start = p.next;
+                if self.ended || self.rotated || self.modal.ccomp != 400 {
+                    last_start = i;
+                    i = p.next;
+                    lines += 1;
+                    break;
+                }
+            } else {
+                emitted += 1;
+                if p.text_end + 1 != p.next {
+                    // Trailing blanks: the line is written trimmed.
+                    self.flush_batch(&buf[batch_start..i])?;
+                    let mut out = std::mem::take(&mut self.out);
+                    out.clear();
+                    out.extend_from_slice(&buf[i..p.text_end]);
+                    out.push(b'\n');
+                    let r = self.flush_batch(&out);
+                    self.out = out;
+                    r?;
+                    batch_start = p.next;
+                } else if p.next - batch_start >= BATCH {
+                    self.flush_batch(&buf[batch_start..p.next])?;
+                    batch_start = p.next;
+                }
+            }
+            last_start = i;
+            i = p.next;
+            lines += 1;
+        }
+        self.flush_batch(&buf[batch_start..i])?;
+        self.out_lines += emitted;
+        if lines > 0 {
+            self.current_line_start = base + last_start as u32;
+            self.current_line_idx = first_line + lines - 1;
+            self.cur.pos = base + i as u32;
+            self.cur.line = first_line + lines;
+        }
+        Ok(lines)
+    }
+
+    /// Runs a line of G0–G3, axis, F and S words (arcs in the XY plane with
+    /// I, J or R) if the block checks would accept it, updating the state
+    /// model; false leaves it untouched for the general path.
+    #[inline(always)]
+    fn fast_line(&mut self, p: &Plain) -> bool {
+        let g = p.mask & 1 != 0;
+        let motion = if !g {
+            self.modal.motion
+        } else {
+            match p.vals[G] {
+                0.0 => 0,
+                1.0 => 10,
+                2.0 => 20,
+                3.0 => 30,
+                _ => return false,
+            }
+        };
+        let feed = if p.mask & (1 << F) != 0 {
+            p.vals[F]
+        } else {
+            self.modal.feed
+        };
+        let moves = g || p.mask & AXIS_MASK != 0;
+        let feed_ok = self.modal.feed_mode != 930 && feed != 0.0;
+        let accepted = match motion {
+            0 => p.mask & !FAST_MASK == 0,
+            10 => p.mask & !FAST_MASK == 0 && (!moves || feed_ok),
+            20 | 30 => {
+                p.mask & !ARC_MASK == 0
+                    && self.modal.plane == 170
+                    && p.mask & (1 << I | 1 << J | 1 << R) != 0
+                    && feed_ok
+                    && self.arc_ok(p, motion)
+            }
+            _ => false,
+        };
+        if !accepted || feed < 0.0 || (p.mask & (1 << S) != 0 && p.vals[S] < 0.0) {
+            return false;
+        }
+        self.modal.motion = motion;
+        self.modal.feed = feed;
+        if p.mask & (1 << S) != 0 {
+            self.modal.speed = p.vals[S];
+        }
+        let mut axes = p.mask & AXIS_MASK;
+        while axes != 0 {
+            let slot = axes.trailing_zeros() as usize;
+            axes &= axes - 1;
+            let v = p.vals[slot];
+            let a = &mut self.pos.axes[slot - 1];
+            if self.modal.absolute {
+                *a = Ok(v);
+            } else if let Ok(x) = a {
+                *x += v;
+            }
+        }
+        true
+    }
+
+    /// The arc geometry checks of the general path, on an XY arc line.
+    fn arc_ok(&mut self, p: &Plain, motion: i32) -> bool {
+        if p.mask & AXIS_MASK == 0 {
+            return true;
+        }
+        let mut words = [(0u8, 0.0f64); 14];
+        for (w, f) in words.iter_mut().zip(&p.words[..p.count]) {
+            *w = (f.letter, f.value);
+        }
+        let mut axes = [(0usize, 0.0f64); 6];
+        let mut n = 0;
+        let mut m = p.mask & AXIS_MASK;
+        while m != 0 {
+            let slot = m.trailing_zeros() as usize;
+            m &= m - 1;
+            axes[n] = (slot - 1, p.vals[slot]);
+            n += 1;
+        }
+        // The checks read the motion mode the line sets.
+        let old = std::mem::replace(&mut self.modal.motion, motion);
+        let ok = self.check_motion(&words[..p.count], &axes[..n]).is_ok();
+        self.modal.motion = old;
+        ok
+    }
+
+    fn flush_batch(&mut self, bytes: &[u8]) -> Result<(), Error> {
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        self.sink.write(bytes).map_err(|e| {
+            crate::diag::Diagnostic::error(
+                crate::diag::ErrorKind::Io {
+                    path: "<output>".into(),
+                    message: e.to_string(),
+                },
+                None,
+            )
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(l: &[u8]) -> Option<Plain> {
+        let mut p = Plain {
+            mask: 0,
+            vals: [0.0; 14],
+            words: [NO_WORD; 14],
+            count: 0,
+            text_end: 0,
+            next: 0,
+        };
+        read_line(l, 0, &mut p).then_some(p)
+    }
+
+    #[test]
+    fn reads_plain_lines() {
+        let p = read(b"G1 X1.5 Y-2 F300\n").expect("plain");
+        assert_eq!(p.mask, 0b1000_0111);
+        assert_eq!(p.count, 4);
+        assert_eq!(
+            (p.words[1].letter, p.words[1].start, p.words[1].end),
+            (b'x', 3, 7)
+        );
+        assert_eq!((p.vals[1], p.vals[2], p.vals[F]), (1.5, -2.0, 300.0));
+        assert_eq!((p.text_end, p.next), (16, 17));
+        let p = read(b"N10 g0z5 \r\nX1\n").expect("plain");
+        assert_eq!((p.text_end, p.next), (8, 11));
+        for l in [
+            "G1 X1",
+            "G1 X1 X2\n",
+            "G1 X#1\n",
+            "G1 X1 (c)\n",
+            "M3\n",
+            "G1 U1\n",
+            " G1\n",
+            "G1 X1 0\n",
+            "N123456 G1\n",
+            "G1 X.\n",
+            "G1 X1.2.3\n",
+            "G1 X1234567890123456\n",
+            "\n",
+        ] {
+            assert!(read(l.as_bytes()).is_none(), "{l:?}");
+        }
+    }
+
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Both number readers give what `str::parse` gives, bit for bit,
+        /// or leave the number to the general path.
+        #[test]
+        fn numbers_read_exactly(
+            t in "[0-9]{0,17}(\\.[0-9]{0,17})?",
+            tail in "[ .\n+A-Z0-9]{0,20}",
+        ) {
+            let text = format!("{t}{tail}");
+            let b = text.as_bytes();
+            let want = t.parse::<f64>().ok().map(f64::to_bits);
+            for got in [number(b, 0), number_slow(b, 0)].into_iter().flatten() {
+                let end = if tail.starts_with(|c: char| c.is_ascii_digit() || c == '.') {
+                    // The tail continues the number: compare with all of it.
+                    got.1
+                } else {
+                    t.len()
+                };
+                prop_assert_eq!(got.1, end);
+                let read = text[..got.1].parse::<f64>().ok().map(f64::to_bits);
+                prop_assert_eq!(Some(got.0.to_bits()), read, "{:?}", text);
+                if end == t.len() {
+                    prop_assert_eq!(Some(got.0.to_bits()), want);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn short_numbers_take_the_word_path() {
+        let b = b"12.5 X3.25 F1000 0.0001 7. .5 -------------------";
+        assert_eq!(number(b, 0), Some((12.5, 4)));
+        assert_eq!(number(b, 6), Some((3.25, 10)));
+        assert_eq!(number(b, 12), Some((1000.0, 16)));
+        assert_eq!(number(b, 17), Some((0.0001, 23)));
+        assert_eq!(number(b, 24), Some((7.0, 26)));
+        assert_eq!(number(b, 27), Some((0.5, 29)));
+        assert_eq!(number(b"123456789.5 ------------", 0), None);
+        assert_eq!(number_slow(b"123456789.5", 0), Some((123456789.5, 11)));
+    }
+}
