@@ -20,8 +20,30 @@ fn write_shortest(out: &mut Vec<u8>, v: f64) {
         out.push(b'0');
         return;
     }
+    // Values with at most nine decimals (most of them): the nearest
+    // nine-decimal number reads back as `v` exactly when one does, and with
+    // its zeros trimmed it is the shortest text. Below 1e6 it is an integer
+    // under 2^53, so the product, its rounding and the check are exact
+    // enough.
+    if v.abs() < 1e6 {
+        let r = (v * 1e9).round();
+        if r / 1e9 == v {
+            write_decimal(out, r as i64, 9);
+            return;
+        }
+    }
+    write_shortest_ryu(out, v);
+}
+
+/// The shortest round-trip text through Ryu, exponent written out.
+fn write_shortest_ryu(out: &mut Vec<u8>, v: f64) {
     let mut buf = ryu::Buffer::new();
     let s = buf.format_finite(v).as_bytes();
+    if !s.contains(&b'e') {
+        // Already plain decimal; only a `.0` ending is dropped.
+        out.extend_from_slice(s.strip_suffix(b".0").unwrap_or(s));
+        return;
+    }
     let (neg, s) = match s.first() {
         Some(b'-') => (true, &s[1..]),
         _ => (false, s),
@@ -114,7 +136,11 @@ fn write_fixed(out: &mut Vec<u8>, v: f64, p: u8) {
         out.extend_from_slice(digits);
         return;
     }
-    let mut n = scaled.round() as i64;
+    write_decimal(out, scaled.round() as i64, p as usize);
+}
+
+/// Writes `n / 10^p` with trailing zeros dropped.
+fn write_decimal(out: &mut Vec<u8>, mut n: i64, p: usize) {
     if n == 0 {
         out.push(b'0');
         return;
@@ -125,7 +151,6 @@ fn write_fixed(out: &mut Vec<u8>, v: f64, p: u8) {
     }
     let mut ib = itoa::Buffer::new();
     let s = ib.format(n).as_bytes();
-    let p = p as usize;
     if s.len() <= p {
         out.extend_from_slice(b"0.");
         out.extend(std::iter::repeat_n(b'0', p - s.len()));
@@ -178,6 +203,30 @@ mod tests {
         ];
         for &(v, want) in cases {
             assert_eq!(s(v, None), want, "{v:e}");
+        }
+    }
+
+    use proptest::prelude::*;
+
+    fn ryu_text(v: f64) -> String {
+        let mut b = Vec::new();
+        super::write_shortest_ryu(&mut b, v);
+        String::from_utf8(b).expect("ascii")
+    }
+
+    proptest! {
+        /// The nine-decimal path gives the text the Ryu path gives.
+        #[test]
+        fn short_path_matches_ryu(
+            n in -2_000_000_000_000_000i64..2_000_000_000_000_000,
+            k in 0u32..12,
+            x in -2.0e6f64..2.0e6,
+        ) {
+            let nice = n as f64 / 10f64.powi(k as i32);
+            prop_assert_eq!(s(nice, None), ryu_text(nice));
+            prop_assert_eq!(s(x, None), ryu_text(x));
+            let small = x * 1e-9;
+            prop_assert_eq!(s(small, None), ryu_text(small));
         }
     }
 

@@ -187,10 +187,11 @@ impl Interp<'_> {
         }
         // 3. The active comment, after the assignments.
         if let Some(c) = active {
-            let body = String::from_utf8_lossy(&raw[c.body.start as usize..c.body.end as usize])
-                .into_owned();
             match c.kind {
                 CommentKind::Debug | CommentKind::Print | CommentKind::Log | CommentKind::Abort => {
+                    let body =
+                        String::from_utf8_lossy(&raw[c.body.start as usize..c.body.end as usize])
+                            .into_owned();
                     let text = self
                         .substitute(&body, c.body.start)
                         .map_err(|(k, s)| self.error_in_line(k, file, start, s))?;

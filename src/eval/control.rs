@@ -277,8 +277,12 @@ impl Interp<'_> {
 
     fn note_loop(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Rc<str>) {
         let line = file.olines[oidx as usize].line_idx;
-        let label = key.rsplit('#').next().unwrap_or("").into();
-        self.last_loop = Some((label, line, file.clone()));
+        // The key is kept as it is (no allocation per pass); the label is
+        // cut from it only for a message.
+        let same = matches!(&self.last_loop, Some((k, l, f)) if *l == line && Rc::ptr_eq(k, key) && Rc::ptr_eq(f, file));
+        if !same {
+            self.last_loop = Some((key.clone(), line, file.clone()));
+        }
     }
 
     /// Evaluates a condition the reference evaluates but ngcflat skips; warns
@@ -716,10 +720,11 @@ impl Interp<'_> {
         oidx: u32,
         name: &Rc<str>,
     ) -> Result<SubRec, Error> {
-        let base: Rc<str> = Rc::from(name.rsplit('/').next().unwrap_or(name));
-        if let Some(rec) = self.subs.get(&base) {
+        let base_name = name.rsplit('/').next().unwrap_or(name);
+        if let Some(rec) = self.subs.get(base_name) {
             return Ok(rec.clone());
         }
+        let base: Rc<str> = Rc::from(base_name);
         let found = self
             .loader
             .find(name)
@@ -813,7 +818,13 @@ impl Interp<'_> {
             ));
         }
         let (a, b) = self.osite(file, oidx);
-        let mut f = Frame::new(kind, name);
+        let mut f = match self.frame_pool.pop() {
+            Some(mut f) => {
+                f.reset(kind, name);
+                f
+            }
+            None => Frame::new(kind, name),
+        };
         f.ret = Some(ret);
         f.call_site = Some(crate::diag::Site::new(&file.file, a, b));
         self.frames.push(f);
@@ -857,10 +868,12 @@ impl Interp<'_> {
             let (a, b) = self.osite(file, oidx);
             self.warn(WarningKind::QuirkRepeatRecursion, file, a, b);
         }
-        self.subs
-            .entry(base.clone())
-            .or_insert_with(|| target.clone());
-        self.called.insert(base.clone());
+        if !self.subs.contains_key(&base) {
+            self.subs.insert(base.clone(), target.clone());
+        }
+        if !self.called.contains(&base) {
+            self.called.insert(base.clone());
+        }
         let o_info = &file.olines[oidx as usize];
         let ret = Cursor {
             file: file.clone(),
@@ -869,7 +882,7 @@ impl Interp<'_> {
             next_o: oidx as usize + 1,
         };
         self.push_frame(file, oidx, FrameKind::Call, base, ret)?;
-        let mut saved = Box::new([0.0; 30]);
+        let mut saved = self.saved_pool.pop().unwrap_or_else(|| Box::new([0.0; 30]));
         saved.copy_from_slice(&self.params.values[1..31]);
         self.params.values[1..31].copy_from_slice(&argv);
         self.params.set[1..31].fill(true);
@@ -909,16 +922,18 @@ impl Interp<'_> {
             let (a, b) = self.osite(file, oidx);
             self.warn(WarningKind::QuirkRepeatCount, file, a, b);
         }
-        let f = self.frames.pop().expect("call frame");
-        if let Some(saved) = f.saved {
+        let mut f = self.frames.pop().expect("call frame");
+        if let Some(saved) = f.saved.take() {
             self.params.values[1..31].copy_from_slice(&saved[..]);
+            self.saved_pool.push(saved);
         }
         if f.auto_restore
-            && let Some(m) = f.saved_modal
+            && let Some(m) = f.saved_modal.take()
         {
             self.restore_modal(&m)?;
         }
-        self.cur = f.ret.expect("return cursor");
+        self.cur = f.ret.take().expect("return cursor");
+        self.frame_pool.push(f);
         Ok(())
     }
 
@@ -934,13 +949,14 @@ impl Interp<'_> {
         }
         self.value = 0.0;
         self.value_returned = false;
-        let f = self.frames.pop().expect("M98 frame");
+        let mut f = self.frames.pop().expect("M98 frame");
         if f.auto_restore
-            && let Some(m) = f.saved_modal
+            && let Some(m) = f.saved_modal.take()
         {
             self.restore_modal(&m)?;
         }
-        self.cur = f.ret.expect("return cursor");
+        self.cur = f.ret.take().expect("return cursor");
+        self.frame_pool.push(f);
         Ok(())
     }
 

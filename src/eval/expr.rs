@@ -45,7 +45,20 @@ pub fn binary(op: BinOp, a: f64, c: f64, span: Span) -> EvalResult {
             a / c
         }
         BinOp::Mod => {
-            let mut r = a % c;
+            let (ai, ci) = (a as i64, c as i64);
+            let mut r = if ai as f64 == a
+                && ci as f64 == c
+                && ci != 0
+                && a.abs() < 9.0e15
+                && c.abs() < 9.0e15
+            {
+                // Whole numbers: the remainder in integers is exact, as the
+                // floating-point one is; only its zero keeps the sign of a.
+                let r = (ai % ci) as f64;
+                if r == 0.0 && a.is_sign_negative() { -0.0 } else { r }
+            } else {
+                a % c
+            };
             if r < 0.0 {
                 r += c.abs();
             }
@@ -192,6 +205,10 @@ impl Interp<'_> {
     }
 
     pub(crate) fn read_numbered(&mut self, i: usize, span: Span) -> EvalResult {
+        // Plain parameters the program has assigned: the common case.
+        if i < 5000 && self.params.set[i] {
+            return Ok(self.params.values[i]);
+        }
         if let ParamClass::Position(axis) = classify(i)
             && !self.params.set[i]
         {
@@ -259,6 +276,51 @@ mod tests {
     use super::*;
 
     const S: Span = Span { start: 0, end: 0 };
+
+    use proptest::prelude::*;
+
+    fn mod_reference(a: f64, c: f64) -> f64 {
+        let mut r = a % c;
+        if r < 0.0 {
+            r += c.abs();
+        }
+        r
+    }
+
+    proptest! {
+        /// MOD on whole numbers through integers gives what the
+        /// floating-point remainder gives, bit for bit (zero's sign too).
+        #[test]
+        fn mod_matches_the_float_remainder(
+            a in -1_000_000i64..1_000_000,
+            c in -1000i64..1000,
+            x in -1.0e6f64..1.0e6,
+            big in prop_oneof![Just(9.0e15), Just(1.0e300), Just(-4.5e15), Just(f64::INFINITY)],
+        ) {
+            for (a, c) in [(a as f64, c as f64), (x, c as f64), (a as f64, x), (big, c as f64), (a as f64, big), (-(a as f64), c as f64)] {
+                let got = binary(BinOp::Mod, a, c, S).map(f64::to_bits);
+                prop_assert_eq!(got, Ok(mod_reference(a, c).to_bits()), "{} MOD {}", a, c);
+            }
+        }
+
+        #[test]
+        fn integer_values_as_before(v in prop_oneof![
+            (-1_000_000i64..1_000_000).prop_map(|i| i as f64),
+            -1.0e6f64..1.0e6,
+            Just(-0.0), Just(f64::NAN), Just(1.0e300), Just(9.0e15), Just(-9.5e15),
+        ]) {
+            let f = v.floor();
+            let frac = v - f;
+            let want = if frac > 0.9999 {
+                Ok(f as i64 + 1)
+            } else if frac > 0.0001 || !v.is_finite() {
+                Err(())
+            } else {
+                Ok(f as i64)
+            };
+            prop_assert_eq!(integer_value(v).map_err(|_| ()), want, "{}", v);
+        }
+    }
 
     #[test]
     fn operators_table() {

@@ -21,7 +21,7 @@ mod validate;
 
 use std::collections::HashSet;
 
-use fx_hasher::FxMap;
+use fx_hasher::{FxMap, FxSet};
 use std::rc::Rc;
 
 use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};
@@ -83,6 +83,20 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// Makes a pooled frame like a new one, keeping its tables' room.
+    fn reset(&mut self, kind: FrameKind, name: Rc<str>) {
+        self.kind = kind;
+        self.name = name;
+        self.ret = None;
+        self.call_site = None;
+        self.saved = None;
+        self.locals.clear();
+        self.labels.clear();
+        self.m98_loop = None;
+        self.saved_modal = None;
+        self.auto_restore = false;
+    }
+
     fn new(kind: FrameKind, name: Rc<str>) -> Frame {
         Frame {
             kind,
@@ -113,6 +127,10 @@ pub struct Interp<'s> {
     params: Params,
     globals: FxMap<Rc<str>, f64>,
     frames: Vec<Frame>,
+    /// Frames of returned calls, reused by the next calls.
+    frame_pool: Vec<Frame>,
+    /// Argument save areas of returned calls.
+    saved_pool: Vec<Box<[f64; 30]>>,
     value: f64,
     value_returned: bool,
     /// Reading undefined named parameters gives 0 (sub definition skip).
@@ -123,7 +141,7 @@ pub struct Interp<'s> {
     steps: u64,
     pub warnings: Vec<Diagnostic>,
     subs: FxMap<Rc<str>, SubRec>,
-    called: HashSet<Rc<str>>,
+    called: FxSet<Rc<str>>,
     modal: Modal,
     pos: Position,
     current_tool: Option<f64>,
@@ -132,9 +150,13 @@ pub struct Interp<'s> {
     /// The reference's never-cleared break/continue flags (for warnings).
     ref_stale_break: Option<u32>,
     ref_stale_continue: Option<u32>,
+    /// Control key, line and file of the last loop passed (for limit
+    /// messages).
     last_loop: Option<(Rc<str>, u32, Rc<FileIndex>)>,
     parser: LineParser,
-    cache: FxMap<(usize, u32), Rc<Line>>,
+    /// Parsed lines of loop and sub bodies, with their end and the start of
+    /// the next line.
+    cache: FxMap<(usize, u32), (Rc<Line>, u32, u32)>,
     out: Vec<u8>,
     ended: bool,
     current_line_start: u32,
@@ -154,6 +176,11 @@ pub struct Interp<'s> {
     /// The repeat line (O-line index) an endrepeat just jumped back to.
     repeat_again: Option<u32>,
     scratch: block::Scratch,
+}
+
+/// The label part of a control key (`scope#label`).
+fn loop_label(key: &str) -> String {
+    key.rsplit('#').next().unwrap_or("").to_string()
 }
 
 fn file_key(f: &Rc<FileIndex>) -> usize {
@@ -202,6 +229,8 @@ impl<'s> Interp<'s> {
             params,
             globals,
             frames: vec![main_frame],
+            frame_pool: Vec::new(),
+            saved_pool: Vec::new(),
             value: 0.0,
             value_returned: false,
             defining: false,
@@ -211,7 +240,7 @@ impl<'s> Interp<'s> {
             steps: 0,
             warnings: Vec::new(),
             subs: FxMap::default(),
-            called: HashSet::new(),
+            called: FxSet::default(),
             modal: Modal::default(),
             pos,
             current_tool: if s.zero_start || !s.tool_table.is_empty() {
@@ -430,7 +459,7 @@ impl<'s> Interp<'s> {
         self.steps += 1;
         if self.steps > self.s.max_steps {
             let (label, line, file) = match &self.last_loop {
-                Some((l, n, f)) => (Some(l.to_string()), Some(*n), f.clone()),
+                Some((k, n, f)) => (Some(loop_label(k)), Some(*n), f.clone()),
                 None => (None, None, self.cur.file.clone()),
             };
             let kind = ErrorKind::StepLimit {
@@ -473,6 +502,15 @@ impl<'s> Interp<'s> {
             self.cur.pos = o.next;
             self.cur.line += 1;
             return self.exec_oline(&file, oidx);
+        }
+        if let Some(data) = file.file.memory()
+            && let Some((line, end, next)) = self.cache.get(&(file_key(&file), line_idx))
+        {
+            // A line of a loop or sub body run before.
+            let (line, end, next) = (line.clone(), *end, *next);
+            self.cur.pos = next;
+            self.cur.line += 1;
+            return self.exec_line(&file, start, &data[start as usize..end as usize], &line);
         }
         let mut window = std::mem::take(&mut self.window);
         if self.s.plain_runs {
@@ -550,10 +588,11 @@ impl<'s> Interp<'s> {
         let line = if file.keeps(line_idx) {
             let key = (file_key(file), line_idx);
             match self.cache.get(&key) {
-                Some(l) => l.clone(),
+                Some(l) => l.0.clone(),
                 None => {
                     let l = Rc::new(self.parse_line(file, start, raw, terminated)?);
-                    self.cache.insert(key, l.clone());
+                    let end = start + raw.len() as u32;
+                    self.cache.insert(key, (l.clone(), end, next));
                     l
                 }
             }
@@ -625,7 +664,7 @@ impl<'s> Interp<'s> {
         self.out_lines += 1;
         if self.out_lines > self.s.max_output_lines {
             let (label, line, file) = match &self.last_loop {
-                Some((l, n, f)) => (Some(l.to_string()), Some(*n + 1), f.clone()),
+                Some((k, n, f)) => (Some(loop_label(k)), Some(*n + 1), f.clone()),
                 None => (None, None, self.cur.file.clone()),
             };
             let at = self.current_line_start;

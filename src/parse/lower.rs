@@ -443,6 +443,11 @@ pub fn parse_number(text: &str) -> Result<f64, ErrorKind> {
 
 /// The reference's integer rule: within 0.0001 of an integer.
 pub fn integer_value(v: f64) -> Result<i64, ErrorKind> {
+    // Whole numbers (nearly all) without a call to floor.
+    let i = v as i64;
+    if i as f64 == v && v.abs() < 9.0e15 {
+        return Ok(i);
+    }
     let f = v.floor();
     let frac = v - f;
     if frac > 0.9999 {
