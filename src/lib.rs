@@ -77,6 +77,8 @@ pub fn flatten(
             None,
         )
     })?;
+    let mut sink = sink;
+    sink.refer_to(index.file.clone());
     Interp::new(settings, loader, index, sink).run()
 }
 

@@ -55,7 +55,11 @@ pub fn binary(op: BinOp, a: f64, c: f64, span: Span) -> EvalResult {
                 // Whole numbers: the remainder in integers is exact, as the
                 // floating-point one is; only its zero keeps the sign of a.
                 let r = (ai % ci) as f64;
-                if r == 0.0 && a.is_sign_negative() { -0.0 } else { r }
+                if r == 0.0 && a.is_sign_negative() {
+                    -0.0
+                } else {
+                    r
+                }
             } else {
                 a % c
             };

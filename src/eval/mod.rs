@@ -129,7 +129,9 @@ pub struct Interp<'s> {
     frames: Vec<Frame>,
     /// Frames of returned calls, reused by the next calls.
     frame_pool: Vec<Frame>,
-    /// Argument save areas of returned calls.
+    /// Argument save areas of returned calls (boxed: they move between
+    /// frames and the pool without copying).
+    #[allow(clippy::vec_box)]
     saved_pool: Vec<Box<[f64; 30]>>,
     value: f64,
     value_returned: bool,

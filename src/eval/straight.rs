@@ -284,7 +284,7 @@ impl Interp<'_> {
         while lines < max_lines && self.out_lines + emitted < self.s.max_output_lines {
             if buf.get(i) == Some(&b'\n') {
                 // Blank line: nothing to write.
-                self.flush_batch(&buf[batch_start..i])?;
+                self.flush_input(file, base, &buf[batch_start..i], batch_start)?;
                 last_start = i;
                 i += 1;
                 batch_start = i;
@@ -297,7 +297,7 @@ impl Interp<'_> {
             if !self.fast_line(p) {
                 // Other words or modes: the block checks and the full
                 // state update, still without the grammar.
-                self.flush_batch(&buf[batch_start..i])?;
+                self.flush_input(file, base, &buf[batch_start..i], batch_start)?;
                 self.out_lines += emitted;
                 emitted = 0;
                 self.current_line_start = base + i as u32;
@@ -318,7 +318,7 @@ impl Interp<'_> {
                 emitted += 1;
                 if p.text_end + 1 != p.next {
                     // Trailing blanks: the line is written trimmed.
-                    self.flush_batch(&buf[batch_start..i])?;
+                    self.flush_input(file, base, &buf[batch_start..i], batch_start)?;
                     let mut out = std::mem::take(&mut self.out);
                     out.clear();
                     out.extend_from_slice(&buf[i..p.text_end]);
@@ -328,7 +328,7 @@ impl Interp<'_> {
                     r?;
                     batch_start = p.next;
                 } else if p.next - batch_start >= BATCH {
-                    self.flush_batch(&buf[batch_start..p.next])?;
+                    self.flush_input(file, base, &buf[batch_start..p.next], batch_start)?;
                     batch_start = p.next;
                 }
             }
@@ -336,7 +336,7 @@ impl Interp<'_> {
             i = p.next;
             lines += 1;
         }
-        self.flush_batch(&buf[batch_start..i])?;
+        self.flush_input(file, base, &buf[batch_start..i], batch_start)?;
         self.out_lines += emitted;
         if lines > 0 {
             self.current_line_start = base + last_start as u32;
@@ -431,20 +431,40 @@ impl Interp<'_> {
         ok
     }
 
+    /// Writes input bytes unchanged (`at`: their offset in `buf`, which
+    /// starts at file offset `base`).
+    fn flush_input(
+        &mut self,
+        file: &Rc<FileIndex>,
+        base: u32,
+        bytes: &[u8],
+        at: usize,
+    ) -> Result<(), Error> {
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        let start = base as u64 + at as u64;
+        self.sink
+            .write_input(&file.file, start, bytes)
+            .map_err(output_error)
+    }
+
     fn flush_batch(&mut self, bytes: &[u8]) -> Result<(), Error> {
         if bytes.is_empty() {
             return Ok(());
         }
-        self.sink.write(bytes).map_err(|e| {
-            crate::diag::Diagnostic::error(
-                crate::diag::ErrorKind::Io {
-                    path: "<output>".into(),
-                    message: e.to_string(),
-                },
-                None,
-            )
-        })
+        self.sink.write(bytes).map_err(output_error)
     }
+}
+
+fn output_error(e: std::io::Error) -> Error {
+    crate::diag::Diagnostic::error(
+        crate::diag::ErrorKind::Io {
+            path: "<output>".into(),
+            message: e.to_string(),
+        },
+        None,
+    )
 }
 
 #[cfg(test)]

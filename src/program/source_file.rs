@@ -33,6 +33,8 @@ pub struct SourceFile {
     pub name: String,
     text: Text,
     len: u64,
+    /// Modification time when opened (streamed files), to notice a change.
+    modified: Option<std::time::SystemTime>,
 }
 
 impl Drop for SourceFile {
@@ -52,6 +54,7 @@ impl SourceFile {
             name,
             text: Text::Memory(data),
             len,
+            modified: None,
         }
     }
 
@@ -69,6 +72,7 @@ impl SourceFile {
             name,
             text: Text::Disk { temp: false },
             len: meta.len(),
+            modified: meta.modified().ok(),
         })
     }
 
@@ -91,11 +95,15 @@ impl SourceFile {
         let copied = io::copy(&mut input, &mut f)?;
         let len = data.len() as u64 + copied;
         check_size(len)?;
+        f.flush()?;
+        drop(f);
+        let modified = std::fs::metadata(&path)?.modified().ok();
         Ok(SourceFile {
             path,
             name: name.to_string(),
             text: Text::Disk { temp: true },
             len,
+            modified,
         })
     }
 
@@ -109,6 +117,13 @@ impl SourceFile {
 
     pub fn is_empty(&self) -> bool {
         self.len == 0
+    }
+
+    /// Whether a streamed file still has the size and modification time it
+    /// had when opened.
+    pub fn unchanged(&self) -> io::Result<bool> {
+        let meta = std::fs::metadata(&self.path)?;
+        Ok(meta.len() == self.len && meta.modified().ok() == self.modified)
     }
 
     /// The bytes, when held in memory.

@@ -112,3 +112,55 @@ fn closed_pipe_is_success() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// A program over the in-memory limit, mixing lines copied as they are,
+/// trimmed lines, evaluated lines, loops and subroutine calls.
+fn big_mixed_program() -> String {
+    let mut s = String::from("G21 G90 G17 F600\n#<_step> = 0.25\n");
+    s.push_str("o<pass> sub\n  G1 X[#1 * #<_step>] Y#2\no<pass> endsub\n");
+    let mut i = 0u64;
+    while s.len() < 8_600_000 {
+        match i % 97 {
+            0 => s.push_str(&format!("o<pass> call [{}] [{}]\n", i % 13, i % 7)),
+            1 => s.push_str(&format!("G1 X[{i} * 0.001] Y{}.5  \n", i % 50)),
+            2 => s.push_str(&format!("o{i} repeat [3]\nG0 Z1\no{i} endrepeat\n")),
+            3 => s.push_str("G1 X1 Y2 (comment)\n"),
+            4 => s.push_str("G0 X0 Y0\nG2 X10 Y0 I5 J0\n\n"),
+            5 => s.push_str("N10 G1 X3.25 Y1\r\n"),
+            _ => s.push_str(&format!(
+                "G1 X{}.{:04} Y-{}.5 Z0.1\n",
+                i % 100,
+                i % 10_000,
+                i % 30
+            )),
+        }
+        i += 1;
+    }
+    s.push_str("G0 X0 Y0\nM2\n");
+    s
+}
+
+#[test]
+fn stdout_of_a_streamed_file_equals_the_spooled_output() {
+    // To stdout, unchanged input is copied from the input file on release;
+    // to a file, everything is spooled. Both must be the same bytes.
+    let d = tmp();
+    std::fs::write(d.path().join("big.ngc"), big_mixed_program()).unwrap();
+    let direct = ngcflat(d.path(), &["big.ngc".into()], None);
+    assert_eq!(
+        direct.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&direct.stderr)
+    );
+    let (code, _, err) = crate::run(d.path(), &["big.ngc", "-o", "out.ngc"]);
+    assert_eq!(code, 0, "{err}");
+    let spooled = std::fs::read(d.path().join("out.ngc")).unwrap();
+    assert!(spooled.len() > 8_400_000);
+    assert!(direct.stdout == spooled, "stdout and -o differ");
+    // Through stdin (spilled to a temporary file) as well.
+    let input = std::fs::read(d.path().join("big.ngc")).unwrap();
+    let piped = ngcflat(d.path(), &["-".into()], Some(&input));
+    assert_eq!(piped.status.code(), Some(0));
+    assert!(piped.stdout == spooled, "stdin and -o differ");
+}
