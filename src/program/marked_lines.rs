@@ -103,6 +103,26 @@ impl MarkedLines {
             let blk: &[u8; 64] = chunk[k..k + 64].try_into().expect("64 bytes");
             let (mut nl, mut mk) = masks(blk);
             let blk_base = base + k as u64;
+            if nl == 0 {
+                self.marked |= mk != 0;
+                k += 64;
+                continue;
+            }
+            let first = nl.trailing_zeros();
+            let before = (1u64 << first) - 1;
+            if self.long >= 64 && mk & !before == 0 {
+                // No mark after the first line end: the lines that start in
+                // this block are short and unmarked, so only counted.
+                self.marked |= mk & before != 0;
+                self.end_line(blk_base + first as u64, hit);
+                let rest = nl & (nl - 1);
+                if rest != 0 {
+                    self.idx += rest.count_ones();
+                    self.line_start = blk_base + 64 - rest.leading_zeros() as u64;
+                }
+                k += 64;
+                continue;
+            }
             while nl != 0 {
                 let t = nl.trailing_zeros();
                 let before = (1u64 << t) - 1;
@@ -217,7 +237,7 @@ mod tests {
                 ],
                 0..60,
             ),
-            long in 1usize..50,
+            long in prop_oneof![1usize..50, 60usize..140],
             chunk in 1usize..200,
         ) {
             let data = parts.concat().into_bytes();
