@@ -14,7 +14,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use crate::program::SourceFile;
 
 /// Most ranges recorded; past this, input bytes are spooled like others.
-const MAX_PARTS: usize = 1 << 16;
+const MAX_PARTS: usize = 1 << 14;
 
 /// A piece of the output, in order.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -26,7 +26,7 @@ enum Part {
 }
 
 /// Bytes kept in memory before spilling to a temporary file.
-const SPILL_AT: usize = 4 << 20;
+const SPILL_AT: usize = 1 << 20;
 
 static COUNTER: AtomicU32 = AtomicU32::new(0);
 

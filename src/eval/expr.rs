@@ -201,6 +201,13 @@ impl Interp<'_> {
     pub(crate) fn read_param(&mut self, p: &ParamRef, span: Span) -> EvalResult {
         match p {
             ParamRef::Numbered(index) => {
+                // `#7`: a literal index of an assigned plain parameter.
+                if let ExprKind::Num(v) = index.kind {
+                    let i = v as usize;
+                    if i as f64 == v && (1..5000).contains(&i) && self.params.set[i] {
+                        return Ok(self.params.values[i]);
+                    }
+                }
                 let i = self.param_index(index)?;
                 self.read_numbered(i, span)
             }

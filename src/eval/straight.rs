@@ -177,7 +177,7 @@ fn number_slow(buf: &[u8], mut i: usize) -> Option<(f64, usize)> {
 /// each at most once, ending in a newline. False sends the line to the
 /// general path.
 #[inline(always)]
-fn read_line(buf: &[u8], line: usize, p: &mut Plain) -> bool {
+fn read_line(buf: &[u8], line: usize, p: &mut Plain, comments: bool) -> bool {
     let at = |j: usize| buf.get(j).copied().unwrap_or(0);
     let mut i = line;
     p.mask = 0;
@@ -199,7 +199,7 @@ fn read_line(buf: &[u8], line: usize, p: &mut Plain) -> bool {
     loop {
         let slot = SLOT[at(i) as usize];
         if slot == NONE {
-            return false;
+            return comments && at(i) == b'(' && read_comment(buf, line, i, p);
         }
         let word_start = i;
         i += 1;
@@ -245,10 +245,45 @@ fn read_line(buf: &[u8], line: usize, p: &mut Plain) -> bool {
                 p.next = i + 1;
                 return true;
             }
-            c if SLOT[c as usize] != NONE => {}
+            c if SLOT[c as usize] != NONE || c == b'(' => {}
             _ => return false,
         }
     }
+}
+
+/// Reads an inert comment ending the line at `buf[i..]` (on `(`): printable
+/// ASCII without a nested `(`, not starting like an active comment (`msg`,
+/// `debug`, `print`, `log...`, `abort`, `py...`), then blanks and a newline.
+#[inline(always)]
+fn read_comment(buf: &[u8], line: usize, mut i: usize, p: &mut Plain) -> bool {
+    let at = |j: usize| buf.get(j).copied().unwrap_or(0);
+    i += 1;
+    let mut first = i;
+    while matches!(at(first), b' ' | b'\t') {
+        first += 1;
+    }
+    if matches!(at(first) | 0x20, b'm' | b'd' | b'p' | b'l' | b'a') {
+        return false;
+    }
+    loop {
+        match at(i) {
+            b')' => break,
+            b'(' => return false,
+            b'\t' | b' '..=b'~' => i += 1,
+            _ => return false,
+        }
+    }
+    i += 1;
+    let text_end = i;
+    while is_blank(at(i)) {
+        i += 1;
+    }
+    if at(i) != b'\n' || i - line > crate::parse::MAX_LINE {
+        return false;
+    }
+    p.text_end = text_end;
+    p.next = i + 1;
+    true
 }
 
 impl Interp<'_> {
@@ -267,6 +302,8 @@ impl Interp<'_> {
             return Ok(0);
         }
         let max_lines = stop_line.saturating_sub(first_line);
+        // Comments are copied unless they are to be stripped.
+        let comments = !self.s.strip_comments;
         let mut lines = 0u32;
         let mut emitted = 0u64;
         let mut i = 0usize;
@@ -291,7 +328,7 @@ impl Interp<'_> {
                 lines += 1;
                 continue;
             }
-            if !read_line(buf, i, p) {
+            if !read_line(buf, i, p, comments) {
                 break;
             }
             if !self.fast_line(p) {
@@ -352,6 +389,10 @@ impl Interp<'_> {
     /// model; false leaves it untouched for the general path.
     #[inline(always)]
     fn fast_line(&mut self, p: &Plain) -> bool {
+        if p.mask == 0 {
+            // A comment (and line number) only.
+            return true;
+        }
         let g = p.mask & 1 != 0;
         let motion = if !g {
             self.modal.motion
@@ -480,7 +521,7 @@ mod tests {
             text_end: 0,
             next: 0,
         };
-        read_line(l, 0, &mut p).then_some(p)
+        read_line(l, 0, &mut p, true).then_some(p)
     }
 
     #[test]
@@ -494,13 +535,16 @@ mod tests {
         );
         assert_eq!((p.vals[1], p.vals[2], p.vals[F]), (1.5, -2.0, 300.0));
         assert_eq!((p.text_end, p.next), (16, 17));
+        let p = read(b"G0 X1 (to the start: 5 mm) \n").expect("comment");
+        assert_eq!((p.count, p.text_end, p.next), (2, 26, 28));
+        let p = read(b"(segment 25, depth -1.435)\n").expect("comment");
+        assert_eq!((p.mask, p.count, p.text_end), (0, 0, 26));
         let p = read(b"N10 g0z5 \r\nX1\n").expect("plain");
         assert_eq!((p.text_end, p.next), (8, 11));
         for l in [
             "G1 X1",
             "G1 X1 X2\n",
             "G1 X#1\n",
-            "G1 X1 (c)\n",
             "M3\n",
             "G1 U1\n",
             " G1\n",
@@ -510,6 +554,17 @@ mod tests {
             "G1 X1.2.3\n",
             "G1 X1234567890123456\n",
             "\n",
+            "G1 X1 (msg, hi)\n",
+            "(debug, #1)\n",
+            "( print,x)\n",
+            "(Log,x)\n",
+            "(abort,x)\n",
+            "(py,x)\n",
+            "(a (b) c)\n",
+            "(unclosed\n",
+            "G1 (c) X1\n",
+            "(c) x\n",
+            "(caf\u{e9})\n",
         ] {
             assert!(read(l.as_bytes()).is_none(), "{l:?}");
         }

@@ -697,6 +697,8 @@ fn plain_line() -> impl Strategy<Value = String> {
             Just("G1 X1 (c)"), Just(" G1 X1"), Just("G1 X1 0"), Just("G1 X1 X2"), Just("#1 = 2"),
             Just("G1 X#1"), Just("o1 if [1]"), Just("o1 endif"), Just("F-1"), Just("S-2"),
             Just("X1.1234567890123456"), Just("X-.5 Y+2"), Just("G1 K1"), Just("G1 I1"),
+            Just("(segment 3, depth -1.5)"), Just("G0 X1 ( note ) "), Just("G1 X2 (msg, m)"),
+            Just("(debug, #5420)"), Just("N5 (c)"), Just("G1 X1 (a (b))"), Just("(c) G1"),
         ].prop_map(String::from),
     ]
 }
