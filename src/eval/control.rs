@@ -720,7 +720,7 @@ impl Interp<'_> {
         oidx: u32,
         name: &Rc<str>,
     ) -> Result<SubRec, Error> {
-        let base_name = name.rsplit('/').next().unwrap_or(name);
+        let base_name = base_name(name);
         if let Some(rec) = self.subs.get(base_name) {
             return Ok(rec.clone());
         }
@@ -842,8 +842,8 @@ impl Interp<'_> {
             *slot = self.o_eval(file, oidx, a)?;
         }
         let target = self.resolve(file, oidx, key)?;
-        let base: Rc<str> = if key.contains('/') {
-            Rc::from(key.rsplit('/').next().unwrap_or(key))
+        let base: Rc<str> = if base_name(key).len() != key.len() {
+            Rc::from(base_name(key))
         } else {
             key.clone()
         };
@@ -868,11 +868,14 @@ impl Interp<'_> {
             let (a, b) = self.osite(file, oidx);
             self.warn(WarningKind::QuirkRepeatRecursion, file, a, b);
         }
-        if !self.subs.contains_key(&base) {
-            self.subs.insert(base.clone(), target.clone());
-        }
-        if !self.called.contains(&base) {
-            self.called.insert(base.clone());
+        if self.last_called.as_deref() != Some(&*base) {
+            if !self.subs.contains_key(&base) {
+                self.subs.insert(base.clone(), target.clone());
+            }
+            if !self.called.contains(&base) {
+                self.called.insert(base.clone());
+            }
+            self.last_called = Some(base.clone());
         }
         let o_info = &file.olines[oidx as usize];
         let ret = Cursor {
@@ -1029,5 +1032,13 @@ impl Interp<'_> {
         self.push_frame(file, oidx, FrameKind::M98, name, ret)?;
         self.goto(&target.file, target.oidx, true);
         Ok(())
+    }
+}
+
+/// The sub name of a call label: its part after the last `/`.
+fn base_name(label: &str) -> &str {
+    match memchr::memrchr(b'/', label.as_bytes()) {
+        Some(i) => &label[i + 1..],
+        None => label,
     }
 }

@@ -78,7 +78,7 @@ pub struct Frame {
     /// Pending passes of an `M98 ... L` on the given line of this frame.
     pub m98_loop: Option<(u32, i64)>,
     /// Modal state saved by M70/M73; `auto` restores it on return (M73).
-    pub saved_modal: Option<Modal>,
+    pub saved_modal: Option<Box<Modal>>,
     pub auto_restore: bool,
 }
 
@@ -144,6 +144,8 @@ pub struct Interp<'s> {
     pub warnings: Vec<Diagnostic>,
     subs: FxMap<Rc<str>, SubRec>,
     called: FxSet<Rc<str>>,
+    /// The sub of the last call, already registered and marked called.
+    last_called: Option<Rc<str>>,
     modal: Modal,
     pos: Position,
     current_tool: Option<f64>,
@@ -243,6 +245,7 @@ impl<'s> Interp<'s> {
             warnings: Vec::new(),
             subs: FxMap::default(),
             called: FxSet::default(),
+            last_called: None,
             modal: Modal::default(),
             pos,
             current_tool: if s.zero_start || !s.tool_table.is_empty() {

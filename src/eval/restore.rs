@@ -24,7 +24,7 @@ impl Interp<'_> {
                 let m = self.modal.clone();
                 let nested = self.frames.len() > 1;
                 let f = self.frames.last_mut().expect("frame");
-                f.saved_modal = Some(m);
+                f.saved_modal = Some(Box::new(m));
                 f.auto_restore = op == 73 && nested;
             }
             71 => {
@@ -33,7 +33,10 @@ impl Interp<'_> {
                 f.auto_restore = false;
             }
             _ => {
-                let saved = self.frames.last().and_then(|f| f.saved_modal.clone());
+                let saved = self
+                    .frames
+                    .last()
+                    .and_then(|f| f.saved_modal.as_deref().cloned());
                 match saved {
                     Some(m) => self.restore_modal(&m)?,
                     None => {
