@@ -11,7 +11,6 @@ use crate::diag::Error;
 use crate::program::FileIndex;
 
 use super::Interp;
-use super::fast::FastWord;
 
 /// Word slots: G, X, Y, Z, A, B, C, F, S (the fast set), then I, J, K, R, P
 /// (lines with these take the block checks).
@@ -50,20 +49,11 @@ const POW10: [f64; 23] = [
 /// Output bytes gathered before they are handed to the sink.
 const BATCH: usize = 1 << 16;
 
-const NO_WORD: FastWord = FastWord {
-    letter: 0,
-    value: 0.0,
-    start: 0,
-    end: 0,
-};
-
 /// One line read by [`read_line`].
 struct Plain {
     mask: u32,
     /// Values by slot.
     vals: [f64; 14],
-    /// Words in line order, spans relative to the line start.
-    words: [FastWord; 14],
     count: usize,
     /// End of the text to write (without trailing blanks and terminator).
     text_end: usize,
@@ -201,7 +191,6 @@ fn read_line(buf: &[u8], line: usize, p: &mut Plain, comments: bool) -> bool {
         if slot == NONE {
             return comments && at(i) == b'(' && read_comment(buf, line, i, p);
         }
-        let word_start = i;
         i += 1;
         let neg = at(i) == b'-';
         if matches!(at(i), b'-' | b'+') {
@@ -228,12 +217,6 @@ fn read_line(buf: &[u8], line: usize, p: &mut Plain, comments: bool) -> bool {
         p.mask |= bit;
         let v = if neg { -v } else { v };
         p.vals[slot as usize] = v;
-        p.words[p.count] = FastWord {
-            letter: LETTERS[slot as usize],
-            value: v,
-            start: (word_start - line) as u16,
-            end: (i - line) as u16,
-        };
         p.count += 1;
         let text_end = i;
         while is_blank(at(i)) {
@@ -313,7 +296,6 @@ impl Interp<'_> {
         let p = &mut Plain {
             mask: 0,
             vals: [0.0; 14],
-            words: [NO_WORD; 14],
             count: 0,
             text_end: 0,
             next: 0,
@@ -340,7 +322,15 @@ impl Interp<'_> {
                 self.current_line_start = base + i as u32;
                 self.current_line_idx = first_line + lines;
                 let raw = &buf[i..p.next - 1];
-                match self.exec_plain(file, base + i as u32, raw, &p.words[..p.count]) {
+                // The words again, with their spans for messages.
+                let mut fw = std::mem::take(&mut self.fast_words);
+                let r = if super::fast::scan(raw, &mut fw) && !fw.is_empty() {
+                    self.exec_plain(file, base + i as u32, raw, &fw)
+                } else {
+                    None
+                };
+                self.fast_words = fw;
+                match r {
                     None => break,
                     Some(r) => r?,
                 }
@@ -452,9 +442,15 @@ impl Interp<'_> {
         if p.mask & AXIS_MASK == 0 {
             return true;
         }
+        // The words by letter (each at most once, so order is not needed).
         let mut words = [(0u8, 0.0f64); 14];
-        for (w, f) in words.iter_mut().zip(&p.words[..p.count]) {
-            *w = (f.letter, f.value);
+        let mut count = 0;
+        let mut all = p.mask;
+        while all != 0 {
+            let slot = all.trailing_zeros() as usize;
+            all &= all - 1;
+            words[count] = (LETTERS[slot], p.vals[slot]);
+            count += 1;
         }
         let mut axes = [(0usize, 0.0f64); 6];
         let mut n = 0;
@@ -467,7 +463,7 @@ impl Interp<'_> {
         }
         // The checks read the motion mode the line sets.
         let old = std::mem::replace(&mut self.modal.motion, motion);
-        let ok = self.check_motion(&words[..p.count], &axes[..n]).is_ok();
+        let ok = self.check_motion(&words[..count], &axes[..n]).is_ok();
         self.modal.motion = old;
         ok
     }
@@ -516,7 +512,6 @@ mod tests {
         let mut p = Plain {
             mask: 0,
             vals: [0.0; 14],
-            words: [NO_WORD; 14],
             count: 0,
             text_end: 0,
             next: 0,
@@ -529,10 +524,6 @@ mod tests {
         let p = read(b"G1 X1.5 Y-2 F300\n").expect("plain");
         assert_eq!(p.mask, 0b1000_0111);
         assert_eq!(p.count, 4);
-        assert_eq!(
-            (p.words[1].letter, p.words[1].start, p.words[1].end),
-            (b'x', 3, 7)
-        );
         assert_eq!((p.vals[1], p.vals[2], p.vals[F]), (1.5, -2.0, 300.0));
         assert_eq!((p.text_end, p.next), (16, 17));
         let p = read(b"G0 X1 (to the start: 5 mm) \n").expect("comment");
