@@ -97,6 +97,9 @@ impl Interp<'_> {
         words: &Words,
         m99: bool,
     ) -> Result<bool, Error> {
+        if !m99 && self.apply_simple(words) {
+            return Ok(false);
+        }
         let mut gbuf = [0i32; 16];
         let mut gn = 0;
         let mut ends = m99;
@@ -347,6 +350,57 @@ impl Interp<'_> {
             self.modal.reset_at_end();
         }
         Ok(ends)
+    }
+
+    /// The common line (G0/G1, axis, F and S words, each at most once) in
+    /// a plain state: as the general update below, in a few steps. False
+    /// leaves the state untouched.
+    fn apply_simple(&mut self, words: &[(u8, f64)]) -> bool {
+        if self.rotated || self.modal.ccomp != 400 {
+            return false;
+        }
+        let mut motion = self.modal.motion;
+        let mut seen = 0u32;
+        for &(l, v) in words {
+            let bit = 1u32 << (l.wrapping_sub(b'a') & 31);
+            if seen & bit != 0 {
+                return false;
+            }
+            seen |= bit;
+            match l {
+                b'g' if v == 0.0 => motion = 0,
+                b'g' if v == 1.0 => motion = 10,
+                b'x' | b'y' | b'z' | b'a' | b'b' | b'c' | b'f' | b's' => {}
+                _ => return false,
+            }
+        }
+        if !matches!(motion, 0 | 10) {
+            return false;
+        }
+        self.modal.motion = motion;
+        for &(l, v) in words {
+            match l {
+                b'f' => self.modal.feed = v,
+                b's' => self.modal.speed = v,
+                b'g' => {}
+                _ => {
+                    let a = match l {
+                        b'x' => 0,
+                        b'y' => 1,
+                        b'z' => 2,
+                        b'a' => 3,
+                        b'b' => 4,
+                        _ => 5,
+                    };
+                    if self.modal.absolute {
+                        self.pos.axes[a] = Ok(v);
+                    } else if let Ok(p) = &mut self.pos.axes[a] {
+                        *p += v;
+                    }
+                }
+            }
+        }
+        true
     }
 
     fn set_units(&mut self, metric: bool) {
