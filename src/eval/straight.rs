@@ -317,6 +317,7 @@ impl Interp<'_> {
                 // Other words or modes: the block checks and the full
                 // state update, still without the grammar.
                 self.flush_input(file, base, &buf[batch_start..i], batch_start)?;
+                batch_start = i;
                 self.out_lines += emitted;
                 emitted = 0;
                 self.current_line_start = base + i as u32;

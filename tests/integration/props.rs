@@ -692,6 +692,10 @@ fn plain_line() -> impl Strategy<Value = String> {
             Just("G93"), Just("G94"), Just("G41 D0"), Just("G40"), Just("G10 L2 P1 R30"),
             Just("G10 L2 P1 X1"), Just("G92 X3"), Just("G55"), Just("G54"), Just("G80"),
             Just("M3 S100"), Just(""), Just("G2.5"), Just("G4 P0"),
+            // Words the loop reads but leaves to the block checks, with a
+            // comment the plain-line scanner does not take.
+            Just("G4 P0 (wait)"), Just("G17 (xy plane)"), Just("G92.1 (cancel)"),
+            Just("G2 X1 Y1 R100 (round)"), Just("G1 F0 (zero feed)"), Just("G90 (back)"),
         ].prop_map(String::from),
         1 => prop_oneof![
             Just("G1 X1 (c)"), Just(" G1 X1"), Just("G1 X1 0"), Just("G1 X1 X2"), Just("#1 = 2"),
