@@ -1,9 +1,11 @@
-//! The straight-line loop: runs of the commonest CAM lines (`G0`/`G1` moves
-//! with axis, `F` and `S` words, optional line number) go through one tight
-//! loop that finds line ends, reads numbers, updates the state model and
+//! The straight-line loop: runs of the commonest CAM lines (`G0`–`G3` with
+//! axis, `F` and `S` words, `I`/`J`/`R` arcs in the XY plane, a line number,
+//! an inert comment at the end) go through one tight loop that finds line
+//! ends, reads numbers, makes the block checks, updates the state model and
 //! copies the input bytes to the output in blocks. Any line it does not
 //! fully understand ends the run and takes the general path, which gives the
-//! same result line by line; a property test compares the two.
+//! same result line by line; a property test and a fuzz target compare the
+//! two.
 
 use std::rc::Rc;
 
@@ -11,6 +13,8 @@ use crate::diag::Error;
 use crate::program::FileIndex;
 
 use super::Interp;
+use super::fast::POW10;
+use crate::program::swar::{LO7, splat};
 
 /// Word slots: G, X, Y, Z, A, B, C, F, S (the fast set), then I, J, K, R, P
 /// (lines with these take the block checks).
@@ -41,11 +45,6 @@ const fn slot_table() -> [u8; 256] {
 
 static SLOT: [u8; 256] = slot_table();
 
-const POW10: [f64; 23] = [
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
-    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
-];
-
 /// Output bytes gathered before they are handed to the sink.
 const BATCH: usize = 1 << 16;
 
@@ -64,12 +63,6 @@ struct Plain {
 #[inline(always)]
 fn is_blank(c: u8) -> bool {
     matches!(c, b' ' | b'\t' | b'\r')
-}
-
-const LO7: u64 = 0x7f7f_7f7f_7f7f_7f7f;
-
-const fn splat(b: u8) -> u64 {
-    0x0101_0101_0101_0101 * b as u64
 }
 
 const POW10_INT: [u64; 9] = [

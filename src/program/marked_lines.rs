@@ -4,18 +4,7 @@
 //! mark, overlong lines and the leading blank lines are handed on. Every
 //! O-line, `%` line, `M98` and `M99` holds a mark.
 
-/// `b` in every byte.
-pub(crate) const fn splat(b: u8) -> u64 {
-    0x0101_0101_0101_0101 * b as u64
-}
-
-const LO7: u64 = splat(0x7f);
-
-/// 0x80 in every byte of `t` that is zero, nothing elsewhere.
-#[inline(always)]
-pub(crate) fn zero_bytes(t: u64) -> u64 {
-    !(((t & LO7).wrapping_add(LO7)) | t | LO7)
-}
+use super::swar::{splat, zero_bytes};
 
 /// The high bits of the eight bytes of `m`, as the low eight bits.
 #[inline(always)]
