@@ -56,9 +56,10 @@ impl Interp<'_> {
         items: &[Item],
     ) -> Result<(), crate::diag::Error> {
         // Scratch buffers are reused from line to line.
-        let mut scratch = std::mem::take(&mut self.scratch);
+        // Boxed: taking it out and putting it back moves a pointer.
+        let mut scratch = self.scratch.take().unwrap_or_default();
         let r = self.exec_items_with(file, start, raw, line, items, &mut scratch);
-        self.scratch = scratch;
+        self.scratch = Some(scratch);
         r
     }
 

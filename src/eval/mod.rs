@@ -179,7 +179,7 @@ pub struct Interp<'s> {
     rotated: bool,
     /// The repeat line (O-line index) an endrepeat just jumped back to.
     repeat_again: Option<u32>,
-    scratch: block::Scratch,
+    scratch: Option<Box<block::Scratch>>,
 }
 
 /// The label part of a control key (`scope#label`).
@@ -274,7 +274,7 @@ impl<'s> Interp<'s> {
             tlo: Some([0.0; 9]),
             rotated: false,
             repeat_again: None,
-            scratch: block::Scratch::default(),
+            scratch: Some(Box::default()),
         }
     }
 
