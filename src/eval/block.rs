@@ -7,7 +7,7 @@ use std::rc::Rc;
 use crate::diag::{ErrorKind, WarningKind};
 use crate::emit::write_number;
 use crate::parse::MAX_LINE;
-use crate::parse::ast::{CommentKind, Item, Line, ParamRef, Span};
+use crate::parse::ast::{CommentKind, Item, ParamRef, Span};
 use crate::program::FileIndex;
 
 use super::Interp;
@@ -52,13 +52,12 @@ impl Interp<'_> {
         file: &Rc<FileIndex>,
         start: u32,
         raw: &[u8],
-        line: &Line,
         items: &[Item],
     ) -> Result<(), crate::diag::Error> {
         // Scratch buffers are reused from line to line.
         // Boxed: taking it out and putting it back moves a pointer.
         let mut scratch = self.scratch.take().unwrap_or_default();
-        let r = self.exec_items_with(file, start, raw, line, items, &mut scratch);
+        let r = self.exec_items_with(file, start, raw, items, &mut scratch);
         self.scratch = Some(scratch);
         r
     }
@@ -68,11 +67,9 @@ impl Interp<'_> {
         file: &Rc<FileIndex>,
         start: u32,
         raw: &[u8],
-        line: &Line,
         items: &[Item],
         scratch: &mut Scratch,
     ) -> Result<(), crate::diag::Error> {
-        let _ = line;
         scratch.clear();
         let Scratch {
             words,

@@ -182,6 +182,17 @@ pub struct Interp<'s> {
     scratch: Option<Box<block::Scratch>>,
 }
 
+/// An error writing the output.
+fn output_error(e: std::io::Error) -> Error {
+    Diagnostic::error(
+        ErrorKind::Io {
+            path: "<output>".into(),
+            message: e.to_string(),
+        },
+        None,
+    )
+}
+
 /// The label part of a control key (`scope#label`).
 fn loop_label(key: &str) -> String {
     key.rsplit('#').next().unwrap_or("").to_string()
@@ -359,15 +370,7 @@ impl<'s> Interp<'s> {
             ..
         } = self;
         warnings.extend(loader.warnings);
-        sink.finish().map_err(|e| {
-            Diagnostic::error(
-                ErrorKind::Io {
-                    path: "<output>".into(),
-                    message: e.to_string(),
-                },
-                None,
-            )
-        })?;
+        sink.finish().map_err(output_error)?;
         Ok(warnings)
     }
 
@@ -637,7 +640,7 @@ impl<'s> Interp<'s> {
                     Err(self.error(ErrorKind::StrayPercent, file, start, start + 1))
                 }
             }
-            LineKind::Items(items) => self.exec_items(file, start, raw, line, items),
+            LineKind::Items(items) => self.exec_items(file, start, raw, items),
             // O-lines are executed from the file index; one that reaches
             // here failed to index, so re-raise its parse error.
             LineKind::O(_) | LineKind::M98(_) => Ok(()),
@@ -684,16 +687,10 @@ impl<'s> Interp<'s> {
                 at,
             ));
         }
-        let r = self.sink.write(bytes).and_then(|_| self.sink.write(b"\n"));
-        r.map_err(|e| {
-            Diagnostic::error(
-                ErrorKind::Io {
-                    path: "<output>".into(),
-                    message: e.to_string(),
-                },
-                None,
-            )
-        })
+        self.sink
+            .write(bytes)
+            .and_then(|_| self.sink.write(b"\n"))
+            .map_err(output_error)
     }
 }
 

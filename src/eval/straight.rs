@@ -12,8 +12,8 @@ use std::rc::Rc;
 use crate::diag::Error;
 use crate::program::FileIndex;
 
-use super::Interp;
 use super::fast::POW10;
+use super::{Interp, output_error};
 use crate::program::swar::{LO7, splat};
 
 /// Word slots: G, X, Y, Z, A, B, C, F, S (the fast set), then I, J, K, R, P
@@ -340,13 +340,10 @@ impl Interp<'_> {
                 if p.text_end + 1 != p.next {
                     // Trailing blanks: the line is written trimmed.
                     self.flush_input(file, base, &buf[batch_start..i], batch_start)?;
-                    let mut out = std::mem::take(&mut self.out);
-                    out.clear();
-                    out.extend_from_slice(&buf[i..p.text_end]);
-                    out.push(b'\n');
-                    let r = self.flush_batch(&out);
-                    self.out = out;
-                    r?;
+                    self.sink
+                        .write(&buf[i..p.text_end])
+                        .and_then(|_| self.sink.write(b"\n"))
+                        .map_err(output_error)?;
                     batch_start = p.next;
                 } else if p.next - batch_start >= BATCH {
                     self.flush_input(file, base, &buf[batch_start..p.next], batch_start)?;
@@ -479,23 +476,6 @@ impl Interp<'_> {
             .write_input(&file.file, start, bytes)
             .map_err(output_error)
     }
-
-    fn flush_batch(&mut self, bytes: &[u8]) -> Result<(), Error> {
-        if bytes.is_empty() {
-            return Ok(());
-        }
-        self.sink.write(bytes).map_err(output_error)
-    }
-}
-
-fn output_error(e: std::io::Error) -> Error {
-    crate::diag::Diagnostic::error(
-        crate::diag::ErrorKind::Io {
-            path: "<output>".into(),
-            message: e.to_string(),
-        },
-        None,
-    )
 }
 
 #[cfg(test)]
