@@ -85,16 +85,15 @@ pub struct Frame {
 impl Frame {
     /// Makes a pooled frame like a new one, keeping its tables' room.
     fn reset(&mut self, kind: FrameKind, name: Rc<str>) {
-        self.kind = kind;
-        self.name = name;
-        self.ret = None;
-        self.call_site = None;
-        self.saved = None;
-        self.locals.clear();
-        self.labels.clear();
-        self.m98_loop = None;
-        self.saved_modal = None;
-        self.auto_restore = false;
+        let mut locals = std::mem::take(&mut self.locals);
+        let mut labels = std::mem::take(&mut self.labels);
+        locals.clear();
+        labels.clear();
+        *self = Frame {
+            locals,
+            labels,
+            ..Frame::new(kind, name)
+        };
     }
 
     fn new(kind: FrameKind, name: Rc<str>) -> Frame {

@@ -382,25 +382,25 @@ impl Interp<'_> {
             match l {
                 b'f' => self.modal.feed = v,
                 b's' => self.modal.speed = v,
-                b'g' => {}
                 _ => {
-                    let a = match l {
-                        b'x' => 0,
-                        b'y' => 1,
-                        b'z' => 2,
-                        b'a' => 3,
-                        b'b' => 4,
-                        _ => 5,
-                    };
-                    if self.modal.absolute {
-                        self.pos.axes[a] = Ok(v);
-                    } else if let Ok(p) = &mut self.pos.axes[a] {
-                        *p += v;
+                    if let Some(a) = axis_index(l) {
+                        self.move_axis(a, v);
                     }
                 }
             }
         }
         true
+    }
+
+    /// The end of a move on one axis: the word's value (G90) or the
+    /// position plus it (G91); an unknown position stays unknown.
+    #[inline]
+    pub(super) fn move_axis(&mut self, axis: usize, v: f64) {
+        if self.modal.absolute {
+            self.pos.axes[axis] = Ok(v);
+        } else if let Ok(p) = &mut self.pos.axes[axis] {
+            *p += v;
+        }
     }
 
     fn set_units(&mut self, metric: bool) {
@@ -604,7 +604,6 @@ impl Interp<'_> {
             self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "an XY rotation (G10 R)");
             return;
         }
-        let line = self.line_no();
         let motion = self.modal.motion;
         match motion {
             382..=385 => self.probe(axis_words),
@@ -623,13 +622,8 @@ impl Interp<'_> {
                     return;
                 }
                 for &(a, v) in axis_words {
-                    if self.modal.absolute {
-                        self.pos.axes[a] = Ok(v);
-                    } else if let Ok(p) = &mut self.pos.axes[a] {
-                        *p += v;
-                    }
+                    self.move_axis(a, v);
                 }
-                let _ = line;
             }
         }
     }

@@ -417,13 +417,7 @@ impl Interp<'_> {
         while axes != 0 {
             let slot = axes.trailing_zeros() as usize;
             axes &= axes - 1;
-            let v = p.vals[slot];
-            let a = &mut self.pos.axes[slot - 1];
-            if self.modal.absolute {
-                *a = Ok(v);
-            } else if let Ok(x) = a {
-                *x += v;
-            }
+            self.move_axis(slot - 1, p.vals[slot]);
         }
         true
     }
