@@ -30,7 +30,7 @@ pub struct Scratch {
     words: Words,
     repl: Vec<(Span, Repl)>,
     num_set: Vec<(usize, f64)>,
-    named_set: Vec<(Rc<str>, f64)>,
+    named_set: Vec<(crate::parse::Name, f64)>,
     context_ops: Vec<(u8, Span)>,
     word_spans: Vec<Span>,
 }

@@ -6,7 +6,7 @@ use std::rc::Rc;
 
 use crate::diag::{Error, ErrorKind, WarningKind};
 use crate::parse::ast::{Label, LineKind, OKind, OLine};
-use crate::parse::integer_value;
+use crate::parse::{Name, integer_value};
 use crate::program::{FileIndex, control_key};
 
 use super::expr::round_half_even_int;
@@ -63,7 +63,7 @@ impl Interp<'_> {
     }
 
     /// The label text of an O-line (computed labels are evaluated).
-    fn label_text(&mut self, file: &Rc<FileIndex>, oidx: u32) -> Result<Rc<str>, Error> {
+    fn label_text(&mut self, file: &Rc<FileIndex>, oidx: u32) -> Result<Name, Error> {
         let o = self.oline(file, oidx);
         match &o.label {
             Label::Static(s) => Ok(s.clone()),
@@ -74,13 +74,13 @@ impl Interp<'_> {
                     let start = file.olines[oidx as usize].start;
                     self.error_in_line(k, file, start, o.label_span)
                 })?;
-                Ok(Rc::from(n.to_string()))
+                Ok(Name::new(&n.to_string()))
             }
         }
     }
 
     /// Internal key of the O-line's label.
-    fn key_of(&mut self, file: &Rc<FileIndex>, oidx: u32) -> Result<Rc<str>, Error> {
+    fn key_of(&mut self, file: &Rc<FileIndex>, oidx: u32) -> Result<Name, Error> {
         if let Some(k) = &file.olines[oidx as usize].key {
             return Ok(k.clone());
         }
@@ -120,7 +120,7 @@ impl Interp<'_> {
         &mut self,
         file: &Rc<FileIndex>,
         from: u32,
-        key: &Rc<str>,
+        key: &Name,
         what: Seek,
         only: &[OKind],
     ) -> Result<u32, Error> {
@@ -188,12 +188,7 @@ impl Interp<'_> {
 
     /// Like `seek`, but passes over `break`/`continue` lines of the same
     /// loop, which do nothing while the loop is being left.
-    fn seek_loop_end(
-        &mut self,
-        file: &Rc<FileIndex>,
-        from: u32,
-        key: &Rc<str>,
-    ) -> Result<u32, Error> {
+    fn seek_loop_end(&mut self, file: &Rc<FileIndex>, from: u32, key: &Name) -> Result<u32, Error> {
         let mut at = from;
         let from_continue = file.kind_of(from) == Some(OKind::Continue);
         loop {
@@ -218,7 +213,7 @@ impl Interp<'_> {
         &mut self,
         file: &Rc<FileIndex>,
         oidx: u32,
-        key: &Rc<str>,
+        key: &Name,
         kind: OKind,
     ) -> Result<(), Error> {
         let line = file.olines[oidx as usize].line_idx;
@@ -254,7 +249,7 @@ impl Interp<'_> {
         &mut self,
         file: &Rc<FileIndex>,
         oidx: u32,
-        key: &Rc<str>,
+        key: &Name,
         kinds: &[OKind],
         _expected: &'static str,
     ) -> Result<LabelRec, Error> {
@@ -275,11 +270,11 @@ impl Interp<'_> {
         }
     }
 
-    fn note_loop(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Rc<str>) {
+    fn note_loop(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) {
         let line = file.olines[oidx as usize].line_idx;
         // The key is kept as it is (no allocation per pass); the label is
         // cut from it only for a message.
-        let same = matches!(&self.last_loop, Some((k, l, f)) if *l == line && Rc::ptr_eq(k, key) && Rc::ptr_eq(f, file));
+        let same = matches!(&self.last_loop, Some((k, l, f)) if *l == line && k == key && Rc::ptr_eq(f, file));
         if !same {
             self.last_loop = Some((key.clone(), line, file.clone()));
         }
@@ -532,7 +527,7 @@ impl Interp<'_> {
 
     /// A line with the label being looked for, but of a kind that does not
     /// belong there.
-    fn stray(&mut self, file: &Rc<FileIndex>, t: u32, key: &Rc<str>) -> Result<(), Error> {
+    fn stray(&mut self, file: &Rc<FileIndex>, t: u32, key: &Name) -> Result<(), Error> {
         let label = key.rsplit('#').next().unwrap_or("").to_string();
         let found = file.kind_of(t).map(|k| k.name()).unwrap_or("?");
         let rec = self.frame().labels.get(key).cloned();
@@ -556,7 +551,7 @@ impl Interp<'_> {
         ))
     }
 
-    fn skip_if(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Rc<str>) -> Result<(), Error> {
+    fn skip_if(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) -> Result<(), Error> {
         let mut at = oidx;
         loop {
             let t = self.seek(file, at, key, Seek::Control, &[])?;
@@ -592,7 +587,7 @@ impl Interp<'_> {
         &mut self,
         file: &Rc<FileIndex>,
         t: u32,
-        key: &Rc<str>,
+        key: &Name,
         end: OKind,
         _what: &str,
     ) -> Result<(), Error> {
@@ -609,7 +604,7 @@ impl Interp<'_> {
 
     /// A `sub` line reached by normal flow: a definition to register and
     /// skip.
-    fn reach_sub(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Rc<str>) -> Result<(), Error> {
+    fn reach_sub(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) -> Result<(), Error> {
         if self.level() > 0 {
             let outer = self
                 .frames
@@ -714,17 +709,11 @@ impl Interp<'_> {
 
     /// Finds a subroutine: registered, then a file on the search path, then
     /// further down the current file.
-    fn resolve(
-        &mut self,
-        file: &Rc<FileIndex>,
-        oidx: u32,
-        name: &Rc<str>,
-    ) -> Result<SubRec, Error> {
-        let base_name = base_name(name);
-        if let Some(rec) = self.subs.get(base_name) {
+    fn resolve(&mut self, file: &Rc<FileIndex>, oidx: u32, name: &Name) -> Result<SubRec, Error> {
+        let base = base_key(name);
+        if let Some(rec) = self.subs.get(&base) {
             return Ok(rec.clone());
         }
-        let base: Rc<str> = Rc::from(base_name);
         let found = self
             .loader
             .find(name)
@@ -805,7 +794,7 @@ impl Interp<'_> {
         file: &Rc<FileIndex>,
         oidx: u32,
         kind: FrameKind,
-        name: Rc<str>,
+        name: Name,
         ret: Cursor,
     ) -> Result<(), Error> {
         if self.level() + 1 > MAX_CALL_LEVEL {
@@ -831,7 +820,7 @@ impl Interp<'_> {
         Ok(())
     }
 
-    fn call(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Rc<str>) -> Result<(), Error> {
+    fn call(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) -> Result<(), Error> {
         let line = file.olines[oidx as usize].line.clone();
         let LineKind::O(o) = &line.kind else {
             unreachable!("call on a non-O line")
@@ -842,11 +831,7 @@ impl Interp<'_> {
             *slot = self.o_eval(file, oidx, a)?;
         }
         let target = self.resolve(file, oidx, key)?;
-        let base: Rc<str> = if base_name(key).len() != key.len() {
-            Rc::from(base_name(key))
-        } else {
-            key.clone()
-        };
+        let base = base_key(key);
         if target.file.kind_of(target.oidx) == Some(OKind::Bare) {
             return Err(self.oerr(
                 ErrorKind::FanucNeedsM98 {
@@ -894,7 +879,7 @@ impl Interp<'_> {
         let f = self.frame();
         f.saved = Some(saved);
         if oword_nargs {
-            f.locals.insert(Rc::from("n_args"), nargs);
+            f.locals.insert(Name::new("n_args"), nargs);
         }
         self.goto(&target.file, target.oidx, true);
         Ok(())
@@ -1007,7 +992,7 @@ impl Interp<'_> {
                 self.frame().m98_loop = Some((line, count - 1));
             }
         }
-        let name: Rc<str> = Rc::from(n.to_string());
+        let name = Name::new(&n.to_string());
         let target = self.resolve(file, oidx, &name)?;
         if target.file.kind_of(target.oidx) == Some(OKind::Sub) {
             return Err(self.oerr(
@@ -1036,6 +1021,17 @@ impl Interp<'_> {
 }
 
 /// The sub name of a call label: its part after the last `/`.
+/// The sub name of a call label, as a key (the label itself when it is
+/// already bare).
+fn base_key(label: &Name) -> Name {
+    let base = base_name(label);
+    if base.len() == label.len() {
+        label.clone()
+    } else {
+        Name::new(base)
+    }
+}
+
 fn base_name(label: &str) -> &str {
     match memchr::memrchr(b'/', label.as_bytes()) {
         Some(i) => &label[i + 1..],

@@ -1,8 +1,6 @@
 //! Parameter substitution in `(debug,…)`, `(print,…)`, `(log,…)` and
 //! `(abort,…)` texts, with the reference's `%d`, `%f` and `%.Nf` directives.
 
-use std::rc::Rc;
-
 use crate::diag::ErrorKind;
 use crate::parse::ast::Span;
 
@@ -112,7 +110,7 @@ impl Interp<'_> {
                         .filter(|c| !c.is_whitespace())
                         .flat_map(|c| c.to_lowercase())
                         .collect();
-                    let name: Rc<str> = Rc::from(name);
+                    let name = crate::parse::Name::new(&name);
                     let span = Span::new(base + i as u32, base + (i + close + 1) as u32);
                     if self.named_exists(&name, span)? {
                         let v = self.read_named(&name, span)?;

@@ -26,8 +26,8 @@ use std::rc::Rc;
 
 use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};
 use crate::emit::Sink;
-use crate::parse::LineParser;
 use crate::parse::ast::{Line, LineKind, OKind, Span};
+use crate::parse::{LineParser, Name};
 use crate::program::{FileIndex, Loader, Window, next_line};
 
 pub use settings::{Define, Settings};
@@ -69,12 +69,12 @@ pub struct LabelRec {
 
 pub struct Frame {
     pub kind: FrameKind,
-    pub name: Rc<str>,
+    pub name: Name,
     pub ret: Option<Cursor>,
     pub call_site: Option<Site>,
     pub saved: Option<Box<[f64; 30]>>,
-    pub locals: FxMap<Rc<str>, f64>,
-    pub labels: FxMap<Rc<str>, LabelRec>,
+    pub locals: FxMap<Name, f64>,
+    pub labels: FxMap<Name, LabelRec>,
     /// Pending passes of an `M98 ... L` on the given line of this frame.
     pub m98_loop: Option<(u32, i64)>,
     /// Modal state saved by M70/M73; `auto` restores it on return (M73).
@@ -84,7 +84,7 @@ pub struct Frame {
 
 impl Frame {
     /// Makes a pooled frame like a new one, keeping its tables' room.
-    fn reset(&mut self, kind: FrameKind, name: Rc<str>) {
+    fn reset(&mut self, kind: FrameKind, name: Name) {
         let mut locals = std::mem::take(&mut self.locals);
         let mut labels = std::mem::take(&mut self.labels);
         locals.clear();
@@ -96,7 +96,7 @@ impl Frame {
         };
     }
 
-    fn new(kind: FrameKind, name: Rc<str>) -> Frame {
+    fn new(kind: FrameKind, name: Name) -> Frame {
         Frame {
             kind,
             name,
@@ -124,7 +124,7 @@ pub struct Interp<'s> {
     pub loader: Loader,
     main: Rc<FileIndex>,
     params: Params,
-    globals: FxMap<Rc<str>, f64>,
+    globals: FxMap<Name, f64>,
     frames: Vec<Frame>,
     /// Frames of returned calls, reused by the next calls.
     frame_pool: Vec<Frame>,
@@ -141,10 +141,10 @@ pub struct Interp<'s> {
     out_lines: u64,
     steps: u64,
     pub warnings: Vec<Diagnostic>,
-    subs: FxMap<Rc<str>, SubRec>,
-    called: FxSet<Rc<str>>,
+    subs: FxMap<Name, SubRec>,
+    called: FxSet<Name>,
     /// The sub of the last call, already registered and marked called.
-    last_called: Option<Rc<str>>,
+    last_called: Option<Name>,
     modal: Modal,
     pos: Position,
     current_tool: Option<f64>,
@@ -155,7 +155,7 @@ pub struct Interp<'s> {
     ref_stale_continue: Option<u32>,
     /// Control key, line and file of the last loop passed (for limit
     /// messages).
-    last_loop: Option<(Rc<str>, u32, Rc<FileIndex>)>,
+    last_loop: Option<(Name, u32, Rc<FileIndex>)>,
     parser: LineParser,
     /// Parsed lines of loop and sub bodies, with their end and the start of
     /// the next line.
@@ -205,15 +205,15 @@ impl<'s> Interp<'s> {
     pub fn new(s: &'s Settings, loader: Loader, main: Rc<FileIndex>, sink: Sink) -> Interp<'s> {
         let mut params = Params::new(s.zero_start);
         let mut globals = FxMap::default();
-        let mut main_frame = Frame::new(FrameKind::Main, Rc::from(""));
+        let mut main_frame = Frame::new(FrameKind::Main, Name::new(""));
         for d in &s.defines {
             match d {
                 Define::Numbered(i, v) => params.assign(*i, *v),
                 Define::Named(n, v) => {
                     if n.starts_with('_') {
-                        globals.insert(Rc::from(n.as_str()), *v);
+                        globals.insert(Name::new(n), *v);
                     } else {
-                        main_frame.locals.insert(Rc::from(n.as_str()), *v);
+                        main_frame.locals.insert(Name::new(n), *v);
                     }
                 }
             }

@@ -1,9 +1,8 @@
 //! Named parameters: locals per call level, `_` globals, the predefined
 //! read-only names answered from the state model, INI values.
 
-use std::rc::Rc;
-
 use crate::diag::ErrorKind;
+use crate::parse::Name;
 use crate::parse::ast::Span;
 
 use super::Interp;
@@ -236,7 +235,7 @@ impl Interp<'_> {
         }
     }
 
-    fn named_table(&mut self, name: &str) -> &mut super::fx_hasher::FxMap<Rc<str>, f64> {
+    fn named_table(&mut self, name: &str) -> &mut super::fx_hasher::FxMap<Name, f64> {
         if name.starts_with('_') || self.frames.len() == 1 {
             &mut self.globals
         } else {
@@ -244,7 +243,7 @@ impl Interp<'_> {
         }
     }
 
-    pub(crate) fn read_named(&mut self, name: &Rc<str>, span: Span) -> EvalResult {
+    pub(crate) fn read_named(&mut self, name: &Name, span: Span) -> EvalResult {
         if name.starts_with('_') {
             // A -D value overrides a predefined one (e.g. _hal values).
             if let Some(v) = self.globals.get(name) {
@@ -269,7 +268,7 @@ impl Interp<'_> {
 
     pub(crate) fn named_exists(
         &mut self,
-        name: &Rc<str>,
+        name: &Name,
         span: Span,
     ) -> Result<bool, (ErrorKind, Span)> {
         if name.starts_with("_ini[") || name.starts_with("_hal[") {
@@ -287,14 +286,14 @@ impl Interp<'_> {
     /// Creates a named parameter (value 0) when its setting is parsed.
     pub(crate) fn create_named(
         &mut self,
-        name: &Rc<str>,
+        name: &Name,
         span: Span,
     ) -> Result<(), (ErrorKind, Span)> {
         // An `_ini[...]` name the INI does not have is an ordinary global.
         let ini_missing =
             name.starts_with("_ini[") && self.predefined(name, span).is_none_or(|r| r.is_err());
         if (self.is_predefined(name) && !ini_missing)
-            || (name.as_ref() == "n_args" && self.s.oword_nargs && self.level() > 0)
+            || (name.as_str() == "n_args" && self.s.oword_nargs && self.level() > 0)
         {
             return Err((
                 ErrorKind::NamedReadOnly {
@@ -310,7 +309,7 @@ impl Interp<'_> {
         Ok(())
     }
 
-    pub(crate) fn set_named(&mut self, name: &Rc<str>, v: f64) {
+    pub(crate) fn set_named(&mut self, name: &Name, v: f64) {
         self.named_table(name).insert(name.clone(), v);
     }
 }

@@ -1,7 +1,7 @@
 //! Typed syntax tree of one line. Spans are byte offsets relative to the start
 //! of the raw line; the line knows its own offset in the file.
 
-use std::rc::Rc;
+use super::Name;
 
 /// `start..end` in bytes, relative to the start of the raw line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -89,7 +89,7 @@ pub enum ExprKind {
 pub enum ParamRef {
     Numbered(Expr),
     /// Lower-cased name without blanks; globals start with `_`.
-    Named(Rc<str>),
+    Named(Name),
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -146,7 +146,7 @@ pub enum Item {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Label {
     /// `o100` (as "100"), `o<name>`.
-    Static(Rc<str>),
+    Static(Name),
     /// `o[#1+2]`, `o#1`: evaluated when the line is read.
     Dynamic(Expr),
 }

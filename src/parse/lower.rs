@@ -1,9 +1,8 @@
 //! pest pairs → typed AST. One `lower_<rule>` function per grammar rule.
 
-use std::rc::Rc;
-
 use pest::iterators::Pair;
 
+use super::Name;
 use super::ast::*;
 use super::grammar::Rule;
 use super::normalize::Normalized;
@@ -165,7 +164,7 @@ impl Lowerer<'_> {
         if p.as_rule() == Rule::named {
             let s = p.as_str();
             let name = &s[1..s.len() - 1];
-            return Ok(ParamRef::Named(Rc::from(name)));
+            return Ok(ParamRef::Named(Name::new(name)));
         }
         Ok(ParamRef::Numbered(self.lower_value(p)?))
     }
@@ -280,11 +279,11 @@ impl Lowerer<'_> {
         let inner = lp.into_inner().next().expect("label");
         let label = if inner.as_rule() == Rule::named {
             let s = inner.as_str();
-            Label::Static(Rc::from(&s[1..s.len() - 1]))
+            Label::Static(Name::new(&s[1..s.len() - 1]))
         } else if inner.as_rule() == Rule::number {
             let v = self.lower_number(&inner)?;
             let n = integer_value(v).map_err(|k| (k, label_span))?;
-            Label::Static(Rc::from(n.to_string()))
+            Label::Static(Name::new(&n.to_string()))
         } else {
             Label::Dynamic(self.lower_value(inner)?)
         };

@@ -3,11 +3,13 @@
 pub mod ast;
 mod grammar;
 mod lower;
+mod name;
 pub mod normalize;
 
 use pest::Parser as _;
 
 pub use lower::{integer_value, parse_number};
+pub use name::Name;
 
 use crate::diag::ErrorKind;
 use ast::{Line, LineKind, Span};

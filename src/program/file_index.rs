@@ -3,6 +3,7 @@
 //! in order, sub definitions and their ends, and the errors the reference
 //! reports even on lines it skips.
 
+use crate::parse::Name;
 use std::collections::HashMap;
 use std::rc::Rc;
 use std::sync::Arc;
@@ -23,10 +24,10 @@ pub struct OInfo {
     pub next: u32,
     pub line: Rc<Line>,
     /// Name of the sub definition the line lies in ("" outside).
-    pub scope: Rc<str>,
+    pub scope: Name,
     /// Internal key of a static label: `scope#label` for control labels,
     /// `label` for sub/endsub/return/call/bare.
-    pub key: Option<Rc<str>>,
+    pub key: Option<Name>,
 }
 
 impl OInfo {
@@ -48,7 +49,7 @@ pub struct SubDefInfo {
     /// O-line index of the matching `endsub`, if any.
     pub end: Option<u32>,
     /// A `sub` or bare O line inside the definition: (O-line index, name).
-    pub nested: Option<(u32, Rc<str>)>,
+    pub nested: Option<(u32, Name)>,
     /// `return`/`endsub` lines with the same label, in order (the reference
     /// reads them while skipping the definition: a value sets `#<_value>`,
     /// none clears it).
@@ -64,7 +65,7 @@ pub struct FileIndex {
     pub first_nonblank_next: u32,
     pub olines: Vec<OInfo>,
     /// Static label key → O-line indices in file order.
-    pub occ: HashMap<Rc<str>, Vec<u32>>,
+    pub occ: HashMap<Name, Vec<u32>>,
     /// O-lines whose label is computed when read.
     pub dynamic: Vec<u32>,
     /// Errors raised even on skipped lines: (line index, line start, error).
@@ -86,12 +87,12 @@ pub struct FileIndex {
     pub line_count: u32,
 }
 
-pub fn control_key(scope: &str, label: &str) -> Rc<str> {
+pub fn control_key(scope: &str, label: &str) -> Name {
     let mut s = String::with_capacity(scope.len() + label.len() + 1);
     s.push_str(scope);
     s.push('#');
     s.push_str(label);
-    Rc::from(s)
+    Name::new(&s)
 }
 
 pub use super::source_file::next_line;
@@ -106,7 +107,7 @@ impl FileIndex {
         let mut first_nonblank = None;
         let mut first_nonblank_next = 0u32;
         let mut percent_start = false;
-        let mut current_def: Option<Rc<str>> = None;
+        let mut current_def: Option<Name> = None;
         let scanned = file.scan_marked_lines(crate::parse::MAX_LINE + 1, |m, raw| {
             let (idx, pos, terminated) = (m.idx, m.start as u32, m.terminated);
             let next = (m.end + terminated as u64) as u32;
@@ -129,7 +130,7 @@ impl FileIndex {
                                 start: pos,
                                 next,
                                 line: Rc::new(line),
-                                scope: Rc::from(""),
+                                scope: Name::new(""),
                                 key: None,
                             });
                         }
@@ -156,7 +157,7 @@ impl FileIndex {
             Err(e) => (0, Some(e.to_string())),
         };
         // Scopes and keys.
-        let mut occ: HashMap<Rc<str>, Vec<u32>> = HashMap::new();
+        let mut occ: HashMap<Name, Vec<u32>> = HashMap::new();
         let mut dynamic = Vec::new();
         for (i, info) in olines.iter_mut().enumerate() {
             let Some(o) = (match &info.line.kind {
@@ -174,7 +175,7 @@ impl FileIndex {
                     current_def = label.clone();
                 }
             } else if o.kind == OKind::EndSub && current_def.is_some() && current_def == label {
-                info.scope = current_def.clone().unwrap_or_else(|| Rc::from(""));
+                info.scope = current_def.clone().unwrap_or_else(|| Name::new(""));
                 current_def = None;
             }
             if let Some(d) = &current_def
@@ -236,7 +237,7 @@ impl FileIndex {
                 let name = olines[j as usize]
                     .key
                     .clone()
-                    .unwrap_or_else(|| Rc::from("?"));
+                    .unwrap_or_else(|| Name::new("?"));
                 def.nested = Some((j, name));
             }
             if let Some(e) = def.end {
