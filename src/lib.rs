@@ -9,6 +9,7 @@ pub mod config;
 pub mod diag;
 pub mod emit;
 pub mod eval;
+mod fx_hasher;
 pub mod parse;
 pub mod program;
 

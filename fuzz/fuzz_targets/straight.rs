@@ -1,5 +1,6 @@
-//! Differential: the straight-line loop against the line-by-line path. Any
-//! program must give the same output, or the same error, both ways.
+//! Differential: the straight-line loop (lines read in place or ahead on a
+//! second thread) against the line-by-line path. Any program must give the
+//! same output, or the same error, both ways.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -18,6 +19,8 @@ fuzz_target!(|data: &[u8]| {
         max_output_lines: 10_000,
         zero_start: flags & 1 != 0,
         strip_comments: flags & 2 != 0,
+        // Some runs read lines ahead on a second thread in tiny chunks.
+        scan_ahead: if flags & 4 != 0 { 1 + (flags >> 3) as usize } else { 0 },
         ..Settings::default()
     };
     let slow = Settings {

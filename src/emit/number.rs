@@ -26,7 +26,13 @@ fn write_shortest(out: &mut Vec<u8>, v: f64) {
     // under 2^53, so the product, its rounding and the check are exact
     // enough.
     if v.abs() < 1e6 {
-        let r = (v * 1e9).round();
+        // Round to an integer by adding and removing 1.5 * 2^52 (inline,
+        // no libm call): half-way cases round to even instead of away from
+        // zero, but a half-way product never passes the check below, so
+        // the result is the same.
+        const SHIFT: f64 = 6_755_399_441_055_744.0;
+        let s = v * 1e9;
+        let r = (s + SHIFT) - SHIFT;
         if r / 1e9 == v {
             write_decimal(out, r as i64, 9);
             return;

@@ -124,6 +124,19 @@ impl Interp<'_> {
         what: Seek,
         only: &[OKind],
     ) -> Result<u32, Error> {
+        // A control search from a static label finds the same line every
+        // time (the label occurrences, skipped-line errors and `%` lines are
+        // fixed per file): found targets are kept.
+        let memo = matches!(what, Seek::Control)
+            && only.is_empty()
+            && file.dynamic.is_empty()
+            && file.olines[from as usize].key.as_ref() == Some(key);
+        if memo {
+            let t = file.seek_memo[from as usize].get();
+            if t != u32::MAX {
+                return Ok(t);
+            }
+        }
         let from_line = file.olines[from as usize].line_idx;
         let mut best: Option<u32> = None;
         if let Some(list) = file.occ.get(key) {
@@ -169,7 +182,12 @@ impl Interp<'_> {
             return Err(self.error(ErrorKind::LabelBeforePercent { label }, file, a, b));
         }
         match best {
-            Some(b) => Ok(b),
+            Some(b) => {
+                if memo {
+                    file.seek_memo[from as usize].set(b);
+                }
+                Ok(b)
+            }
             None => {
                 let (a, b) = self.osite(file, from);
                 let kind = match what {

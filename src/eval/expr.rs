@@ -28,7 +28,23 @@ fn b(x: bool) -> f64 {
     if x { 1.0 } else { 0.0 }
 }
 
+/// `binary` with the plain arithmetic and comparisons inline; the rest
+/// (which may fail or call libm) out of line.
+#[inline(always)]
+fn binary_fast(op: BinOp, a: f64, c: f64, span: Span) -> EvalResult {
+    match op {
+        BinOp::Mul => Ok(a * c),
+        BinOp::Add => Ok(a + c),
+        BinOp::Sub => Ok(a - c),
+        BinOp::Lt => Ok(b(a < c)),
+        BinOp::Gt => Ok(b(a > c)),
+        BinOp::Eq => Ok(b((a - c).abs() < TOLERANCE_EQUAL)),
+        _ => binary(op, a, c, span),
+    }
+}
+
 /// Binary operation; `span` is where a domain error is reported.
+#[inline(never)]
 pub fn binary(op: BinOp, a: f64, c: f64, span: Span) -> EvalResult {
     Ok(match op {
         BinOp::Pow => {
@@ -152,6 +168,33 @@ impl Interp<'_> {
     pub(crate) fn eval(&mut self, e: &Expr) -> EvalResult {
         match &e.kind {
             ExprKind::Num(v) => check(*v, e.span),
+            ExprKind::Slot(i) => {
+                let i = *i as usize;
+                if self.params.set[i] {
+                    return check(self.params.values[i], e.span);
+                }
+                self.eval_rare(e)
+            }
+            ExprKind::Bin(op, operands, checked) => {
+                let a = self.eval_operand(&operands.0)?;
+                let c = self.eval_operand(&operands.1)?;
+                let v = binary_fast(*op, a, c, e.span)?;
+                if *checked { check(v, e.span) } else { Ok(v) }
+            }
+            _ => self.eval_rare(e),
+        }
+    }
+
+    /// The less common expression kinds, kept out of `eval` so that its
+    /// frame stays small.
+    #[inline(never)]
+    fn eval_rare(&mut self, e: &Expr) -> EvalResult {
+        match &e.kind {
+            ExprKind::Num(v) => check(*v, e.span),
+            ExprKind::Slot(i) => {
+                let v = self.read_numbered(*i as usize, e.span)?;
+                check(v, e.span)
+            }
             ExprKind::Param(p) => {
                 let v = self.read_param(p, e.span)?;
                 check(v, e.span)
@@ -182,7 +225,7 @@ impl Interp<'_> {
             ExprKind::Bin(op, operands, false) => {
                 let a = self.eval_operand(&operands.0)?;
                 let c = self.eval_operand(&operands.1)?;
-                binary(*op, a, c, e.span)
+                binary_fast(*op, a, c, e.span)
             }
             _ => self.eval(e),
         }

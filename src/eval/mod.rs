@@ -7,12 +7,12 @@ mod control;
 mod degrees;
 mod expr;
 mod fast;
-mod fx_hasher;
 mod message;
 mod modal;
 mod named;
 pub mod params;
 mod restore;
+mod scan_ahead;
 mod settings;
 pub mod state;
 mod straight;
@@ -21,7 +21,7 @@ mod validate;
 
 use std::collections::HashSet;
 
-use fx_hasher::{FxMap, FxSet};
+use crate::fx_hasher::{FxMap, FxSet};
 use std::rc::Rc;
 
 use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};

@@ -235,7 +235,7 @@ impl Interp<'_> {
         }
     }
 
-    fn named_table(&mut self, name: &str) -> &mut super::fx_hasher::FxMap<Name, f64> {
+    fn named_table(&mut self, name: &str) -> &mut crate::fx_hasher::FxMap<Name, f64> {
         if name.starts_with('_') || self.frames.len() == 1 {
             &mut self.globals
         } else {

@@ -41,6 +41,9 @@ pub struct Settings {
     /// Runs of plain lines take the batched straight-line loop. Off only to
     /// check that loop against the line-by-line path.
     pub plain_runs: bool,
+    /// Chunk size in bytes for reading plain lines on a second core during a
+    /// long straight-line run (0: one core).
+    pub scan_ahead: usize,
 }
 
 impl Default for Settings {
@@ -58,6 +61,7 @@ impl Default for Settings {
             defines: Vec::new(),
             warnings: true,
             plain_runs: true,
+            scan_ahead: 32 << 10,
             uvw_axes: false,
             machine_metric: false,
             tool_table: Vec::new(),

@@ -13,6 +13,7 @@ use crate::diag::Error;
 use crate::program::FileIndex;
 
 use super::fast::POW10;
+use super::scan_ahead::{Ahead, InPlace, Lines, Read, Shared};
 use super::{Interp, output_error};
 use crate::program::swar::{LO7, splat};
 
@@ -48,16 +49,30 @@ static SLOT: [u8; 256] = slot_table();
 /// Output bytes gathered before they are handed to the sink.
 const BATCH: usize = 1 << 16;
 
+/// Where a straight-line run stands.
+#[derive(Default)]
+struct Run {
+    /// Start of the next line in the buffer.
+    i: usize,
+    lines: u32,
+    /// Lines written and not yet counted in `out_lines`.
+    emitted: u64,
+    /// Input bytes [batch_start, i) are output as they are.
+    batch_start: usize,
+    last_start: usize,
+}
+
 /// One line read by [`read_line`].
-struct Plain {
-    mask: u32,
+#[derive(Clone, Copy, Default)]
+pub(super) struct Plain {
+    pub(super) mask: u32,
     /// Values by slot.
-    vals: [f64; 14],
-    count: usize,
+    pub(super) vals: [f64; 14],
+    pub(super) count: usize,
     /// End of the text to write (without trailing blanks and terminator).
-    text_end: usize,
+    pub(super) text_end: usize,
     /// Start of the next line.
-    next: usize,
+    pub(super) next: usize,
 }
 
 #[inline(always)]
@@ -160,7 +175,7 @@ fn number_slow(buf: &[u8], mut i: usize) -> Option<(f64, usize)> {
 /// each at most once, ending in a newline. False sends the line to the
 /// general path.
 #[inline(always)]
-fn read_line(buf: &[u8], line: usize, p: &mut Plain, comments: bool) -> bool {
+pub(super) fn read_line(buf: &[u8], line: usize, p: &mut Plain, comments: bool) -> bool {
     let at = |j: usize| buf.get(j).copied().unwrap_or(0);
     let mut i = line;
     p.mask = 0;
@@ -280,46 +295,88 @@ impl Interp<'_> {
         let max_lines = stop_line.saturating_sub(first_line);
         // Comments are copied unless they are to be stripped.
         let comments = !self.s.strip_comments;
-        let mut lines = 0u32;
-        let mut emitted = 0u64;
-        let mut i = 0usize;
-        let mut last_start = 0usize;
-        // Input bytes [batch_start, i) are output as they are.
-        let mut batch_start = 0usize;
-        let p = &mut Plain {
-            mask: 0,
-            vals: [0.0; 14],
-            count: 0,
-            text_end: 0,
-            next: 0,
+        let mut run = Run::default();
+        let chunk = self.s.scan_ahead;
+        // The first bytes are read in place; a run that goes on past them
+        // reads the rest on two cores (a short run does not start a thread).
+        let limit = if chunk == 0 { usize::MAX } else { 2 * chunk };
+        let mut here = InPlace {
+            buf,
+            comments,
+            limit,
+            line: Plain::default(),
         };
-        while lines < max_lines && self.out_lines + emitted < self.s.max_output_lines {
-            if buf.get(i) == Some(&b'\n') {
-                // Blank line: nothing to write.
-                self.flush_input(file, base, &buf[batch_start..i], batch_start)?;
-                last_start = i;
-                i += 1;
-                batch_start = i;
-                lines += 1;
-                continue;
-            }
-            if !read_line(buf, i, p, comments) {
-                break;
-            }
+        let paused = self.run_lines(file, buf, base, first_line, max_lines, &mut here, &mut run)?;
+        if paused {
+            let shared = Shared::new(buf, run.i, comments, chunk);
+            std::thread::scope(|s| {
+                s.spawn(|| shared.help());
+                let mut ahead = Ahead::new(&shared);
+                self.run_lines(file, buf, base, first_line, max_lines, &mut ahead, &mut run)
+            })?;
+        }
+        self.flush_input(file, base, &buf[run.batch_start..run.i], run.batch_start)?;
+        self.out_lines += run.emitted;
+        let lines = run.lines;
+        if lines > 0 {
+            self.current_line_start = base + run.last_start as u32;
+            self.current_line_idx = first_line + lines - 1;
+            self.cur.pos = base + run.i as u32;
+            self.cur.line = first_line + lines;
+        }
+        Ok(lines)
+    }
+
+    /// The loop over lines from `src`, from where `run` stands. True: `src`
+    /// paused (the run goes on with another source).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn run_lines(
+        &mut self,
+        file: &Rc<FileIndex>,
+        buf: &[u8],
+        base: u32,
+        first_line: u32,
+        max_lines: u32,
+        src: &mut impl Lines,
+        run: &mut Run,
+    ) -> Result<bool, Error> {
+        let Run {
+            i,
+            lines,
+            emitted,
+            batch_start,
+            last_start,
+        } = run;
+        while *lines < max_lines && self.out_lines + *emitted < self.s.max_output_lines {
+            let p = match src.read(*i) {
+                Read::Pause => return Ok(true),
+                Read::Stop => break,
+                Read::Blank => {
+                    // Blank line: nothing to write.
+                    self.flush_input(file, base, &buf[*batch_start..*i], *batch_start)?;
+                    *last_start = *i;
+                    *i += 1;
+                    *batch_start = *i;
+                    *lines += 1;
+                    continue;
+                }
+                Read::Line(p) => p,
+            };
             if !self.fast_line(p) {
                 // Other words or modes: the block checks and the full
                 // state update, still without the grammar.
-                self.flush_input(file, base, &buf[batch_start..i], batch_start)?;
-                batch_start = i;
-                self.out_lines += emitted;
-                emitted = 0;
-                self.current_line_start = base + i as u32;
-                self.current_line_idx = first_line + lines;
-                let raw = &buf[i..p.next - 1];
+                self.flush_input(file, base, &buf[*batch_start..*i], *batch_start)?;
+                *batch_start = *i;
+                self.out_lines += *emitted;
+                *emitted = 0;
+                self.current_line_start = base + *i as u32;
+                self.current_line_idx = first_line + *lines;
+                let raw = &buf[*i..p.next - 1];
                 // The words again, with their spans for messages.
                 let mut fw = std::mem::take(&mut self.fast_words);
                 let r = if super::fast::scan(raw, &mut fw) && !fw.is_empty() {
-                    self.exec_plain(file, base + i as u32, raw, &fw)
+                    self.exec_plain(file, base + *i as u32, raw, &fw)
                 } else {
                     None
                 };
@@ -328,41 +385,33 @@ impl Interp<'_> {
                     None => break,
                     Some(r) => r?,
                 }
-                batch_start = p.next;
+                *batch_start = p.next;
                 if self.ended || self.rotated || self.modal.ccomp != 400 {
-                    last_start = i;
-                    i = p.next;
-                    lines += 1;
+                    *last_start = *i;
+                    *i = p.next;
+                    *lines += 1;
                     break;
                 }
             } else {
-                emitted += 1;
+                *emitted += 1;
                 if p.text_end + 1 != p.next {
                     // Trailing blanks: the line is written trimmed.
-                    self.flush_input(file, base, &buf[batch_start..i], batch_start)?;
+                    self.flush_input(file, base, &buf[*batch_start..*i], *batch_start)?;
                     self.sink
-                        .write(&buf[i..p.text_end])
+                        .write(&buf[*i..p.text_end])
                         .and_then(|_| self.sink.write(b"\n"))
                         .map_err(output_error)?;
-                    batch_start = p.next;
-                } else if p.next - batch_start >= BATCH {
-                    self.flush_input(file, base, &buf[batch_start..p.next], batch_start)?;
-                    batch_start = p.next;
+                    *batch_start = p.next;
+                } else if p.next - *batch_start >= BATCH {
+                    self.flush_input(file, base, &buf[*batch_start..p.next], *batch_start)?;
+                    *batch_start = p.next;
                 }
             }
-            last_start = i;
-            i = p.next;
-            lines += 1;
+            *last_start = *i;
+            *i = p.next;
+            *lines += 1;
         }
-        self.flush_input(file, base, &buf[batch_start..i], batch_start)?;
-        self.out_lines += emitted;
-        if lines > 0 {
-            self.current_line_start = base + last_start as u32;
-            self.current_line_idx = first_line + lines - 1;
-            self.cur.pos = base + i as u32;
-            self.cur.line = first_line + lines;
-        }
-        Ok(lines)
+        Ok(false)
     }
 
     /// Runs a line of G0–G3, axis, F and S words (arcs in the XY plane with

@@ -74,6 +74,9 @@ pub struct Expr {
 #[derive(Debug, Clone, PartialEq)]
 pub enum ExprKind {
     Num(f64),
+    /// `#7`: a numbered parameter whose index is a whole literal from 1 to
+    /// 4999 (the plain parameters), resolved when the line is parsed.
+    Slot(u16),
     Param(Box<ParamRef>),
     Neg(Box<Expr>),
     /// The flag marks a bracketed (value-level) result, which is checked for

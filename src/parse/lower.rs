@@ -180,7 +180,15 @@ impl Lowerer<'_> {
             Rule::unary_plus => return self.lower_value(p.into_inner().next().expect("operand")),
             Rule::param => {
                 let t = p.into_inner().next().expect("target");
-                ExprKind::Param(Box::new(self.lower_param_target(t)?))
+                match self.lower_param_target(t)? {
+                    ParamRef::Numbered(Expr {
+                        kind: ExprKind::Num(v),
+                        ..
+                    }) if v.fract() == 0.0 && (1.0..5000.0).contains(&v) => {
+                        ExprKind::Slot(v as u16)
+                    }
+                    r => ExprKind::Param(Box::new(r)),
+                }
             }
             Rule::bracket => {
                 let e = p.into_inner().next().expect("expr");

@@ -4,11 +4,12 @@
 //! reports even on lines it skips.
 
 use crate::parse::Name;
-use std::collections::HashMap;
+use std::cell::Cell;
 use std::rc::Rc;
 use std::sync::Arc;
 
 use crate::diag::ErrorKind;
+use crate::fx_hasher::FxMap;
 use crate::parse::ast::{Label, Line, LineKind, OKind, OLine};
 use crate::parse::{LineError, LineParser};
 
@@ -65,7 +66,7 @@ pub struct FileIndex {
     pub first_nonblank_next: u32,
     pub olines: Vec<OInfo>,
     /// Static label key → O-line indices in file order.
-    pub occ: HashMap<Name, Vec<u32>>,
+    pub occ: FxMap<Name, Vec<u32>>,
     /// O-lines whose label is computed when read.
     pub dynamic: Vec<u32>,
     /// Errors raised even on skipped lines: (line index, line start, error).
@@ -76,7 +77,10 @@ pub struct FileIndex {
     /// while seeking a subroutine, which clears `#<_value>`).
     pub m99_lines: Vec<u32>,
     /// Sub definition details, by O-line index of the `sub` line.
-    pub defs: HashMap<u32, SubDefInfo>,
+    pub defs: FxMap<u32, SubDefInfo>,
+    /// Found targets of control-label searches, by the O-line searched
+    /// from (`u32::MAX`: not searched yet); see `Interp::seek`.
+    pub seek_memo: Vec<Cell<u32>>,
     /// Line ranges (first, last) of loop bodies and sub definitions: lines in
     /// them are parsed once and kept.
     pub keep: Vec<(u32, u32)>,
@@ -157,7 +161,7 @@ impl FileIndex {
             Err(e) => (0, Some(e.to_string())),
         };
         // Scopes and keys.
-        let mut occ: HashMap<Name, Vec<u32>> = HashMap::new();
+        let mut occ: FxMap<Name, Vec<u32>> = FxMap::default();
         let mut dynamic = Vec::new();
         for (i, info) in olines.iter_mut().enumerate() {
             let Some(o) = (match &info.line.kind {
@@ -198,7 +202,7 @@ impl FileIndex {
         }
         // Sub definitions: each is matched through its own label's
         // occurrences, so the work is linear in the number of O-lines.
-        let mut defs = HashMap::new();
+        let mut defs = FxMap::default();
         let mut keep = Vec::new();
         let sub_lines: Vec<u32> = olines
             .iter()
@@ -282,6 +286,7 @@ impl FileIndex {
             file,
             read_error,
             first_nonblank_next,
+            seek_memo: vec![Cell::new(u32::MAX); olines.len()],
             olines,
             occ,
             dynamic,
@@ -367,7 +372,30 @@ fn quick_is_candidate(raw: &[u8]) -> bool {
             return true;
         }
     }
-    memchr::memchr(b'(', raw).is_some()
+    memchr::memchr(b'(', raw).is_some() && !comments_inert(raw)
+}
+
+/// The line's comments are closed and not nested, and the bytes outside them
+/// are ASCII without a mark (`o`, `m`, `%`) or `;`: it is no O-line, `%` or
+/// M98 line, and parsing it raises no error the reference reports on
+/// skipped lines (a mark inside a comment, `(segment 3)`, is common in CAM
+/// output and needs no parse).
+fn comments_inert(raw: &[u8]) -> bool {
+    let mut inside = false;
+    for &b in raw {
+        if inside {
+            match b {
+                b'(' => return false,
+                b')' => inside = false,
+                _ => {}
+            }
+        } else if b == b'(' {
+            inside = true;
+        } else if !b.is_ascii() || matches!(b | 0x20, b'o' | b'm') || matches!(b, b'%' | b';') {
+            return false;
+        }
+    }
+    !inside
 }
 
 fn starts_with_m99(raw: &[u8]) -> bool {

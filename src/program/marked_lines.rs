@@ -1,38 +1,12 @@
 //! Finds the lines the O-word index must look at without looking at every
-//! line: newline positions and marked bytes (`o`, `O`, `%`, `m`, `M`) are
-//! turned into bit masks eight bytes at a time, and only lines holding a
-//! mark, overlong lines and the leading blank lines are handed on. Every
-//! O-line, `%` line, `M98` and `M99` holds a mark.
-
-use super::swar::{splat, zero_bytes};
-
-/// The high bits of the eight bytes of `m`, as the low eight bits.
-#[inline(always)]
-fn gather(m: u64) -> u64 {
-    ((m >> 7).wrapping_mul(0x0102_0408_1020_4080)) >> 56
-}
+//! line: newlines and marked bytes (`o`, `O`, `%`, `m`, `M`) are found with
+//! `memchr`, and only lines holding a mark, overlong lines and the leading
+//! blank lines are handed on. Every O-line, `%` line, `M98` and `M99` holds a
+//! mark.
 
 #[inline(always)]
 fn is_mark(b: u8) -> bool {
     matches!(b | 0x20, b'o' | b'm') || b == b'%'
-}
-
-/// Newline and mark masks of 64 bytes (bit k is byte k).
-#[inline(always)]
-fn masks(blk: &[u8; 64]) -> (u64, u64) {
-    let mut nl = 0u64;
-    let mut mk = 0u64;
-    for (j, w) in blk.as_chunks::<8>().0.iter().enumerate() {
-        let w = u64::from_le_bytes(*w);
-        let folded = w | splat(0x20);
-        let n = zero_bytes(w ^ splat(b'\n'));
-        let m = zero_bytes(folded ^ splat(b'o'))
-            | zero_bytes(folded ^ splat(b'm'))
-            | zero_bytes(w ^ splat(b'%'));
-        nl |= gather(n) << (j * 8);
-        mk |= gather(m) << (j * 8);
-    }
-    (nl, mk)
 }
 
 /// A line handed on: index, start offset, end offset (its newline, or the
@@ -69,6 +43,21 @@ impl MarkedLines {
         }
     }
 
+    /// A scanner starting at the line start `start` of a file whose leading
+    /// blank lines lie before it (line indices count from `start`).
+    pub fn after_leading(long: usize, start: u64) -> MarkedLines {
+        MarkedLines {
+            line_start: start,
+            leading: false,
+            ..MarkedLines::new(long)
+        }
+    }
+
+    /// Still in the leading blank lines.
+    pub fn leading(&self) -> bool {
+        self.leading
+    }
+
     /// Start of the line being read (it may continue in the next chunk).
     pub fn line_start(&self) -> u64 {
         self.line_start
@@ -77,52 +66,43 @@ impl MarkedLines {
     /// Reads the next chunk of the file, which starts at offset `base`.
     pub fn feed(&mut self, chunk: &[u8], base: u64, hit: &mut impl FnMut(Marked)) {
         let mut k = 0;
-        while k < chunk.len() {
-            if self.leading || chunk.len() - k < 64 {
-                let b = chunk[k];
-                if b == b'\n' {
-                    self.end_line(base + k as u64, hit);
-                } else {
-                    self.marked |= is_mark(b);
-                    self.nonblank |= !b.is_ascii_whitespace();
-                }
-                k += 1;
-                continue;
+        // The leading blank lines, a byte at a time (they are all handed on).
+        while self.leading && k < chunk.len() {
+            let b = chunk[k];
+            if b == b'\n' {
+                self.end_line(base + k as u64, hit);
+            } else {
+                self.marked |= is_mark(b);
+                self.nonblank |= !b.is_ascii_whitespace();
             }
-            let blk: &[u8; 64] = chunk[k..k + 64].try_into().expect("64 bytes");
-            let (mut nl, mut mk) = masks(blk);
-            let blk_base = base + k as u64;
-            if nl == 0 {
-                self.marked |= mk != 0;
-                k += 64;
-                continue;
-            }
-            let first = nl.trailing_zeros();
-            let before = (1u64 << first) - 1;
-            if self.long >= 64 && mk & !before == 0 {
-                // No mark after the first line end: the lines that start in
-                // this block are short and unmarked, so only counted.
-                self.marked |= mk & before != 0;
-                self.end_line(blk_base + first as u64, hit);
-                let rest = nl & (nl - 1);
-                if rest != 0 {
-                    self.idx += rest.count_ones();
-                    self.line_start = blk_base + 64 - rest.leading_zeros() as u64;
-                }
-                k += 64;
-                continue;
-            }
-            while nl != 0 {
-                let t = nl.trailing_zeros();
-                let before = (1u64 << t) - 1;
-                self.marked |= mk & before != 0;
-                mk &= !before;
-                self.end_line(blk_base + t as u64, hit);
-                nl &= nl - 1;
-            }
-            self.marked |= mk != 0;
-            k += 64;
+            k += 1;
         }
+        if k < chunk.len() {
+            self.feed_lines(&chunk[k..], base + k as u64, hit);
+        }
+    }
+
+    /// After the leading lines: newlines and marks are found with `memchr`
+    /// (vector instructions where the machine has them), so a line costs a
+    /// few steps, not one per byte.
+    fn feed_lines(&mut self, chunk: &[u8], base: u64, hit: &mut impl FnMut(Marked)) {
+        let mut letters = memchr::memchr3_iter(b'o', b'O', b'%', chunk);
+        let mut ms = memchr::memchr2_iter(b'm', b'M', chunk);
+        let (mut a, mut b) = (letters.next(), ms.next());
+        for nl in memchr::memchr_iter(b'\n', chunk) {
+            // Marks before this newline belong to the line it ends.
+            while a.is_some_and(|m| m < nl) {
+                self.marked = true;
+                a = letters.next();
+            }
+            while b.is_some_and(|m| m < nl) {
+                self.marked = true;
+                b = ms.next();
+            }
+            self.end_line(base + nl as u64, hit);
+        }
+        // The line that goes on into the next chunk.
+        self.marked |= a.is_some() || b.is_some();
     }
 
     #[inline(always)]
@@ -202,16 +182,6 @@ mod tests {
         }
         let n = s.finish(data.len() as u64, &mut hit);
         (out, n)
-    }
-
-    #[test]
-    fn gathers_high_bits() {
-        for x in 0..256u64 {
-            let m = (0..8)
-                .filter(|b| x >> b & 1 == 1)
-                .fold(0u64, |m, b| m | 0x80 << (8 * b));
-            assert_eq!(gather(m), x);
-        }
     }
 
     proptest! {

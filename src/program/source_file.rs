@@ -13,6 +13,24 @@ use super::marked_lines::{Marked, MarkedLines};
 pub const IN_MEMORY_LIMIT: u64 = 8 << 20;
 /// Bytes read from disk at a time.
 const CHUNK: usize = 1 << 20;
+/// Lines handed on by a scan of part of a file, with their raw bytes.
+type KeptHits = Vec<(Marked, Vec<u8>)>;
+
+/// Reads until `buf` is full or the file ends; returns the bytes read.
+fn read_full(file: &mut File, buf: &mut [u8]) -> io::Result<usize> {
+    let mut got = 0;
+    while got < buf.len() {
+        let n = file.read(&mut buf[got..])?;
+        if n == 0 {
+            break;
+        }
+        got += n;
+    }
+    Ok(got)
+}
+
+/// Streamed files from this size are scanned for marked lines on two cores.
+const SPLIT_SCAN: u64 = 16 << 20;
 /// Longest line kept whole; longer lines are errors anyway.
 const LONG_LINE: usize = 4096;
 
@@ -150,9 +168,16 @@ impl SourceFile {
     /// Calls `f(line, raw)` for the lines [`MarkedLines`] hands on (lines
     /// with `o`, `m` or `%`, lines longer than `long`, leading blank lines),
     /// in order; `raw` is cut at 4096 bytes. Returns the number of lines.
-    pub fn scan_marked_lines(
+    pub fn scan_marked_lines(&self, long: usize, f: impl FnMut(Marked, &[u8])) -> io::Result<u32> {
+        self.scan_marked(long, SPLIT_SCAN, f)
+    }
+
+    /// `scan_marked_lines`, on two cores for streamed files from `split_at`
+    /// bytes.
+    fn scan_marked(
         &self,
         long: usize,
+        split_at: u64,
         mut f: impl FnMut(Marked, &[u8]),
     ) -> io::Result<u32> {
         let mut s = MarkedLines::new(long);
@@ -163,47 +188,121 @@ impl SourceFile {
                 Ok(s.finish(data.len() as u64, &mut hit))
             }
             Text::Disk { .. } => {
-                let mut file = File::open(&self.path)?;
-                let mut buf = vec![0u8; CHUNK];
-                // The part of the current line read in earlier chunks.
-                let mut carry: Vec<u8> = Vec::new();
-                let mut base = 0u64;
-                loop {
-                    let n = file.read(&mut buf)?;
-                    if n == 0 {
-                        break;
-                    }
-                    let chunk = &buf[..n];
-                    let mut hit = |m: Marked| {
-                        let end = (m.end - base) as usize;
-                        if m.start >= base {
-                            f(m, &chunk[(m.start - base) as usize..end]);
-                        } else {
-                            let mut raw = carry.clone();
-                            let room = LONG_LINE.saturating_sub(raw.len());
-                            raw.extend_from_slice(&chunk[..end.min(room)]);
-                            f(m, &raw);
-                        }
-                    };
-                    s.feed(chunk, base, &mut hit);
-                    let ls = s.line_start();
-                    let end = base + n as u64;
-                    if ls >= end {
-                        carry.clear();
-                    } else if ls >= base {
-                        carry.clear();
-                        let rest = &chunk[(ls - base) as usize..];
-                        carry.extend_from_slice(&rest[..rest.len().min(LONG_LINE)]);
-                    } else {
-                        let room = LONG_LINE.saturating_sub(carry.len());
-                        carry.extend_from_slice(&chunk[..n.min(room)]);
-                    }
-                    base = end;
+                if self.len >= split_at {
+                    return self.scan_marked_split(long, f);
                 }
+                let carry = self.scan_disk(&mut s, 0, self.len, &mut f)?;
                 let mut hit = |m: Marked| f(m, &carry);
-                Ok(s.finish(base, &mut hit))
+                Ok(s.finish(self.len, &mut hit))
             }
         }
+    }
+
+    /// `scan_marked_lines` of a large file on two cores: a second thread
+    /// scans the second half (from a line start) and keeps its hits, which
+    /// are handed on after the first half's, their line numbers moved on by
+    /// its line count.
+    fn scan_marked_split(&self, long: usize, mut f: impl FnMut(Marked, &[u8])) -> io::Result<u32> {
+        // The second half starts after the first newline from the middle.
+        let mid = self.len / 2;
+        let mut file = File::open(&self.path)?;
+        file.seek(SeekFrom::Start(mid))?;
+        let mut probe = vec![0u8; LONG_LINE];
+        let n = read_full(&mut file, &mut probe)?;
+        let mut s = MarkedLines::new(long);
+        let Some(k) = memchr::memchr(b'\n', &probe[..n]) else {
+            let carry = self.scan_disk(&mut s, 0, self.len, &mut f)?;
+            let mut hit = |m: Marked| f(m, &carry);
+            return Ok(s.finish(self.len, &mut hit));
+        };
+        let split = mid + k as u64 + 1;
+        let second = std::thread::scope(|scope| {
+            let job = scope.spawn(move || -> io::Result<(KeptHits, u32)> {
+                let mut hits = Vec::new();
+                let mut t = MarkedLines::after_leading(long, split);
+                let mut keep = |m: Marked, raw: &[u8]| hits.push((m, raw.to_vec()));
+                let carry = self.scan_disk(&mut t, split, self.len, &mut keep)?;
+                let mut hit = |m: Marked| keep(m, &carry);
+                let count = t.finish(self.len, &mut hit);
+                Ok((hits, count))
+            });
+            let first = self.scan_disk(&mut s, 0, split, &mut f);
+            (first, job.join())
+        });
+        let (first, second) = second;
+        first?;
+        let (hits, count) = match second {
+            Ok(r) => r?,
+            Err(_) => return Err(io::Error::other("the scanning thread failed")),
+        };
+        if s.leading() {
+            // The whole first half is blank: its state carries into the
+            // second, which is scanned again.
+            let carry = self.scan_disk(&mut s, split, self.len, &mut f)?;
+            let mut hit = |m: Marked| f(m, &carry);
+            return Ok(s.finish(self.len, &mut hit));
+        }
+        let lines = s.finish(split, &mut |_| {});
+        for (m, raw) in &hits {
+            let m = Marked {
+                idx: m.idx + lines,
+                ..*m
+            };
+            f(m, raw);
+        }
+        Ok(lines + count)
+    }
+
+    /// Feeds bytes [from, to) of the file (`from` a line start) to `s`,
+    /// handing each hit on with its raw bytes (cut at `LONG_LINE`). Returns
+    /// the start of the line still open at `to`.
+    fn scan_disk(
+        &self,
+        s: &mut MarkedLines,
+        from: u64,
+        to: u64,
+        f: &mut impl FnMut(Marked, &[u8]),
+    ) -> io::Result<Vec<u8>> {
+        let mut file = File::open(&self.path)?;
+        file.seek(SeekFrom::Start(from))?;
+        let mut buf = vec![0u8; CHUNK];
+        // The part of the current line read in earlier chunks.
+        let mut carry: Vec<u8> = Vec::new();
+        let mut base = from;
+        while base < to {
+            let want = ((to - base) as usize).min(CHUNK);
+            let n = file.read(&mut buf[..want])?;
+            if n == 0 {
+                break;
+            }
+            let chunk = &buf[..n];
+            let mut hit = |m: Marked| {
+                let end = (m.end - base) as usize;
+                if m.start >= base {
+                    f(m, &chunk[(m.start - base) as usize..end]);
+                } else {
+                    let mut raw = carry.clone();
+                    let room = LONG_LINE.saturating_sub(raw.len());
+                    raw.extend_from_slice(&chunk[..end.min(room)]);
+                    f(m, &raw);
+                }
+            };
+            s.feed(chunk, base, &mut hit);
+            let ls = s.line_start();
+            let end = base + n as u64;
+            if ls >= end {
+                carry.clear();
+            } else if ls >= base {
+                carry.clear();
+                let rest = &chunk[(ls - base) as usize..];
+                carry.extend_from_slice(&rest[..rest.len().min(LONG_LINE)]);
+            } else {
+                let room = LONG_LINE.saturating_sub(carry.len());
+                carry.extend_from_slice(&chunk[..n.min(room)]);
+            }
+            base = end;
+        }
+        Ok(carry)
     }
 
     /// Calls `f(index, start, raw, terminated)` for every line, in order.
@@ -324,14 +423,7 @@ impl Window {
         let f = self.file.as_mut().expect("file");
         f.seek(SeekFrom::Start(at))?;
         self.buf.resize(CHUNK, 0);
-        let mut got = 0;
-        while got < CHUNK {
-            let n = f.read(&mut self.buf[got..])?;
-            if n == 0 {
-                break;
-            }
-            got += n;
-        }
+        let got = read_full(f, &mut self.buf)?;
         self.buf.truncate(got);
         self.start = at;
         Ok(())
@@ -413,6 +505,60 @@ impl Window {
                 });
             }
             scan += n as u64;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    type Hits = (Vec<(Marked, Vec<u8>)>, u32);
+
+    fn hits(src: &SourceFile, long: usize, split_at: u64) -> Hits {
+        let mut out = Vec::new();
+        let n = src
+            .scan_marked(long, split_at, |m, raw| out.push((m, raw.to_vec())))
+            .expect("scan");
+        (out, n)
+    }
+
+    fn on_disk(data: &[u8]) -> SourceFile {
+        let path =
+            std::env::temp_dir().join(format!("scan-{}-{}.ngc", std::process::id(), unique()));
+        std::fs::write(&path, data).expect("write");
+        SourceFile {
+            path,
+            name: "t".into(),
+            text: Text::Disk { temp: true },
+            len: data.len() as u64,
+            modified: None,
+        }
+    }
+
+    proptest! {
+        /// Streamed and split, a file gives the lines and count it gives
+        /// from memory.
+        #[test]
+        fn split_scan_agrees_with_the_memory_scan(
+            parts in proptest::collection::vec(
+                prop_oneof![
+                    "[gG0-9. xXyY-]{0,30}",
+                    Just("\n".to_string()),
+                    "[oOmM%\n \t]",
+                    "[a-z]{300}",
+                ],
+                0..80,
+            ),
+            long in prop_oneof![1usize..50, 60usize..300],
+        ) {
+            let data = parts.concat().into_bytes();
+            let mem = SourceFile::new("m".into(), "m".into(), data.clone());
+            let want = hits(&mem, long, 0);
+            let disk = on_disk(&data);
+            prop_assert_eq!(&hits(&disk, long, 0), &want);
+            prop_assert_eq!(&hits(&disk, long, u64::MAX), &want);
         }
     }
 }

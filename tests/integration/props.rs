@@ -727,8 +727,13 @@ proptest! {
             Ok(s) => s,
             Err(e) => format!("error: {}", render(&e, MessageFormat::Short, false)),
         };
+        // Tiny chunks: runs of a few lines already read ahead on a second
+        // thread.
+        let ahead = Settings { scan_ahead: 8, ..on.clone() };
         let fast = show(ngcflat::flatten_str(&prog, &on));
         let slow = show(ngcflat::flatten_str(&prog, &off));
-        prop_assert_eq!(fast, slow, "program:\n{}", prog);
+        let split = show(ngcflat::flatten_str(&prog, &ahead));
+        prop_assert_eq!(&fast, &slow, "program:\n{}", prog);
+        prop_assert_eq!(&split, &slow, "program:\n{}", prog);
     }
 }

@@ -1,0 +1,354 @@
+//! Reading plain lines on a second core while the straight-line loop applies
+//! them. The buffer is cut at line starts into chunks; both threads claim
+//! chunks in order from one counter and read their lines (`read_line`, the
+//! pure half of the loop's work), and the loop takes the chunks in order.
+//! The loop thread reads chunks itself whenever the next one is not ready,
+//! so the two threads share the reading and neither waits for long. A chunk
+//! holds the same results the loop would get reading the lines itself;
+//! reading stops at the first line that is not plain, where the loop stops
+//! anyway.
+
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+use super::straight::{Plain, read_line};
+
+/// Chunks read ahead of the one being applied, at most.
+const AHEAD: usize = 4;
+
+/// What the loop finds at a line start.
+#[derive(Clone, Copy)]
+pub enum Read<'p> {
+    /// An empty line (a newline only).
+    Blank,
+    /// A plain line.
+    Line(&'p Plain),
+    /// Not a plain line (or the end of the buffer): the run ends here.
+    Stop,
+    /// The source has no more lines for this run; another one goes on.
+    Pause,
+}
+
+/// Reads the line at `buf[i..]` into `p`.
+#[inline(always)]
+pub fn read_at<'p>(buf: &[u8], i: usize, p: &'p mut Plain, comments: bool) -> Read<'p> {
+    if buf.get(i) == Some(&b'\n') {
+        Read::Blank
+    } else if read_line(buf, i, p, comments) {
+        Read::Line(p)
+    } else {
+        Read::Stop
+    }
+}
+
+/// A source of lines for the straight-line loop, read at line starts in
+/// order.
+pub trait Lines {
+    fn read(&mut self, i: usize) -> Read<'_>;
+}
+
+/// Reads each line when the loop asks for it, up to a byte offset.
+pub struct InPlace<'b> {
+    pub buf: &'b [u8],
+    pub comments: bool,
+    /// Lines starting here or later are left to another source.
+    pub limit: usize,
+    pub line: Plain,
+}
+
+impl Lines for InPlace<'_> {
+    #[inline(always)]
+    fn read(&mut self, i: usize) -> Read<'_> {
+        if i >= self.limit {
+            return Read::Pause;
+        }
+        read_at(self.buf, i, &mut self.line, self.comments)
+    }
+}
+
+/// One line of a chunk read ahead.
+#[derive(Clone, Copy)]
+enum Rec {
+    Blank,
+    Line(Plain),
+    Stop,
+}
+
+/// Chunk boundaries: line starts about `size` bytes apart, from the line
+/// start `from` to the buffer's end.
+pub fn cut(buf: &[u8], from: usize, size: usize) -> Vec<usize> {
+    let size = size.max(1);
+    let mut cuts = vec![from];
+    let mut at = from + size;
+    while at < buf.len() {
+        match memchr::memchr(b'\n', &buf[at..]) {
+            Some(k) if at + k + 1 < buf.len() => {
+                cuts.push(at + k + 1);
+                at += k + 1 + size;
+            }
+            _ => break,
+        }
+    }
+    cuts.push(buf.len());
+    cuts
+}
+
+/// State both threads share.
+pub struct Shared<'b> {
+    buf: &'b [u8],
+    comments: bool,
+    cuts: Vec<usize>,
+    /// Next chunk to claim.
+    next: AtomicUsize,
+    /// Chunk the loop is applying.
+    applied: AtomicUsize,
+    /// The loop is done: stop reading.
+    done: AtomicBool,
+    slots: Vec<Mutex<Option<Vec<Rec>>>>,
+    /// Spent chunk vectors, for reuse.
+    pool: Mutex<Vec<Vec<Rec>>>,
+}
+
+impl<'b> Shared<'b> {
+    /// Chunks of `buf` from the line start `from` on.
+    pub fn new(buf: &'b [u8], from: usize, comments: bool, chunk: usize) -> Shared<'b> {
+        let cuts = cut(buf, from, chunk);
+        let n = cuts.len() - 1;
+        Shared {
+            buf,
+            comments,
+            cuts,
+            next: AtomicUsize::new(0),
+            applied: AtomicUsize::new(0),
+            done: AtomicBool::new(false),
+            slots: (0..n).map(|_| Mutex::new(None)).collect(),
+            pool: Mutex::new(Vec::new()),
+        }
+    }
+
+    fn chunks(&self) -> usize {
+        self.slots.len()
+    }
+
+    /// Reads the lines of chunk `c`, up to the first one that is not plain.
+    fn read_chunk(&self, c: usize) -> Vec<Rec> {
+        let mut v = self
+            .pool
+            .lock()
+            .ok()
+            .and_then(|mut p| p.pop())
+            .unwrap_or_default();
+        v.clear();
+        let (mut i, end) = (self.cuts[c], self.cuts[c + 1]);
+        while i < end {
+            if self.buf[i] == b'\n' {
+                v.push(Rec::Blank);
+                i += 1;
+                continue;
+            }
+            // Read straight into the record (no copy of the line).
+            v.push(Rec::Line(Plain::default()));
+            let Some(Rec::Line(p)) = v.last_mut() else {
+                unreachable!("just pushed")
+            };
+            if !read_line(self.buf, i, p, self.comments) {
+                *v.last_mut().expect("pushed") = Rec::Stop;
+                return v;
+            }
+            i = p.next;
+        }
+        v
+    }
+
+    fn store(&self, c: usize, v: Vec<Rec>) {
+        if let Ok(mut s) = self.slots[c].lock() {
+            *s = Some(v);
+        }
+    }
+
+    fn take(&self, c: usize) -> Option<Vec<Rec>> {
+        self.slots[c].lock().ok().and_then(|mut s| s.take())
+    }
+
+    /// Claims the next chunk if it is at most `AHEAD` past the one applied.
+    fn claim(&self) -> Option<usize> {
+        let c = self.next.load(Ordering::Acquire);
+        if c >= self.chunks() || c > self.applied.load(Ordering::Acquire) + AHEAD {
+            return None;
+        }
+        self.next
+            .compare_exchange(c, c + 1, Ordering::AcqRel, Ordering::Acquire)
+            .ok()
+    }
+
+    /// The second thread: reads chunks until all are read or the loop is
+    /// done.
+    pub fn help(&self) {
+        while !self.done.load(Ordering::Acquire) {
+            if self.next.load(Ordering::Acquire) >= self.chunks() {
+                return;
+            }
+            match self.claim() {
+                Some(c) => {
+                    let v = self.read_chunk(c);
+                    self.store(c, v);
+                }
+                None => std::thread::yield_now(),
+            }
+        }
+    }
+
+    fn finish(&self) {
+        self.done.store(true, Ordering::Release);
+    }
+}
+
+/// Lines from chunks read by either thread, in order.
+pub struct Ahead<'s, 'b> {
+    shared: &'s Shared<'b>,
+    /// Chunk being applied (`usize::MAX` before the first).
+    chunk: usize,
+    recs: Vec<Rec>,
+    pos: usize,
+}
+
+impl<'s, 'b> Ahead<'s, 'b> {
+    pub fn new(shared: &'s Shared<'b>) -> Ahead<'s, 'b> {
+        Ahead {
+            shared,
+            chunk: usize::MAX,
+            recs: Vec::new(),
+            pos: 0,
+        }
+    }
+
+    /// Chunk `c`, read by whichever thread gets to it first.
+    fn obtain(&self, c: usize) -> Vec<Rec> {
+        let s = self.shared;
+        loop {
+            if let Some(v) = s.take(c) {
+                return v;
+            }
+            match s.claim() {
+                Some(k) => {
+                    let v = s.read_chunk(k);
+                    if k == c {
+                        return v;
+                    }
+                    s.store(k, v);
+                }
+                // The other thread is reading it.
+                None => std::thread::yield_now(),
+            }
+        }
+    }
+}
+
+/// The loop is done with its lines, also when it fails or panics: the other
+/// thread stops (a scope waiting for it would otherwise wait forever).
+impl Drop for Ahead<'_, '_> {
+    fn drop(&mut self) {
+        self.shared.finish();
+    }
+}
+
+impl Lines for Ahead<'_, '_> {
+    #[inline]
+    fn read(&mut self, _i: usize) -> Read<'_> {
+        loop {
+            if self.pos < self.recs.len() {
+                self.pos += 1;
+                return match &self.recs[self.pos - 1] {
+                    Rec::Blank => Read::Blank,
+                    Rec::Line(q) => Read::Line(q),
+                    Rec::Stop => Read::Stop,
+                };
+            }
+            let next = self.chunk.wrapping_add(1);
+            if next >= self.shared.chunks() {
+                return Read::Stop;
+            }
+            let spent = std::mem::take(&mut self.recs);
+            if let Ok(mut pool) = self.shared.pool.lock() {
+                pool.push(spent);
+            }
+            self.chunk = next;
+            self.shared.applied.store(next, Ordering::Release);
+            self.recs = self.obtain(next);
+            self.pos = 0;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chunks_start_at_line_starts_and_cover_the_buffer() {
+        let buf = b"G1 X1\nG1 X2\n\nG1 X3\nG1 X4";
+        for (from, size) in (0..buf.len() + 2).map(|s| (0, s)).chain([(6, 1), (12, 3)]) {
+            let cuts = cut(buf, from, size);
+            assert_eq!(cuts.first(), Some(&from));
+            assert_eq!(cuts.last(), Some(&buf.len()));
+            for w in cuts.windows(2) {
+                assert!(w[0] < w[1], "{size}: {cuts:?}");
+            }
+            for &c in &cuts[1..cuts.len() - 1] {
+                assert_eq!(buf[c - 1], b'\n', "{size}: {cuts:?}");
+            }
+        }
+    }
+
+    /// Lines read through chunks on two threads are the lines read in
+    /// place, in order, with the same stop.
+    #[test]
+    fn chunks_give_the_lines_read_in_place() {
+        let mut text = String::new();
+        for k in 0..3000 {
+            text.push_str(&format!("G1 X{k}.5 Y-{k}\n"));
+            if k % 7 == 0 {
+                text.push('\n');
+            }
+            if k % 11 == 0 {
+                text.push_str("(note)\n");
+            }
+        }
+        text.push_str("M2\nG1 X1\n");
+        let buf = text.as_bytes();
+        for chunk in [1, 64, 1000, 1 << 20] {
+            let shared = Shared::new(buf, 0, true, chunk);
+            std::thread::scope(|s| {
+                s.spawn(|| shared.help());
+                let mut ahead = Ahead::new(&shared);
+                let mut here = InPlace {
+                    buf,
+                    comments: true,
+                    limit: usize::MAX,
+                    line: Plain::default(),
+                };
+                let mut i = 0;
+                let mut lines = 0;
+                loop {
+                    match (ahead.read(i), here.read(i)) {
+                        (Read::Blank, Read::Blank) => i += 1,
+                        (Read::Line(p), Read::Line(q)) => {
+                            assert_eq!((p.mask, p.next, p.text_end), (q.mask, q.next, q.text_end));
+                            // Only the slots of the line's words are read.
+                            for s in (0..14).filter(|s| p.mask >> s & 1 == 1) {
+                                assert_eq!(p.vals[s].to_bits(), q.vals[s].to_bits());
+                            }
+                            i = p.next;
+                        }
+                        (Read::Stop, Read::Stop) => break,
+                        _ => panic!("chunk {chunk}: lines differ at byte {i}"),
+                    }
+                    lines += 1;
+                }
+                drop(ahead);
+                assert_eq!(&buf[i..i + 2], b"M2");
+                assert!(lines > 3000);
+            });
+        }
+    }
+}
