@@ -830,7 +830,7 @@ impl Interp<'_> {
                 f.reset(kind, name);
                 f
             }
-            None => Frame::new(kind, name),
+            None => Box::new(Frame::new(kind, name)),
         };
         f.ret = Some(ret);
         f.call_site = Some(crate::diag::Site::new(&file.file, a, b));

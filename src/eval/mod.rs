@@ -85,15 +85,28 @@ pub struct Frame {
 impl Frame {
     /// Makes a pooled frame like a new one, keeping its tables' room.
     fn reset(&mut self, kind: FrameKind, name: Name) {
-        let mut locals = std::mem::take(&mut self.locals);
-        let mut labels = std::mem::take(&mut self.labels);
-        locals.clear();
-        labels.clear();
-        *self = Frame {
+        let Frame {
+            kind: k,
+            name: n,
+            ret,
+            call_site,
+            saved,
             locals,
             labels,
-            ..Frame::new(kind, name)
-        };
+            m98_loop,
+            saved_modal,
+            auto_restore,
+        } = self;
+        *k = kind;
+        *n = name;
+        *ret = None;
+        *call_site = None;
+        *saved = None;
+        locals.clear();
+        labels.clear();
+        *m98_loop = None;
+        *saved_modal = None;
+        *auto_restore = false;
     }
 
     fn new(kind: FrameKind, name: Name) -> Frame {
@@ -125,9 +138,12 @@ pub struct Interp<'s> {
     main: Rc<FileIndex>,
     params: Params,
     globals: FxMap<Name, f64>,
-    frames: Vec<Frame>,
+    /// Boxed: a call moves a pointer, not the frame.
+    #[allow(clippy::vec_box)]
+    frames: Vec<Box<Frame>>,
     /// Frames of returned calls, reused by the next calls.
-    frame_pool: Vec<Frame>,
+    #[allow(clippy::vec_box)]
+    frame_pool: Vec<Box<Frame>>,
     /// Argument save areas of returned calls (boxed: they move between
     /// frames and the pool without copying).
     #[allow(clippy::vec_box)]
@@ -242,7 +258,7 @@ impl<'s> Interp<'s> {
             main,
             params,
             globals,
-            frames: vec![main_frame],
+            frames: vec![Box::new(main_frame)],
             frame_pool: Vec::new(),
             saved_pool: Vec::new(),
             value: 0.0,
