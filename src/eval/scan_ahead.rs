@@ -29,18 +29,6 @@ pub enum Read<'p> {
     Pause,
 }
 
-/// Reads the line at `buf[i..]` into `p`.
-#[inline(always)]
-pub fn read_at<'p>(buf: &[u8], i: usize, p: &'p mut Plain, comments: bool) -> Read<'p> {
-    if buf.get(i) == Some(&b'\n') {
-        Read::Blank
-    } else if read_line(buf, i, p, comments) {
-        Read::Line(p)
-    } else {
-        Read::Stop
-    }
-}
-
 /// A source of lines for the straight-line loop, read at line starts in
 /// order.
 pub trait Lines {
@@ -60,9 +48,14 @@ impl Lines for InPlace<'_> {
     #[inline(always)]
     fn read(&mut self, i: usize) -> Read<'_> {
         if i >= self.limit {
-            return Read::Pause;
+            Read::Pause
+        } else if self.buf.get(i) == Some(&b'\n') {
+            Read::Blank
+        } else if read_line(self.buf, i, &mut self.line, self.comments) {
+            Read::Line(&self.line)
+        } else {
+            Read::Stop
         }
-        read_at(self.buf, i, &mut self.line, self.comments)
     }
 }
 

@@ -112,7 +112,7 @@ impl FileIndex {
         let mut first_nonblank_next = 0u32;
         let mut percent_start = false;
         let mut current_def: Option<Name> = None;
-        let scanned = file.scan_marked_lines(crate::parse::MAX_LINE + 1, |m, raw| {
+        let scanned = file.scan_marked_lines(crate::parse::MAX_LINE + 1, &matters, |m, raw| {
             let (idx, pos, terminated) = (m.idx, m.start as u32, m.terminated);
             let next = (m.end + terminated as u64) as u32;
             if starts_with_m99(raw) {
@@ -332,6 +332,14 @@ impl FileIndex {
     pub fn kind_of(&self, oidx: u32) -> Option<OKind> {
         self.olines[oidx as usize].kind()
     }
+}
+
+/// Whether the index looks at a line handed on after the leading blank lines
+/// (the closure in `FileIndex::build` does nothing with the others).
+fn matters(raw: &[u8], terminated: bool) -> bool {
+    starts_with_m99(raw)
+        || quick_is_candidate(raw)
+        || raw.len() + terminated as usize > crate::parse::MAX_LINE + 1
 }
 
 /// Cheap test: could this raw line be an O-line, `%`, or carry a comment

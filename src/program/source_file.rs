@@ -168,8 +168,18 @@ impl SourceFile {
     /// Calls `f(line, raw)` for the lines [`MarkedLines`] hands on (lines
     /// with `o`, `m` or `%`, lines longer than `long`, leading blank lines),
     /// in order; `raw` is cut at 4096 bytes. Returns the number of lines.
-    pub fn scan_marked_lines(&self, long: usize, f: impl FnMut(Marked, &[u8])) -> io::Result<u32> {
-        self.scan_marked(long, SPLIT_SCAN, f)
+    ///
+    /// `matters(raw, terminated)` tells which of the lines after the leading
+    /// blank lines `f` acts on: a large file's second half is scanned ahead
+    /// on another thread, which keeps only those (in memory until their
+    /// turn), so they must be few.
+    pub fn scan_marked_lines(
+        &self,
+        long: usize,
+        matters: &(dyn Fn(&[u8], bool) -> bool + Sync),
+        f: impl FnMut(Marked, &[u8]),
+    ) -> io::Result<u32> {
+        self.scan_marked(long, SPLIT_SCAN, matters, f)
     }
 
     /// `scan_marked_lines`, on two cores for streamed files from `split_at`
@@ -178,6 +188,7 @@ impl SourceFile {
         &self,
         long: usize,
         split_at: u64,
+        matters: &(dyn Fn(&[u8], bool) -> bool + Sync),
         mut f: impl FnMut(Marked, &[u8]),
     ) -> io::Result<u32> {
         let mut s = MarkedLines::new(long);
@@ -189,7 +200,7 @@ impl SourceFile {
             }
             Text::Disk { .. } => {
                 if self.len >= split_at {
-                    return self.scan_marked_split(long, f);
+                    return self.scan_marked_split(long, matters, f);
                 }
                 let carry = self.scan_disk(&mut s, 0, self.len, &mut f)?;
                 let mut hit = |m: Marked| f(m, &carry);
@@ -202,7 +213,12 @@ impl SourceFile {
     /// scans the second half (from a line start) and keeps its hits, which
     /// are handed on after the first half's, their line numbers moved on by
     /// its line count.
-    fn scan_marked_split(&self, long: usize, mut f: impl FnMut(Marked, &[u8])) -> io::Result<u32> {
+    fn scan_marked_split(
+        &self,
+        long: usize,
+        matters: &(dyn Fn(&[u8], bool) -> bool + Sync),
+        mut f: impl FnMut(Marked, &[u8]),
+    ) -> io::Result<u32> {
         // The second half starts after the first newline from the middle.
         let mid = self.len / 2;
         let mut file = File::open(&self.path)?;
@@ -220,7 +236,11 @@ impl SourceFile {
             let job = scope.spawn(move || -> io::Result<(KeptHits, u32)> {
                 let mut hits = Vec::new();
                 let mut t = MarkedLines::after_leading(long, split);
-                let mut keep = |m: Marked, raw: &[u8]| hits.push((m, raw.to_vec()));
+                let mut keep = |m: Marked, raw: &[u8]| {
+                    if matters(raw, m.terminated) {
+                        hits.push((m, raw.to_vec()));
+                    }
+                };
                 let carry = self.scan_disk(&mut t, split, self.len, &mut keep)?;
                 let mut hit = |m: Marked| keep(m, &carry);
                 let count = t.finish(self.len, &mut hit);
@@ -516,10 +536,16 @@ mod tests {
 
     type Hits = (Vec<(Marked, Vec<u8>)>, u32);
 
-    fn hits(src: &SourceFile, long: usize, split_at: u64) -> Hits {
+    /// The lines handed on that hold an `o`, or all with `every`.
+    fn hits(src: &SourceFile, long: usize, split_at: u64, every: bool) -> Hits {
         let mut out = Vec::new();
+        let matters = |raw: &[u8], _: bool| every || raw.contains(&b'o');
         let n = src
-            .scan_marked(long, split_at, |m, raw| out.push((m, raw.to_vec())))
+            .scan_marked(long, split_at, &matters, |m, raw| {
+                if matters(raw, m.terminated) {
+                    out.push((m, raw.to_vec()))
+                }
+            })
             .expect("scan");
         (out, n)
     }
@@ -555,10 +581,12 @@ mod tests {
         ) {
             let data = parts.concat().into_bytes();
             let mem = SourceFile::new("m".into(), "m".into(), data.clone());
-            let want = hits(&mem, long, 0);
             let disk = on_disk(&data);
-            prop_assert_eq!(&hits(&disk, long, 0), &want);
-            prop_assert_eq!(&hits(&disk, long, u64::MAX), &want);
+            for every in [true, false] {
+                let want = hits(&mem, long, 0, every);
+                prop_assert_eq!(&hits(&disk, long, 0, every), &want);
+                prop_assert_eq!(&hits(&disk, long, u64::MAX, every), &want);
+            }
         }
     }
 }
