@@ -175,6 +175,11 @@ impl Interp<'_> {
                 }
                 self.eval_rare(e)
             }
+            ExprKind::Param(p) if let ParamRef::Named(name) = &**p => {
+                let v = self.read_named(name, e.span)?;
+                check(v, e.span)
+            }
+            ExprKind::Neg(inner) => Ok(-self.eval(inner)?),
             ExprKind::Bin(op, operands, checked) => {
                 let a = self.eval_operand(&operands.0)?;
                 let c = self.eval_operand(&operands.1)?;

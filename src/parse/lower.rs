@@ -175,7 +175,11 @@ impl Lowerer<'_> {
             Rule::number => ExprKind::Num(self.lower_number(&p)?),
             Rule::unary_minus => {
                 let inner = self.lower_value(p.into_inner().next().expect("operand"))?;
-                ExprKind::Neg(Box::new(inner))
+                match inner.kind {
+                    // `-0.1`: the negated literal (same value, same checks).
+                    ExprKind::Num(v) => ExprKind::Num(-v),
+                    _ => ExprKind::Neg(Box::new(inner)),
+                }
             }
             Rule::unary_plus => return self.lower_value(p.into_inner().next().expect("operand")),
             Rule::param => {
