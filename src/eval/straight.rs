@@ -49,6 +49,17 @@ static SLOT: [u8; 256] = slot_table();
 /// Output bytes gathered before they are handed to the sink.
 const BATCH: usize = 1 << 16;
 
+/// The bytes a straight-line run reads: `buf` is the file's text from
+/// offset `base`, whose first line is `first_line`; at most `max_lines` are
+/// run.
+struct Stretch<'a> {
+    file: &'a Rc<FileIndex>,
+    buf: &'a [u8],
+    base: u32,
+    first_line: u32,
+    max_lines: u32,
+}
+
 /// Where a straight-line run stands.
 #[derive(Default)]
 struct Run {
@@ -306,13 +317,20 @@ impl Interp<'_> {
             limit,
             line: Plain::default(),
         };
-        let paused = self.run_lines(file, buf, base, first_line, max_lines, &mut here, &mut run)?;
+        let at = Stretch {
+            file,
+            buf,
+            base,
+            first_line,
+            max_lines,
+        };
+        let paused = self.run_lines(&at, &mut here, &mut run)?;
         if paused {
             let shared = Shared::new(buf, run.i, comments, chunk);
             std::thread::scope(|s| {
                 s.spawn(|| shared.help());
                 let mut ahead = Ahead::new(&shared);
-                self.run_lines(file, buf, base, first_line, max_lines, &mut ahead, &mut run)
+                self.run_lines(&at, &mut ahead, &mut run)
             })?;
         }
         self.flush_input(file, base, &buf[run.batch_start..run.i], run.batch_start)?;
@@ -329,18 +347,20 @@ impl Interp<'_> {
 
     /// The loop over lines from `src`, from where `run` stands. True: `src`
     /// paused (the run goes on with another source).
-    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn run_lines(
         &mut self,
-        file: &Rc<FileIndex>,
-        buf: &[u8],
-        base: u32,
-        first_line: u32,
-        max_lines: u32,
+        at: &Stretch<'_>,
         src: &mut impl Lines,
         run: &mut Run,
     ) -> Result<bool, Error> {
+        let &Stretch {
+            file,
+            buf,
+            base,
+            first_line,
+            max_lines,
+        } = at;
         let Run {
             i,
             lines,

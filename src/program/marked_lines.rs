@@ -125,7 +125,7 @@ impl MarkedLines {
 
     /// Ends the file at offset `len`: a last line without a newline is
     /// always handed on. Returns the number of lines.
-    pub fn finish(mut self, len: u64, hit: &mut impl FnMut(Marked)) -> u32 {
+    pub fn finish(&mut self, len: u64, hit: &mut impl FnMut(Marked)) -> u32 {
         if self.line_start < len {
             hit(Marked {
                 idx: self.idx,

@@ -202,9 +202,7 @@ impl SourceFile {
                 if self.len >= split_at {
                     return self.scan_marked_split(long, matters, f);
                 }
-                let carry = self.scan_disk(&mut s, 0, self.len, &mut f)?;
-                let mut hit = |m: Marked| f(m, &carry);
-                Ok(s.finish(self.len, &mut hit))
+                self.scan_to_end(&mut s, 0, &mut f)
             }
         }
     }
@@ -227,9 +225,7 @@ impl SourceFile {
         let n = read_full(&mut file, &mut probe)?;
         let mut s = MarkedLines::new(long);
         let Some(k) = memchr::memchr(b'\n', &probe[..n]) else {
-            let carry = self.scan_disk(&mut s, 0, self.len, &mut f)?;
-            let mut hit = |m: Marked| f(m, &carry);
-            return Ok(s.finish(self.len, &mut hit));
+            return self.scan_to_end(&mut s, 0, &mut f);
         };
         let split = mid + k as u64 + 1;
         let second = std::thread::scope(|scope| {
@@ -258,9 +254,7 @@ impl SourceFile {
         if s.leading() {
             // The whole first half is blank: its state carries into the
             // second, which is scanned again.
-            let carry = self.scan_disk(&mut s, split, self.len, &mut f)?;
-            let mut hit = |m: Marked| f(m, &carry);
-            return Ok(s.finish(self.len, &mut hit));
+            return self.scan_to_end(&mut s, split, &mut f);
         }
         let lines = s.finish(split, &mut |_| {});
         for (m, raw) in &hits {
@@ -271,6 +265,19 @@ impl SourceFile {
             f(m, raw);
         }
         Ok(lines + count)
+    }
+
+    /// Feeds the file from `from` (a line start) to its end to `s` and ends
+    /// the scan; returns the number of lines.
+    fn scan_to_end(
+        &self,
+        s: &mut MarkedLines,
+        from: u64,
+        f: &mut impl FnMut(Marked, &[u8]),
+    ) -> io::Result<u32> {
+        let carry = self.scan_disk(s, from, self.len, f)?;
+        let mut hit = |m: Marked| f(m, &carry);
+        Ok(s.finish(self.len, &mut hit))
     }
 
     /// Feeds bytes [from, to) of the file (`from` a line start) to `s`,
