@@ -309,10 +309,16 @@ mod tests {
         }
         text.push_str("M2\nG1 X1\n");
         let buf = text.as_bytes();
-        for chunk in [1, 64, 1000, 1 << 20] {
+        // Without a helper thread too (when none can be started).
+        for (chunk, helper) in [1, 64, 1000, 1 << 20]
+            .into_iter()
+            .flat_map(|c| [(c, true), (c, false)])
+        {
             let shared = Shared::new(buf, 0, true, chunk);
             std::thread::scope(|s| {
-                s.spawn(|| shared.help());
+                if helper {
+                    s.spawn(|| shared.help());
+                }
                 let mut ahead = Ahead::new(&shared);
                 let mut here = InPlace {
                     buf,

@@ -328,7 +328,9 @@ impl Interp<'_> {
         if paused {
             let shared = Shared::new(buf, run.i, comments, chunk);
             std::thread::scope(|s| {
-                s.spawn(|| shared.help());
+                // Without a second thread (none can be started) the loop
+                // reads every chunk itself.
+                let _ = std::thread::Builder::new().spawn_scoped(s, || shared.help());
                 let mut ahead = Ahead::new(&shared);
                 self.run_lines(&at, &mut ahead, &mut run)
             })?;

@@ -229,23 +229,32 @@ impl SourceFile {
         };
         let split = mid + k as u64 + 1;
         let second = std::thread::scope(|scope| {
-            let job = scope.spawn(move || -> io::Result<(KeptHits, u32)> {
-                let mut hits = Vec::new();
-                let mut t = MarkedLines::after_leading(long, split);
-                let mut keep = |m: Marked, raw: &[u8]| {
-                    if matters(raw, m.terminated) {
-                        hits.push((m, raw.to_vec()));
-                    }
-                };
-                let carry = self.scan_disk(&mut t, split, self.len, &mut keep)?;
-                let mut hit = |m: Marked| keep(m, &carry);
-                let count = t.finish(self.len, &mut hit);
-                Ok((hits, count))
-            });
+            let job = std::thread::Builder::new().spawn_scoped(
+                scope,
+                move || -> io::Result<(KeptHits, u32)> {
+                    let mut hits = Vec::new();
+                    let mut t = MarkedLines::after_leading(long, split);
+                    let mut keep = |m: Marked, raw: &[u8]| {
+                        if matters(raw, m.terminated) {
+                            hits.push((m, raw.to_vec()));
+                        }
+                    };
+                    let carry = self.scan_disk(&mut t, split, self.len, &mut keep)?;
+                    let mut hit = |m: Marked| keep(m, &carry);
+                    let count = t.finish(self.len, &mut hit);
+                    Ok((hits, count))
+                },
+            );
+            // No second thread could be started: one scan does it all.
+            let Ok(job) = job else {
+                return None;
+            };
             let first = self.scan_disk(&mut s, 0, split, &mut f);
-            (first, job.join())
+            Some((first, job.join()))
         });
-        let (first, second) = second;
+        let Some((first, second)) = second else {
+            return self.scan_to_end(&mut s, 0, &mut f);
+        };
         first?;
         let (hits, count) = match second {
             Ok(r) => r?,
