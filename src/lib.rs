@@ -65,7 +65,7 @@ pub fn flatten(
     };
     let index = Rc::new(FileIndex::build(Arc::new(source)));
     let loader = Loader::new(search.clone(), main_dir);
-    let sink = Sink::new(dest.clone()).map_err(|e| {
+    let mut sink = Sink::new(dest.clone()).map_err(|e| {
         let path = match &dest {
             Destination::File(p) => p.clone(),
             _ => PathBuf::from("<output>"),
@@ -78,7 +78,6 @@ pub fn flatten(
             None,
         )
     })?;
-    let mut sink = sink;
     sink.refer_to(index.file.clone());
     Interp::new(settings, loader, index, sink).run()
 }

@@ -10,7 +10,7 @@ use crate::parse::{Name, integer_value};
 use crate::program::{FileIndex, control_key};
 
 use super::expr::round_half_even_int;
-use super::{Cursor, Frame, FrameKind, Interp, LabelRec, MAX_CALL_LEVEL, SubRec};
+use super::{Cursor, Frame, FrameKind, Interp, LabelRec, MAX_CALL_LEVEL, SubRec, label_of_key};
 
 /// What a forward search was looking for (for the error when nothing is found).
 enum Seek {
@@ -271,7 +271,7 @@ impl Interp<'_> {
         kinds: &[OKind],
         _expected: &'static str,
     ) -> Result<LabelRec, Error> {
-        let label = || -> String { key.rsplit('#').next().unwrap_or("").to_string() };
+        let label = || label_of_key(key);
         match self.frame().labels.get(key).cloned() {
             None => Err(self.oerr(ErrorKind::UndefinedLabel { label: label() }, file, oidx)),
             Some(rec) if kinds.contains(&rec.kind) => Ok(rec),
@@ -546,7 +546,7 @@ impl Interp<'_> {
     /// A line with the label being looked for, but of a kind that does not
     /// belong there.
     fn stray(&mut self, file: &Rc<FileIndex>, t: u32, key: &Name) -> Result<(), Error> {
-        let label = key.rsplit('#').next().unwrap_or("").to_string();
+        let label = label_of_key(key);
         let found = file.kind_of(t).map(|k| k.name()).unwrap_or("?");
         let rec = self.frame().labels.get(key).cloned();
         if let Some(r) = &rec
@@ -871,13 +871,11 @@ impl Interp<'_> {
             let (a, b) = self.osite(file, oidx);
             self.warn(WarningKind::QuirkRepeatRecursion, file, a, b);
         }
-        if self.last_called.as_deref() != Some(&*base) {
-            if !self.subs.contains_key(&base) {
-                self.subs.insert(base.clone(), target.clone());
-            }
-            if !self.called.contains(&base) {
-                self.called.insert(base.clone());
-            }
+        if self.last_called.as_ref() != Some(&base) {
+            self.subs
+                .entry(base.clone())
+                .or_insert_with(|| target.clone());
+            self.called.insert(base.clone());
             self.last_called = Some(base.clone());
         }
         let o_info = &file.olines[oidx as usize];
@@ -1038,7 +1036,6 @@ impl Interp<'_> {
     }
 }
 
-/// The sub name of a call label: its part after the last `/`.
 /// The sub name of a call label, as a key (the label itself when it is
 /// already bare).
 fn base_key(label: &Name) -> Name {
@@ -1050,6 +1047,7 @@ fn base_key(label: &Name) -> Name {
     }
 }
 
+/// The sub name of a call label: its part after the last `/`.
 fn base_name(label: &str) -> &str {
     match memchr::memrchr(b'/', label.as_bytes()) {
         Some(i) => &label[i + 1..],

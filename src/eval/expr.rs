@@ -191,11 +191,11 @@ impl Interp<'_> {
     }
 
     /// The less common expression kinds, kept out of `eval` so that its
-    /// frame stays small.
+    /// frame stays small (`eval` does the others itself).
     #[inline(never)]
     fn eval_rare(&mut self, e: &Expr) -> EvalResult {
         match &e.kind {
-            ExprKind::Num(v) => check(*v, e.span),
+            ExprKind::Num(_) | ExprKind::Neg(_) | ExprKind::Bin(..) => self.eval(e),
             ExprKind::Slot(i) => {
                 let v = self.read_numbered(*i as usize, e.span)?;
                 check(v, e.span)
@@ -203,13 +203,6 @@ impl Interp<'_> {
             ExprKind::Param(p) => {
                 let v = self.read_param(p, e.span)?;
                 check(v, e.span)
-            }
-            ExprKind::Neg(inner) => Ok(-self.eval(inner)?),
-            ExprKind::Bin(op, operands, checked) => {
-                let a = self.eval_operand(&operands.0)?;
-                let c = self.eval_operand(&operands.1)?;
-                let v = binary(*op, a, c, e.span)?;
-                if *checked { check(v, e.span) } else { Ok(v) }
             }
             ExprKind::Func(f, arg) => {
                 let x = self.eval(arg)?;
@@ -249,13 +242,6 @@ impl Interp<'_> {
     pub(crate) fn read_param(&mut self, p: &ParamRef, span: Span) -> EvalResult {
         match p {
             ParamRef::Numbered(index) => {
-                // `#7`: a literal index of an assigned plain parameter.
-                if let ExprKind::Num(v) = index.kind {
-                    let i = v as usize;
-                    if i as f64 == v && (1..5000).contains(&i) && self.params.set[i] {
-                        return Ok(self.params.values[i]);
-                    }
-                }
                 let i = self.param_index(index)?;
                 self.read_numbered(i, span)
             }

@@ -208,8 +208,19 @@ fn output_error(e: std::io::Error) -> Error {
     )
 }
 
+/// An error reading a streamed program file.
+fn read_error(file: &FileIndex, e: std::io::Error) -> Error {
+    Diagnostic::error(
+        ErrorKind::Io {
+            path: file.file.path.clone(),
+            message: e.to_string(),
+        },
+        None,
+    )
+}
+
 /// The label part of a control key (`scope#label`).
-fn loop_label(key: &str) -> String {
+fn label_of_key(key: &str) -> String {
     key.rsplit('#').next().unwrap_or("").to_string()
 }
 
@@ -482,7 +493,7 @@ impl<'s> Interp<'s> {
         self.steps += 1;
         if self.steps > self.s.max_steps {
             let (label, line, file) = match &self.last_loop {
-                Some((k, n, f)) => (Some(loop_label(k)), Some(*n), f.clone()),
+                Some((k, n, f)) => (Some(label_of_key(k)), Some(*n), f.clone()),
                 None => (None, None, self.cur.file.clone()),
             };
             let kind = ErrorKind::StepLimit {
@@ -547,13 +558,7 @@ impl<'s> Interp<'s> {
                 }
                 None => match window.from(&file.file, start) {
                     Ok(buf) => self.straight_run(&file, buf, start, line_idx, stop),
-                    Err(e) => Err(Diagnostic::error(
-                        ErrorKind::Io {
-                            path: file.file.path.clone(),
-                            message: e.to_string(),
-                        },
-                        None,
-                    )),
+                    Err(e) => Err(read_error(&file, e)),
                 },
             };
             match run {
@@ -582,15 +587,9 @@ impl<'s> Interp<'s> {
                 (&data[start as usize..end], next as u32, t)
             }
             None => {
-                let l = window.line(&file.file, start).map_err(|e| {
-                    Diagnostic::error(
-                        ErrorKind::Io {
-                            path: file.file.path.clone(),
-                            message: e.to_string(),
-                        },
-                        None,
-                    )
-                })?;
+                let l = window
+                    .line(&file.file, start)
+                    .map_err(|e| read_error(file, e))?;
                 let next = l.next;
                 let t = l.terminated;
                 (window.bytes(&l), next, t)
@@ -687,7 +686,7 @@ impl<'s> Interp<'s> {
         self.out_lines += 1;
         if self.out_lines > self.s.max_output_lines {
             let (label, line, file) = match &self.last_loop {
-                Some((k, n, f)) => (Some(loop_label(k)), Some(*n + 1), f.clone()),
+                Some((k, n, f)) => (Some(label_of_key(k)), Some(*n + 1), f.clone()),
                 None => (None, None, self.cur.file.clone()),
             };
             let at = self.current_line_start;

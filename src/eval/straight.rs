@@ -15,7 +15,6 @@ use crate::program::FileIndex;
 use super::fast::POW10;
 use super::scan_ahead::{Ahead, InPlace, Lines, Read, Shared};
 use super::{Interp, output_error};
-use crate::program::swar::{LO7, splat};
 
 /// Word slots: G, X, Y, Z, A, B, C, F, S (the fast set), then I, J, K, R, P
 /// (lines with these take the block checks).
@@ -90,6 +89,14 @@ pub(super) struct Plain {
 fn is_blank(c: u8) -> bool {
     matches!(c, b' ' | b'\t' | b'\r')
 }
+
+/// `b` in every byte of a `u64` (eight bytes at a time, first byte lowest).
+const fn splat(b: u8) -> u64 {
+    0x0101_0101_0101_0101 * b as u64
+}
+
+/// The low seven bits of every byte.
+const LO7: u64 = splat(0x7f);
 
 const POW10_INT: [u64; 9] = [
     1,
