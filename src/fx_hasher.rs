@@ -1,5 +1,5 @@
-//! A small, fast, non-cryptographic hasher for the evaluator's maps
-//! (parameter names, labels, line cache). Inputs come from the program being
+//! A small, fast, non-cryptographic hasher for the maps of the evaluator and
+//! the file index (parameter names, labels, line cache). Inputs come from the program being
 //! flattened, not from an adversary who gains anything by collisions; the
 //! step limit bounds any pathological case.
 

@@ -3,7 +3,6 @@
 //! in order, sub definitions and their ends, and the errors the reference
 //! reports even on lines it skips.
 
-use crate::parse::Name;
 use std::cell::Cell;
 use std::rc::Rc;
 use std::sync::Arc;
@@ -11,9 +10,10 @@ use std::sync::Arc;
 use crate::diag::ErrorKind;
 use crate::fx_hasher::FxMap;
 use crate::parse::ast::{Label, Line, LineKind, OKind, OLine};
-use crate::parse::{LineError, LineParser};
+use crate::parse::{LineError, LineParser, Name};
 
 use super::SourceFile;
+use super::marked_lines::is_mark;
 
 /// One O-line (or M98 line) of a file.
 #[derive(Debug)]
@@ -146,7 +146,7 @@ impl FileIndex {
                         }
                     }
                 }
-            } else if raw.len() + terminated as usize > crate::parse::MAX_LINE + 1
+            } else if overlong(raw, terminated)
                 && let Err(e) = parser.parse(raw, terminated)
             {
                 skip_errors.push((idx, pos, e));
@@ -337,9 +337,12 @@ impl FileIndex {
 /// Whether the index looks at a line handed on after the leading blank lines
 /// (the closure in `FileIndex::build` does nothing with the others).
 fn matters(raw: &[u8], terminated: bool) -> bool {
-    starts_with_m99(raw)
-        || quick_is_candidate(raw)
-        || raw.len() + terminated as usize > crate::parse::MAX_LINE + 1
+    starts_with_m99(raw) || quick_is_candidate(raw) || overlong(raw, terminated)
+}
+
+/// Longer than the reference reads (an error even on a skipped line).
+fn overlong(raw: &[u8], terminated: bool) -> bool {
+    raw.len() + terminated as usize > crate::parse::MAX_LINE + 1
 }
 
 /// Cheap test: could this raw line be an O-line, `%`, or carry a comment
@@ -399,7 +402,7 @@ fn comments_inert(raw: &[u8]) -> bool {
             }
         } else if b == b'(' {
             inside = true;
-        } else if !b.is_ascii() || matches!(b | 0x20, b'o' | b'm') || matches!(b, b'%' | b';') {
+        } else if !b.is_ascii() || is_mark(b) || b == b';' {
             return false;
         }
     }

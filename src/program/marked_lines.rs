@@ -4,8 +4,9 @@
 //! blank lines are handed on. Every O-line, `%` line, `M98` and `M99` holds a
 //! mark.
 
+/// `o`, `O`, `m`, `M` or `%`: every O-line, `%` line, M98 and M99 holds one.
 #[inline(always)]
-fn is_mark(b: u8) -> bool {
+pub(super) fn is_mark(b: u8) -> bool {
     matches!(b | 0x20, b'o' | b'm') || b == b'%'
 }
 

@@ -6,7 +6,6 @@ pub mod ini;
 mod loader;
 mod marked_lines;
 mod source_file;
-pub(crate) mod swar;
 
 pub use file_index::{FileIndex, OInfo, SubDefInfo, control_key, next_line, not_in_file};
 pub use loader::{Loader, SearchPath, check_name};

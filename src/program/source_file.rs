@@ -239,9 +239,7 @@ impl SourceFile {
                             hits.push((m, raw.to_vec()));
                         }
                     };
-                    let carry = self.scan_disk(&mut t, split, self.len, &mut keep)?;
-                    let mut hit = |m: Marked| keep(m, &carry);
-                    let count = t.finish(self.len, &mut hit);
+                    let count = self.scan_to_end(&mut t, split, &mut keep)?;
                     Ok((hits, count))
                 },
             );
@@ -550,7 +548,7 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    type Hits = (Vec<(Marked, Vec<u8>)>, u32);
+    type Hits = (KeptHits, u32);
 
     /// The lines handed on that hold an `o`, or all with `every`.
     fn hits(src: &SourceFile, long: usize, split_at: u64, every: bool) -> Hits {
