@@ -34,7 +34,7 @@ fn write_shortest(out: &mut Vec<u8>, v: f64) {
         let s = v * 1e9;
         let r = (s + SHIFT) - SHIFT;
         if r / 1e9 == v {
-            write_decimal(out, r as i64, 9);
+            write_nine(out, r as i64);
             return;
         }
     }
@@ -45,7 +45,9 @@ fn write_shortest(out: &mut Vec<u8>, v: f64) {
 fn write_shortest_ryu(out: &mut Vec<u8>, v: f64) {
     let mut buf = ryu::Buffer::new();
     let s = buf.format_finite(v).as_bytes();
-    if !s.contains(&b'e') {
+    // Ryu writes an exponent only outside 1e-5..1e16; the search is made
+    // only near and beyond those bounds.
+    if (1e-4..1e15).contains(&v.abs()) || !s.contains(&b'e') {
         // Already plain decimal; only a `.0` ending is dropped.
         out.extend_from_slice(s.strip_suffix(b".0").unwrap_or(s));
         return;
@@ -173,6 +175,35 @@ fn write_decimal(out: &mut Vec<u8>, mut n: i64, p: usize) {
     }
 }
 
+/// Writes `n / 10^9` with trailing zeros dropped: `write_decimal` for nine
+/// decimals, with the fraction's digits made directly.
+fn write_nine(out: &mut Vec<u8>, n: i64) {
+    let m = n.unsigned_abs();
+    if n < 0 {
+        out.push(b'-');
+    }
+    let int = m / 1_000_000_000;
+    let mut frac = (m % 1_000_000_000) as u32;
+    let mut ib = itoa::Buffer::new();
+    out.extend_from_slice(ib.format(int).as_bytes());
+    if frac != 0 {
+        let mut digits = 9;
+        while frac.is_multiple_of(10) {
+            frac /= 10;
+            digits -= 1;
+        }
+        let mut buf = [b'0'; 10];
+        buf[0] = b'.';
+        let mut i = digits;
+        while frac > 0 {
+            buf[i] = b'0' + (frac % 10) as u8;
+            frac /= 10;
+            i -= 1;
+        }
+        out.extend_from_slice(&buf[..=digits]);
+    }
+}
+
 fn trim_zeros(s: &[u8]) -> &[u8] {
     let mut e = s.len();
     while e > 0 && s[e - 1] == b'0' {
@@ -233,6 +264,22 @@ mod tests {
             prop_assert_eq!(s(x, None), ryu_text(x));
             let small = x * 1e-9;
             prop_assert_eq!(s(small, None), ryu_text(small));
+        }
+    }
+
+    proptest! {
+        /// Nine decimals made directly read as `write_decimal` writes them.
+        #[test]
+        fn nine_decimals_as_the_general_writer(
+            n in prop_oneof![-2_000_000_000_000_000i64..2_000_000_000_000_000, -10_000i64..10_000],
+            zeros in 0u32..10,
+        ) {
+            let n = n.saturating_mul(10i64.pow(zeros)).clamp(-4_000_000_000_000_000_000, 4_000_000_000_000_000_000);
+            prop_assume!(n != 0);
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            super::write_nine(&mut a, n);
+            super::write_decimal(&mut b, n, 9);
+            prop_assert_eq!(a, b, "{}", n);
         }
     }
 

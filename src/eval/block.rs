@@ -7,7 +7,7 @@ use std::rc::Rc;
 use crate::diag::{ErrorKind, WarningKind};
 use crate::emit::write_number;
 use crate::parse::MAX_LINE;
-use crate::parse::ast::{CommentKind, Item, ParamRef, Span};
+use crate::parse::ast::{CommentKind, ExprKind, Item, ParamRef, Span};
 use crate::program::FileIndex;
 
 use super::Interp;
@@ -46,6 +46,20 @@ impl Scratch {
     }
 }
 
+/// A word that `exec_words` can run: not an M-code it would have to act on
+/// (M70 to M73, M98, M99, or an M-code computed by an expression).
+fn plain_word(item: &Item) -> bool {
+    match item {
+        Item::Word(w) => {
+            w.letter != b'm'
+                || (w.literal
+                    && matches!(w.value.kind, ExprKind::Num(v)
+                        if !matches!(v, 70.0 | 71.0 | 72.0 | 73.0 | 98.0 | 99.0)))
+        }
+        _ => false,
+    }
+}
+
 impl Interp<'_> {
     pub(super) fn exec_items(
         &mut self,
@@ -71,6 +85,9 @@ impl Interp<'_> {
         scratch: &mut Scratch,
     ) -> Result<(), crate::diag::Error> {
         scratch.clear();
+        if items.iter().all(plain_word) {
+            return self.exec_words(file, start, raw, items, scratch);
+        }
         let Scratch {
             words,
             repl,
@@ -100,7 +117,7 @@ impl Interp<'_> {
                     }
                     let v = self
                         .eval(&w.value)
-                        .map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
+                        .map_err(|f| self.fault_in_line(*f, file, start))?;
                     let bit = 1u32 << (w.letter.wrapping_sub(b'a') as u32 & 31);
                     if w.letter == b'm' {
                         m_count += 1;
@@ -136,22 +153,22 @@ impl Interp<'_> {
                         ParamRef::Numbered(index) => {
                             let i = self
                                 .param_index(index)
-                                .map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
+                                .map_err(|f| self.fault_in_line(*f, file, start))?;
                             if is_read_only(i) {
                                 let k = ErrorKind::ParamReadOnly { index: i as i64 };
                                 return Err(self.error_in_line(k, file, start, a.target_span));
                             }
                             let v = self
                                 .eval(&a.value)
-                                .map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
+                                .map_err(|f| self.fault_in_line(*f, file, start))?;
                             num_set.push((i, v));
                         }
                         ParamRef::Named(name) => {
                             self.create_named(name, a.target_span)
-                                .map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
+                                .map_err(|f| self.fault_in_line(*f, file, start))?;
                             let v = self
                                 .eval(&a.value)
-                                .map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
+                                .map_err(|f| self.fault_in_line(*f, file, start))?;
                             named_set.push((name.clone(), v));
                         }
                     }
@@ -192,7 +209,7 @@ impl Interp<'_> {
                             .into_owned();
                     let text = self
                         .substitute(&body, c.body.start)
-                        .map_err(|(k, s)| self.error_in_line(k, file, start, s))?;
+                        .map_err(|f| self.fault_in_line(*f, file, start))?;
                     if c.kind == CommentKind::Abort {
                         return Err(self.error_in_line(
                             ErrorKind::Abort { message: text },
@@ -268,6 +285,73 @@ impl Interp<'_> {
             self.context_op(op, file, start, span)?;
         }
         if ends {
+            if self.main.percent_start {
+                self.emit_raw(b"%")?;
+            }
+            self.ended = true;
+        }
+        Ok(())
+    }
+
+    /// A line of words only, none of them a program-flow or context M-code
+    /// (the common line of a loop body): `exec_items_with` without the
+    /// steps that have nothing to do.
+    fn exec_words(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        raw: &[u8],
+        items: &[Item],
+        scratch: &mut Scratch,
+    ) -> Result<(), crate::diag::Error> {
+        let Scratch { words, repl, .. } = scratch;
+        let mut seen = 0u32;
+        let mut m_count = 0;
+        for item in items {
+            let Item::Word(w) = item else {
+                unreachable!("checked by plain_word")
+            };
+            if matches!(w.letter, b'u' | b'v' | b'w') && !self.s.uvw_axes {
+                let k = ErrorKind::BadCharacter {
+                    ch: w.letter as char,
+                    byte: w.letter,
+                };
+                let at = Span::new(w.span.start, w.span.start + 1);
+                return Err(self.error_in_line(k, file, start, at));
+            }
+            let v = self
+                .eval(&w.value)
+                .map_err(|f| self.fault_in_line(*f, file, start))?;
+            if w.letter == b'm' {
+                m_count += 1;
+                if m_count > 4 {
+                    let k = ErrorKind::TooManyMWords;
+                    return Err(self.error_in_line(k, file, start, w.span));
+                }
+            } else if w.letter != b'g' && w.letter.is_ascii_lowercase() {
+                let bit = 1u32 << (w.letter.wrapping_sub(b'a') as u32 & 31);
+                if seen & bit != 0 {
+                    let k = ErrorKind::DuplicateWord {
+                        letter: w.letter as char,
+                    };
+                    return Err(self.error_in_line(k, file, start, w.span));
+                }
+                seen |= bit;
+            }
+            words.push((w.letter, v));
+            if !w.literal {
+                repl.push((w.value.span, Repl::Number(v)));
+            }
+        }
+        if let Err((k, at)) = super::validate::check_block(words, &self.modal) {
+            let span = match at.and_then(|i| items.get(i)) {
+                Some(Item::Word(w)) => w.span,
+                _ => Span::new(0, raw.len() as u32),
+            };
+            return Err(self.error_in_line(k, file, start, span));
+        }
+        self.write_line(file, start, raw, repl)?;
+        if self.apply_words(file, start, words, false)? {
             if self.main.percent_start {
                 self.emit_raw(b"%")?;
             }

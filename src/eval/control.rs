@@ -59,7 +59,7 @@ impl Interp<'_> {
     ) -> Result<f64, Error> {
         let start = file.olines[oidx as usize].start;
         self.eval(e)
-            .map_err(|(k, s)| self.error_in_line(k, file, start, s))
+            .map_err(|f| self.fault_in_line(*f, file, start))
     }
 
     /// The label text of an O-line (computed labels are evaluated).
@@ -302,12 +302,12 @@ impl Interp<'_> {
     /// if it would fail there.
     fn probe_condition(&mut self, file: &Rc<FileIndex>, oidx: u32) {
         if let Some(e) = self.oline(file, oidx).expr.clone()
-            && let Err((k, _)) = self.eval(&e)
+            && let Err(f) = self.eval(&e)
         {
             let (a, b) = self.osite(file, oidx);
             self.warn(
                 WarningKind::QuirkSkippedCondition {
-                    message: k.to_string(),
+                    message: f.0.to_string(),
                 },
                 file,
                 a,

@@ -12,13 +12,23 @@ use super::params::{MAX_PARAM, ParamClass, classify};
 /// EQ/NE tolerance of LinuxCNC 2.9.
 pub const TOLERANCE_EQUAL: f64 = 0.0001;
 
-pub type EvalResult = Result<f64, (ErrorKind, Span)>;
+/// An evaluation error: its kind and the span it is reported at. Boxed, so
+/// that a result is two words wide and comes back in registers.
+pub type Fault = Box<(ErrorKind, Span)>;
+
+pub type EvalResult = Result<f64, Fault>;
+
+/// A fault of `kind` at `span`.
+#[cold]
+pub fn fault(kind: ErrorKind, span: Span) -> Fault {
+    Box::new((kind, span))
+}
 
 fn check(v: f64, span: Span) -> EvalResult {
     if v.is_nan() {
-        Err((ErrorKind::NotANumber, span))
+        Err(fault(ErrorKind::NotANumber, span))
     } else if v.is_infinite() {
-        Err((ErrorKind::Infinity, span))
+        Err(fault(ErrorKind::Infinity, span))
     } else {
         Ok(v)
     }
@@ -49,41 +59,18 @@ pub fn binary(op: BinOp, a: f64, c: f64, span: Span) -> EvalResult {
     Ok(match op {
         BinOp::Pow => {
             if a < 0.0 && c.floor() != c {
-                return Err((ErrorKind::NegativePower, span));
+                return Err(fault(ErrorKind::NegativePower, span));
             }
             a.powf(c)
         }
         BinOp::Mul => a * c,
         BinOp::Div => {
             if c == 0.0 {
-                return Err((ErrorKind::DivideByZero, span));
+                return Err(fault(ErrorKind::DivideByZero, span));
             }
             a / c
         }
-        BinOp::Mod => {
-            let (ai, ci) = (a as i64, c as i64);
-            let mut r = if ai as f64 == a
-                && ci as f64 == c
-                && ci != 0
-                && a.abs() < 9.0e15
-                && c.abs() < 9.0e15
-            {
-                // Whole numbers: the remainder in integers is exact, as the
-                // floating-point one is; only its zero keeps the sign of a.
-                let r = (ai % ci) as f64;
-                if r == 0.0 && a.is_sign_negative() {
-                    -0.0
-                } else {
-                    r
-                }
-            } else {
-                a % c
-            };
-            if r < 0.0 {
-                r += c.abs();
-            }
-            r
-        }
+        BinOp::Mod => modulo(a, c),
         BinOp::Add => a + c,
         BinOp::Sub => a - c,
         BinOp::Eq => b((a - c).abs() < TOLERANCE_EQUAL),
@@ -96,6 +83,29 @@ pub fn binary(op: BinOp, a: f64, c: f64, span: Span) -> EvalResult {
         BinOp::Or => b(a != 0.0 || c != 0.0),
         BinOp::Xor => b((a != 0.0) != (c != 0.0)),
     })
+}
+
+/// `a MOD c`: the remainder made non-negative by adding `|c|`.
+#[inline]
+pub fn modulo(a: f64, c: f64) -> f64 {
+    let (ai, ci) = (a as i64, c as i64);
+    let mut r =
+        if ai as f64 == a && ci as f64 == c && ci != 0 && a.abs() < 9.0e15 && c.abs() < 9.0e15 {
+            // Whole numbers: the remainder in integers is exact, as the
+            // floating-point one is; only its zero keeps the sign of a.
+            let r = (ai % ci) as f64;
+            if r == 0.0 && a.is_sign_negative() {
+                -0.0
+            } else {
+                r
+            }
+        } else {
+            a % c
+        };
+    if r < 0.0 {
+        r += c.abs();
+    }
+    r
 }
 
 /// One-argument function.
@@ -111,13 +121,13 @@ pub fn unary(f: Func, x: f64, span: Span) -> EvalResult {
         }
         Func::Acos => {
             if !(-1.0..=1.0).contains(&x) {
-                return Err((ErrorKind::AcosRange, span));
+                return Err(fault(ErrorKind::AcosRange, span));
             }
             super::degrees::to_degrees(x.acos())
         }
         Func::Asin => {
             if !(-1.0..=1.0).contains(&x) {
-                return Err((ErrorKind::AsinRange, span));
+                return Err(fault(ErrorKind::AsinRange, span));
             }
             super::degrees::to_degrees(x.asin())
         }
@@ -129,14 +139,14 @@ pub fn unary(f: Func, x: f64, span: Span) -> EvalResult {
         Func::Fup => x.ceil(),
         Func::Ln => {
             if x <= 0.0 {
-                return Err((ErrorKind::LnDomain, span));
+                return Err(fault(ErrorKind::LnDomain, span));
             }
             x.ln()
         }
         Func::Round => round_half_away(x),
         Func::Sqrt => {
             if x < 0.0 {
-                return Err((ErrorKind::SqrtNegative, span));
+                return Err(fault(ErrorKind::SqrtNegative, span));
             }
             x.sqrt()
         }
@@ -179,6 +189,13 @@ impl Interp<'_> {
                 let v = self.read_named(name, e.span)?;
                 check(v, e.span)
             }
+            ExprKind::Code(c) => match self.s.compiled_exprs {
+                true => match self.run_code(&c.ops) {
+                    Some(v) => Ok(v),
+                    None => self.eval(&c.tree),
+                },
+                false => self.eval(&c.tree),
+            },
             ExprKind::Neg(inner) => Ok(-self.eval(inner)?),
             ExprKind::Bin(op, operands, checked) => {
                 let a = self.eval_operand(&operands.0)?;
@@ -195,7 +212,9 @@ impl Interp<'_> {
     #[inline(never)]
     fn eval_rare(&mut self, e: &Expr) -> EvalResult {
         match &e.kind {
-            ExprKind::Num(_) | ExprKind::Neg(_) | ExprKind::Bin(..) => self.eval(e),
+            ExprKind::Num(_) | ExprKind::Neg(_) | ExprKind::Bin(..) | ExprKind::Code(_) => {
+                self.eval(e)
+            }
             ExprKind::Slot(i) => {
                 let v = self.read_numbered(*i as usize, e.span)?;
                 check(v, e.span)
@@ -230,11 +249,11 @@ impl Interp<'_> {
     }
 
     /// Index of a numbered parameter reference.
-    pub(crate) fn param_index(&mut self, index: &Expr) -> Result<usize, (ErrorKind, Span)> {
+    pub(crate) fn param_index(&mut self, index: &Expr) -> Result<usize, Fault> {
         let v = self.eval(index)?;
-        let i = integer_value(v).map_err(|k| (k, index.span))?;
+        let i = integer_value(v).map_err(|k| fault(k, index.span))?;
         if i < 1 || i >= MAX_PARAM as i64 {
-            return Err((ErrorKind::ParamOutOfRange { index: i }, index.span));
+            return Err(fault(ErrorKind::ParamOutOfRange { index: i }, index.span));
         }
         Ok(i as usize)
     }
@@ -263,7 +282,7 @@ impl Interp<'_> {
             if self.s.zero_start {
                 return Ok(0.0);
             }
-            return Err((
+            return Err(fault(
                 ErrorKind::RuntimeParam {
                     what: format!("#{i} ({what})"),
                     why: why.to_string(),
@@ -282,7 +301,7 @@ impl Interp<'_> {
                 ParamClass::Runtime(w, y) | ParamClass::ReadOnlyRuntime(w, y) => (w, y),
                 _ => ("value", "it depends on the machine"),
             };
-            return Err((
+            return Err(fault(
                 ErrorKind::RuntimeParam {
                     what: format!("#{i} ({what})"),
                     why: why.to_string(),
@@ -304,11 +323,11 @@ impl Interp<'_> {
         Ok(self.params.values[i])
     }
 
-    fn param_exists(&mut self, p: &ParamRef, span: Span) -> Result<bool, (ErrorKind, Span)> {
+    fn param_exists(&mut self, p: &ParamRef, span: Span) -> Result<bool, Fault> {
         match p {
             ParamRef::Numbered(index) => {
                 let v = self.eval(index)?;
-                let i = integer_value(v).map_err(|k| (k, index.span))?;
+                let i = integer_value(v).map_err(|k| fault(k, index.span))?;
                 Ok((1..MAX_PARAM as i64).contains(&i))
             }
             ParamRef::Named(name) => self.named_exists(name, span),

@@ -1,10 +1,10 @@
 //! Parameter substitution in `(debug,…)`, `(print,…)`, `(log,…)` and
 //! `(abort,…)` texts, with the reference's `%d`, `%f` and `%.Nf` directives.
 
-use crate::diag::ErrorKind;
 use crate::parse::ast::Span;
 
 use super::Interp;
+use super::expr::Fault;
 use super::params::MAX_PARAM;
 
 #[derive(Clone, Copy)]
@@ -27,11 +27,7 @@ fn push_value(out: &mut String, v: f64, fmt: Fmt) {
 impl Interp<'_> {
     /// Substitutes parameters in a message body. `base` is the body's offset
     /// in the line, for error positions.
-    pub(crate) fn substitute(
-        &mut self,
-        text: &str,
-        base: u32,
-    ) -> Result<String, (ErrorKind, Span)> {
+    pub(crate) fn substitute(&mut self, text: &str, base: u32) -> Result<String, Fault> {
         let bytes = text.as_bytes();
         let mut out = String::with_capacity(text.len() + 16);
         let mut fmt = Fmt::Decimals(6);

@@ -3,6 +3,7 @@
 //! by its value.
 
 mod block;
+mod code;
 mod control;
 mod degrees;
 mod expr;
@@ -349,6 +350,16 @@ impl<'s> Interp<'s> {
         span: Span,
     ) -> Error {
         self.error(kind, file, line_start + span.start, line_start + span.end)
+    }
+
+    /// Error for an evaluation fault in the line starting at `line_start`.
+    pub(crate) fn fault_in_line(
+        &self,
+        (kind, span): (ErrorKind, Span),
+        file: &Rc<FileIndex>,
+        line_start: u32,
+    ) -> Error {
+        self.error_in_line(kind, file, line_start, span)
     }
 
     pub(crate) fn warn(&mut self, kind: WarningKind, file: &Rc<FileIndex>, start: u32, end: u32) {

@@ -6,7 +6,7 @@ use crate::parse::Name;
 use crate::parse::ast::Span;
 
 use super::Interp;
-use super::expr::EvalResult;
+use super::expr::{EvalResult, Fault, fault};
 use super::state::{AXES, Unknown};
 
 fn flag(x: bool) -> f64 {
@@ -86,7 +86,7 @@ impl Interp<'_> {
                     _ => self.s.zero_start.then_some(-1.0),
                 };
                 return Some(v.ok_or_else(|| {
-                    (
+                    fault(
                         ErrorKind::RuntimeParam {
                             what: format!("#<{name}>"),
                             why: "the tool in the spindle is known only on the machine".into(),
@@ -111,7 +111,7 @@ impl Interp<'_> {
                 if let Some(axis) = name.strip_prefix("_abs_").filter(|a| a.len() == 1)
                     && AXES.contains(&axis.as_bytes()[0])
                 {
-                    return Some(Err((
+                    return Some(Err(fault(
                         ErrorKind::RuntimeParam {
                             what: format!("#<{name}> (machine position)"),
                             why: "machine coordinates depend on homing and offsets".into(),
@@ -122,7 +122,7 @@ impl Interp<'_> {
                     )));
                 }
                 if name.starts_with("_hal[") {
-                    return Some(Err((
+                    return Some(Err(fault(
                         ErrorKind::RuntimeParam {
                             what: format!("#<{name}>"),
                             why: "HAL values exist only on the running machine".into(),
@@ -135,7 +135,7 @@ impl Interp<'_> {
                     let found = self.s.ini.as_ref().and_then(|i| i.get_upper(sec, key));
                     return Some(match found.and_then(|v| v.trim().parse::<f64>().ok()) {
                         Some(v) => Ok(v),
-                        None => Err((
+                        None => Err(fault(
                             ErrorKind::NamedUndefined {
                                 name: name.to_string(),
                             },
@@ -207,7 +207,7 @@ impl Interp<'_> {
     pub(crate) fn position(&self, axis: usize, span: Span) -> EvalResult {
         if self.modal.ccomp != 400 {
             let why = "cutter radius compensation is on".to_string();
-            return Err((
+            return Err(fault(
                 ErrorKind::UnknownPosition {
                     axis: AXES[axis] as char,
                     why,
@@ -224,7 +224,7 @@ impl Interp<'_> {
                     }
                     Unknown::After(what, line) => format!("{what} at line {line} made it unknown"),
                 };
-                Err((
+                Err(fault(
                     ErrorKind::UnknownPosition {
                         axis: AXES[axis] as char,
                         why,
@@ -257,7 +257,7 @@ impl Interp<'_> {
         match self.named_table(name).get(name) {
             Some(v) => Ok(*v),
             None if defining => Ok(0.0),
-            None => Err((
+            None => Err(fault(
                 ErrorKind::NamedUndefined {
                     name: name.to_string(),
                 },
@@ -266,11 +266,7 @@ impl Interp<'_> {
         }
     }
 
-    pub(crate) fn named_exists(
-        &mut self,
-        name: &Name,
-        span: Span,
-    ) -> Result<bool, (ErrorKind, Span)> {
+    pub(crate) fn named_exists(&mut self, name: &Name, span: Span) -> Result<bool, Fault> {
         if name.starts_with("_ini[") || name.starts_with("_hal[") {
             if self.globals.contains_key(name) {
                 return Ok(true);
@@ -284,18 +280,14 @@ impl Interp<'_> {
     }
 
     /// Creates a named parameter (value 0) when its setting is parsed.
-    pub(crate) fn create_named(
-        &mut self,
-        name: &Name,
-        span: Span,
-    ) -> Result<(), (ErrorKind, Span)> {
+    pub(crate) fn create_named(&mut self, name: &Name, span: Span) -> Result<(), Fault> {
         // An `_ini[...]` name the INI does not have is an ordinary global.
         let ini_missing =
             name.starts_with("_ini[") && self.predefined(name, span).is_none_or(|r| r.is_err());
         if (self.is_predefined(name) && !ini_missing)
             || (name.as_str() == "n_args" && self.s.oword_nargs && self.level() > 0)
         {
-            return Err((
+            return Err(fault(
                 ErrorKind::NamedReadOnly {
                     name: name.to_string(),
                 },

@@ -44,6 +44,9 @@ pub struct Settings {
     /// Chunk size in bytes for reading plain lines on a second core during a
     /// long straight-line run (0: one core).
     pub scan_ahead: usize,
+    /// Compiled expressions run on the stack machine. Off only to check it
+    /// against the tree evaluation.
+    pub compiled_exprs: bool,
 }
 
 impl Default for Settings {
@@ -62,6 +65,7 @@ impl Default for Settings {
             warnings: true,
             plain_runs: true,
             scan_ahead: 32 << 10,
+            compiled_exprs: true,
             uvw_axes: false,
             machine_metric: false,
             tool_table: Vec::new(),

@@ -85,6 +85,9 @@ pub enum ExprKind {
     Func(Func, Box<Expr>),
     Atan(Box<(Expr, Expr)>),
     Exists(Box<ParamRef>),
+    /// A value expression with its compiled form (only at the top of a
+    /// word, assignment or O-line value).
+    Code(Box<super::code::Code>),
 }
 
 /// A parameter reference: `#<integer value>` or `#<name>`.

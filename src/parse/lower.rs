@@ -4,6 +4,7 @@ use pest::iterators::Pair;
 
 use super::Name;
 use super::ast::*;
+use super::code::compile;
 use super::grammar::Rule;
 use super::normalize::Normalized;
 use crate::diag::ErrorKind;
@@ -81,7 +82,7 @@ impl Lowerer<'_> {
         let letter = it.next().expect("letter").as_str().as_bytes()[0];
         let vp = it.next().expect("value");
         let literal = vp.as_rule() == Rule::number;
-        let value = self.lower_value(vp)?;
+        let value = compile(self.lower_value(vp)?);
         Ok(Word {
             letter,
             span,
@@ -96,7 +97,7 @@ impl Lowerer<'_> {
         let tp = it.next().expect("target");
         let target_span = self.tight_span(&tp);
         let target = self.lower_param_target(tp)?;
-        let value = self.lower_value(it.next().expect("value"))?;
+        let value = compile(self.lower_value(it.next().expect("value"))?);
         Ok(Assign {
             target,
             target_span,
@@ -337,7 +338,7 @@ impl Lowerer<'_> {
         for q in cp.into_inner() {
             match q.as_rule() {
                 Rule::bracket => {
-                    let e = self.lower_value(q)?;
+                    let e = compile(self.lower_value(q)?);
                     if kind == OKind::Call {
                         args.push(e);
                     } else {

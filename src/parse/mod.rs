@@ -1,6 +1,7 @@
 //! Line parsing: raw bytes → processed line → pest pairs → typed AST.
 
 pub mod ast;
+pub mod code;
 mod grammar;
 mod lower;
 mod name;

@@ -737,3 +737,86 @@ proptest! {
         prop_assert_eq!(&split, &slow, "program:\n{}", prog);
     }
 }
+
+/// A value expression over every operator, function and kind of parameter
+/// reading, including ones that fail (division by zero, domain errors,
+/// undefined names, unset parameters).
+fn any_value() -> impl Strategy<Value = String> {
+    let leaf = prop_oneof![
+        12 => proptest::sample::select(
+            &[
+                "0", "1", "-1", "0.5", "2", "-0.25", "3", "1000000", "0.0001", "-0", "#1", "#2",
+                "#3", "#<a>", "#<b>", "#<_g>", "##1", "#[#1 + 1]", "EXISTS[#<a>]",
+            ][..]
+        )
+        .prop_map(String::from),
+        1 => proptest::sample::select(
+            &["#4", "#<undef>", "#5220", "#5420", "#<_x>", "EXISTS[#<nope>]", "#31"][..]
+        )
+        .prop_map(String::from),
+    ];
+    leaf.prop_recursive(3, 12, 2, |inner| {
+        prop_oneof![
+            (
+                proptest::sample::select(
+                    &[
+                        "+", "-", "*", "/", "MOD", "**", "EQ", "NE", "GT", "GE", "LT", "LE", "AND",
+                        "OR", "XOR",
+                    ][..]
+                ),
+                inner.clone(),
+                inner.clone()
+            )
+                .prop_map(|(op, a, b)| format!("[{a} {op} {b}]")),
+            (
+                proptest::sample::select(
+                    &[
+                        "ABS", "ACOS", "ASIN", "COS", "EXP", "FIX", "FUP", "LN", "ROUND", "SIN",
+                        "SQRT", "TAN",
+                    ][..]
+                ),
+                inner.clone()
+            )
+                .prop_map(|(f, a)| format!("{f}[{a}]")),
+            (inner.clone(), inner.clone()).prop_map(|(y, x)| format!("ATAN[{y}]/[{x}]")),
+            inner.clone().prop_map(|a| format!("-{a}")),
+            inner.prop_map(|a| format!("#[ABS[FIX[{a}]] MOD 40 + 1]")),
+        ]
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    /// Compiled expressions give what the tree evaluation gives: the same
+    /// output, and the same error at the same place when there is one.
+    #[test]
+    fn compiled_expressions_match_the_tree(
+        e in proptest::collection::vec(any_value(), 4),
+        v in proptest::collection::vec(
+            proptest::sample::select(&["0", "1", "-1", "0.5", "2", "-3.75", "1e6"][..]),
+            5,
+        ),
+        zero_start in any::<bool>(),
+    ) {
+        let v: Vec<&str> = v.iter().map(|s| if *s == "1e6" { "1000000" } else { s }).collect();
+        let prog = format!(
+            "#1 = {}\n#2 = {}\n#3 = {}\n#<a> = {}\n#<b> = {}\n#<_g> = 2\n\
+             o<s> sub\n#<a> = [#1 * 2]\nG1 X{} Y{}\n#10 = {}\n(debug, #10)\no<s> endsub\n\
+             G1 X{} Y{} Z{}\n#11 = {}\n(debug, #11)\no<s> call [{}] [2]\n\
+             o1 if [{}]\nG0 X1\no1 endif\nM2\n",
+            v[0], v[1], v[2], v[3], v[4],
+            e[0], e[1], e[2],
+            e[0], e[1], e[2], e[3], e[3], e[2],
+        );
+        let on = Settings { zero_start, ..small_limits() };
+        let off = Settings { compiled_exprs: false, ..on.clone() };
+        let show = |r: Result<String, Error>| match r {
+            Ok(s) => s,
+            Err(e) => format!("error: {}", render(&e, MessageFormat::Short, false)),
+        };
+        let fast = show(ngcflat::flatten_str(&prog, &on));
+        let slow = show(ngcflat::flatten_str(&prog, &off));
+        prop_assert_eq!(&fast, &slow, "program:\n{}", prog);
+    }
+}

@@ -1,0 +1,110 @@
+//! The fast path of expression evaluation: runs a compiled expression on a
+//! small stack. It only reads, and gives up (`None`) on anything but plain
+//! finite values, so that the tree evaluation, run instead, reports every
+//! error and warning exactly as it would have.
+
+use crate::parse::code::{Op, STACK};
+use crate::parse::integer_value;
+
+use super::Interp;
+use super::expr::{TOLERANCE_EQUAL, binary, modulo, unary};
+use super::params::MAX_PARAM;
+use crate::parse::ast::{BinOp, Span};
+
+impl Interp<'_> {
+    /// The value of a compiled expression, or `None` to evaluate the tree.
+    #[inline]
+    pub(super) fn run_code(&self, ops: &[Op]) -> Option<f64> {
+        let mut stack = [0f64; STACK];
+        let mut n = 0usize;
+        for op in ops {
+            match op {
+                Op::Num(v) => {
+                    *stack.get_mut(n)? = *v;
+                    n += 1;
+                }
+                Op::Slot(i) => {
+                    *stack.get_mut(n)? = self.stored(*i as usize)?;
+                    n += 1;
+                }
+                Op::Named(name) => {
+                    let table = if name.starts_with('_') || self.frames.len() == 1 {
+                        &self.globals
+                    } else {
+                        &self.frames.last()?.locals
+                    };
+                    let v = *table.get(name)?;
+                    if !v.is_finite() {
+                        return None;
+                    }
+                    *stack.get_mut(n)? = v;
+                    n += 1;
+                }
+                Op::Index => {
+                    let top = stack.get_mut(n.checked_sub(1)?)?;
+                    let i = integer_value(*top).ok()?;
+                    if i < 1 || i >= MAX_PARAM as i64 {
+                        return None;
+                    }
+                    *top = self.stored(i as usize)?;
+                }
+                Op::Neg => {
+                    let top = stack.get_mut(n.checked_sub(1)?)?;
+                    *top = -*top;
+                }
+                Op::Bin(op) => {
+                    n = n.checked_sub(1)?;
+                    let c = *stack.get(n)?;
+                    let top = stack.get_mut(n.checked_sub(1)?)?;
+                    let a = *top;
+                    *top = match op {
+                        BinOp::Mul => a * c,
+                        BinOp::Add => a + c,
+                        BinOp::Sub => a - c,
+                        BinOp::Lt => f64::from(a < c),
+                        BinOp::Gt => f64::from(a > c),
+                        BinOp::Eq => f64::from((a - c).abs() < TOLERANCE_EQUAL),
+                        BinOp::Mod => modulo(a, c),
+                        _ => binary(*op, a, c, Span::default()).ok()?,
+                    };
+                }
+                Op::Check => {
+                    if !stack.get(n.checked_sub(1)?)?.is_finite() {
+                        return None;
+                    }
+                }
+                Op::Func(f) => {
+                    let top = stack.get_mut(n.checked_sub(1)?)?;
+                    let v = unary(*f, *top, Span::default()).ok()?;
+                    if !v.is_finite() {
+                        return None;
+                    }
+                    *top = v;
+                }
+                Op::Atan => {
+                    n = n.checked_sub(1)?;
+                    let x = *stack.get(n)?;
+                    let top = stack.get_mut(n.checked_sub(1)?)?;
+                    let v = super::degrees::to_degrees(top.atan2(x));
+                    if !v.is_finite() {
+                        return None;
+                    }
+                    *top = v;
+                }
+            }
+        }
+        if n == 1 { Some(stack[0]) } else { None }
+    }
+
+    /// A plain parameter the program has set, if finite.
+    #[inline]
+    fn stored(&self, i: usize) -> Option<f64> {
+        if i < 5000 && self.params.set[i] {
+            let v = self.params.values[i];
+            if v.is_finite() {
+                return Some(v);
+            }
+        }
+        None
+    }
+}
