@@ -88,6 +88,9 @@ impl Interp<'_> {
         if items.iter().all(plain_word) {
             return self.exec_words(file, start, raw, items, scratch);
         }
+        if items.iter().all(|i| matches!(i, Item::Assign(_))) {
+            return self.exec_assigns(file, start, items, scratch);
+        }
         let Scratch {
             words,
             repl,
@@ -320,7 +323,7 @@ impl Interp<'_> {
                 return Err(self.error_in_line(k, file, start, at));
             }
             let v = self
-                .eval(&w.value)
+                .eval_value(&w.value)
                 .map_err(|f| self.fault_in_line(*f, file, start))?;
             if w.letter == b'm' {
                 m_count += 1;
@@ -343,6 +346,10 @@ impl Interp<'_> {
                 repl.push((w.value.span, Repl::Number(v)));
             }
         }
+        if self.fast_words(words) {
+            // Checked and applied: a plain move.
+            return self.write_line(file, start, raw, repl);
+        }
         if let Err((k, at)) = super::validate::check_block(words, &self.modal) {
             let span = match at.and_then(|i| items.get(i)) {
                 Some(Item::Word(w)) => w.span,
@@ -351,6 +358,65 @@ impl Interp<'_> {
             return Err(self.error_in_line(k, file, start, span));
         }
         self.write_line(file, start, raw, repl)?;
+        if self.apply_words(file, start, words, false)? {
+            if self.main.percent_start {
+                self.emit_raw(b"%")?;
+            }
+            self.ended = true;
+        }
+        Ok(())
+    }
+
+    /// A line of assignments only: `exec_items_with` without the steps that
+    /// have nothing to do (nothing is written).
+    fn exec_assigns(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        items: &[Item],
+        scratch: &mut Scratch,
+    ) -> Result<(), crate::diag::Error> {
+        let Scratch {
+            words,
+            num_set,
+            named_set,
+            ..
+        } = scratch;
+        for item in items {
+            let Item::Assign(a) = item else {
+                unreachable!("only assignments")
+            };
+            match &a.target {
+                ParamRef::Numbered(index) => {
+                    let i = self
+                        .param_index(index)
+                        .map_err(|f| self.fault_in_line(*f, file, start))?;
+                    if is_read_only(i) {
+                        let k = ErrorKind::ParamReadOnly { index: i as i64 };
+                        return Err(self.error_in_line(k, file, start, a.target_span));
+                    }
+                    let v = self
+                        .eval_value(&a.value)
+                        .map_err(|f| self.fault_in_line(*f, file, start))?;
+                    num_set.push((i, v));
+                }
+                ParamRef::Named(name) => {
+                    self.create_named(name, a.target_span)
+                        .map_err(|f| self.fault_in_line(*f, file, start))?;
+                    let v = self
+                        .eval_value(&a.value)
+                        .map_err(|f| self.fault_in_line(*f, file, start))?;
+                    named_set.push((name.clone(), v));
+                }
+            }
+        }
+        for &(i, v) in num_set.iter() {
+            self.params.assign(i, v);
+        }
+        for (n, v) in named_set.iter() {
+            self.set_named(n, *v);
+        }
+        // No words: the state model sees an empty block.
         if self.apply_words(file, start, words, false)? {
             if self.main.percent_start {
                 self.emit_raw(b"%")?;

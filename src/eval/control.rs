@@ -58,7 +58,7 @@ impl Interp<'_> {
         e: &crate::parse::ast::Expr,
     ) -> Result<f64, Error> {
         let start = file.olines[oidx as usize].start;
-        self.eval(e)
+        self.eval_value(e)
             .map_err(|f| self.fault_in_line(*f, file, start))
     }
 

@@ -207,6 +207,20 @@ impl Interp<'_> {
         }
     }
 
+    /// `eval` with its two most common cases, a literal and a compiled
+    /// expression, done in the caller.
+    #[inline(always)]
+    pub(crate) fn eval_value(&mut self, e: &Expr) -> EvalResult {
+        match &e.kind {
+            ExprKind::Num(v) => check(*v, e.span),
+            ExprKind::Code(c) if self.s.compiled_exprs => match self.run_code(&c.ops) {
+                Some(v) => Ok(v),
+                None => self.eval(&c.tree),
+            },
+            _ => self.eval(e),
+        }
+    }
+
     /// The less common expression kinds, kept out of `eval` so that its
     /// frame stays small (`eval` does the others itself).
     #[inline(never)]

@@ -38,8 +38,9 @@ pub struct Settings {
     pub tool_table: Vec<(i64, super::tools::ToolData)>,
     /// Collect warnings (check mode and stderr notes).
     pub warnings: bool,
-    /// Runs of plain lines take the batched straight-line loop. Off only to
-    /// check that loop against the line-by-line path.
+    /// Runs of plain lines take the batched straight-line loop, and plain
+    /// moves of evaluated lines its state update. Off only to check both
+    /// against the line-by-line path and the general block checks.
     pub plain_runs: bool,
     /// Chunk size in bytes for reading plain lines on a second core during a
     /// long straight-line run (0: one core).

@@ -500,6 +500,25 @@ impl Interp<'_> {
         true
     }
 
+    /// `fast_line` for the evaluated words of a line: true if it ran them
+    /// (the block checks accept them and the state model is updated), false
+    /// to leave them to the general checks.
+    pub(super) fn fast_words(&mut self, words: &[(u8, f64)]) -> bool {
+        if self.rotated || self.modal.ccomp != 400 || !self.s.plain_runs {
+            return false;
+        }
+        let mut p = Plain::default();
+        for &(l, v) in words {
+            let slot = SLOT[l as usize];
+            if slot == NONE || p.mask & (1 << slot) != 0 {
+                return false;
+            }
+            p.mask |= 1 << slot;
+            p.vals[slot as usize] = v;
+        }
+        self.fast_line(&p)
+    }
+
     /// The arc geometry checks of the general path, on an XY arc line.
     fn arc_ok(&mut self, p: &Plain, motion: i32) -> bool {
         if p.mask & AXIS_MASK == 0 {

@@ -699,7 +699,9 @@ fn plain_line() -> impl Strategy<Value = String> {
         ].prop_map(String::from),
         1 => prop_oneof![
             Just("G1 X1 (c)"), Just(" G1 X1"), Just("G1 X1 0"), Just("G1 X1 X2"), Just("#1 = 2"),
-            Just("G1 X#1"), Just("o1 if [1]"), Just("o1 endif"), Just("F-1"), Just("S-2"),
+            Just("G1 X#1"), Just("G1 X[#1 + 1] Y2"), Just("G0 X[#1] F[#1 * 100]"),
+            Just("G2 X[#1] Y1 R[#1 + 5]"), Just("G91 G1 X[1]"), Just("G1 X[-1] F[0]"),
+            Just("G3 X[2] I[#1] J0"), Just("G1 X[1] A[2] S[-1]"), Just("o1 if [1]"), Just("o1 endif"), Just("F-1"), Just("S-2"),
             Just("X1.1234567890123456"), Just("X-.5 Y+2"), Just("G1 K1"), Just("G1 I1"),
             Just("(segment 3, depth -1.5)"), Just("G0 X1 ( note ) "), Just("G1 X2 (msg, m)"),
             Just("(debug, #5420)"), Just("N5 (c)"), Just("G1 X1 (a (b))"), Just("(c) G1"),
