@@ -26,7 +26,7 @@ impl Interp<'_> {
         }
     }
 
-    fn osite(&self, file: &Rc<FileIndex>, oidx: u32) -> (u32, u32) {
+    pub(super) fn osite(&self, file: &Rc<FileIndex>, oidx: u32) -> (u32, u32) {
         let o = &file.olines[oidx as usize];
         let end = o.start + o.line_len();
         // Point at the O-word, not at the indentation before it.
@@ -727,9 +727,14 @@ impl Interp<'_> {
 
     /// Finds a subroutine: registered, then a file on the search path, then
     /// further down the current file.
-    fn resolve(&mut self, file: &Rc<FileIndex>, oidx: u32, name: &Name) -> Result<SubRec, Error> {
-        let base = base_key(name);
-        if let Some(rec) = self.subs.get(&base) {
+    fn resolve(
+        &mut self,
+        file: &Rc<FileIndex>,
+        oidx: u32,
+        name: &Name,
+        base: &Name,
+    ) -> Result<SubRec, Error> {
+        if let Some(rec) = self.subs.get(base) {
             return Ok(rec.clone());
         }
         let found = self
@@ -737,13 +742,13 @@ impl Interp<'_> {
             .find(name)
             .map_err(|k| self.oerr(k, file, oidx))?;
         if let Some(sub_file) = found {
-            let target = sub_file.occ.get(&base).and_then(|l| {
+            let target = sub_file.occ.get(base).and_then(|l| {
                 l.iter()
                     .copied()
                     .find(|&j| matches!(sub_file.kind_of(j), Some(OKind::Sub | OKind::Bare)))
             });
             let Some(t) = target else {
-                let k = crate::program::not_in_file(&base, &sub_file.file);
+                let k = crate::program::not_in_file(base, &sub_file.file);
                 return Err(self.oerr(k, file, oidx));
             };
             let until = sub_file.olines[t as usize].line_idx;
@@ -775,7 +780,7 @@ impl Interp<'_> {
         let t = self.seek(
             file,
             oidx,
-            &base,
+            base,
             Seek::Sub {
                 from_line: line + 1,
             },
@@ -824,7 +829,6 @@ impl Interp<'_> {
                 oidx,
             ));
         }
-        let (a, b) = self.osite(file, oidx);
         let mut f = match self.frame_pool.pop() {
             Some(mut f) => {
                 f.reset(kind, name);
@@ -832,8 +836,9 @@ impl Interp<'_> {
             }
             None => Box::new(Frame::new(kind, name)),
         };
+        debug_assert!(Rc::ptr_eq(&ret.file, file));
         f.ret = Some(ret);
-        f.call_site = Some(crate::diag::Site::new(&file.file, a, b));
+        f.call_oidx = Some(oidx);
         self.frames.push(f);
         Ok(())
     }
@@ -848,8 +853,8 @@ impl Interp<'_> {
         for (slot, a) in argv.iter_mut().zip(&o.args) {
             *slot = self.o_eval(file, oidx, a)?;
         }
-        let target = self.resolve(file, oidx, key)?;
         let base = base_key(key);
+        let target = self.resolve(file, oidx, key, &base)?;
         if target.file.kind_of(target.oidx) == Some(OKind::Bare) {
             return Err(self.oerr(
                 ErrorKind::FanucNeedsM98 {
@@ -1009,7 +1014,7 @@ impl Interp<'_> {
             }
         }
         let name = Name::new(&n.to_string());
-        let target = self.resolve(file, oidx, &name)?;
+        let target = self.resolve(file, oidx, &name, &base_key(&name))?;
         if target.file.kind_of(target.oidx) == Some(OKind::Sub) {
             return Err(self.oerr(
                 ErrorKind::SubNeedsCall {
@@ -1049,7 +1054,8 @@ fn base_key(label: &Name) -> Name {
 
 /// The sub name of a call label: its part after the last `/`.
 fn base_name(label: &str) -> &str {
-    match memchr::memrchr(b'/', label.as_bytes()) {
+    // Labels are short: a plain search beats setting up a vector one.
+    match label.bytes().rposition(|b| b == b'/') {
         Some(i) => &label[i + 1..],
         None => label,
     }

@@ -72,7 +72,9 @@ pub struct Frame {
     pub kind: FrameKind,
     pub name: Name,
     pub ret: Option<Cursor>,
-    pub call_site: Option<Site>,
+    /// The O-line (of the file `ret` is in) that made the call; its site is
+    /// worked out only for a message.
+    pub call_oidx: Option<u32>,
     pub saved: Option<Box<[f64; 30]>>,
     pub locals: FxMap<Name, f64>,
     pub labels: FxMap<Name, LabelRec>,
@@ -90,7 +92,7 @@ impl Frame {
             kind: k,
             name: n,
             ret,
-            call_site,
+            call_oidx,
             saved,
             locals,
             labels,
@@ -101,7 +103,7 @@ impl Frame {
         *k = kind;
         *n = name;
         *ret = None;
-        *call_site = None;
+        *call_oidx = None;
         *saved = None;
         locals.clear();
         labels.clear();
@@ -115,7 +117,7 @@ impl Frame {
             kind,
             name,
             ret: None,
-            call_site: None,
+            call_oidx: None,
             saved: None,
             locals: FxMap::default(),
             labels: FxMap::default(),
@@ -325,7 +327,11 @@ impl<'s> Interp<'s> {
         self.frames
             .iter()
             .rev()
-            .filter_map(|f| f.call_site.clone())
+            .filter_map(|f| {
+                let (ret, oidx) = (f.ret.as_ref()?, f.call_oidx?);
+                let (a, b) = self.osite(&ret.file, oidx);
+                Some(Site::new(&ret.file.file, a, b))
+            })
             .collect()
     }
 
