@@ -15,16 +15,21 @@ impl Interp<'_> {
     /// The value of a compiled expression, or `None` to evaluate the tree.
     #[inline]
     pub(super) fn run_code(&self, ops: &[Op]) -> Option<f64> {
+        // Compiling checked that the stack never goes deeper than `STACK`
+        // nor below empty; the masks only spare the bounds checks (a wrong
+        // list would give `None` or a wrong value, never a panic).
+        const MASK: usize = STACK - 1;
+        const _: () = assert!(STACK.is_power_of_two());
         let mut stack = [0f64; STACK];
         let mut n = 0usize;
         for op in ops {
             match op {
                 Op::Num(v) => {
-                    *stack.get_mut(n)? = *v;
+                    stack[n & MASK] = *v;
                     n += 1;
                 }
                 Op::Slot(i) => {
-                    *stack.get_mut(n)? = self.stored(*i as usize)?;
+                    stack[n & MASK] = self.stored(*i as usize)?;
                     n += 1;
                 }
                 Op::Named(name) => {
@@ -37,11 +42,11 @@ impl Interp<'_> {
                     if !v.is_finite() {
                         return None;
                     }
-                    *stack.get_mut(n)? = v;
+                    stack[n & MASK] = v;
                     n += 1;
                 }
                 Op::Index => {
-                    let top = stack.get_mut(n.checked_sub(1)?)?;
+                    let top = &mut stack[n.wrapping_sub(1) & MASK];
                     let i = integer_value(*top).ok()?;
                     if i < 1 || i >= MAX_PARAM as i64 {
                         return None;
@@ -49,13 +54,13 @@ impl Interp<'_> {
                     *top = self.stored(i as usize)?;
                 }
                 Op::Neg => {
-                    let top = stack.get_mut(n.checked_sub(1)?)?;
+                    let top = &mut stack[n.wrapping_sub(1) & MASK];
                     *top = -*top;
                 }
                 Op::Bin(op) => {
-                    n = n.checked_sub(1)?;
-                    let c = *stack.get(n)?;
-                    let top = stack.get_mut(n.checked_sub(1)?)?;
+                    n = n.wrapping_sub(1);
+                    let c = stack[n & MASK];
+                    let top = &mut stack[n.wrapping_sub(1) & MASK];
                     let a = *top;
                     *top = match op {
                         BinOp::Mul => a * c,
@@ -69,12 +74,12 @@ impl Interp<'_> {
                     };
                 }
                 Op::Check => {
-                    if !stack.get(n.checked_sub(1)?)?.is_finite() {
+                    if !stack[n.wrapping_sub(1) & MASK].is_finite() {
                         return None;
                     }
                 }
                 Op::Func(f) => {
-                    let top = stack.get_mut(n.checked_sub(1)?)?;
+                    let top = &mut stack[n.wrapping_sub(1) & MASK];
                     let v = unary(*f, *top, Span::default()).ok()?;
                     if !v.is_finite() {
                         return None;
@@ -82,9 +87,9 @@ impl Interp<'_> {
                     *top = v;
                 }
                 Op::Atan => {
-                    n = n.checked_sub(1)?;
-                    let x = *stack.get(n)?;
-                    let top = stack.get_mut(n.checked_sub(1)?)?;
+                    n = n.wrapping_sub(1);
+                    let x = stack[n & MASK];
+                    let top = &mut stack[n.wrapping_sub(1) & MASK];
                     let v = super::degrees::to_degrees(top.atan2(x));
                     if !v.is_finite() {
                         return None;

@@ -97,6 +97,16 @@ impl Interp<'_> {
     /// Moves reading to an O-line (`after`: to the line after it).
     fn goto(&mut self, file: &Rc<FileIndex>, oidx: u32, after: bool) {
         let o = &file.olines[oidx as usize];
+        if Rc::ptr_eq(&self.cur.file, file) {
+            // The same file (any jump within a body): no count to touch.
+            let c = &mut self.cur;
+            (c.pos, c.line, c.next_o) = if after {
+                (o.next, o.line_idx + 1, oidx as usize + 1)
+            } else {
+                (o.start, o.line_idx, oidx as usize)
+            };
+            return;
+        }
         self.cur = if after {
             Cursor {
                 file: file.clone(),
@@ -320,8 +330,7 @@ impl Interp<'_> {
     pub(super) fn exec_oline(&mut self, file: &Rc<FileIndex>, oidx: u32) -> Result<(), Error> {
         self.current_line_idx = file.olines[oidx as usize].line_idx;
         self.current_line_start = file.olines[oidx as usize].start;
-        let info_line = file.olines[oidx as usize].line.clone();
-        let o = match &info_line.kind {
+        let o = match &file.olines[oidx as usize].line.kind {
             LineKind::O(o) => o,
             LineKind::M98(m) => return self.exec_m98(file, oidx, m),
             _ => return Ok(()),
@@ -334,28 +343,35 @@ impl Interp<'_> {
             let (a, b) = self.osite(file, oidx);
             self.warn(WarningKind::CommentOnOLine, file, a, b);
         }
-        let key = self.key_of(file, oidx)?;
+        let computed;
+        let key = match &file.olines[oidx as usize].key {
+            Some(k) => k,
+            None => {
+                computed = self.key_of(file, oidx)?;
+                &computed
+            }
+        };
         match o.kind {
             OKind::If => {
                 let c = self.o_eval(file, oidx, o.expr.as_ref().expect("condition"))?;
-                self.record(file, oidx, &key, OKind::If)?;
+                self.record(file, oidx, key, OKind::If)?;
                 if c != 0.0 {
                     self.executed_if = true;
                     Ok(())
                 } else {
                     self.executed_if = false;
-                    self.skip_if(file, oidx, &key)
+                    self.skip_if(file, oidx, key)
                 }
             }
             OKind::ElseIf | OKind::Else => {
-                self.expect(file, oidx, &key, &[OKind::If], "if")?;
+                self.expect(file, oidx, key, &[OKind::If], "if")?;
                 if o.kind == OKind::ElseIf {
                     self.probe_condition(file, oidx);
                 }
                 // A branch was taken: go to the endif.
                 let mut at = oidx;
                 loop {
-                    let t = self.seek(file, at, &key, Seek::Control, &[])?;
+                    let t = self.seek(file, at, key, Seek::Control, &[])?;
                     match file.kind_of(t) {
                         Some(OKind::EndIf) => {
                             self.executed_if = true;
@@ -367,24 +383,24 @@ impl Interp<'_> {
                             at = t;
                         }
                         Some(OKind::Else) => at = t,
-                        _ => return self.stray(file, t, &key),
+                        _ => return self.stray(file, t, key),
                     }
                 }
             }
             OKind::EndIf => {
-                self.expect(file, oidx, &key, &[OKind::If], "if")?;
+                self.expect(file, oidx, key, &[OKind::If], "if")?;
                 self.executed_if = true;
                 Ok(())
             }
             OKind::Do => {
                 // The reference records a do label only on first sight.
-                match self.frame().labels.get(&key).cloned() {
+                match self.frame().labels.get(key).cloned() {
                     Some(rec) if rec.oidx != oidx => {
                         let (a, b) = self.osite(file, oidx);
                         let first_line = rec.line + 1;
                         self.warn(WarningKind::LabelReused { first_line }, file, a, b);
                     }
-                    _ => self.record(file, oidx, &key, OKind::Do)?,
+                    _ => self.record(file, oidx, key, OKind::Do)?,
                 }
                 Ok(())
             }
@@ -392,44 +408,39 @@ impl Interp<'_> {
                 let is_do_end = self
                     .frame()
                     .labels
-                    .get(&key)
+                    .get(key)
                     .is_some_and(|r| r.kind == OKind::Do);
                 let c = self.o_eval(file, oidx, o.expr.as_ref().expect("condition"))?;
                 if is_do_end {
-                    let rec = self.frame().labels.get(&key).cloned().expect("do record");
+                    let rec = self.frame().labels.get(key).cloned().expect("do record");
                     if c != 0.0 {
                         if let Some(first_line) = self.ref_stale_break.take() {
                             let (a, b) = self.osite(file, oidx);
                             self.warn(WarningKind::QuirkStaleBreak { first_line }, file, a, b);
                         }
-                        self.note_loop(file, rec.oidx, &key);
+                        self.note_loop(file, rec.oidx, key);
                         self.goto(file, rec.oidx, true);
                     } else {
                         self.ref_stale_break = None;
                     }
                     return Ok(());
                 }
-                self.record(file, oidx, &key, OKind::While)?;
+                self.record(file, oidx, key, OKind::While)?;
                 if c != 0.0 {
                     return Ok(());
                 }
-                let t = self.seek_loop_end(file, oidx, &key)?;
-                self.loop_exit(file, t, &key, OKind::EndWhile, "while")
+                let t = self.seek_loop_end(file, oidx, key)?;
+                self.loop_exit(file, t, key, OKind::EndWhile, "while")
             }
             OKind::EndWhile => {
-                let rec = self.expect(file, oidx, &key, &[OKind::While], "while")?;
-                self.note_loop(file, rec.oidx, &key);
+                let rec = self.expect(file, oidx, key, &[OKind::While], "while")?;
+                self.note_loop(file, rec.oidx, key);
                 self.goto(file, rec.oidx, false);
                 Ok(())
             }
             OKind::Repeat => {
-                self.record(file, oidx, &key, OKind::Repeat)?;
-                let count = self
-                    .frame()
-                    .labels
-                    .get(&key)
-                    .map(|r| r.repeat)
-                    .unwrap_or(-1);
+                self.record(file, oidx, key, OKind::Repeat)?;
+                let count = self.frame().labels.get(key).map(|r| r.repeat).unwrap_or(-1);
                 let mut count = count;
                 // Reached from its endrepeat, the loop goes on; reached any
                 // other way it starts afresh (the reference would continue a
@@ -445,29 +456,29 @@ impl Interp<'_> {
                     count = round_half_even_int(n);
                 }
                 if count > 0 {
-                    if let Some(r) = self.frame().labels.get_mut(&key) {
+                    if let Some(r) = self.frame().labels.get_mut(key) {
                         r.repeat = count - 1;
                     }
                     Ok(())
                 } else {
-                    if let Some(r) = self.frame().labels.get_mut(&key) {
+                    if let Some(r) = self.frame().labels.get_mut(key) {
                         r.repeat = -1;
                     }
-                    let t = self.seek_loop_end(file, oidx, &key)?;
-                    self.loop_exit(file, t, &key, OKind::EndRepeat, "repeat")
+                    let t = self.seek_loop_end(file, oidx, key)?;
+                    self.loop_exit(file, t, key, OKind::EndRepeat, "repeat")
                 }
             }
             OKind::EndRepeat => {
-                let rec = self.expect(file, oidx, &key, &[OKind::Repeat], "repeat")?;
-                self.note_loop(file, rec.oidx, &key);
+                let rec = self.expect(file, oidx, key, &[OKind::Repeat], "repeat")?;
+                self.note_loop(file, rec.oidx, key);
                 self.repeat_again = Some(rec.oidx);
                 self.goto(file, rec.oidx, false);
                 Ok(())
             }
             OKind::Break | OKind::Continue => {
                 let expected = "while/do";
-                let rec = self.expect(file, oidx, &key, &[OKind::While, OKind::Do], expected)?;
-                let t = self.seek_loop_end(file, oidx, &key)?;
+                let rec = self.expect(file, oidx, key, &[OKind::While, OKind::Do], expected)?;
+                let t = self.seek_loop_end(file, oidx, key)?;
                 let tkind = file.kind_of(t);
                 match (rec.kind, tkind, o.kind) {
                     (OKind::While, Some(OKind::EndWhile), OKind::Break) => {
@@ -480,7 +491,7 @@ impl Interp<'_> {
                         Ok(())
                     }
                     (OKind::While, Some(OKind::EndWhile), _) => {
-                        self.note_loop(file, rec.oidx, &key);
+                        self.note_loop(file, rec.oidx, key);
                         self.goto(file, rec.oidx, false);
                         Ok(())
                     }
@@ -494,17 +505,17 @@ impl Interp<'_> {
                         let e = self.oline(file, t).expr.clone().expect("condition");
                         let c = self.o_eval(file, t, &e)?;
                         if c != 0.0 {
-                            self.note_loop(file, rec.oidx, &key);
+                            self.note_loop(file, rec.oidx, key);
                             self.goto(file, rec.oidx, true);
                         } else {
                             self.goto(file, t, true);
                         }
                         Ok(())
                     }
-                    _ => self.stray(file, t, &key),
+                    _ => self.stray(file, t, key),
                 }
             }
-            OKind::Sub => self.reach_sub(file, oidx, &key),
+            OKind::Sub => self.reach_sub(file, oidx, key),
             OKind::EndSub | OKind::Return => {
                 if self.level() == 0 {
                     return Err(self.oerr(ErrorKind::NotInSub, file, oidx));
@@ -518,7 +529,7 @@ impl Interp<'_> {
                 };
                 self.return_from_call(file, oidx, v)
             }
-            OKind::Call => self.call(file, oidx, &key),
+            OKind::Call => self.call(file, oidx, key),
             OKind::Bare => {
                 if self.s.fanuc_disabled {
                     return Err(self.oerr(
