@@ -11,10 +11,65 @@ use super::expr::{TOLERANCE_EQUAL, binary, modulo, unary};
 use super::params::MAX_PARAM;
 use crate::parse::ast::{BinOp, Span};
 
+/// A binary operation, `None` where it fails (division by zero, a negative
+/// base to a fractional power).
+#[inline(always)]
+fn apply(op: BinOp, a: f64, c: f64) -> Option<f64> {
+    Some(match op {
+        BinOp::Mul => a * c,
+        BinOp::Add => a + c,
+        BinOp::Sub => a - c,
+        BinOp::Lt => f64::from(a < c),
+        BinOp::Gt => f64::from(a > c),
+        BinOp::Eq => f64::from((a - c).abs() < TOLERANCE_EQUAL),
+        BinOp::Mod => modulo(a, c),
+        _ => binary(op, a, c, Span::default()).ok()?,
+    })
+}
+
 impl Interp<'_> {
     /// The value of a compiled expression, or `None` to evaluate the tree.
     #[inline]
     pub(super) fn run_code(&self, ops: &[Op]) -> Option<f64> {
+        // The most common shape, `[a op b]` of two readings, without the
+        // stack.
+        if let [a, b, Op::Bin(op), rest @ ..] = ops
+            && matches!(rest, [] | [Op::Check])
+            && let (Some(a), Some(b)) = (self.leaf(a), self.leaf(b))
+        {
+            let v = apply(*op, a?, b?)?;
+            return (rest.is_empty() || v.is_finite()).then_some(v);
+        }
+        self.run_stack(ops)
+    }
+
+    /// The value pushed by a reading (`None` if `op` is not one; `Some(None)`
+    /// if the reading gives up).
+    #[inline(always)]
+    fn leaf(&self, op: &Op) -> Option<Option<f64>> {
+        match op {
+            Op::Num(v) => Some(Some(*v)),
+            Op::Slot(i) => Some(self.stored(*i as usize)),
+            Op::Named(name) => Some(self.named(name)),
+            _ => None,
+        }
+    }
+
+    /// A named parameter's stored value, if set and finite (the reading
+    /// `read_named` does first).
+    #[inline(always)]
+    fn named(&self, name: &crate::parse::Name) -> Option<f64> {
+        let table = if name.starts_with('_') || self.frames.len() == 1 {
+            &self.globals
+        } else {
+            &self.frames.last()?.locals
+        };
+        let v = *table.get(name)?;
+        v.is_finite().then_some(v)
+    }
+
+    /// The general case: every operation on a small stack.
+    fn run_stack(&self, ops: &[Op]) -> Option<f64> {
         // Compiling checked that the stack never goes deeper than `STACK`
         // nor below empty; the masks only spare the bounds checks (a wrong
         // list would give `None` or a wrong value, never a panic).
@@ -33,16 +88,7 @@ impl Interp<'_> {
                     n += 1;
                 }
                 Op::Named(name) => {
-                    let table = if name.starts_with('_') || self.frames.len() == 1 {
-                        &self.globals
-                    } else {
-                        &self.frames.last()?.locals
-                    };
-                    let v = *table.get(name)?;
-                    if !v.is_finite() {
-                        return None;
-                    }
-                    stack[n & MASK] = v;
+                    stack[n & MASK] = self.named(name)?;
                     n += 1;
                 }
                 Op::Index => {
@@ -61,17 +107,7 @@ impl Interp<'_> {
                     n = n.wrapping_sub(1);
                     let c = stack[n & MASK];
                     let top = &mut stack[n.wrapping_sub(1) & MASK];
-                    let a = *top;
-                    *top = match op {
-                        BinOp::Mul => a * c,
-                        BinOp::Add => a + c,
-                        BinOp::Sub => a - c,
-                        BinOp::Lt => f64::from(a < c),
-                        BinOp::Gt => f64::from(a > c),
-                        BinOp::Eq => f64::from((a - c).abs() < TOLERANCE_EQUAL),
-                        BinOp::Mod => modulo(a, c),
-                        _ => binary(*op, a, c, Span::default()).ok()?,
-                    };
+                    *top = apply(*op, *top, c)?;
                 }
                 Op::Check => {
                     if !stack[n.wrapping_sub(1) & MASK].is_finite() {

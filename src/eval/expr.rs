@@ -207,12 +207,15 @@ impl Interp<'_> {
         }
     }
 
-    /// `eval` with its two most common cases, a literal and a compiled
-    /// expression, done in the caller.
+    /// `eval` with its most common cases, a literal, a set parameter and a
+    /// compiled expression, done in the caller.
     #[inline(always)]
     pub(crate) fn eval_value(&mut self, e: &Expr) -> EvalResult {
         match &e.kind {
             ExprKind::Num(v) => check(*v, e.span),
+            ExprKind::Slot(i) if self.params.set[*i as usize] => {
+                check(self.params.values[*i as usize], e.span)
+            }
             ExprKind::Code(c) if self.s.compiled_exprs => match self.run_code(&c.ops) {
                 Some(v) => Ok(v),
                 None => self.eval(&c.tree),

@@ -822,3 +822,49 @@ proptest! {
         prop_assert_eq!(&fast, &slow, "program:\n{}", prog);
     }
 }
+
+/// Edge cases of the stack machine, one per line: each is flattened with
+/// compiled expressions and with the tree alone, and both must give the
+/// same output or the same error.
+#[test]
+fn compiled_expression_edges_match_the_tree() {
+    let cases: &[&str] = &[
+        "[#<big> ** #<big>]",
+        "[[#<big> ** #<big>] - 1]",
+        "[1 / #<zero>]",
+        "[#<zero> / #<zero>]",
+        "[#1 MOD #<zero>]",
+        "[-1 ** 0.5]",
+        "[#<neg> ** 0.5]",
+        "SQRT[#<neg>]",
+        "LN[#<zero>]",
+        "ACOS[#<big>]",
+        "[#<undef> + 1]",
+        "[#77 + 1]",
+        "[#<_x> * 2]",
+        "[##<zero> + 1]",
+        "[#[#1 + 0.5] + 1]",
+        "[EXP[#<big>] + 1]",
+        "[#<big> * #<big> * #<big> * #<big> * #<big> * #<big>]",
+        "-[#<neg> * 2]",
+        "[#1 EQ 1.00001]",
+        "[#1 NE 1.00001]",
+    ];
+    for e in cases {
+        let prog = format!(
+            "#1 = 1\n#<big> = 1000000\n#<zero> = 0\n#<neg> = -4\n#10 = {e}\n(debug, #10)\nG0 X{e}\nM2\n"
+        );
+        let on = small_limits();
+        let off = Settings {
+            compiled_exprs: false,
+            ..on.clone()
+        };
+        let show = |r: Result<String, Error>| match r {
+            Ok(s) => s,
+            Err(e) => format!("error: {}", render(&e, MessageFormat::Short, false)),
+        };
+        let fast = show(ngcflat::flatten_str(&prog, &on));
+        let slow = show(ngcflat::flatten_str(&prog, &off));
+        assert_eq!(fast, slow, "{e}");
+    }
+}
