@@ -736,6 +736,37 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     }
 
+    /// An error on the thread reaches the evaluator at a later write, every
+    /// write after it fails, and nothing is released.
+    #[test]
+    fn a_failure_on_the_thread_stops_the_output() {
+        let dir = tempfile::tempdir().unwrap();
+        let data = b"G0 X1\n".repeat(100);
+        let src = Arc::new(SourceFile::new(
+            "m.ngc".into(),
+            "m.ngc".into(),
+            data.clone(),
+        ));
+        let path = dir.path().join("out.ngc");
+        let mut out = Output::new(Sink::new(Destination::File(path.clone())).unwrap(), None, 0);
+        // A range the sink cannot record (it refers to no file) fails the
+        // thread.
+        let Mode::Threaded(w) = &mut out.mode else {
+            panic!("no output thread")
+        };
+        w.input = Some(src.clone());
+        w.ranges_left = 1;
+        out.write_input(&src, 0, &data[..6]).unwrap();
+        let e = (0..1000)
+            .find_map(|_| out.write(&[b'x'; 1000]).err())
+            .expect("the failure reaches the evaluator");
+        assert!(e.to_string().contains("could not be recorded"), "{e}");
+        assert!(matches!(out.mode, Mode::Stopped));
+        assert!(out.line(b"G0").is_err());
+        assert!(out.finish().is_err());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
     /// Output thrown away never starts a thread.
     #[test]
     fn discarded_output_stays_here() {
