@@ -15,6 +15,23 @@ pub fn write_number(out: &mut Vec<u8>, v: f64, precision: Option<u8>) -> bool {
     true
 }
 
+/// An upper bound of the length `write_number` gives `v`, known without
+/// writing it; `None` for values whose text may be long (tiny or huge ones)
+/// or that have no G-code form.
+#[inline]
+pub fn max_len(v: f64, precision: Option<u8>) -> Option<usize> {
+    let a = v.abs();
+    match precision {
+        // At most 17 significant digits, a sign, a point and three zeros
+        // after it.
+        None if a == 0.0 || (1e-4..1e15).contains(&a) => Some(25),
+        // A sign, 16 digits (rounding up to 1e15), a point and the
+        // decimals.
+        Some(p) if a < 1e15 => Some(18 + p.min(15) as usize),
+        _ => None,
+    }
+}
+
 fn write_shortest(out: &mut Vec<u8>, v: f64) {
     if v == 0.0 {
         out.push(b'0');
@@ -281,6 +298,37 @@ mod tests {
             super::write_decimal(&mut b, n, 9);
             prop_assert_eq!(a, b, "{}", n);
         }
+    }
+
+    proptest! {
+        /// `max_len` bounds the text of every value it accepts, in every
+        /// precision.
+        #[test]
+        fn max_len_bounds_the_text(
+            bits in any::<u64>(),
+            mant in -1.0f64..1.0,
+            exp in -6i32..17,
+            p in proptest::option::of(0u8..20),
+        ) {
+            let scaled = mant * 10f64.powi(exp);
+            for v in [f64::from_bits(bits), scaled, scaled.abs().max(1e-4), 1e15f64.next_down()] {
+                if let Some(n) = super::max_len(v, p) {
+                    let mut b = Vec::new();
+                    prop_assert!(super::write_number(&mut b, v, p));
+                    prop_assert!(b.len() <= n, "{:e} {:?}: {}", v, p, String::from_utf8_lossy(&b));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn max_len_refuses_long_and_unprintable_values() {
+        for v in [1e-5, 1e15, -1e300, f64::NAN, f64::INFINITY] {
+            assert_eq!(super::max_len(v, None), None, "{v:e}");
+        }
+        assert_eq!(super::max_len(1e15, Some(3)), None);
+        assert_eq!(super::max_len(1e-300, Some(3)), Some(21));
+        assert_eq!(super::max_len(-0.0, None), Some(25));
     }
 
     #[test]

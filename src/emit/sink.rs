@@ -80,6 +80,7 @@ pub enum Destination {
     Discard,
 }
 
+/// Flattened output held back until the program is known to be good.
 pub struct Sink {
     mem: Vec<u8>,
     spill: Option<TempFile>,
@@ -121,6 +122,24 @@ impl Sink {
         }
     }
 
+    /// The file output may refer to, if any.
+    pub fn input(&self) -> Option<&Arc<SourceFile>> {
+        self.input.as_ref()
+    }
+
+    /// Output is thrown away (check mode).
+    pub fn discards(&self) -> bool {
+        matches!(self.dest, Destination::Discard)
+    }
+
+    /// How many more ranges [`Sink::record_input`] is sure to accept,
+    /// whatever is written between them: each range adds at most one part
+    /// and the bytes written after it one more, and the first range may add
+    /// a part for the bytes before it.
+    pub fn range_room(&self) -> usize {
+        MAX_PARTS.saturating_sub(self.parts.len() + 3) / 2
+    }
+
     /// Appends bytes that are `file`'s bytes from offset `start` on.
     pub fn write_input(
         &mut self,
@@ -128,20 +147,29 @@ impl Sink {
         start: u64,
         bytes: &[u8],
     ) -> io::Result<()> {
-        let len = bytes.len() as u64;
-        match &self.input {
-            Some(f) if Arc::ptr_eq(f, file) && self.parts.len() < MAX_PARTS => {
-                if self.parts.is_empty() && self.spooled > 0 {
-                    self.parts.push(Part::Spooled(self.spooled));
-                }
-                match self.parts.last_mut() {
-                    Some(Part::Input { start: s, len: l }) if *s + *l == start => *l += len,
-                    _ => self.parts.push(Part::Input { start, len }),
-                }
-                Ok(())
-            }
-            _ => self.write(bytes),
+        let ours = self.input.as_ref().is_some_and(|f| Arc::ptr_eq(f, file));
+        if ours && self.record_input(start, bytes.len() as u64) {
+            Ok(())
+        } else {
+            self.write(bytes)
         }
+    }
+
+    /// Appends `len` bytes of the input file from offset `start` on as a
+    /// range of it. False when there is no input file to refer to or no room
+    /// for another range: nothing was appended, the bytes must be written.
+    pub fn record_input(&mut self, start: u64, len: u64) -> bool {
+        if self.input.is_none() || self.parts.len() >= MAX_PARTS {
+            return false;
+        }
+        if self.parts.is_empty() && self.spooled > 0 {
+            self.parts.push(Part::Spooled(self.spooled));
+        }
+        match self.parts.last_mut() {
+            Some(Part::Input { start: s, len: l }) if *s + *l == start => *l += len,
+            _ => self.parts.push(Part::Input { start, len }),
+        }
+        true
     }
 
     /// Appends bytes (whole lines).
@@ -228,32 +256,34 @@ impl Sink {
             Destination::Stdout => {
                 let stdout = io::stdout();
                 let mut out = BufWriter::with_capacity(1 << 16, stdout.lock());
-                let r = (|| -> io::Result<()> {
-                    if !self.parts.is_empty() {
-                        return self.release_parts(&mut out);
-                    }
-                    if let Some(t) = self.spill.as_mut() {
-                        t.file.flush()?;
-                        let f = t.file.get_mut();
-                        f.seek(SeekFrom::Start(0))?;
-                        let mut buf = vec![0u8; 1 << 16];
-                        loop {
-                            let n = f.read(&mut buf)?;
-                            if n == 0 {
-                                break;
-                            }
-                            out.write_all(&buf[..n])?;
-                        }
-                    }
-                    out.write_all(&self.mem)?;
-                    out.flush()
-                })();
-                match r {
+                match self.release(&mut out) {
                     Err(e) if e.kind() == io::ErrorKind::BrokenPipe => Ok(()),
                     other => other,
                 }
             }
         }
+    }
+
+    /// Writes the whole output to `out` (the release to stdout).
+    pub(super) fn release(&mut self, out: &mut impl Write) -> io::Result<()> {
+        if !self.parts.is_empty() {
+            return self.release_parts(out);
+        }
+        if let Some(t) = self.spill.as_mut() {
+            t.file.flush()?;
+            let f = t.file.get_mut();
+            f.seek(SeekFrom::Start(0))?;
+            let mut buf = vec![0u8; 1 << 16];
+            loop {
+                let n = f.read(&mut buf)?;
+                if n == 0 {
+                    break;
+                }
+                out.write_all(&buf[..n])?;
+            }
+        }
+        out.write_all(&self.mem)?;
+        out.flush()
     }
 }
 

@@ -5,21 +5,14 @@
 use std::rc::Rc;
 
 use crate::diag::{ErrorKind, WarningKind};
-use crate::emit::write_number;
+use crate::emit::{Edit, max_edited_len, write_edited};
 use crate::parse::MAX_LINE;
 use crate::parse::ast::{CommentKind, ExprKind, Item, ParamRef, Span};
 use crate::program::FileIndex;
 
-use super::Interp;
 use super::message::{is_stable, stabilize};
 use super::params::is_read_only;
-
-/// How a span of the raw line is rewritten.
-enum Repl {
-    Number(f64),
-    Remove,
-    Text(String),
-}
+use super::{Interp, output_error};
 
 /// Evaluated words of the line: (letter, value).
 pub type Words = Vec<(u8, f64)>;
@@ -28,7 +21,7 @@ pub type Words = Vec<(u8, f64)>;
 #[derive(Default)]
 pub struct Scratch {
     words: Words,
-    repl: Vec<(Span, Repl)>,
+    repl: Vec<(Span, Edit)>,
     num_set: Vec<(usize, f64)>,
     named_set: Vec<(crate::parse::Name, f64)>,
     context_ops: Vec<(u8, Span)>,
@@ -146,9 +139,9 @@ impl Interp<'_> {
                     if w.letter == b'm' && matches!(v, 70.0 | 71.0 | 72.0 | 73.0) {
                         // Context save/restore: replaced by explicit words.
                         context_ops.push((v as u8, w.span));
-                        repl.push((w.span, Repl::Remove));
+                        repl.push((w.span, Edit::Remove));
                     } else if !w.literal {
-                        repl.push((w.value.span, Repl::Number(v)));
+                        repl.push((w.value.span, Edit::Number(v)));
                     }
                 }
                 Item::Assign(a) => {
@@ -175,14 +168,14 @@ impl Interp<'_> {
                             named_set.push((name.clone(), v));
                         }
                     }
-                    repl.push((a.span, Repl::Remove));
+                    repl.push((a.span, Edit::Remove));
                 }
                 Item::Comment(c) => {
                     if c.kind != CommentKind::Semicolon {
                         active = Some(c);
                     }
                     if self.s.strip_comments {
-                        repl.push((c.span, Repl::Remove));
+                        repl.push((c.span, Edit::Remove));
                     }
                 }
             }
@@ -223,11 +216,11 @@ impl Interp<'_> {
                     }
                     if !self.s.strip_comments {
                         if c.kind == CommentKind::Debug && self.params.values[5599] <= 0.0 {
-                            repl.push((c.span, Repl::Remove));
+                            repl.push((c.span, Edit::Remove));
                         } else if c.kind == CommentKind::Debug {
                             // As (msg,...) the text is shown exactly as
                             // substituted and never read for parameters again.
-                            repl.push((c.span, Repl::Text(format!("(MSG,{text})"))));
+                            repl.push((c.span, Edit::Text(format!("(MSG,{text})"))));
                         } else {
                             let text = stabilize(&text);
                             if !is_stable(&text) {
@@ -238,7 +231,7 @@ impl Interp<'_> {
                                     start + c.span.end,
                                 );
                             }
-                            repl.push((c.body, Repl::Text(text)));
+                            repl.push((c.body, Edit::Text(text)));
                         }
                     }
                 }
@@ -257,7 +250,7 @@ impl Interp<'_> {
                 if let Item::Word(w) = item {
                     if words[k] == (b'm', 99.0) {
                         repl.retain(|(s, _)| *s != w.value.span);
-                        repl.push((w.span, Repl::Text("M2".into())));
+                        repl.push((w.span, Edit::Text("M2".into())));
                         break;
                     }
                     k += 1;
@@ -275,7 +268,7 @@ impl Interp<'_> {
                     !self.s.strip_comments
                         && !repl
                             .iter()
-                            .any(|(s, r)| matches!(r, Repl::Remove) && *s == c.span)
+                            .any(|(s, r)| matches!(r, Edit::Remove) && *s == c.span)
                 }
             })
             .count();
@@ -343,7 +336,7 @@ impl Interp<'_> {
             }
             words.push((w.letter, v));
             if !w.literal {
-                repl.push((w.value.span, Repl::Number(v)));
+                repl.push((w.value.span, Edit::Number(v)));
             }
         }
         if self.fast_words(words) {
@@ -426,64 +419,35 @@ impl Interp<'_> {
         Ok(())
     }
 
+    /// Writes the line with its replacements. A line that cannot be too
+    /// long whatever its numbers read goes to the output with them (to be
+    /// written maybe on the output thread); any other is written here to
+    /// check its length.
     fn write_line(
         &mut self,
         file: &Rc<FileIndex>,
         start: u32,
         raw: &[u8],
-        repl: &[(Span, Repl)],
+        repl: &[(Span, Edit)],
     ) -> Result<(), crate::diag::Error> {
+        if max_edited_len(raw.len(), repl, self.s.precision).is_some_and(|n| n <= MAX_LINE) {
+            self.count_line()?;
+            return self.output.edited_line(raw, repl).map_err(output_error);
+        }
         let mut out = std::mem::take(&mut self.out);
         out.clear();
-        let trimmed_len = raw
-            .iter()
-            .rposition(|b| !b.is_ascii_whitespace())
-            .map_or(0, |p| p + 1);
-        if repl.is_empty() {
-            out.extend_from_slice(&raw[..trimmed_len]);
-        } else {
-            let mut last = 0usize;
-            for (span, r) in repl {
-                let (a, b) = (span.start as usize, span.end as usize);
-                if a < last {
-                    continue;
-                }
-                out.extend_from_slice(&raw[last..a]);
-                last = b;
-                match r {
-                    Repl::Number(v) => {
-                        if !write_number(&mut out, *v, self.s.precision) {
-                            self.out = out;
-                            return Err(self.error_in_line(
-                                ErrorKind::Unprintable { value: *v },
-                                file,
-                                start,
-                                *span,
-                            ));
-                        }
-                    }
-                    Repl::Text(t) => out.extend_from_slice(t.as_bytes()),
-                    Repl::Remove => {
-                        while last < raw.len() && matches!(raw[last], b' ' | b'\t') {
-                            last += 1;
-                        }
-                    }
-                }
-            }
-            if last < trimmed_len {
-                out.extend_from_slice(&raw[last..trimmed_len]);
-            }
-            while let Some(&b) = out.last() {
-                if b.is_ascii_whitespace() {
-                    out.pop();
-                } else {
-                    break;
-                }
-            }
+        if let Err((value, span)) = write_edited(&mut out, raw, repl, self.s.precision) {
+            self.out = out;
+            let k = ErrorKind::Unprintable { value };
+            return Err(self.error_in_line(k, file, start, span));
         }
         if out.len() > MAX_LINE {
             let len = out.len();
             self.out = out;
+            let trimmed_len = raw
+                .iter()
+                .rposition(|b| !b.is_ascii_whitespace())
+                .map_or(0, |p| p + 1);
             let end = start + trimmed_len as u32;
             return Err(self.error(ErrorKind::OutputLineTooLong { len }, file, start, end));
         }

@@ -26,7 +26,7 @@ use crate::fx_hasher::{FxMap, FxSet};
 use std::rc::Rc;
 
 use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};
-use crate::emit::Sink;
+use crate::emit::{Output, Sink};
 use crate::parse::ast::{Line, LineKind, OKind, Span};
 use crate::parse::{LineParser, Name};
 use crate::program::{FileIndex, Loader, Window, next_line};
@@ -156,7 +156,7 @@ pub struct Interp<'s> {
     /// Reading undefined named parameters gives 0 (sub definition skip).
     defining: bool,
     cur: Cursor,
-    sink: Sink,
+    output: Output,
     out_lines: u64,
     steps: u64,
     pub warnings: Vec<Diagnostic>,
@@ -279,7 +279,7 @@ impl<'s> Interp<'s> {
             value_returned: false,
             defining: false,
             cur,
-            sink,
+            output: Output::new(sink, s.precision, s.format_thread_after),
             out_lines: 0,
             steps: 0,
             warnings: Vec::new(),
@@ -407,13 +407,13 @@ impl<'s> Interp<'s> {
         }
         self.finish_warnings();
         let Interp {
-            sink,
+            output,
             mut warnings,
             loader,
             ..
         } = self;
         warnings.extend(loader.warnings);
-        sink.finish().map_err(output_error)?;
+        output.finish().map_err(output_error)?;
         Ok(warnings)
     }
 
@@ -700,6 +700,12 @@ impl<'s> Interp<'s> {
 
     /// Writes one finished output line.
     fn emit_raw(&mut self, bytes: &[u8]) -> Result<(), Error> {
+        self.count_line()?;
+        self.output.line(bytes).map_err(output_error)
+    }
+
+    /// Counts an output line about to be written, against the limit.
+    fn count_line(&mut self) -> Result<(), Error> {
         self.out_lines += 1;
         if self.out_lines > self.s.max_output_lines {
             let (label, line, file) = match &self.last_loop {
@@ -718,10 +724,7 @@ impl<'s> Interp<'s> {
                 at,
             ));
         }
-        self.sink
-            .write(bytes)
-            .and_then(|_| self.sink.write(b"\n"))
-            .map_err(output_error)
+        Ok(())
     }
 }
 

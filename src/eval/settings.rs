@@ -48,6 +48,10 @@ pub struct Settings {
     /// Compiled expressions run on the stack machine. Off only to check it
     /// against the tree evaluation.
     pub compiled_exprs: bool,
+    /// Lines with computed numbers written before number formatting and
+    /// output writing move to a second thread (0: from the first line;
+    /// `usize::MAX`: never). Output that is thrown away never moves.
+    pub format_thread_after: usize,
 }
 
 impl Default for Settings {
@@ -67,6 +71,7 @@ impl Default for Settings {
             plain_runs: true,
             scan_ahead: 32 << 10,
             compiled_exprs: true,
+            format_thread_after: 4096,
             uvw_axes: false,
             machine_metric: false,
             tool_table: Vec::new(),

@@ -45,7 +45,7 @@ const fn slot_table() -> [u8; 256] {
 
 static SLOT: [u8; 256] = slot_table();
 
-/// Output bytes gathered before they are handed to the sink.
+/// Output bytes gathered before they are handed to the output.
 const BATCH: usize = 1 << 16;
 
 /// The bytes a straight-line run reads: `buf` is the file's text from
@@ -426,9 +426,8 @@ impl Interp<'_> {
                 if p.text_end + 1 != p.next {
                     // Trailing blanks: the line is written trimmed.
                     self.flush_input(file, base, &buf[*batch_start..*i], *batch_start)?;
-                    self.sink
-                        .write(&buf[*i..p.text_end])
-                        .and_then(|_| self.sink.write(b"\n"))
+                    self.output
+                        .line(&buf[*i..p.text_end])
                         .map_err(output_error)?;
                     *batch_start = p.next;
                 } else if p.next - *batch_start >= BATCH {
@@ -563,7 +562,7 @@ impl Interp<'_> {
             return Ok(());
         }
         let start = base as u64 + at as u64;
-        self.sink
+        self.output
             .write_input(&file.file, start, bytes)
             .map_err(output_error)
     }

@@ -868,3 +868,92 @@ fn compiled_expression_edges_match_the_tree() {
         assert_eq!(fast, slow, "{e}");
     }
 }
+
+/// A value that changes with the pass `#<k>` of a loop: short, long, tiny
+/// and huge numbers, and ones that fail (a division by zero, a value with
+/// no G-code form).
+fn pass_value() -> impl Strategy<Value = &'static str> {
+    proptest::sample::select(
+        &[
+            "#<k>",
+            "[#<k> * 0.05]",
+            "[#<k> / 3]",
+            "[0 - #<k> / 7]",
+            "[#<k> * 1000000000000]",
+            "[#<k> * 123456789.123]",
+            "[#<k> / 10000000]",
+            "[10 ** [#<k> + 10]]",
+            "[10 ** [#<k> * 40]]",
+            "[1 / [#<k> - 30]]",
+            "SIN[#<k>]",
+            "[#<k> * 0.1 + 0.2]",
+            // Short names of long numbers (set in the loop).
+            "#<t>",
+            "#<u>",
+            "#<w>",
+        ][..],
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    /// Output written on the output thread, from the first line or from a
+    /// later one, is the output written without it, errors included (an
+    /// over-long line, a value with no G-code form, the output line limit).
+    #[test]
+    fn output_thread_matches_direct_output(
+        prog in program(),
+        values in proptest::collection::vec(pass_value(), 1..7),
+        end in proptest::sample::select(
+            &["", "  ", " #<j> = 2", " (msg, k #<k>) ", " (debug, k #<k>)", " (note)\t"][..]
+        ),
+        len in 100usize..260,
+        passes in 0u32..60,
+        precision in proptest::option::of(0u8..7),
+        max_lines in prop_oneof![Just(10_000u64), 1u64..100],
+        strip_comments in any::<bool>(),
+    ) {
+        let mut line = String::from("G1");
+        for (letter, v) in "XYZABC".chars().zip(&values) {
+            line.push_str(&format!(" {letter}{v}"));
+        }
+        line.push_str(end);
+        // A comment brings the line to about `len` bytes: some lines are
+        // written later, some are checked here, some are too long.
+        let pad = len.saturating_sub(line.len() + 3);
+        if pad > 0 {
+            line.push_str(&format!(" ({})", "p".repeat(pad)));
+        }
+        let body = prog.strip_suffix("M2\n").unwrap_or(&prog);
+        let prog = format!(
+            "{body}#<k> = 0\no900 repeat [{passes}]\n\
+             #<t> = [#<k> / 3 - 0.1]\n#<u> = [#<k> * 1000000 + 1 / 7]\n#<w> = [0 - #<k> / 70000]\n\
+             {line}\n#<k> = [#<k> + 1]\no900 endrepeat\nG0 X[#<k> * 0.3]\nM2\n"
+        );
+        let never = Settings {
+            precision,
+            strip_comments,
+            max_output_lines: max_lines,
+            format_thread_after: usize::MAX,
+            ..small_limits()
+        };
+        let show = |r: Result<String, Error>| match r {
+            Ok(s) => s,
+            Err(e) => format!("error: {}", render(&e, MessageFormat::Short, false)),
+        };
+        let direct = ngcflat::flatten_str(&prog, &never);
+        if let Ok(text) = &direct {
+            // Lines whose numbers are written later must not escape the
+            // length check.
+            let long = text.lines().find(|l| l.len() > ngcflat::parse::MAX_LINE);
+            prop_assert!(long.is_none(), "{:?}", long);
+        }
+        let direct = show(direct);
+        for after in [0, 5] {
+            let on = Settings { format_thread_after: after, ..never.clone() };
+            let threaded = show(ngcflat::flatten_str(&prog, &on));
+            prop_assert_eq!(&threaded, &direct, "thread after {} lines, program:\n{}", after, prog);
+        }
+    }
+}
