@@ -130,16 +130,19 @@ impl Output {
         }
     }
 
+    /// The result of handing something to the thread: false means it
+    /// stopped, and its error is returned.
+    fn sent(&mut self, ok: bool) -> io::Result<()> {
+        if ok { Ok(()) } else { Err(self.stop()) }
+    }
+
     /// Appends bytes (whole lines).
     pub fn write(&mut self, bytes: &[u8]) -> io::Result<()> {
         match &mut self.mode {
             Mode::Direct(sink) => sink.write(bytes),
             Mode::Threaded(w) => {
-                if w.write(bytes) {
-                    Ok(())
-                } else {
-                    Err(self.stop())
-                }
+                let ok = w.write(bytes);
+                self.sent(ok)
             }
             Mode::Stopped => Err(stopped()),
         }
@@ -150,11 +153,8 @@ impl Output {
         match &mut self.mode {
             Mode::Direct(sink) => sink.write(bytes).and_then(|_| sink.write(b"\n")),
             Mode::Threaded(w) => {
-                if w.line(bytes) {
-                    Ok(())
-                } else {
-                    Err(self.stop())
-                }
+                let ok = w.line(bytes);
+                self.sent(ok)
             }
             Mode::Stopped => Err(stopped()),
         }
@@ -171,11 +171,8 @@ impl Output {
         match &mut self.mode {
             Mode::Direct(sink) => sink.write_input(file, start, bytes),
             Mode::Threaded(w) => {
-                if w.write_input(file, start, bytes) {
-                    Ok(())
-                } else {
-                    Err(self.stop())
-                }
+                let ok = w.write_input(file, start, bytes);
+                self.sent(ok)
             }
             Mode::Stopped => Err(stopped()),
         }
@@ -202,11 +199,8 @@ impl Output {
             }
             Mode::Threaded(w) => {
                 w.edited_line(raw, edits);
-                if w.send_if_full() {
-                    Ok(())
-                } else {
-                    Err(self.stop())
-                }
+                let ok = w.send_if_full();
+                self.sent(ok)
             }
             Mode::Stopped => Err(stopped()),
         }
@@ -717,10 +711,9 @@ mod tests {
         assert!(outs[1] == outs[0]);
     }
 
-    /// Dropped before the end (the program failed), output on a thread
-    /// leaves nothing behind: no output file, no temporary file.
-    #[test]
-    fn dropped_output_leaves_nothing() {
+    /// A folder, a source file in memory, its bytes, and output on a thread
+    /// to a file in that folder.
+    fn threaded_to_file() -> (tempfile::TempDir, Arc<SourceFile>, Vec<u8>, Output) {
         let dir = tempfile::tempdir().unwrap();
         let data = b"G0 X1\n".repeat(100);
         let src = Arc::new(SourceFile::new(
@@ -729,7 +722,15 @@ mod tests {
             data.clone(),
         ));
         let path = dir.path().join("out.ngc");
-        let mut out = Output::new(Sink::new(Destination::File(path)).unwrap(), None, 0);
+        let out = Output::new(Sink::new(Destination::File(path)).unwrap(), None, 0);
+        (dir, src, data, out)
+    }
+
+    /// Dropped before the end (the program failed), output on a thread
+    /// leaves nothing behind: no output file, no temporary file.
+    #[test]
+    fn dropped_output_leaves_nothing() {
+        let (dir, src, data, mut out) = threaded_to_file();
         assert!(threaded(&out));
         run(&mut out, &ops(20_000, data.len()), &src, &data);
         drop(out);
@@ -740,15 +741,7 @@ mod tests {
     /// write after it fails, and nothing is released.
     #[test]
     fn a_failure_on_the_thread_stops_the_output() {
-        let dir = tempfile::tempdir().unwrap();
-        let data = b"G0 X1\n".repeat(100);
-        let src = Arc::new(SourceFile::new(
-            "m.ngc".into(),
-            "m.ngc".into(),
-            data.clone(),
-        ));
-        let path = dir.path().join("out.ngc");
-        let mut out = Output::new(Sink::new(Destination::File(path.clone())).unwrap(), None, 0);
+        let (dir, src, data, mut out) = threaded_to_file();
         // A range the sink cannot record (it refers to no file) fails the
         // thread.
         let Mode::Threaded(w) = &mut out.mode else {

@@ -7,7 +7,7 @@ use std::rc::Rc;
 use crate::diag::{ErrorKind, WarningKind};
 use crate::emit::{Edit, max_edited_len, write_edited};
 use crate::parse::MAX_LINE;
-use crate::parse::ast::{CommentKind, ExprKind, Item, ParamRef, Span};
+use crate::parse::ast::{Assign, CommentKind, ExprKind, Item, ParamRef, Span, Word};
 use crate::program::FileIndex;
 
 use super::message::{is_stable, stabilize};
@@ -37,6 +37,14 @@ impl Scratch {
         self.context_ops.clear();
         self.word_spans.clear();
     }
+}
+
+/// What the words read so far on a line count against the per-line limits.
+#[derive(Default)]
+struct WordCounts {
+    /// Letters seen (bit per letter), G and M words aside.
+    seen: u32,
+    m_words: u32,
 }
 
 /// A word that `exec_words` can run: not an M-code it would have to act on
@@ -93,47 +101,12 @@ impl Interp<'_> {
             word_spans,
         } = scratch;
         let mut active = None;
-        let mut seen = 0u32;
-        let mut m_count = 0;
+        let mut counts = WordCounts::default();
         // 1. Read the line: every value sees the parameters as they were.
         for item in items {
             match item {
                 Item::Word(w) => {
-                    if matches!(w.letter, b'u' | b'v' | b'w') && !self.s.uvw_axes {
-                        let k = ErrorKind::BadCharacter {
-                            ch: w.letter as char,
-                            byte: w.letter,
-                        };
-                        return Err(self.error_in_line(
-                            k,
-                            file,
-                            start,
-                            Span::new(w.span.start, w.span.start + 1),
-                        ));
-                    }
-                    let v = self
-                        .eval(&w.value)
-                        .map_err(|f| self.fault_in_line(*f, file, start))?;
-                    let bit = 1u32 << (w.letter.wrapping_sub(b'a') as u32 & 31);
-                    if w.letter == b'm' {
-                        m_count += 1;
-                        if m_count > 4 {
-                            return Err(self.error_in_line(
-                                ErrorKind::TooManyMWords,
-                                file,
-                                start,
-                                w.span,
-                            ));
-                        }
-                    } else if w.letter != b'g' && w.letter.is_ascii_lowercase() {
-                        if seen & bit != 0 {
-                            let k = ErrorKind::DuplicateWord {
-                                letter: w.letter as char,
-                            };
-                            return Err(self.error_in_line(k, file, start, w.span));
-                        }
-                        seen |= bit;
-                    }
+                    let v = self.read_word(file, start, w, &mut counts)?;
                     words.push((w.letter, v));
                     word_spans.push(w.span);
                     if w.letter == b'm' && matches!(v, 70.0 | 71.0 | 72.0 | 73.0) {
@@ -145,29 +118,7 @@ impl Interp<'_> {
                     }
                 }
                 Item::Assign(a) => {
-                    match &a.target {
-                        ParamRef::Numbered(index) => {
-                            let i = self
-                                .param_index(index)
-                                .map_err(|f| self.fault_in_line(*f, file, start))?;
-                            if is_read_only(i) {
-                                let k = ErrorKind::ParamReadOnly { index: i as i64 };
-                                return Err(self.error_in_line(k, file, start, a.target_span));
-                            }
-                            let v = self
-                                .eval(&a.value)
-                                .map_err(|f| self.fault_in_line(*f, file, start))?;
-                            num_set.push((i, v));
-                        }
-                        ParamRef::Named(name) => {
-                            self.create_named(name, a.target_span)
-                                .map_err(|f| self.fault_in_line(*f, file, start))?;
-                            let v = self
-                                .eval(&a.value)
-                                .map_err(|f| self.fault_in_line(*f, file, start))?;
-                            named_set.push((name.clone(), v));
-                        }
-                    }
+                    self.read_assign(file, start, a, num_set, named_set)?;
                     repl.push((a.span, Edit::Remove));
                 }
                 Item::Comment(c) => {
@@ -190,12 +141,7 @@ impl Interp<'_> {
             return Err(self.error_in_line(k, file, start, span));
         }
         // 2. Assignments: numbered in order, then named in order.
-        for &(i, v) in num_set.iter() {
-            self.params.assign(i, v);
-        }
-        for (n, v) in named_set.iter() {
-            self.set_named(n, *v);
-        }
+        self.apply_assigns(num_set, named_set);
         // 3. The active comment, after the assignments.
         if let Some(c) = active {
             match c.kind {
@@ -281,11 +227,106 @@ impl Interp<'_> {
             self.context_op(op, file, start, span)?;
         }
         if ends {
-            if self.main.percent_start {
-                self.emit_raw(b"%")?;
-            }
-            self.ended = true;
+            self.end_program()?;
         }
+        Ok(())
+    }
+
+    /// The value of a word, after the checks on its letter that the
+    /// reference makes while reading the line (U/V/W without those axes, a
+    /// fifth M word, a letter given twice).
+    #[inline(always)]
+    fn read_word(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        w: &Word,
+        counts: &mut WordCounts,
+    ) -> Result<f64, crate::diag::Error> {
+        if matches!(w.letter, b'u' | b'v' | b'w') && !self.s.uvw_axes {
+            let k = ErrorKind::BadCharacter {
+                ch: w.letter as char,
+                byte: w.letter,
+            };
+            let at = Span::new(w.span.start, w.span.start + 1);
+            return Err(self.error_in_line(k, file, start, at));
+        }
+        let v = self
+            .eval_value(&w.value)
+            .map_err(|f| self.fault_in_line(*f, file, start))?;
+        if w.letter == b'm' {
+            counts.m_words += 1;
+            if counts.m_words > 4 {
+                let k = ErrorKind::TooManyMWords;
+                return Err(self.error_in_line(k, file, start, w.span));
+            }
+        } else if w.letter != b'g' && w.letter.is_ascii_lowercase() {
+            let bit = 1u32 << (w.letter.wrapping_sub(b'a') as u32 & 31);
+            if counts.seen & bit != 0 {
+                let k = ErrorKind::DuplicateWord {
+                    letter: w.letter as char,
+                };
+                return Err(self.error_in_line(k, file, start, w.span));
+            }
+            counts.seen |= bit;
+        }
+        Ok(v)
+    }
+
+    /// Reads an assignment (target checks, then the value) into the sets
+    /// applied after the line is read.
+    #[inline(always)]
+    fn read_assign(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        a: &Assign,
+        num_set: &mut Vec<(usize, f64)>,
+        named_set: &mut Vec<(crate::parse::Name, f64)>,
+    ) -> Result<(), crate::diag::Error> {
+        match &a.target {
+            ParamRef::Numbered(index) => {
+                let i = self
+                    .param_index(index)
+                    .map_err(|f| self.fault_in_line(*f, file, start))?;
+                if is_read_only(i) {
+                    let k = ErrorKind::ParamReadOnly { index: i as i64 };
+                    return Err(self.error_in_line(k, file, start, a.target_span));
+                }
+                let v = self
+                    .eval_value(&a.value)
+                    .map_err(|f| self.fault_in_line(*f, file, start))?;
+                num_set.push((i, v));
+            }
+            ParamRef::Named(name) => {
+                self.create_named(name, a.target_span)
+                    .map_err(|f| self.fault_in_line(*f, file, start))?;
+                let v = self
+                    .eval_value(&a.value)
+                    .map_err(|f| self.fault_in_line(*f, file, start))?;
+                named_set.push((name.clone(), v));
+            }
+        }
+        Ok(())
+    }
+
+    /// The line's assignments, numbered in order, then named in order.
+    fn apply_assigns(&mut self, num_set: &[(usize, f64)], named_set: &[(crate::parse::Name, f64)]) {
+        for &(i, v) in num_set {
+            self.params.assign(i, v);
+        }
+        for (n, v) in named_set {
+            self.set_named(n, *v);
+        }
+    }
+
+    /// A block ended the program (M2, M30, M99 at the top): the closing `%`
+    /// of a `%` program, then nothing more runs.
+    fn end_program(&mut self) -> Result<(), crate::diag::Error> {
+        if self.main.percent_start {
+            self.emit_raw(b"%")?;
+        }
+        self.ended = true;
         Ok(())
     }
 
@@ -301,39 +342,12 @@ impl Interp<'_> {
         scratch: &mut Scratch,
     ) -> Result<(), crate::diag::Error> {
         let Scratch { words, repl, .. } = scratch;
-        let mut seen = 0u32;
-        let mut m_count = 0;
+        let mut counts = WordCounts::default();
         for item in items {
             let Item::Word(w) = item else {
                 unreachable!("checked by plain_word")
             };
-            if matches!(w.letter, b'u' | b'v' | b'w') && !self.s.uvw_axes {
-                let k = ErrorKind::BadCharacter {
-                    ch: w.letter as char,
-                    byte: w.letter,
-                };
-                let at = Span::new(w.span.start, w.span.start + 1);
-                return Err(self.error_in_line(k, file, start, at));
-            }
-            let v = self
-                .eval_value(&w.value)
-                .map_err(|f| self.fault_in_line(*f, file, start))?;
-            if w.letter == b'm' {
-                m_count += 1;
-                if m_count > 4 {
-                    let k = ErrorKind::TooManyMWords;
-                    return Err(self.error_in_line(k, file, start, w.span));
-                }
-            } else if w.letter != b'g' && w.letter.is_ascii_lowercase() {
-                let bit = 1u32 << (w.letter.wrapping_sub(b'a') as u32 & 31);
-                if seen & bit != 0 {
-                    let k = ErrorKind::DuplicateWord {
-                        letter: w.letter as char,
-                    };
-                    return Err(self.error_in_line(k, file, start, w.span));
-                }
-                seen |= bit;
-            }
+            let v = self.read_word(file, start, w, &mut counts)?;
             words.push((w.letter, v));
             if !w.literal {
                 repl.push((w.value.span, Edit::Number(v)));
@@ -352,10 +366,7 @@ impl Interp<'_> {
         }
         self.write_line(file, start, raw, repl)?;
         if self.apply_words(file, start, words, false)? {
-            if self.main.percent_start {
-                self.emit_raw(b"%")?;
-            }
-            self.ended = true;
+            self.end_program()?;
         }
         Ok(())
     }
@@ -379,42 +390,12 @@ impl Interp<'_> {
             let Item::Assign(a) = item else {
                 unreachable!("only assignments")
             };
-            match &a.target {
-                ParamRef::Numbered(index) => {
-                    let i = self
-                        .param_index(index)
-                        .map_err(|f| self.fault_in_line(*f, file, start))?;
-                    if is_read_only(i) {
-                        let k = ErrorKind::ParamReadOnly { index: i as i64 };
-                        return Err(self.error_in_line(k, file, start, a.target_span));
-                    }
-                    let v = self
-                        .eval_value(&a.value)
-                        .map_err(|f| self.fault_in_line(*f, file, start))?;
-                    num_set.push((i, v));
-                }
-                ParamRef::Named(name) => {
-                    self.create_named(name, a.target_span)
-                        .map_err(|f| self.fault_in_line(*f, file, start))?;
-                    let v = self
-                        .eval_value(&a.value)
-                        .map_err(|f| self.fault_in_line(*f, file, start))?;
-                    named_set.push((name.clone(), v));
-                }
-            }
+            self.read_assign(file, start, a, num_set, named_set)?;
         }
-        for &(i, v) in num_set.iter() {
-            self.params.assign(i, v);
-        }
-        for (n, v) in named_set.iter() {
-            self.set_named(n, *v);
-        }
+        self.apply_assigns(num_set, named_set);
         // No words: the state model sees an empty block.
         if self.apply_words(file, start, words, false)? {
-            if self.main.percent_start {
-                self.emit_raw(b"%")?;
-            }
-            self.ended = true;
+            self.end_program()?;
         }
         Ok(())
     }
@@ -508,10 +489,7 @@ impl Interp<'_> {
                 .map_or(0, |p| p + 1);
             self.emit_raw(&raw[..trimmed])?;
             if self.apply_words(file, start, &words, false)? {
-                if self.main.percent_start {
-                    self.emit_raw(b"%")?;
-                }
-                self.ended = true;
+                self.end_program()?;
             }
             Ok(())
         })();

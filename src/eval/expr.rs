@@ -189,13 +189,7 @@ impl Interp<'_> {
                 let v = self.read_named(name, e.span)?;
                 check(v, e.span)
             }
-            ExprKind::Code(c) => match self.s.compiled_exprs {
-                true => match self.run_code(&c.ops) {
-                    Some(v) => Ok(v),
-                    None => self.eval(&c.tree),
-                },
-                false => self.eval(&c.tree),
-            },
+            ExprKind::Code(c) => self.eval_code(c),
             ExprKind::Neg(inner) => Ok(-self.eval(inner)?),
             ExprKind::Bin(op, operands, checked) => {
                 let a = self.eval_operand(&operands.0)?;
@@ -216,11 +210,21 @@ impl Interp<'_> {
             ExprKind::Slot(i) if self.params.set[*i as usize] => {
                 check(self.params.values[*i as usize], e.span)
             }
-            ExprKind::Code(c) if self.s.compiled_exprs => match self.run_code(&c.ops) {
+            ExprKind::Code(c) => self.eval_code(c),
+            _ => self.eval(e),
+        }
+    }
+
+    /// A compiled expression: the stack machine, or the tree where it gives
+    /// up (or is switched off).
+    #[inline(always)]
+    fn eval_code(&mut self, c: &crate::parse::code::Code) -> EvalResult {
+        match self.s.compiled_exprs {
+            true => match self.run_code(&c.ops) {
                 Some(v) => Ok(v),
                 None => self.eval(&c.tree),
             },
-            _ => self.eval(e),
+            false => self.eval(&c.tree),
         }
     }
 
