@@ -158,6 +158,10 @@ fn in_range(x: f64) -> bool {
 }
 
 pub fn sin_deg(x: f64) -> f64 {
+    // A zero keeps its sign (the double-double sum would lose it).
+    if x == 0.0 {
+        return x;
+    }
     if !in_range(x) {
         return (x * (std::f64::consts::PI / 180.0)).sin();
     }
@@ -172,6 +176,9 @@ pub fn cos_deg(x: f64) -> f64 {
 }
 
 pub fn tan_deg(x: f64) -> f64 {
+    if x == 0.0 {
+        return x;
+    }
     if !in_range(x) {
         return (x * (std::f64::consts::PI / 180.0)).tan();
     }
@@ -184,6 +191,9 @@ pub fn tan_deg(x: f64) -> f64 {
 
 /// `(r * 180.0) / M_PIl` for a result `r` in radians from the double libm.
 pub fn to_degrees(r: f64) -> f64 {
+    if r == 0.0 {
+        return r;
+    }
     let p = r * 180.0;
     to_f64(round64(div(dd(p), PI64)))
 }

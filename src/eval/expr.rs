@@ -159,7 +159,8 @@ pub fn round_half_away(x: f64) -> f64 {
     if !(-2147483648.0..2147483648.0).contains(&t) || t.is_nan() {
         -2147483648.0
     } else {
-        t
+        // Through an integer there: a zero has no sign.
+        t + 0.0
     }
 }
 

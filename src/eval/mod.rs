@@ -11,6 +11,7 @@ mod fast;
 mod message;
 mod modal;
 mod named;
+mod nurbs;
 pub mod params;
 mod restore;
 mod scan_ahead;
@@ -198,6 +199,8 @@ pub struct Interp<'s> {
     /// The repeat line (O-line index) an endrepeat just jumped back to.
     repeat_again: Option<u32>,
     scratch: Option<Box<block::Scratch>>,
+    /// Control points of the NURBS block being read.
+    nurbs: nurbs::Nurbs,
 }
 
 /// An error writing the output.
@@ -315,6 +318,7 @@ impl<'s> Interp<'s> {
             rotated: false,
             repeat_again: None,
             scratch: Some(Box::default()),
+            nurbs: nurbs::Nurbs::default(),
         }
     }
 

@@ -7,6 +7,7 @@ use crate::program::FileIndex;
 
 use super::Interp;
 use super::block::Words;
+use super::nurbs::{NO_MOTION, NURBS};
 use super::state::Unknown;
 
 const LINEAR: [bool; 9] = [true, true, true, false, false, false, true, true, true];
@@ -20,7 +21,7 @@ impl Interp<'_> {
         self.current_line_idx + 1
     }
 
-    fn forget(&mut self, axes: &[usize], what: &'static str) {
+    pub(super) fn forget(&mut self, axes: &[usize], what: &'static str) {
         let line = self.line_no();
         for &a in axes {
             self.pos.axes[a] = Err(Unknown::After(what, line));
@@ -100,6 +101,7 @@ impl Interp<'_> {
         if !m99 && self.apply_simple(words) {
             return Ok(false);
         }
+        let motion_before = self.modal.motion;
         let mut gbuf = [0i32; 16];
         let mut gn = 0;
         let mut ends = m99;
@@ -336,6 +338,17 @@ impl Interp<'_> {
                 }
             }
             Some(_) => {}
+            None if gs.contains(&53) => {
+                // G5.3 ends the block; axis words on its line start another
+                // one (the reference runs them as G5.2).
+                self.nurbs_end();
+                if !axis_words.is_empty() {
+                    self.nurbs_point(NO_MOTION, axis_words, l_word);
+                }
+            }
+            None if gs.contains(&NURBS) || (motion_before == NURBS && !axis_words.is_empty()) => {
+                self.nurbs_point(motion_before, axis_words, l_word);
+            }
             None => {
                 if !axis_words.is_empty() && !dynamic_tlo {
                     if let Err(k) = self.check_motion(words, axis_words) {
@@ -390,6 +403,16 @@ impl Interp<'_> {
             }
         }
         true
+    }
+
+    /// Where a word sends an axis: its value (G90) or the position plus it
+    /// (G91).
+    pub(super) fn axis_end(&self, axis: usize, v: f64) -> Result<f64, Unknown> {
+        if self.modal.absolute {
+            Ok(v)
+        } else {
+            self.pos.axes[axis].clone().map(|p| p + v)
+        }
     }
 
     /// The end of a move on one axis: the word's value (G90) or the

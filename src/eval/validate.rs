@@ -5,6 +5,7 @@
 
 use crate::diag::ErrorKind;
 
+use super::nurbs::{NO_MOTION, NURBS, Nurbs};
 use super::state::Modal;
 
 /// Modal group of a G-code (×10), or None for an unknown code.
@@ -71,11 +72,15 @@ fn g_uses_axes(g: i32) -> bool {
 
 /// Checks a block. `words` are (letter, value) in line order; returns the
 /// error and the index of the word it concerns.
-pub fn check_block(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind, Option<usize>)> {
+pub fn check_block(
+    words: &[(u8, f64)],
+    modal: &Modal,
+    points: &Nurbs,
+) -> Result<(), (ErrorKind, Option<usize>)> {
     if simple_block_ok(words, modal) {
         return Ok(());
     }
-    full_check(words, modal)
+    full_check(words, modal, points)
 }
 
 const fn bit(c: u8) -> u32 {
@@ -129,7 +134,11 @@ fn simple_block_ok(words: &[(u8, f64)], modal: &Modal) -> bool {
     }
 }
 
-fn full_check(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind, Option<usize>)> {
+fn full_check(
+    words: &[(u8, f64)],
+    modal: &Modal,
+    points: &Nurbs,
+) -> Result<(), (ErrorKind, Option<usize>)> {
     let bad = |msg: &str, at: Option<usize>| {
         Err((
             ErrorKind::Semantic {
@@ -227,20 +236,57 @@ fn full_check(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind, Opti
     let m_on = |codes: &[i64]| ms.iter().any(|(m, _)| codes.contains(m));
     let axis_word = b"xyzabcuvw".iter().find_map(|&c| has_at(c));
     let motion_here = gs.iter().find(|(g, _)| g_group(*g) == Some(1)).map(|x| x.0);
-    // NURBS control points (G5.2 ... G5.3).
-    let nurbs = motion_here.unwrap_or(modal.motion) == 52;
-    if nurbs && axis_word.is_some() {
-        if has_at(b'x').is_none() || has_at(b'y').is_none() {
+    // An absent P or Q reads as -1 in the reference, so a P-1 or Q-1 is no P
+    // or Q where one is required.
+    let value = |c: u8| has_at(c).map(|i| words[i].1);
+    let given = |c: u8| value(c).is_some_and(|v| v != -1.0);
+    // NURBS blocks (G5.2 ... G5.3).
+    let nurbs = motion_here.unwrap_or(modal.motion) == NURBS;
+    let g53 = gs.iter().find(|g| g.0 == 53).map(|g| g.1);
+    if let Some(at) = g53 {
+        if modal.motion != NURBS {
+            return bad("G5.3 without a G5.2 block before it", Some(at));
+        }
+        if let Some(order) = points.short_of_order() {
+            let msg = format!(
+                "a NURBS block needs at least as many control points as its order L = {order}"
+            );
+            return bad(&msg, Some(at));
+        }
+    }
+    // A control point: on a G5.2 line, a line of axis words in G5.2 mode, or
+    // axis words after G5.3 (which start a new block). The checks on P see
+    // the points still pending, which G5.3 has just cleared.
+    let point = (nurbs && (motion_here.is_some() || axis_word.is_some()))
+        || (g53.is_some() && axis_word.is_some());
+    if point {
+        let pending = points.pending() && g53.is_none();
+        let p = value(b'p').unwrap_or(-1.0);
+        if has_at(b'x').is_some() != has_at(b'y').is_some() {
             return bad(
                 "both X and Y are needed for a NURBS control point",
                 axis_word,
             );
         }
-        if !words.iter().any(|w| w.0 == b'p' && w.1 > 0.0) {
+        if pending && axis_word.is_none() && p > 0.0 {
+            return bad(
+                "a P word without X and Y is only allowed for the first NURBS control point",
+                has_at(b'p'),
+            );
+        }
+        if pending && p <= 0.0 {
             return bad(
                 "a positive weight P is needed for every NURBS control point",
-                axis_word,
+                has_at(b'p').or(axis_word),
             );
+        }
+        let feed_mode = gs
+            .iter()
+            .find(|g| matches!(g.0, 930 | 940 | 950))
+            .map_or(modal.feed_mode, |g| g.0);
+        let feed = value(b'f').unwrap_or(modal.feed);
+        if feed_mode == 940 && feed == 0.0 {
+            return bad("a NURBS block with a zero feed rate", has_at(b'f'));
         }
     }
     if nurbs
@@ -256,10 +302,10 @@ fn full_check(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind, Opti
         if needs_axes && axis_word.is_none() && !matches!(m, 760) {
             return bad("all axes missing with motion code", None);
         }
-        if matches!(m, 820 | 860 | 880 | 890) && has_at(b'p').is_none() {
+        if matches!(m, 820 | 860 | 880 | 890) && !given(b'p') {
             return bad("dwell time P word missing with G82/G86/G88/G89", None);
         }
-        if matches!(m, 730 | 830) && has_at(b'q').is_none() {
+        if matches!(m, 730 | 830) && !given(b'q') {
             return bad("Q word missing with G73/G83", None);
         }
         if m == 760 && has_at(b'p').is_none() {
@@ -299,7 +345,7 @@ fn full_check(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind, Opti
     let motion = motion_here.unwrap_or(modal.motion);
     if let Some(i) = axis_word
         && axis_g0.is_none()
-        && motion == 800
+        && matches!(motion, 800 | NO_MOTION)
     {
         return bad(
             if motion_here == Some(800) {
@@ -318,7 +364,14 @@ fn full_check(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind, Opti
             has_at(b'@').or(has_at(b'^')),
         );
     }
-    for &(l, v) in words {
+    for (i, &(l, v)) in words.iter().enumerate() {
+        // L is read as a whole number, and never negative.
+        if l == b'l' {
+            let n = crate::parse::integer_value(v).map_err(|k| (k, Some(i)))?;
+            if n < 0 {
+                return bad("negative L word", Some(i));
+            }
+        }
         if l == b'f' && v < 0.0 {
             return bad("negative F word", None);
         }
@@ -409,8 +462,45 @@ fn full_check(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind, Opti
             return bad("G41/G42 need a whole-number D word", Some(i));
         }
     }
+    // Peck depths of a running G73/G83.
+    if matches!(motion, 730 | 830)
+        && (motion_here.is_some() || axis_word.is_some())
+        && value(b'q').is_some_and(|q| q != -1.0 && q <= 0.0)
+    {
+        return bad("negative or zero Q value in G73/G83", has_at(b'q'));
+    }
+    if value(b'h').is_some_and(|h| h < -1.0) {
+        return bad("negative H word", has_at(b'h'));
+    }
+    // G10's L and P: P is a tool number (L1, L10, L11) or a coordinate
+    // system (L2, L20), rounded half away from zero; an absent P reads as
+    // -1, and only a P above its rounding by more than 0.0001 is refused.
+    if g_on(&[100]) {
+        let p = value(b'p').unwrap_or(-1.0);
+        let l = value(b'l').map_or(-1, |l| l.round() as i64);
+        let p_int = if p >= 0.0 {
+            (p + 0.5).trunc()
+        } else {
+            (p - 0.5).trunc()
+        };
+        if !matches!(l, 1 | 2 | 10 | 11 | 20) {
+            return bad("G10 needs L1, L2, L10, L11 or L20", has_at(b'l'));
+        }
+        if p + 0.0001 - p_int > 0.0002 {
+            return bad("G10 P value not a whole number", has_at(b'p'));
+        }
+        if matches!(l, 2 | 20) && !(0.0..=9.0).contains(&p_int) {
+            return bad("G10 L2/L20 P value out of range (0 to 9)", has_at(b'p'));
+        }
+        if matches!(l, 1 | 10 | 11) && p_int < 1.0 {
+            return bad(
+                "G10 L1/L10/L11 P value (a tool number) out of range",
+                has_at(b'p'),
+            );
+        }
+    }
     // Codes that need words.
-    if g_on(&[40]) && has_at(b'p').is_none() {
+    if g_on(&[40]) && !given(b'p') {
         return bad(
             "dwell time missing with G4",
             gs.iter().find(|g| g.0 == 40).map(|g| g.1),
@@ -422,7 +512,7 @@ fn full_check(words: &[(u8, f64)], modal: &Modal) -> Result<(), (ErrorKind, Opti
     if m_on(&[62, 63, 64, 65]) && has_at(b'p').is_none() {
         return bad("no valid P word with M62-M65", None);
     }
-    if m_on(&[66]) && has_at(b'p').is_none() && has_at(b'e').is_none() {
+    if m_on(&[66]) && !given(b'p') && has_at(b'e').is_none() {
         return bad("M66 needs a P or an E word", None);
     }
     if m_on(&[61]) && has_at(b'q').is_none() {
