@@ -33,12 +33,10 @@ impl Interp<'_> {
     pub(super) fn run_code(&self, ops: &[Op]) -> Option<f64> {
         // The most common shape, `[a op b]` of two readings, without the
         // stack.
-        if let [a, b, Op::Bin(op), rest @ ..] = ops
-            && matches!(rest, [] | [Op::Check])
-            && let (Some(a), Some(b)) = (self.leaf(a), self.leaf(b))
+        if let [a, b @ (Op::BinK(..) | Op::BinS(..) | Op::BinN(..))] = ops
+            && let Some(a) = self.leaf(a)
         {
-            let v = apply(*op, a?, b?)?;
-            return (rest.is_empty() || v.is_finite()).then_some(v);
+            return self.binary(a?, b);
         }
         self.run_stack(ops)
     }
@@ -53,6 +51,20 @@ impl Interp<'_> {
             Op::Named(name) => Some(self.named(name)),
             _ => None,
         }
+    }
+
+    /// A binary operation with its right operand read in place applied to
+    /// `a`; `None` for any other operation or when it gives up.
+    #[inline(always)]
+    fn binary(&self, a: f64, op: &Op) -> Option<f64> {
+        let (op, checked, c) = match op {
+            Op::BinK(op, checked, k) => (*op, *checked, *k),
+            Op::BinS(op, checked, i) => (*op, *checked, self.stored(*i as usize)?),
+            Op::BinN(op, checked, name) => (*op, *checked, self.named(name)?),
+            _ => return None,
+        };
+        let v = apply(op, a, c)?;
+        (!checked || v.is_finite()).then_some(v)
     }
 
     /// A named parameter's stored value, if set and finite (the reading
@@ -103,16 +115,18 @@ impl Interp<'_> {
                     let top = &mut stack[n.wrapping_sub(1) & MASK];
                     *top = -*top;
                 }
-                Op::Bin(op) => {
+                Op::Bin(op, checked) => {
                     n = n.wrapping_sub(1);
                     let c = stack[n & MASK];
                     let top = &mut stack[n.wrapping_sub(1) & MASK];
                     *top = apply(*op, *top, c)?;
-                }
-                Op::Check => {
-                    if !stack[n.wrapping_sub(1) & MASK].is_finite() {
+                    if *checked && !top.is_finite() {
                         return None;
                     }
+                }
+                Op::BinK(..) | Op::BinS(..) | Op::BinN(..) => {
+                    let top = &mut stack[n.wrapping_sub(1) & MASK];
+                    *top = self.binary(*top, op)?;
                 }
                 Op::Func(f) => {
                     let top = &mut stack[n.wrapping_sub(1) & MASK];

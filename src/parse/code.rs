@@ -10,6 +10,9 @@ use super::ast::{BinOp, Expr, ExprKind, Func, ParamRef};
 pub const STACK: usize = 8;
 
 /// One stack operation. Reads push a value and give up unless it is finite.
+/// A binary operation whose right operand is a read takes it directly
+/// (`BinK`, `BinS`, `BinN`), and `checked` says its result must be finite
+/// (a bracketed result).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Op {
     Num(f64),
@@ -20,9 +23,14 @@ pub enum Op {
     Index,
     Named(Name),
     Neg,
-    Bin(BinOp),
-    /// The value on top must be finite (a bracketed result).
-    Check,
+    /// The two values on top.
+    Bin(BinOp, bool),
+    /// The value on top and a number.
+    BinK(BinOp, bool, f64),
+    /// The value on top and a numbered parameter.
+    BinS(BinOp, bool, u16),
+    /// The value on top and a named parameter.
+    BinN(BinOp, bool, Name),
     /// A function of the value on top; its result must be finite.
     Func(Func),
     /// `ATAN[y]/[x]` of the two values on top; the result must be finite.
@@ -94,13 +102,28 @@ fn emit(e: &Expr, ops: &mut Vec<Op>, depth: &mut usize, max: &mut usize) -> bool
             ops.push(Op::Neg);
         }
         ExprKind::Bin(op, operands, checked) => {
-            if !emit(&operands.0, ops, depth, max) || !emit(&operands.1, ops, depth, max) {
+            if !emit(&operands.0, ops, depth, max) {
                 return false;
             }
-            *depth -= 1;
-            ops.push(Op::Bin(*op));
-            if *checked {
-                ops.push(Op::Check);
+            // A read on the right is taken by the operation itself.
+            let fused = match &operands.1.kind {
+                ExprKind::Num(v) if v.is_finite() => Some(Op::BinK(*op, *checked, *v)),
+                ExprKind::Slot(i) => Some(Op::BinS(*op, *checked, *i)),
+                ExprKind::Param(p) => match &**p {
+                    ParamRef::Named(n) => Some(Op::BinN(*op, *checked, n.clone())),
+                    ParamRef::Numbered(_) => None,
+                },
+                _ => None,
+            };
+            match fused {
+                Some(f) => ops.push(f),
+                None => {
+                    if !emit(&operands.1, ops, depth, max) {
+                        return false;
+                    }
+                    *depth -= 1;
+                    ops.push(Op::Bin(*op, *checked));
+                }
             }
         }
         ExprKind::Func(f, arg) => {
@@ -153,18 +176,15 @@ mod tests {
             ("X#<a>", None),
             (
                 "X[1 + #2]",
-                Some(vec![Op::Num(1.0), Op::Slot(2), Op::Bin(Add), Op::Check]),
+                Some(vec![Op::Num(1.0), Op::BinS(Add, true, 2)]),
             ),
             (
                 "X[#<a> * [2 - #1]]",
                 Some(vec![
                     n("a"),
                     Op::Num(2.0),
-                    Op::Slot(1),
-                    Op::Bin(Sub),
-                    Op::Check,
-                    Op::Bin(Mul),
-                    Op::Check,
+                    Op::BinS(Sub, true, 1),
+                    Op::Bin(Mul, true),
                 ]),
             ),
             ("X-#<a>", Some(vec![n("a"), Op::Neg])),
@@ -174,10 +194,21 @@ mod tests {
                 Some(vec![
                     Op::Num(1.0),
                     Op::Num(2.0),
-                    Op::Num(3.0),
-                    Op::Bin(Mul),
-                    Op::Bin(Add),
-                    Op::Check,
+                    Op::BinK(Mul, false, 3.0),
+                    Op::Bin(Add, true),
+                ]),
+            ),
+            (
+                "X[#1 - #<b>]",
+                Some(vec![Op::Slot(1), Op::BinN(Sub, true, Name::new("b"))]),
+            ),
+            (
+                "X[#1 / ##2]",
+                Some(vec![
+                    Op::Slot(1),
+                    Op::Slot(2),
+                    Op::Index,
+                    Op::Bin(Div, true),
                 ]),
             ),
             ("XSQRT[#1]", Some(vec![Op::Slot(1), Op::Func(Func::Sqrt)])),
