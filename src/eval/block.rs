@@ -381,10 +381,7 @@ impl Interp<'_> {
         scratch: &mut Scratch,
     ) -> Result<(), crate::diag::Error> {
         let Scratch {
-            words,
-            num_set,
-            named_set,
-            ..
+            num_set, named_set, ..
         } = scratch;
         for item in items {
             let Item::Assign(a) = item else {
@@ -392,11 +389,8 @@ impl Interp<'_> {
             };
             self.read_assign(file, start, a, num_set, named_set)?;
         }
+        // No words: an empty block changes nothing in the state model.
         self.apply_assigns(num_set, named_set);
-        // No words: the state model sees an empty block.
-        if self.apply_words(file, start, words, false)? {
-            self.end_program()?;
-        }
         Ok(())
     }
 

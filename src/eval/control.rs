@@ -405,14 +405,16 @@ impl Interp<'_> {
                 Ok(())
             }
             OKind::While => {
-                let is_do_end = self
-                    .frame()
-                    .labels
-                    .get(key)
-                    .is_some_and(|r| r.kind == OKind::Do);
+                let line = file.olines[oidx as usize].line_idx;
+                // One look at the label: the end of a do loop, this loop
+                // already recorded (each pass after the first), or new.
+                let (do_rec, recorded) = match self.frame().labels.get(key) {
+                    Some(r) if r.kind == OKind::Do => (Some(r.clone()), false),
+                    Some(r) => (None, r.kind == OKind::While && r.line == line),
+                    None => (None, false),
+                };
                 let c = self.o_eval(file, oidx, o.expr.as_ref().expect("condition"))?;
-                if is_do_end {
-                    let rec = self.frame().labels.get(key).cloned().expect("do record");
+                if let Some(rec) = do_rec {
                     if c != 0.0 {
                         if let Some(first_line) = self.ref_stale_break.take() {
                             let (a, b) = self.osite(file, oidx);
@@ -425,7 +427,9 @@ impl Interp<'_> {
                     }
                     return Ok(());
                 }
-                self.record(file, oidx, key, OKind::While)?;
+                if !recorded {
+                    self.record(file, oidx, key, OKind::While)?;
+                }
                 if c != 0.0 {
                     return Ok(());
                 }

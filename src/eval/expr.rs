@@ -272,6 +272,13 @@ impl Interp<'_> {
 
     /// Index of a numbered parameter reference.
     pub(crate) fn param_index(&mut self, index: &Expr) -> Result<usize, Fault> {
+        // A literal in range (`#2 = ...`), the common case.
+        if let ExprKind::Num(v) = index.kind {
+            let i = v as usize;
+            if i as f64 == v && (1..MAX_PARAM).contains(&i) {
+                return Ok(i);
+            }
+        }
         let v = self.eval(index)?;
         let i = integer_value(v).map_err(|k| fault(k, index.span))?;
         if i < 1 || i >= MAX_PARAM as i64 {
