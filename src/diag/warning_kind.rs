@@ -40,6 +40,12 @@ pub enum WarningKind {
     QuirkSkippedBreak,
     /// `M98 P.. L0`: the reference leaks a call frame.
     QuirkL0,
+    /// `G43 H1`, `G20`, then `#<_abs_z>`; `G43 H1`, `M6`, then `#<_z>`; or
+    /// `M61 Q2` then `#<_current_tool>`: the standalone reference keeps the
+    /// tool length offset in the old units, takes the position after a tool
+    /// change from the last move without the offset changed since, and does
+    /// not change its current tool on M61.
+    QuirkStandalone { why: &'static str, line: u32 },
 }
 
 impl WarningKind {
@@ -60,6 +66,7 @@ impl WarningKind {
             QuirkRepeatRecursion => "W0105",
             QuirkL0 => "W0106",
             QuirkSkippedBreak => "W0109",
+            QuirkStandalone { .. } => "W0110",
         }
     }
 }
@@ -114,6 +121,10 @@ impl fmt::Display for WarningKind {
             QuirkRepeatRecursion => write!(
                 f,
                 "recursive call inside a repeat: LinuxCNC shares one counter across the calls; ngcflat counts each call"
+            ),
+            QuirkStandalone { why, line } => write!(
+                f,
+                "since {why} at line {line}, LinuxCNC's standalone interpreter (rs274) reads a different value here; ngcflat gives the machine's"
             ),
             QuirkSkippedBreak => write!(
                 f,

@@ -305,6 +305,7 @@ impl Interp<'_> {
         if let ParamClass::Position(axis) = classify(i)
             && !self.params.set[i]
         {
+            self.note_standalone_drift(span);
             return self.position(axis, span);
         }
         if let ParamClass::Refreshed(what, why) = classify(i) {
@@ -319,6 +320,9 @@ impl Interp<'_> {
                 },
                 span,
             ));
+        }
+        if (5400..=5413).contains(&i) {
+            self.note_m61(span);
         }
         if (5400..=5413).contains(&i)
             && let Some(v) = self.tool_param(i)

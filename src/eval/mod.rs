@@ -201,6 +201,13 @@ pub struct Interp<'s> {
     scratch: Option<Box<block::Scratch>>,
     /// Control points of the NURBS block being read.
     nurbs: nurbs::Nurbs,
+    /// The tool length offset changed since the last move.
+    tlo_moved: bool,
+    /// Why and since which line the standalone reference's position
+    /// differs from the machine's (see W0110).
+    standalone_drift: Option<(&'static str, u32)>,
+    /// The line of an M61 not followed by a tool change (see W0110).
+    m61_line: Option<u32>,
 }
 
 /// An error writing the output.
@@ -319,6 +326,9 @@ impl<'s> Interp<'s> {
             repeat_again: None,
             scratch: Some(Box::default()),
             nurbs: nurbs::Nurbs::default(),
+            tlo_moved: false,
+            standalone_drift: None,
+            m61_line: None,
         }
     }
 

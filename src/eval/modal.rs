@@ -54,6 +54,17 @@ impl Interp<'_> {
         }
     }
 
+    /// Before G92 or G52 writes the offset parameters: axes without a word
+    /// keep the offsets in effect, which are none after G92.2 (whose
+    /// parameters still hold the old values).
+    fn keep_active_g92(&mut self) {
+        if self.params.known[5210] && self.params.values[5210] == 0.0 {
+            for a in 0..9 {
+                self.params.assign(5211 + a, 0.0);
+            }
+        }
+    }
+
     /// G5x offset of coordinate system `cs` (1–9) on an axis, program units.
     fn g5x_offset(&self, cs: i32, axis: usize) -> Option<f64> {
         self.param_prog(5221 + 20 * (cs as usize - 1) + axis, axis)
@@ -136,8 +147,11 @@ impl Interp<'_> {
                         30 => self.modal.spindle = 3,
                         40 => self.modal.spindle = 4,
                         50 => self.modal.spindle = 0,
-                        60 => self.current_tool = self.selected_tool,
-                        610 => self.current_tool = q_word,
+                        60 => {
+                            self.current_tool = self.selected_tool;
+                            self.m61_line = None;
+                            self.tool_change_sync();
+                        }
                         70 => self.modal.mist = true,
                         80 => self.modal.flood = true,
                         90 => {
@@ -181,6 +195,12 @@ impl Interp<'_> {
                     510 => self.modal.speed_override = on,
                     520 => self.modal.adaptive_feed = on,
                     530 => self.modal.feed_hold = on,
+                    // M61's Q may come after it on the line.
+                    610 => {
+                        self.current_tool = q_word;
+                        self.m61_line = Some(self.line_no());
+                        self.tool_change_sync();
+                    }
                     _ => {}
                 }
             }
@@ -263,6 +283,7 @@ impl Interp<'_> {
         let _ = self.line_no();
         match special {
             Some(920) => {
+                self.keep_active_g92();
                 for &(a, v) in axis_words {
                     // The position becomes the given value; the offset is
                     // known only if the machine position was.
@@ -289,6 +310,7 @@ impl Interp<'_> {
             Some(520) => {
                 // G52: a local offset kept in the G92 parameters.
                 let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
+                self.keep_active_g92();
                 for &(a, v) in axis_words {
                     self.set_param_prog(5211 + a, a, Some(v));
                 }
@@ -350,7 +372,12 @@ impl Interp<'_> {
                 self.nurbs_point(motion_before, axis_words, l_word);
             }
             None => {
-                if !axis_words.is_empty() && !dynamic_tlo {
+                // G43.1's axis words are a move too when the line has a
+                // motion code.
+                let explicit_motion = gs
+                    .iter()
+                    .any(|&g| g != 800 && super::validate::is_motion(g));
+                if !axis_words.is_empty() && (!dynamic_tlo || explicit_motion) {
                     if let Err(k) = self.check_motion(words, axis_words) {
                         let (a, b) = (_start, _start);
                         return Err(self.error(k, _file, a, b));
@@ -405,6 +432,50 @@ impl Interp<'_> {
         true
     }
 
+    /// M6 or M61: the standalone reference takes the position from its last
+    /// move, which misses a tool length offset changed since (the machine
+    /// does not move).
+    fn tool_change_sync(&mut self) {
+        if self.tlo_moved {
+            let line = self.line_no();
+            self.standalone_drift = Some((
+                "a tool change after the tool length offset changed without a move",
+                line,
+            ));
+        }
+    }
+
+    /// A read of the position after the standalone reference's position
+    /// departed from the machine's: warning W0110 at the read.
+    pub(super) fn note_standalone_drift(&mut self, span: crate::parse::ast::Span) {
+        if let Some((why, line)) = self.standalone_drift {
+            let file = self.cur.file.clone();
+            let at = self.current_line_start;
+            self.warn(
+                crate::diag::WarningKind::QuirkStandalone { why, line },
+                &file,
+                at + span.start,
+                at + span.end,
+            );
+        }
+    }
+
+    /// A read of the current tool or its data after M61, which the
+    /// standalone reference does not apply: warning W0110 at the read.
+    pub(super) fn note_m61(&mut self, span: crate::parse::ast::Span) {
+        if let Some(line) = self.m61_line {
+            let file = self.cur.file.clone();
+            let at = self.current_line_start;
+            let why = "M61 (the standalone interpreter keeps its current tool)";
+            self.warn(
+                crate::diag::WarningKind::QuirkStandalone { why, line },
+                &file,
+                at + span.start,
+                at + span.end,
+            );
+        }
+    }
+
     /// Where a word sends an axis: its value (G90) or the position plus it
     /// (G91).
     pub(super) fn axis_end(&self, axis: usize, v: f64) -> Result<f64, Unknown> {
@@ -419,6 +490,7 @@ impl Interp<'_> {
     /// position plus it (G91); an unknown position stays unknown.
     #[inline]
     pub(super) fn move_axis(&mut self, axis: usize, v: f64) {
+        self.tlo_moved = false;
         if self.modal.absolute {
             self.pos.axes[axis] = Ok(v);
         } else if let Ok(p) = &mut self.pos.axes[axis] {
@@ -429,6 +501,13 @@ impl Interp<'_> {
     fn set_units(&mut self, metric: bool) {
         if self.modal.metric == metric {
             return;
+        }
+        if self.tlo.is_some_and(|t| t.iter().any(|&v| v != 0.0)) {
+            let line = self.line_no();
+            self.standalone_drift = Some((
+                "a change of units with a tool length offset in effect",
+                line,
+            ));
         }
         let f = if metric { 25.4 } else { 1.0 / 25.4 };
         for (a, lin) in LINEAR.iter().enumerate() {
@@ -623,6 +702,7 @@ impl Interp<'_> {
     }
 
     fn move_to(&mut self, axis_words: &[(usize, f64)]) {
+        self.tlo_moved = false;
         if self.rotated {
             self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "an XY rotation (G10 R)");
             return;

@@ -79,6 +79,9 @@ impl Interp<'_> {
             "_feed" => m.feed,
             "_rpm" => m.speed.abs(),
             "_current_tool" | "_selected_tool" | "_current_pocket" | "_selected_pocket" => {
+                if name == "_current_tool" {
+                    self.note_m61(span);
+                }
                 let v = match name {
                     "_current_tool" => self.current_tool,
                     "_selected_tool" => self.selected_tool,
@@ -100,12 +103,14 @@ impl Interp<'_> {
                 if let Some(axis) = name.strip_prefix('_').filter(|a| a.len() == 1)
                     && let Some(i) = AXES.iter().position(|&c| c == axis.as_bytes()[0])
                 {
+                    self.note_standalone_drift(span);
                     return Some(self.position(i, span));
                 }
                 if let Some(axis) = name.strip_prefix("_abs_").filter(|a| a.len() == 1)
                     && let Some(i) = AXES.iter().position(|&c| c == axis.as_bytes()[0])
                     && let Some(v) = self.abs_position(i)
                 {
+                    self.note_standalone_drift(span);
                     return Some(Ok(v));
                 }
                 if let Some(axis) = name.strip_prefix("_abs_").filter(|a| a.len() == 1)

@@ -101,6 +101,9 @@ impl Interp<'_> {
             };
             self.pos.axes[a] = ok.ok_or(Unknown::After(what, line));
         }
+        if new != self.tlo {
+            self.tlo_moved = true;
+        }
         self.tlo = new;
     }
 

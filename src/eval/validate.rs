@@ -336,7 +336,13 @@ fn full_check(
             return bad("spindle not turning in G33", None);
         }
     }
-    let axis_g0 = gs.iter().find(|(g, _)| g_uses_axes(*g)).map(|x| x.0);
+    // G43.1 takes the axis words as offsets; with a motion code on the line
+    // they are also the move's end point.
+    let axis_g0 = gs
+        .iter()
+        .find(|(g, _)| g_uses_axes(*g))
+        .map(|x| x.0)
+        .or_else(|| (g_on(&[431]) && motion_here.is_none()).then_some(431));
     if let (Some(_), Some(_), Some(i)) = (motion_here, axis_g0, axis_word)
         && motion_here != Some(800)
     {
@@ -471,6 +477,17 @@ fn full_check(
     }
     if value(b'h').is_some_and(|h| h < -1.0) {
         return bad("negative H word", has_at(b'h'));
+    }
+    // G53 moves in machine coordinates: with G0 or G1, never incremental.
+    if let Some(at) = gs.iter().find(|g| g.0 == 530).map(|g| g.1) {
+        let motion_to_be = motion_here.or(axis_word.map(|_| modal.motion));
+        if !matches!(motion_to_be, Some(0 | 10)) {
+            return bad("G53 needs G0 or G1", Some(at));
+        }
+        let incremental = g_on(&[910]) || (!modal.absolute && !g_on(&[900]));
+        if incremental {
+            return bad("G53 cannot be used in incremental mode (G91)", Some(at));
+        }
     }
     // G10's L and P: P is a tool number (L1, L10, L11) or a coordinate
     // system (L2, L20), rounded half away from zero; an absent P reads as

@@ -95,6 +95,21 @@ const WARNING_FIXTURES: &[(&str, &str, &[&str])] = &[
         "fixtures/deviation/control/continue-then-break.ngc",
         &[],
     ),
+    (
+        "W0110",
+        "fixtures/deviation/position/tool-change-forgets-new-offset.ngc",
+        &["--zero-start"],
+    ),
+    (
+        "W0110",
+        "fixtures/deviation/position/tool-offset-kept-across-units.ngc",
+        &["--zero-start"],
+    ),
+    (
+        "W0110",
+        "fixtures/deviation/position/m61-keeps-current-tool.ngc",
+        &[],
+    ),
 ];
 
 /// Warning kinds declared in src/diag/warning_kind.rs that nothing in
