@@ -322,7 +322,7 @@ impl Interp<'_> {
             ));
         }
         if (5400..=5413).contains(&i) {
-            self.note_m61(span);
+            self.note_m61(span, i != 5400);
         }
         if (5400..=5413).contains(&i)
             && let Some(v) = self.tool_param(i)

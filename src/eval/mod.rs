@@ -82,7 +82,7 @@ pub struct Frame {
     /// Pending passes of an `M98 ... L` on the given line of this frame.
     pub m98_loop: Option<(u32, i64)>,
     /// Modal state saved by M70/M73; `auto` restores it on return (M73).
-    pub saved_modal: Option<Box<Modal>>,
+    pub saved_modal: Option<Box<restore::Saved>>,
     pub auto_restore: bool,
 }
 
@@ -206,8 +206,9 @@ pub struct Interp<'s> {
     /// Why and since which line the standalone reference's position
     /// differs from the machine's (see W0110).
     standalone_drift: Option<(&'static str, u32)>,
-    /// The line of an M61 not followed by a tool change (see W0110).
-    m61_line: Option<u32>,
+    /// The line of an M61 not followed by a tool change, and the tool the
+    /// standalone reference still has as current (see W0110).
+    m61: Option<(u32, Option<f64>)>,
 }
 
 /// An error writing the output.
@@ -328,7 +329,7 @@ impl<'s> Interp<'s> {
             nurbs: nurbs::Nurbs::default(),
             tlo_moved: false,
             standalone_drift: None,
-            m61_line: None,
+            m61: None,
         }
     }
 

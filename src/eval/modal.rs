@@ -100,6 +100,37 @@ impl Interp<'_> {
         self.pos.axes[axis] = v.ok_or(Unknown::After(what, line));
     }
 
+    /// G43 without H (`on`: the current tool's offset) or G49, as M72
+    /// restores them.
+    pub(super) fn tool_offset_words(&mut self, on: bool) {
+        self.modal.tool_offset = on;
+        if on {
+            let data = self.current_tool.and_then(|t| self.tool(t));
+            let what = "a tool length offset (G43) of a tool whose data is unknown";
+            self.set_tlo(data.map(|d| d.offsets), what);
+        } else {
+            self.set_tlo(Some([0.0; 9]), "G49");
+        }
+    }
+
+    /// G92.3 (`on`) applies the offsets kept in the parameters, G92.2 stops
+    /// applying them and keeps the parameters; the machine does not move.
+    pub(super) fn g92_switch(&mut self, on: bool) {
+        let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
+        self.params.assign(5210, if on { 1.0 } else { 0.0 });
+        let what = if on { "G92.3" } else { "G92.1/G92.2" };
+        for (a, m) in machine.into_iter().enumerate() {
+            self.set_from_machine(a, m, what);
+        }
+    }
+
+    /// Sets the position from a machine position of the tool tip (G53, G28,
+    /// G30 targets), which includes the tool length offset.
+    fn set_from_machine_tip(&mut self, axis: usize, m: Option<f64>, what: &'static str) {
+        let tlo = self.tlo.map(|t| t[axis] * self.to_prog(axis));
+        self.set_from_machine(axis, m.zip(tlo).map(|(m, t)| m - t), what);
+    }
+
     /// Applies the line's words to the model. Returns true when the line ends
     /// the program.
     pub(super) fn apply_words(
@@ -149,7 +180,7 @@ impl Interp<'_> {
                         50 => self.modal.spindle = 0,
                         60 => {
                             self.current_tool = self.selected_tool;
-                            self.m61_line = None;
+                            self.m61 = None;
                             self.tool_change_sync();
                         }
                         70 => self.modal.mist = true,
@@ -197,8 +228,10 @@ impl Interp<'_> {
                     530 => self.modal.feed_hold = on,
                     // M61's Q may come after it on the line.
                     610 => {
+                        if self.m61.is_none() {
+                            self.m61 = Some((self.line_no(), self.current_tool));
+                        }
                         self.current_tool = q_word;
-                        self.m61_line = Some(self.line_no());
                         self.tool_change_sync();
                     }
                     _ => {}
@@ -252,10 +285,7 @@ impl Interp<'_> {
                     self.set_tlo(Some(new), "G43.1");
                     dynamic_tlo = true;
                 }
-                490 => {
-                    self.set_tlo(Some([0.0; 9]), "G49");
-                    self.modal.tool_offset = false;
-                }
+                490 => self.tool_offset_words(false),
                 610 | 611 | 640 => {
                     self.modal.path = g;
                 }
@@ -296,15 +326,17 @@ impl Interp<'_> {
                 self.params.assign(5210, 1.0);
             }
             Some(921) | Some(922) => {
-                let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
                 if special == Some(921) {
+                    let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
                     for a in 0..9 {
                         self.params.assign(5211 + a, 0.0);
                     }
-                }
-                self.params.assign(5210, 0.0);
-                for (a, m) in machine.into_iter().enumerate() {
-                    self.set_from_machine(a, m, "G92.1/G92.2");
+                    self.params.assign(5210, 0.0);
+                    for (a, m) in machine.into_iter().enumerate() {
+                        self.set_from_machine(a, m, "G92.1/G92.2");
+                    }
+                } else {
+                    self.g92_switch(false);
                 }
             }
             Some(520) => {
@@ -321,13 +353,7 @@ impl Interp<'_> {
                     }
                 }
             }
-            Some(923) => {
-                let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
-                self.params.assign(5210, 1.0);
-                for (a, m) in machine.into_iter().enumerate() {
-                    self.set_from_machine(a, m, "G92.3");
-                }
-            }
+            Some(923) => self.g92_switch(true),
             Some(100) => match l_word.map(|v| v.round() as i32) {
                 Some(l @ (1 | 10 | 11)) => self.g10_tool(l, p_word, r_word, words, axis_words),
                 _ => self.g10(l_word, p_word, r_word, axis_words),
@@ -341,7 +367,8 @@ impl Interp<'_> {
                 };
                 for a in axes {
                     let home = self.param_prog(base + a, a);
-                    self.set_from_machine(a, home, "G28/G30 (a move to a home position)");
+                    let what = "G28/G30 (a move to a home position)";
+                    self.set_from_machine_tip(a, home, what);
                 }
             }
             Some(281) | Some(301) => {
@@ -356,7 +383,7 @@ impl Interp<'_> {
                     self.forget(&[0, 1, 2], "cutter radius compensation");
                 }
                 for &(a, v) in axis_words {
-                    self.set_from_machine(a, Some(v), "a G53 machine-coordinate move");
+                    self.set_from_machine_tip(a, Some(v), "a G53 machine-coordinate move");
                 }
             }
             Some(_) => {}
@@ -460,10 +487,16 @@ impl Interp<'_> {
         }
     }
 
-    /// A read of the current tool or its data after M61, which the
-    /// standalone reference does not apply: warning W0110 at the read.
-    pub(super) fn note_m61(&mut self, span: crate::parse::ast::Span) {
-        if let Some(line) = self.m61_line {
+    /// A read of the current tool (`data`: or of its data) after M61, which
+    /// the standalone reference does not apply: warning W0110 at the read if
+    /// the value differs there.
+    pub(super) fn note_m61(&mut self, span: crate::parse::ast::Span, data: bool) {
+        if let Some((line, old)) = self.m61
+            && (old != self.current_tool
+                && (!data
+                    || old.and_then(|t| self.tool(t))
+                        != self.current_tool.and_then(|t| self.tool(t))))
+        {
             let file = self.cur.file.clone();
             let at = self.current_line_start;
             let why = "M61 (the standalone interpreter keeps its current tool)";
@@ -498,7 +531,7 @@ impl Interp<'_> {
         }
     }
 
-    fn set_units(&mut self, metric: bool) {
+    pub(super) fn set_units(&mut self, metric: bool) {
         if self.modal.metric == metric {
             return;
         }
@@ -518,7 +551,7 @@ impl Interp<'_> {
         self.modal.metric = metric;
     }
 
-    fn select_cs(&mut self, cs: i32) {
+    pub(super) fn select_cs(&mut self, cs: i32) {
         let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
         self.modal.coord_index = cs;
         self.params.assign(5220, cs as f64);

@@ -80,7 +80,7 @@ impl Interp<'_> {
             "_rpm" => m.speed.abs(),
             "_current_tool" | "_selected_tool" | "_current_pocket" | "_selected_pocket" => {
                 if name == "_current_tool" {
-                    self.note_m61(span);
+                    self.note_m61(span, false);
                 }
                 let v = match name {
                     "_current_tool" => self.current_tool,

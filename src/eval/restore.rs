@@ -10,6 +10,14 @@ use crate::program::FileIndex;
 use super::Interp;
 use super::state::Modal;
 
+/// The state M70 or M73 saves: the modal state, and whether G92 offsets
+/// were applied (M72 turns them on or off again).
+#[derive(Clone)]
+pub struct Saved {
+    pub modal: Modal,
+    pub g92_applied: bool,
+}
+
 impl Interp<'_> {
     /// M70 save, M71 invalidate, M72 restore, M73 save and restore on return.
     pub(super) fn context_op(
@@ -21,7 +29,10 @@ impl Interp<'_> {
     ) -> Result<(), Error> {
         match op {
             70 | 73 => {
-                let m = self.modal.clone();
+                let m = Saved {
+                    modal: self.modal.clone(),
+                    g92_applied: self.g92_applied(),
+                };
                 let nested = self.frames.len() > 1;
                 let f = self.frames.last_mut().expect("frame");
                 f.saved_modal = Some(Box::new(m));
@@ -53,9 +64,19 @@ impl Interp<'_> {
         Ok(())
     }
 
+    /// G92 offsets are applied (#5210 is not 0).
+    fn g92_applied(&self) -> bool {
+        !(self.params.known[5210] && self.params.values[5210] == 0.0)
+    }
+
     /// Writes the words that bring the machine from the current state to
-    /// `saved`, and adopts it. Writes nothing if nothing changed.
-    pub(super) fn restore_modal(&mut self, saved: &Modal) -> Result<(), Error> {
+    /// `saved`, and adopts it, moving the position model as those words do.
+    /// Writes nothing if nothing changed.
+    pub(super) fn restore_modal(&mut self, saved: &Saved) -> Result<(), Error> {
+        let Saved {
+            modal: saved,
+            g92_applied,
+        } = saved;
         let cur = self.modal.clone();
         // Units come first, on their own line, as in the reference.
         if cur.metric != saved.metric {
@@ -93,8 +114,9 @@ impl Interp<'_> {
                 n => format!("G{}", 53 + n),
             });
         }
-        if cur.tool_offset != saved.tool_offset && !saved.tool_offset {
-            words.push("G49".into());
+        if cur.tool_offset != saved.tool_offset {
+            // G43 takes the current tool's offset, as the reference restores.
+            words.push(if saved.tool_offset { "G43" } else { "G49" }.into());
         }
         if cur.retract_r != saved.retract_r {
             words.push(if saved.retract_r {
@@ -130,6 +152,21 @@ impl Interp<'_> {
         if !words.is_empty() {
             let line = words.join(" ");
             self.emit_raw(line.as_bytes())?;
+        }
+        let g92_now = self.g92_applied();
+        if *g92_applied != g92_now {
+            self.emit_raw(if *g92_applied { b"G92.3" } else { b"G92.2" })?;
+        }
+        // The position model follows what those words do.
+        self.set_units(saved.metric);
+        if cur.coord_index != saved.coord_index {
+            self.select_cs(saved.coord_index);
+        }
+        if cur.tool_offset != saved.tool_offset {
+            self.tool_offset_words(saved.tool_offset);
+        }
+        if *g92_applied != g92_now {
+            self.g92_switch(*g92_applied);
         }
         // Coolant: turn on what was on; M9 only when both were off.
         if saved.mist && !cur.mist {
