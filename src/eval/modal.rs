@@ -509,9 +509,21 @@ impl Interp<'_> {
         }
     }
 
+    /// A motion word's value on an axis: X words are diameters in lathe
+    /// diameter mode (G7), and the position is a radius.
+    #[inline(always)]
+    fn radius_word(&self, axis: usize, v: f64) -> f64 {
+        if axis == 0 && self.modal.lathe_diameter {
+            v / 2.0
+        } else {
+            v
+        }
+    }
+
     /// Where a word sends an axis: its value (G90) or the position plus it
     /// (G91).
     pub(super) fn axis_end(&self, axis: usize, v: f64) -> Result<f64, Unknown> {
+        let v = self.radius_word(axis, v);
         if self.modal.absolute {
             Ok(v)
         } else {
@@ -524,6 +536,7 @@ impl Interp<'_> {
     #[inline]
     pub(super) fn move_axis(&mut self, axis: usize, v: f64) {
         self.tlo_moved = false;
+        let v = self.radius_word(axis, v);
         if self.modal.absolute {
             self.pos.axes[axis] = Ok(v);
         } else if let Ok(p) = &mut self.pos.axes[axis] {
@@ -664,8 +677,7 @@ impl Interp<'_> {
         let start = |a: usize| self.pos.axes[a].as_ref().ok().copied();
         let end = |a: usize| -> Option<f64> {
             match axis_words.iter().find(|w| w.0 == a) {
-                Some(&(_, v)) if self.modal.absolute => Some(v),
-                Some(&(_, v)) => start(a).map(|s| s + v),
+                Some(&(_, v)) => self.axis_end(a, v).ok(),
                 None => start(a),
             }
         };
