@@ -133,7 +133,8 @@ impl Interp<'_> {
         }
         // The reference checks the block before acting on it.
         if !words.is_empty()
-            && let Err((k, at)) = super::validate::check_block(words, &self.modal, &self.nurbs)
+            && let Err((k, at)) =
+                super::validate::check_block(words, &self.modal, &self.nurbs, &self.cycle)
         {
             let span = at
                 .and_then(|i| word_spans.get(i).copied())
@@ -357,7 +358,9 @@ impl Interp<'_> {
             // Checked and applied: a plain move.
             return self.write_line(file, start, raw, repl);
         }
-        if let Err((k, at)) = super::validate::check_block(words, &self.modal, &self.nurbs) {
+        if let Err((k, at)) =
+            super::validate::check_block(words, &self.modal, &self.nurbs, &self.cycle)
+        {
             let span = match at.and_then(|i| items.get(i)) {
                 Some(Item::Word(w)) => w.span,
                 _ => Span::new(0, raw.len() as u32),
@@ -470,7 +473,9 @@ impl Interp<'_> {
             words.push((w.letter, w.value));
         }
         let r = (|| {
-            if let Err((k, at)) = super::validate::check_block(&words, &self.modal, &self.nurbs) {
+            if let Err((k, at)) =
+                super::validate::check_block(&words, &self.modal, &self.nurbs, &self.cycle)
+            {
                 let span = at
                     .and_then(|i| fw.get(i))
                     .map(|w| Span::new(w.start as u32, w.end as u32))

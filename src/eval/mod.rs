@@ -5,6 +5,7 @@
 mod block;
 mod code;
 mod control;
+mod cycle;
 mod degrees;
 mod expr;
 mod fast;
@@ -201,6 +202,8 @@ pub struct Interp<'s> {
     scratch: Option<Box<block::Scratch>>,
     /// Control points of the NURBS block being read.
     nurbs: nurbs::Nurbs,
+    /// R plane and depth of the last canned cycle.
+    cycle: cycle::Cycle,
     /// The tool length offset changed since the last move.
     tlo_moved: bool,
     /// Why and since which line the standalone reference's position
@@ -327,6 +330,7 @@ impl<'s> Interp<'s> {
             repeat_again: None,
             scratch: Some(Box::default()),
             nurbs: nurbs::Nurbs::default(),
+            cycle: cycle::Cycle::default(),
             tlo_moved: false,
             standalone_drift: None,
             m61: None,

@@ -409,6 +409,9 @@ impl Interp<'_> {
                         let (a, b) = (_start, _start);
                         return Err(self.error(k, _file, a, b));
                     }
+                    if super::cycle::is_cycle(self.modal.motion) {
+                        self.note_cycle(words);
+                    }
                     self.move_to(axis_words);
                 }
             }

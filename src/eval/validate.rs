@@ -5,6 +5,7 @@
 
 use crate::diag::ErrorKind;
 
+use super::cycle::{Cycle, depth_axis, is_cycle};
 use super::nurbs::{NO_MOTION, NURBS, Nurbs};
 use super::state::Modal;
 
@@ -76,11 +77,12 @@ pub fn check_block(
     words: &[(u8, f64)],
     modal: &Modal,
     points: &Nurbs,
+    cycle: &Cycle,
 ) -> Result<(), (ErrorKind, Option<usize>)> {
     if simple_block_ok(words, modal) {
         return Ok(());
     }
-    full_check(words, modal, points)
+    full_check(words, modal, points, cycle)
 }
 
 const fn bit(c: u8) -> u32 {
@@ -138,6 +140,7 @@ fn full_check(
     words: &[(u8, f64)],
     modal: &Modal,
     points: &Nurbs,
+    cycle: &Cycle,
 ) -> Result<(), (ErrorKind, Option<usize>)> {
     let bad = |msg: &str, at: Option<usize>| {
         Err((
@@ -311,19 +314,6 @@ fn full_check(
         if m == 760 && has_at(b'p').is_none() {
             return bad("P word missing with G76", None);
         }
-        if matches!(m, 730 | 810..=890) {
-            let (depth, name) = match modal.plane {
-                180 | 181 => (b'y', "Y"),
-                190 | 191 => (b'x', "X"),
-                _ => (b'z', "Z"),
-            };
-            if has_at(depth).is_none() {
-                return bad(&format!("{name} value unspecified in canned cycle"), None);
-            }
-            if let Some(i) = [b'a', b'b', b'c'].iter().find_map(|&c| has_at(c)) {
-                return bad("cannot put a rotary axis word in a canned cycle", Some(i));
-            }
-        }
         if matches!(m, 20 | 30)
             && ![b'i', b'j', b'k', b'r']
                 .iter()
@@ -349,6 +339,69 @@ fn full_check(
         return bad("two G-codes that both use axis values", Some(i));
     }
     let motion = motion_here.unwrap_or(modal.motion);
+    // A canned cycle runs: its code is on the line, or it is the motion mode
+    // and the line has axis words no other code takes.
+    let cycle_runs =
+        is_cycle(motion) && (motion_here.is_some() || (axis_word.is_some() && axis_g0.is_none()));
+    if cycle_runs {
+        // Entering the cycle (not repeating it) needs the depth and R.
+        let first = modal.motion != motion;
+        let (depth, name) = depth_axis(modal.plane);
+        if first && has_at(depth).is_none() {
+            return bad(&format!("{name} value unspecified in canned cycle"), None);
+        }
+        if let Some(i) = [b'a', b'b', b'c'].iter().find_map(|&c| has_at(c)) {
+            return bad("cannot put a rotary axis word in a canned cycle", Some(i));
+        }
+        let r = match value(b'r') {
+            Some(r) => r,
+            None if !first => cycle.r,
+            None => return bad("R clearance plane unspecified in canned cycle", None),
+        };
+        if value(b'l') == Some(0.0) {
+            return bad(
+                "a canned cycle cannot be repeated zero times (L0)",
+                has_at(b'l'),
+            );
+        }
+        let feed_mode = gs
+            .iter()
+            .find(|g| matches!(g.0, 930 | 940 | 950))
+            .map_or(modal.feed_mode, |g| g.0);
+        if feed_mode == 930 {
+            return bad("canned cycles cannot use inverse time feed (G93)", None);
+        }
+        if modal.ccomp != 400 && !g_on(&[400]) {
+            return bad(
+                "canned cycles cannot be used with cutter compensation on",
+                None,
+            );
+        }
+        // The R plane must not be below the bottom of the hole (in G91 the
+        // depth is relative to R, so it must not be positive).
+        let cc = value(depth).unwrap_or(cycle.depth);
+        let absolute = g_on(&[900]) || (modal.absolute && !g_on(&[910]));
+        let below = if absolute { r < cc } else { cc > 0.0 };
+        if below {
+            return bad(&format!("R less than {name} in canned cycle"), has_at(b'r'));
+        }
+        let spindle = ms
+            .iter()
+            .rev()
+            .find(|m| matches!(m.0, 3..=5))
+            .map_or(modal.spindle, |m| if m.0 == 5 { 0 } else { m.0 as i32 });
+        let spindle_msg = match (motion, spindle) {
+            (840, 0) | (740, 0) | (860, 0) | (870, 0) | (880, 0) => {
+                Some("spindle not turning in a tapping or boring cycle")
+            }
+            (840, 4) => Some("spindle turning counterclockwise in G84"),
+            (740, 3) => Some("spindle turning clockwise in G74"),
+            _ => None,
+        };
+        if let Some(msg) = spindle_msg {
+            return bad(msg, None);
+        }
+    }
     if let Some(i) = axis_word
         && axis_g0.is_none()
         && matches!(motion, 800 | NO_MOTION)
@@ -451,7 +504,11 @@ fn full_check(
     )?;
     uses(
         b'l',
-        g_on(&[100, 410, 420, 760]) || canned || m_on(&[66, 98]) || g_on(&[52, 53]),
+        // (G74 takes no L in the reference.)
+        g_on(&[100, 410, 420, 760])
+            || (canned && motion != 740)
+            || m_on(&[66, 98])
+            || g_on(&[52, 53]),
         "L word with no G10, canned cycle or M66 to use it",
     )?;
     uses(

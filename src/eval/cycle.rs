@@ -1,0 +1,43 @@
+//! What canned cycles (G73, G74, G81–G89) keep between blocks: the R plane
+//! and the depth of the last one, which a repeat of the same cycle reuses
+//! when its line leaves them out.
+
+use super::Interp;
+
+/// Whether a motion mode (G-code ×10) is a canned cycle.
+pub fn is_cycle(motion: i32) -> bool {
+    matches!(motion, 730 | 740 | 810..=890)
+}
+
+/// The depth axis of cycles in a plane (G17 → Z, G18 → Y, G19 → X), as a
+/// letter and a name.
+pub fn depth_axis(plane: i32) -> (u8, &'static str) {
+    match plane {
+        180 | 181 => (b'y', "Y"),
+        190 | 191 => (b'x', "X"),
+        _ => (b'z', "Z"),
+    }
+}
+
+/// R plane and depth of the last cycle block, as written (incremental values
+/// in G91).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Cycle {
+    pub r: f64,
+    pub depth: f64,
+}
+
+impl Interp<'_> {
+    /// A cycle block ran (checked by `check_block`): keeps its R and depth
+    /// for repeats.
+    pub(super) fn note_cycle(&mut self, words: &[(u8, f64)]) {
+        let (depth, _) = depth_axis(self.modal.plane);
+        for &(l, v) in words {
+            if l == b'r' {
+                self.cycle.r = v;
+            } else if l == depth {
+                self.cycle.depth = v;
+            }
+        }
+    }
+}
