@@ -57,9 +57,10 @@ impl Interp<'_> {
         oidx: u32,
         e: &crate::parse::ast::Expr,
     ) -> Result<f64, Error> {
-        let start = file.olines[oidx as usize].start;
-        self.eval_value(e)
-            .map_err(|f| self.fault_in_line(*f, file, start))
+        self.eval_value(e).map_err(|f| {
+            let start = file.olines[oidx as usize].start;
+            self.fault_in_line(*f, file, start)
+        })
     }
 
     /// The label text of an O-line (computed labels are evaluated).
@@ -245,7 +246,7 @@ impl Interp<'_> {
         kind: OKind,
     ) -> Result<(), Error> {
         let line = file.olines[oidx as usize].line_idx;
-        if let Some(rec) = self.frame().labels.get(key).cloned() {
+        if let Some(rec) = self.frame().labels.get(key).copied() {
             if rec.line != line && matches!(kind, OKind::If | OKind::While | OKind::Repeat) {
                 let first_line = rec.line + 1;
                 let label = self.label_text(file, oidx)?.to_string();
@@ -282,7 +283,7 @@ impl Interp<'_> {
         _expected: &'static str,
     ) -> Result<LabelRec, Error> {
         let label = || label_of_key(key);
-        match self.frame().labels.get(key).cloned() {
+        match self.frame().labels.get(key).copied() {
             None => Err(self.oerr(ErrorKind::UndefinedLabel { label: label() }, file, oidx)),
             Some(rec) if kinds.contains(&rec.kind) => Ok(rec),
             Some(rec) => Err(self.oerr(
@@ -354,7 +355,13 @@ impl Interp<'_> {
         match o.kind {
             OKind::If => {
                 let c = self.o_eval(file, oidx, o.expr.as_ref().expect("condition"))?;
-                self.record(file, oidx, key, OKind::If)?;
+                // Each pass after the first finds its own record.
+                let line = file.olines[oidx as usize].line_idx;
+                let recorded = matches!(self.frame().labels.get(key),
+                    Some(r) if r.kind == OKind::If && r.line == line);
+                if !recorded {
+                    self.record(file, oidx, key, OKind::If)?;
+                }
                 if c != 0.0 {
                     self.executed_if = true;
                     Ok(())
@@ -394,7 +401,7 @@ impl Interp<'_> {
             }
             OKind::Do => {
                 // The reference records a do label only on first sight.
-                match self.frame().labels.get(key).cloned() {
+                match self.frame().labels.get(key).copied() {
                     Some(rec) if rec.oidx != oidx => {
                         let (a, b) = self.osite(file, oidx);
                         let first_line = rec.line + 1;
@@ -409,7 +416,7 @@ impl Interp<'_> {
                 // One look at the label: the end of a do loop, this loop
                 // already recorded (each pass after the first), or new.
                 let (do_rec, recorded) = match self.frame().labels.get(key) {
-                    Some(r) if r.kind == OKind::Do => (Some(r.clone()), false),
+                    Some(r) if r.kind == OKind::Do => (Some(*r), false),
                     Some(r) => (None, r.kind == OKind::While && r.line == line),
                     None => (None, false),
                 };
@@ -563,7 +570,7 @@ impl Interp<'_> {
     fn stray(&mut self, file: &Rc<FileIndex>, t: u32, key: &Name) -> Result<(), Error> {
         let label = label_of_key(key);
         let found = file.kind_of(t).map(|k| k.name()).unwrap_or("?");
-        let rec = self.frame().labels.get(key).cloned();
+        let rec = self.frame().labels.get(key).copied();
         if let Some(r) = &rec
             && file.kind_of(t) == Some(r.kind)
             && matches!(r.kind, OKind::If | OKind::While | OKind::Repeat)

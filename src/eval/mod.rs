@@ -61,7 +61,7 @@ pub enum FrameKind {
 }
 
 /// Record of a control label reached in this activation.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Copy)]
 pub struct LabelRec {
     pub kind: OKind,
     pub oidx: u32,
@@ -724,26 +724,33 @@ impl<'s> Interp<'s> {
     }
 
     /// Counts an output line about to be written, against the limit.
+    #[inline]
     fn count_line(&mut self) -> Result<(), Error> {
         self.out_lines += 1;
         if self.out_lines > self.s.max_output_lines {
-            let (label, line, file) = match &self.last_loop {
-                Some((k, n, f)) => (Some(label_of_key(k)), Some(*n + 1), f.clone()),
-                None => (None, None, self.cur.file.clone()),
-            };
-            let at = self.current_line_start;
-            return Err(self.error(
-                ErrorKind::OutputLimit {
-                    limit: self.s.max_output_lines,
-                    label,
-                    line,
-                },
-                &file,
-                at,
-                at,
-            ));
+            return Err(self.output_limit());
         }
         Ok(())
+    }
+
+    /// The error of an output past the limit.
+    #[cold]
+    fn output_limit(&self) -> Error {
+        let (label, line, file) = match &self.last_loop {
+            Some((k, n, f)) => (Some(label_of_key(k)), Some(*n + 1), f.clone()),
+            None => (None, None, self.cur.file.clone()),
+        };
+        let at = self.current_line_start;
+        self.error(
+            ErrorKind::OutputLimit {
+                limit: self.s.max_output_lines,
+                label,
+                line,
+            },
+            &file,
+            at,
+            at,
+        )
     }
 }
 
