@@ -75,6 +75,8 @@ pub enum ErrorKind {
     UnexpectedAfterOWord,
     /// `o1 if 1`
     MissingBracket { keyword: &'static str },
+    /// `o1 while [1 LT]`: the bracket holds no complete expression.
+    BadCondition { keyword: &'static str },
     /// `o1 call 5` (arguments must be bracketed)
     CallArgNotBracketed,
     /// `o1 return` in the main program.
@@ -235,6 +237,7 @@ impl ErrorKind {
             UnterminatedSub { .. } => "E0326",
             Abort { .. } => "E0327",
             NoSavedContext => "E0328",
+            BadCondition { .. } => "E0329",
             Semantic { .. } => "E0013",
             OutputLineTooLong { .. } => "E0401",
             StepLimit { .. } => "E0402",
@@ -318,6 +321,10 @@ impl fmt::Display for ErrorKind {
             UnknownOCommand { word } => write!(f, "unknown O-word command '{word}'"),
             UnexpectedAfterOWord => write!(f, "only a comment may follow an O-word command"),
             MissingBracket { keyword } => write!(f, "'[' expected after '{keyword}'"),
+            BadCondition { keyword } => write!(
+                f,
+                "the bracketed expression after '{keyword}' is incomplete or not valid"
+            ),
             CallArgNotBracketed => write!(f, "subroutine arguments must be bracketed: [value]"),
             NotInSub => write!(f, "return or endsub outside a subroutine"),
             DuplicateLabel { label, first_line } => {

@@ -360,11 +360,22 @@ impl Lowerer<'_> {
             _ => None,
         };
         if let (Some(keyword), None) = (needs_bracket, &expr) {
-            let end = cmd_end;
-            exec_error = Some((
-                ErrorKind::MissingBracket { keyword },
-                Span::new(end, end + 1),
-            ));
+            // A bracket that is there but holds no valid expression, or none.
+            let bracket = it
+                .clone()
+                .next()
+                .and_then(|t| t.into_inner().find(|q| q.as_rule() == Rule::o_garbage))
+                .filter(|g| g.as_str().starts_with('['));
+            exec_error = Some(match bracket {
+                Some(g) => (
+                    ErrorKind::BadCondition { keyword },
+                    Span::new(self.norm.raw_offset(g.as_span().start()), self.raw_end(&g)),
+                ),
+                None => (
+                    ErrorKind::MissingBracket { keyword },
+                    Span::new(cmd_end, cmd_end + 1),
+                ),
+            });
         }
         let trail = it.next().expect("o_trail");
         for q in trail.into_inner() {
