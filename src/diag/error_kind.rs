@@ -68,6 +68,8 @@ pub enum ErrorKind {
     UnterminatedName,
     /// `(print, #<_x>)` with the X position unknown.
     UnknownPosition { axis: char, why: String },
+    /// `T50` with a `--tool-table` that has no tool 50.
+    ToolNotInTable { tool: i64 },
     // ------------------------------------------------------------ O-words
     /// `o1 frobnicate`
     UnknownOCommand { word: String },
@@ -209,6 +211,7 @@ impl ErrorKind {
             RuntimeParam { .. } => "E0205",
             UnterminatedName => "E0206",
             UnknownPosition { .. } => "E0207",
+            ToolNotInTable { .. } => "E0208",
             UnknownOCommand { .. } => "E0301",
             UnexpectedAfterOWord => "E0302",
             MissingBracket { .. } => "E0303",
@@ -318,6 +321,7 @@ impl fmt::Display for ErrorKind {
                 "the {} position is not known here ({why}); fix it with an absolute move first, or give --start-position / -D",
                 axis.to_ascii_uppercase()
             ),
+            ToolNotInTable { tool } => write!(f, "tool {tool} is not in the tool table"),
             UnknownOCommand { word } => write!(f, "unknown O-word command '{word}'"),
             UnexpectedAfterOWord => write!(f, "only a comment may follow an O-word command"),
             MissingBracket { keyword } => write!(f, "'[' expected after '{keyword}'"),

@@ -165,7 +165,15 @@ impl Interp<'_> {
                 }
                 b'f' => self.modal.feed = v,
                 b's' => self.modal.speed = v,
-                b't' => self.selected_tool = Some(v),
+                b't' => {
+                    // With a tool table, a tool must be in it (T0: none).
+                    let t = v.round() as i64;
+                    if !self.s.tool_table.is_empty() && t != 0 && !self.tools.contains_key(&t) {
+                        let k = ErrorKind::ToolNotInTable { tool: t };
+                        return Err(self.error(k, _file, _start, _start));
+                    }
+                    self.selected_tool = Some(v);
+                }
                 b'p' => p_word = Some(v),
                 b'h' => h_word = Some(v),
                 b'q' => q_word = Some(v),
