@@ -170,6 +170,9 @@ pub struct Interp<'s> {
     pos: Position,
     current_tool: Option<f64>,
     selected_tool: Option<f64>,
+    /// Pockets of the current and the selected tool, known as the standalone
+    /// reference numbers them (by tool number) under `--zero-start`.
+    pockets: Option<(f64, f64)>,
     executed_if: bool,
     /// The reference's never-cleared break/continue flags (for warnings).
     ref_stale_break: Option<u32>,
@@ -308,6 +311,7 @@ impl<'s> Interp<'s> {
                 None
             },
             selected_tool: if s.zero_start { Some(0.0) } else { None },
+            pockets: s.zero_start.then_some((1.0, -1.0)),
             executed_if: true,
             ref_stale_break: None,
             ref_stale_continue: None,

@@ -173,6 +173,9 @@ impl Interp<'_> {
                         return Err(self.error(k, _file, _start, _start));
                     }
                     self.selected_tool = Some(v);
+                    if let Some(p) = &mut self.pockets {
+                        p.1 = v;
+                    }
                 }
                 b'p' => p_word = Some(v),
                 b'h' => h_word = Some(v),
@@ -188,6 +191,9 @@ impl Interp<'_> {
                         50 => self.modal.spindle = 0,
                         60 => {
                             self.current_tool = self.selected_tool;
+                            if let Some(p) = &mut self.pockets {
+                                p.0 = p.1;
+                            }
                             self.m61 = None;
                             self.tool_change_sync();
                         }
@@ -240,6 +246,9 @@ impl Interp<'_> {
                             self.m61 = Some((self.line_no(), self.current_tool));
                         }
                         self.current_tool = q_word;
+                        if let (Some(p), Some(q)) = (&mut self.pockets, q_word) {
+                            p.0 = q;
+                        }
                         self.tool_change_sync();
                     }
                     _ => {}

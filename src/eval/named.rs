@@ -85,8 +85,8 @@ impl Interp<'_> {
                 let v = match name {
                     "_current_tool" => self.current_tool,
                     "_selected_tool" => self.selected_tool,
-                    "_current_pocket" => self.s.zero_start.then_some(1.0),
-                    _ => self.s.zero_start.then_some(-1.0),
+                    "_current_pocket" => self.pockets.map(|p| p.0),
+                    _ => self.pockets.map(|p| p.1),
                 };
                 return Some(v.ok_or_else(|| {
                     fault(
