@@ -58,7 +58,7 @@ impl Interp<'_> {
     /// keep the offsets in effect, which are none after G92.2 (whose
     /// parameters still hold the old values).
     fn keep_active_g92(&mut self) {
-        if self.params.known[5210] && self.params.values[5210] == 0.0 {
+        if !self.g92_applied() {
             for a in 0..9 {
                 self.params.assign(5211 + a, 0.0);
             }
@@ -70,9 +70,14 @@ impl Interp<'_> {
         self.param_prog(5221 + 20 * (cs as usize - 1) + axis, axis)
     }
 
+    /// G92 offsets are applied (#5210 is not known to be 0).
+    pub(super) fn g92_applied(&self) -> bool {
+        !(self.params.known[5210] && self.params.values[5210] == 0.0)
+    }
+
     /// Applied G92 offset, program units.
     fn g92_offset(&self, axis: usize) -> Option<f64> {
-        if self.params.known[5210] && self.params.values[5210] == 0.0 {
+        if !self.g92_applied() {
             return Some(0.0);
         }
         self.param_prog(5211 + axis, axis)
@@ -100,15 +105,31 @@ impl Interp<'_> {
         self.pos.axes[axis] = v.ok_or(Unknown::After(what, line));
     }
 
+    /// G43 (430) or G43.2 (432) with the tool of `h` or the current one.
+    fn g43(&mut self, g: i32, h: Option<f64>) {
+        self.modal.tool_offset = true;
+        let tool = h.or(self.current_tool);
+        let data = tool.and_then(|t| self.tool(t));
+        let new = match (g, data) {
+            (430, Some(d)) => Some(d.offsets),
+            (_, Some(d)) => self
+                .tlo
+                .map(|old| std::array::from_fn(|a| old[a] + d.offsets[a])),
+            _ => None,
+        };
+        self.set_tlo(
+            new,
+            "a tool length offset (G43) of a tool whose data is unknown",
+        );
+    }
+
     /// G43 without H (`on`: the current tool's offset) or G49, as M72
     /// restores them.
     pub(super) fn tool_offset_words(&mut self, on: bool) {
-        self.modal.tool_offset = on;
         if on {
-            let data = self.current_tool.and_then(|t| self.tool(t));
-            let what = "a tool length offset (G43) of a tool whose data is unknown";
-            self.set_tlo(data.map(|d| d.offsets), what);
+            self.g43(430, None);
         } else {
+            self.modal.tool_offset = false;
             self.set_tlo(Some([0.0; 9]), "G49");
         }
     }
@@ -277,22 +298,7 @@ impl Interp<'_> {
                 400 => self.modal.ccomp = 400,
                 410 | 411 => self.modal.ccomp = 410,
                 420 | 421 => self.modal.ccomp = 420,
-                430 | 432 => {
-                    self.modal.tool_offset = true;
-                    let tool = h_word.or(self.current_tool);
-                    let data = tool.and_then(|t| self.tool(t));
-                    let new = match (g, data) {
-                        (430, Some(d)) => Some(d.offsets),
-                        (_, Some(d)) => self
-                            .tlo
-                            .map(|old| std::array::from_fn(|a| old[a] + d.offsets[a])),
-                        _ => None,
-                    };
-                    self.set_tlo(
-                        new,
-                        "a tool length offset (G43) of a tool whose data is unknown",
-                    );
-                }
+                430 | 432 => self.g43(g, h_word),
                 431 => {
                     self.modal.tool_offset = true;
                     let mut new = [0.0; 9];
@@ -343,17 +349,12 @@ impl Interp<'_> {
                 self.params.assign(5210, 1.0);
             }
             Some(921) | Some(922) => {
+                self.g92_switch(false);
+                // G92.1 also clears the parameters (no longer applied).
                 if special == Some(921) {
-                    let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
                     for a in 0..9 {
                         self.params.assign(5211 + a, 0.0);
                     }
-                    self.params.assign(5210, 0.0);
-                    for (a, m) in machine.into_iter().enumerate() {
-                        self.set_from_machine(a, m, "G92.1/G92.2");
-                    }
-                } else {
-                    self.g92_switch(false);
                 }
             }
             Some(520) => {
@@ -496,15 +497,20 @@ impl Interp<'_> {
     /// departed from the machine's: warning W0110 at the read.
     pub(super) fn note_standalone_drift(&mut self, span: crate::parse::ast::Span) {
         if let Some((why, line)) = self.standalone_drift {
-            let file = self.cur.file.clone();
-            let at = self.current_line_start;
-            self.warn(
-                crate::diag::WarningKind::QuirkStandalone { why, line },
-                &file,
-                at + span.start,
-                at + span.end,
-            );
+            self.warn_standalone(why, line, span);
         }
+    }
+
+    /// Warning W0110 at `span` of the current line.
+    fn warn_standalone(&mut self, why: &'static str, line: u32, span: crate::parse::ast::Span) {
+        let file = self.cur.file.clone();
+        let at = self.current_line_start;
+        self.warn(
+            crate::diag::WarningKind::QuirkStandalone { why, line },
+            &file,
+            at + span.start,
+            at + span.end,
+        );
     }
 
     /// A read of the current tool (`data`: or of its data) after M61, which
@@ -517,15 +523,8 @@ impl Interp<'_> {
                     || old.and_then(|t| self.tool(t))
                         != self.current_tool.and_then(|t| self.tool(t))))
         {
-            let file = self.cur.file.clone();
-            let at = self.current_line_start;
             let why = "M61 (the standalone interpreter keeps its current tool)";
-            self.warn(
-                crate::diag::WarningKind::QuirkStandalone { why, line },
-                &file,
-                at + span.start,
-                at + span.end,
-            );
+            self.warn_standalone(why, line, span);
         }
     }
 

@@ -64,11 +64,6 @@ impl Interp<'_> {
         Ok(())
     }
 
-    /// G92 offsets are applied (#5210 is not 0).
-    fn g92_applied(&self) -> bool {
-        !(self.params.known[5210] && self.params.values[5210] == 0.0)
-    }
-
     /// Writes the words that bring the machine from the current state to
     /// `saved`, and adopts it, moving the position model as those words do.
     /// Writes nothing if nothing changed.

@@ -243,6 +243,11 @@ fn full_check(
     // or Q where one is required.
     let value = |c: u8| has_at(c).map(|i| words[i].1);
     let given = |c: u8| value(c).is_some_and(|v| v != -1.0);
+    // The feed mode the block moves in (G93/G94/G95 on the line first).
+    let feed_mode = gs
+        .iter()
+        .find(|g| matches!(g.0, 930 | 940 | 950))
+        .map_or(modal.feed_mode, |g| g.0);
     // NURBS blocks (G5.2 ... G5.3).
     let nurbs = motion_here.unwrap_or(modal.motion) == NURBS;
     let g53 = gs.iter().find(|g| g.0 == 53).map(|g| g.1);
@@ -283,10 +288,6 @@ fn full_check(
                 has_at(b'p').or(axis_word),
             );
         }
-        let feed_mode = gs
-            .iter()
-            .find(|g| matches!(g.0, 930 | 940 | 950))
-            .map_or(modal.feed_mode, |g| g.0);
         let feed = value(b'f').unwrap_or(modal.feed);
         if feed_mode == 940 && feed == 0.0 {
             return bad("a NURBS block with a zero feed rate", has_at(b'f'));
@@ -364,10 +365,6 @@ fn full_check(
                 has_at(b'l'),
             );
         }
-        let feed_mode = gs
-            .iter()
-            .find(|g| matches!(g.0, 930 | 940 | 950))
-            .map_or(modal.feed_mode, |g| g.0);
         if feed_mode == 930 {
             return bad("canned cycles cannot use inverse time feed (G93)", None);
         }
