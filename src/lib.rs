@@ -10,6 +10,7 @@ pub mod diag;
 pub mod emit;
 pub mod eval;
 mod fx_hasher;
+pub mod machine;
 pub mod parse;
 pub mod program;
 

@@ -1,0 +1,112 @@
+//! What a program makes the machine do, in order: the stream that target
+//! lowering, statistics, the toolpath picture and the travel-limit check
+//! read. Produced by the machine model from executed (flat) blocks.
+//!
+//! Units: linear axes in millimetres, rotary axes in degrees, feeds in
+//! mm/min (or mm/rev, see [`FeedMode`]), times in seconds, whatever units
+//! the program was written in.
+
+/// Axis values in parameter order: X Y Z A B C U V W.
+pub type Axes = [f64; 9];
+
+/// A tool-tip position in the active work coordinate system (G5x, G92 and
+/// G52 offsets in effect), and the offset that takes it to the machine's
+/// controlled point (work + offset = machine coordinates, tool length offset
+/// included) when every offset is known.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Point {
+    pub work: Axes,
+    pub offset: Option<Axes>,
+}
+
+impl Point {
+    /// Machine coordinates of the controlled point, when known.
+    pub fn machine(&self) -> Option<Axes> {
+        self.offset
+            .map(|o| std::array::from_fn(|i| self.work[i] + o[i]))
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MoveKind {
+    Rapid,
+    Feed,
+    /// G38.x: the end point is where the probe would stop at the latest.
+    Probe,
+    /// Rigid tapping or spindle-synchronised motion.
+    SpindleSync,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FeedMode {
+    UnitsPerMinute,
+    InverseTime,
+    UnitsPerRev,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Feed {
+    /// mm/min, mm/rev, or 1/min in inverse time.
+    pub rate: f64,
+    pub mode: FeedMode,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Plane {
+    XY,
+    XZ,
+    YZ,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SpindleDir {
+    Off,
+    Cw,
+    Ccw,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum Motion {
+    /// A straight move (all axes together).
+    Line {
+        kind: MoveKind,
+        from: Point,
+        to: Point,
+        feed: Feed,
+    },
+    /// An arc or helix in `plane`: `center` holds the two in-plane work
+    /// coordinates of its centre; `turns` is 1 for an arc of less than one
+    /// turn, more for P turns (a full circle written without end point is
+    /// one turn with `from == to`).
+    Arc {
+        from: Point,
+        to: Point,
+        center: [f64; 2],
+        plane: Plane,
+        ccw: bool,
+        turns: u32,
+        feed: Feed,
+    },
+    Dwell {
+        seconds: f64,
+    },
+    Spindle {
+        dir: SpindleDir,
+        /// rev/min, or surface speed under G96 (`css`).
+        speed: f64,
+        css: bool,
+    },
+    Coolant {
+        mist: bool,
+        flood: bool,
+    },
+    ToolChange {
+        tool: i64,
+    },
+    /// M0 (`optional: false`) or M1.
+    Pause {
+        optional: bool,
+    },
+    /// M2, M30, or the `%` that ends the program.
+    End,
+}
