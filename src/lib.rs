@@ -13,6 +13,7 @@ mod fx_hasher;
 pub mod machine;
 pub mod parse;
 pub mod program;
+pub mod target;
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
