@@ -6,9 +6,12 @@
 //! so the two threads share the reading and neither waits for long. A chunk
 //! holds the same results the loop would get reading the lines itself;
 //! reading stops at the first line that is not plain, where the loop stops
-//! anyway.
+//! anyway. The loop never waits for the other thread: a chunk the other is
+//! still reading is read again in place. The other thread, once far enough
+//! ahead, sleeps on a condition variable until the loop moves on; nothing
+//! spins.
 
-use std::sync::Mutex;
+use std::sync::{Condvar, Mutex};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use super::straight::{Plain, read_line};
@@ -100,6 +103,10 @@ pub struct Shared<'b> {
     slots: Vec<Mutex<Option<Vec<Rec>>>>,
     /// Spent chunk vectors, for reuse.
     pool: Mutex<Vec<Vec<Rec>>>,
+    /// Counts changes a waiting thread may be waiting for (a chunk stored,
+    /// the loop moving to the next chunk, the loop done).
+    changes: Mutex<u64>,
+    changed: Condvar,
 }
 
 impl<'b> Shared<'b> {
@@ -116,6 +123,34 @@ impl<'b> Shared<'b> {
             done: AtomicBool::new(false),
             slots: (0..n).map(|_| Mutex::new(None)).collect(),
             pool: Mutex::new(Vec::new()),
+            changes: Mutex::new(0),
+            changed: Condvar::new(),
+        }
+    }
+
+    /// The change count, read before testing what a wait would wait for.
+    fn seen(&self) -> u64 {
+        self.changes.lock().map_or(0, |g| *g)
+    }
+
+    /// Wakes the other thread: something it may wait for happened.
+    fn signal(&self) {
+        if let Ok(mut g) = self.changes.lock() {
+            *g += 1;
+        }
+        self.changed.notify_all();
+    }
+
+    /// Sleeps until the change count moves past `seen`.
+    fn wait(&self, seen: u64) {
+        let Ok(mut g) = self.changes.lock() else {
+            return;
+        };
+        while *g == seen {
+            match self.changed.wait(g) {
+                Ok(next) => g = next,
+                Err(_) => return,
+            }
         }
     }
 
@@ -157,6 +192,7 @@ impl<'b> Shared<'b> {
         if let Ok(mut s) = self.slots[c].lock() {
             *s = Some(v);
         }
+        self.signal();
     }
 
     fn take(&self, c: usize) -> Option<Vec<Rec>> {
@@ -177,8 +213,10 @@ impl<'b> Shared<'b> {
     /// The second thread: reads chunks until all are read or the loop is
     /// done.
     pub fn help(&self) {
-        while !self.done.load(Ordering::Acquire) {
-            if self.next.load(Ordering::Acquire) >= self.chunks() {
+        loop {
+            let seen = self.seen();
+            if self.done.load(Ordering::Acquire) || self.next.load(Ordering::Acquire) >= self.chunks()
+            {
                 return;
             }
             match self.claim() {
@@ -186,13 +224,16 @@ impl<'b> Shared<'b> {
                     let v = self.read_chunk(c);
                     self.store(c, v);
                 }
-                None => std::thread::yield_now(),
+                // Far enough ahead, or the loop took the chunk: sleep until
+                // the loop moves on or stores it.
+                None => self.wait(seen),
             }
         }
     }
 
     fn finish(&self) {
         self.done.store(true, Ordering::Release);
+        self.signal();
     }
 }
 
@@ -215,7 +256,7 @@ impl<'s, 'b> Ahead<'s, 'b> {
         }
     }
 
-    /// Chunk `c`, read by whichever thread gets to it first.
+    /// Chunk `c`, read by whichever thread gets to it first (or by both).
     fn obtain(&self, c: usize) -> Vec<Rec> {
         let s = self.shared;
         loop {
@@ -230,8 +271,12 @@ impl<'s, 'b> Ahead<'s, 'b> {
                     }
                     s.store(k, v);
                 }
-                // The other thread is reading it.
-                None => std::thread::yield_now(),
+                // The other thread is reading it. It may have lost its core
+                // to other work: read the chunk here rather than wait (its
+                // copy, stored later, is never read).
+                None if s.next.load(Ordering::Acquire) > c => return s.read_chunk(c),
+                // Lost a race to claim: try again.
+                None => {}
             }
         }
     }
@@ -267,6 +312,7 @@ impl Lines for Ahead<'_, '_> {
             }
             self.chunk = next;
             self.shared.applied.store(next, Ordering::Release);
+            self.shared.signal();
             self.recs = self.obtain(next);
             self.pos = 0;
         }
