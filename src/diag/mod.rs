@@ -5,7 +5,7 @@ mod render;
 mod warning_kind;
 
 pub use error_kind::ErrorKind;
-pub use render::{LineIndex, MessageFormat, render};
+pub use render::{MessageFormat, render};
 pub use warning_kind::WarningKind;
 
 use std::fmt;
@@ -13,21 +13,61 @@ use std::sync::Arc;
 
 use crate::program::SourceFile;
 
-/// A place in a source file: byte offsets from the start of the file.
+/// A place in a source file: byte offsets from the start of the file, and
+/// the line and column they are at, worked out when the site is made (so
+/// that rendering reads no file).
 #[derive(Debug, Clone)]
 pub struct Site {
     pub file: Arc<SourceFile>,
     pub start: u32,
     pub end: u32,
+    loc: Located,
+}
+
+/// A site's line and column (1-based, columns in characters), its end, and
+/// the text of its line.
+#[derive(Debug, Clone)]
+pub(crate) struct Located {
+    pub(crate) file: String,
+    pub(crate) line: u32,
+    pub(crate) col: u32,
+    pub(crate) end_line: u32,
+    pub(crate) end_col: u32,
+    pub(crate) text: String,
 }
 
 impl Site {
     pub fn new(file: &Arc<SourceFile>, start: u32, end: u32) -> Site {
+        let end = end.max(start);
+        let here = file.locate(start);
+        let (end_line, end_col) = if end == start {
+            (here.line, here.col)
+        } else {
+            let there = file.locate(end);
+            (there.line, there.col)
+        };
         Site {
             file: Arc::clone(file),
             start,
-            end: end.max(start),
+            end,
+            loc: Located {
+                file: file.display_name(),
+                line: here.line,
+                col: here.col,
+                end_line,
+                end_col,
+                text: String::from_utf8_lossy(&here.text).into_owned(),
+            },
         }
+    }
+
+    /// 1-based line and column of the start.
+    pub fn line_col(&self) -> (u32, u32) {
+        (self.loc.line, self.loc.col)
+    }
+
+    pub(crate) fn located(&self) -> &Located {
+        &self.loc
     }
 }
 

@@ -1,10 +1,9 @@
 //! Rendering of diagnostics: the one place where byte offsets become lines
 //! and columns.
 
-use std::borrow::Cow;
 use std::fmt::Write as _;
 
-use super::{Diagnostic, Level, Site};
+use super::{Diagnostic, Level, Located};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum MessageFormat {
@@ -17,76 +16,6 @@ pub enum MessageFormat {
     Json,
     /// GitHub Actions workflow commands (`::error file=...`).
     Github,
-}
-
-/// Line starts of a text, for turning byte offsets into line and column.
-pub struct LineIndex<'a> {
-    text: &'a [u8],
-    starts: Vec<u32>,
-}
-
-impl<'a> LineIndex<'a> {
-    pub fn new(text: &'a [u8]) -> LineIndex<'a> {
-        let mut starts = vec![0u32];
-        starts.extend(
-            text.iter()
-                .enumerate()
-                .filter(|(_, b)| **b == b'\n')
-                .map(|(i, _)| i as u32 + 1),
-        );
-        LineIndex { text, starts }
-    }
-
-    /// 1-based line and 1-based column (in characters) of a byte offset.
-    pub fn line_col(&self, offset: u32) -> (u32, u32) {
-        let offset = offset.min(self.text.len() as u32);
-        let line = self.starts.partition_point(|&s| s <= offset).max(1) - 1;
-        let start = self.starts[line] as usize;
-        let col = String::from_utf8_lossy(&self.text[start..offset as usize])
-            .chars()
-            .count();
-        (line as u32 + 1, col as u32 + 1)
-    }
-
-    /// Text of a 1-based line, without its terminator.
-    pub fn line_text(&self, line: u32) -> Cow<'a, str> {
-        let i = (line as usize).saturating_sub(1).min(self.starts.len() - 1);
-        let start = self.starts[i] as usize;
-        let end = self
-            .starts
-            .get(i + 1)
-            .map(|&e| e as usize - 1)
-            .unwrap_or(self.text.len());
-        let mut s = &self.text[start..end.max(start)];
-        while let [rest @ .., b'\r'] = s {
-            s = rest;
-        }
-        String::from_utf8_lossy(s)
-    }
-}
-
-struct Located {
-    file: String,
-    line: u32,
-    col: u32,
-    end_line: u32,
-    end_col: u32,
-    text: String,
-}
-
-fn locate(site: &Site) -> Located {
-    let data = site.file.bytes();
-    let index = LineIndex::new(&data);
-    let (line, col) = index.line_col(site.start);
-    let (end_line, end_col) = index.line_col(site.end);
-    Located {
-        file: site.file.display_name(),
-        line,
-        col,
-        end_line,
-        end_col,
-        text: index.line_text(line).into_owned(),
-    }
 }
 
 fn json_str(out: &mut String, s: &str) {
@@ -123,8 +52,8 @@ pub fn render(d: &Diagnostic, format: MessageFormat, color: bool) -> String {
     let level = d.level();
     let code = d.code();
     let message = d.message();
-    let here = d.site.as_ref().map(locate);
-    let stack: Vec<Located> = d.stack.iter().map(locate).collect();
+    let here = d.site.as_ref().map(|s| s.located());
+    let stack: Vec<&Located> = d.stack.iter().map(|s| s.located()).collect();
     let mut out = String::new();
     match format {
         MessageFormat::Short => {

@@ -4,6 +4,7 @@
 mod file_index;
 pub mod ini;
 mod loader;
+mod locate;
 mod marked_lines;
 mod source_file;
 

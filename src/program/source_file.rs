@@ -7,6 +7,9 @@ use std::fs::File;
 use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+use std::sync::OnceLock;
+
+use super::locate::{LineCol, LineSamples, file_pieces, memory_pieces};
 use super::marked_lines::{Marked, MarkedLines};
 
 /// Files up to this size are kept in memory.
@@ -53,6 +56,8 @@ pub struct SourceFile {
     len: u64,
     /// Modification time when opened (streamed files), to notice a change.
     modified: Option<std::time::SystemTime>,
+    /// Sampled line starts, made on the first diagnostic that needs them.
+    samples: OnceLock<LineSamples>,
 }
 
 impl Drop for SourceFile {
@@ -73,6 +78,7 @@ impl SourceFile {
             text: Text::Memory(data),
             len,
             modified: None,
+            samples: OnceLock::new(),
         }
     }
 
@@ -91,6 +97,7 @@ impl SourceFile {
             text: Text::Disk { temp: false },
             len: meta.len(),
             modified: meta.modified().ok(),
+            samples: OnceLock::new(),
         })
     }
 
@@ -122,6 +129,7 @@ impl SourceFile {
             text: Text::Disk { temp: true },
             len,
             modified,
+            samples: OnceLock::new(),
         })
     }
 
@@ -152,7 +160,35 @@ impl SourceFile {
         }
     }
 
-    /// All bytes (read from disk for streamed files; for diagnostics).
+    /// Line, column and line text of a byte offset, for a diagnostic. A
+    /// streamed file is read once for line samples, then only from the
+    /// sample nearest the offset.
+    pub fn locate(&self, offset: u32) -> LineCol {
+        let offset = u64::from(offset).min(self.len);
+        match &self.text {
+            Text::Memory(d) => {
+                let samples = self
+                    .samples
+                    .get_or_init(|| LineSamples::read(&d[..]).unwrap_or_default());
+                samples.locate(offset, &mut memory_pieces(d))
+            }
+            Text::Disk { .. } => {
+                let Ok(mut f) = File::open(&self.path) else {
+                    return LineCol {
+                        line: 1,
+                        col: 1,
+                        text: Vec::new(),
+                    };
+                };
+                let samples = self.samples.get_or_init(|| {
+                    LineSamples::read(io::BufReader::new(&mut f)).unwrap_or_default()
+                });
+                samples.locate(offset, &mut file_pieces(&mut f))
+            }
+        }
+    }
+
+    /// All bytes (read from disk for streamed files).
     pub fn bytes(&self) -> Cow<'_, [u8]> {
         match &self.text {
             Text::Memory(d) => Cow::Borrowed(d),
@@ -574,6 +610,7 @@ mod tests {
             text: Text::Disk { temp: true },
             len: data.len() as u64,
             modified: None,
+            samples: OnceLock::new(),
         }
     }
 
