@@ -11,8 +11,8 @@
 //! ahead, sleeps on a condition variable until the loop moves on; nothing
 //! spins.
 
-use std::sync::{Condvar, Mutex};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Condvar, Mutex};
 
 use super::straight::{Plain, read_line};
 
@@ -215,7 +215,8 @@ impl<'b> Shared<'b> {
     pub fn help(&self) {
         loop {
             let seen = self.seen();
-            if self.done.load(Ordering::Acquire) || self.next.load(Ordering::Acquire) >= self.chunks()
+            if self.done.load(Ordering::Acquire)
+                || self.next.load(Ordering::Acquire) >= self.chunks()
             {
                 return;
             }

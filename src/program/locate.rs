@@ -166,8 +166,14 @@ mod tests {
         for offset in (0..=text.len()).step_by(7).chain([text.len()]) {
             let before = &text[..offset];
             let line = before.iter().filter(|&&b| b == b'\n').count() as u32 + 1;
-            let start = before.iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
-            let col = String::from_utf8_lossy(&text[start..offset]).chars().count() as u32 + 1;
+            let start = before
+                .iter()
+                .rposition(|&b| b == b'\n')
+                .map_or(0, |p| p + 1);
+            let col = String::from_utf8_lossy(&text[start..offset])
+                .chars()
+                .count() as u32
+                + 1;
             let end = text[start..]
                 .iter()
                 .position(|&b| b == b'\n')
@@ -177,7 +183,15 @@ mod tests {
                 want.pop();
             }
             let got = samples.locate(offset as u64, &mut memory_pieces(&text));
-            assert_eq!(got, LineCol { line, col, text: want }, "offset {offset}");
+            assert_eq!(
+                got,
+                LineCol {
+                    line,
+                    col,
+                    text: want
+                },
+                "offset {offset}"
+            );
         }
     }
 
