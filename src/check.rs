@@ -114,9 +114,17 @@ fn sub_file_name(index: &FileIndex) -> Option<String> {
 
 /// Checks one program; returns its diagnostics.
 pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
-    let source = match crate::read_source(Some(path)) {
+    let source = match crate::program::SourceFile::open_regular(path) {
         Ok(s) => s,
-        Err(e) => return vec![*e],
+        Err(e) => {
+            return vec![*Diagnostic::error(
+                ErrorKind::Io {
+                    path: path.to_path_buf(),
+                    message: e.to_string(),
+                },
+                None,
+            )];
+        }
     };
     let source = std::sync::Arc::new(source);
     let probe = FileIndex::build(source.clone());
@@ -154,6 +162,55 @@ pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
     }
 }
 
+/// [`check_file`], with a fault of ngcflat itself (a panic) reported as an
+/// internal error of that file, so that one file cannot stop the run.
+fn check_file_guarded(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
+    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        if std::env::var_os("NGCFLAT_TEST_PANIC").is_some_and(|n| path.ends_with(n)) {
+            panic!("test fault");
+        }
+        check_file(path, cfg)
+    }));
+    r.unwrap_or_else(|_| {
+        let what = LAST_PANIC
+            .with(|p| p.borrow_mut().take())
+            .unwrap_or_else(|| "a panic".into());
+        vec![*Diagnostic::error(
+            ErrorKind::Internal {
+                what: format!("{what} while checking {}", path.display()),
+            },
+            None,
+        )]
+    })
+}
+
+thread_local! {
+    /// The message and place of the last panic on this thread.
+    static LAST_PANIC: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Runs `f` with panics recorded for [`check_file_guarded`] instead of
+/// printed.
+fn with_quiet_panics<T>(f: impl FnOnce() -> T) -> T {
+    let prev = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "a panic".into());
+        let at = info
+            .location()
+            .map(|l| format!(" at {}:{}", l.file(), l.line()))
+            .unwrap_or_default();
+        LAST_PANIC.with(|p| *p.borrow_mut() = Some(format!("'{msg}'{at}")));
+    }));
+    let r = f();
+    std::panic::set_hook(prev);
+    r
+}
+
 pub fn run(paths: &[PathBuf], exts: &[String], deny_warnings: bool, cfg: &Config) -> ExitCode {
     let (files, mut problems) = collect(paths, exts);
     let results: Mutex<Vec<(usize, Vec<Diagnostic>)>> = Mutex::new(Vec::new());
@@ -162,19 +219,24 @@ pub fn run(paths: &[PathBuf], exts: &[String], deny_warnings: bool, cfg: &Config
         .map(|n| n.get())
         .unwrap_or(2)
         .min(files.len().max(1));
-    std::thread::scope(|s| {
-        for _ in 0..workers {
-            s.spawn(|| {
-                loop {
-                    let i = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(f) = files.get(i) else { break };
-                    let d = check_file(f, cfg);
-                    results.lock().expect("results").push((i, d));
-                }
-            });
-        }
+    with_quiet_panics(|| {
+        std::thread::scope(|s| {
+            for _ in 0..workers {
+                s.spawn(|| {
+                    loop {
+                        let i = next.fetch_add(1, Ordering::Relaxed);
+                        let Some(f) = files.get(i) else { break };
+                        let d = check_file_guarded(f, cfg);
+                        results
+                            .lock()
+                            .unwrap_or_else(|e| e.into_inner())
+                            .push((i, d));
+                    }
+                });
+            }
+        })
     });
-    let mut results = results.into_inner().expect("results");
+    let mut results = results.into_inner().unwrap_or_else(|e| e.into_inner());
     results.sort_by_key(|r| r.0);
     let mut all: Vec<Diagnostic> = Vec::new();
     all.append(&mut problems);
@@ -187,12 +249,12 @@ pub fn run(paths: &[PathBuf], exts: &[String], deny_warnings: bool, cfg: &Config
     let errors = all.iter().filter(|d| d.level() == Level::Error).count();
     let warnings = all.iter().filter(|d| d.level() == Level::Warning).count();
     crate::report(&all, cfg.format);
-    eprintln!(
-        "{} files, {} errors, {} warnings",
+    crate::write_stderr(&format!(
+        "{} files, {} errors, {} warnings\n",
         files.len(),
         errors,
         warnings
-    );
+    ));
     if io_error {
         ExitCode::from(2)
     } else if errors > 0 || (deny_warnings && warnings > 0) {

@@ -123,7 +123,14 @@ pub fn report(diags: &[Diagnostic], format: MessageFormat) {
     for d in diags {
         s.push_str(&diag::render(d, format, color));
     }
-    eprint!("{s}");
+    write_stderr(&s);
+}
+
+/// Writes to stderr, ignoring failures: a closed or full stderr must not
+/// stop the run (the exit status still tells the outcome).
+pub fn write_stderr(s: &str) {
+    use std::io::Write;
+    let _ = std::io::stderr().lock().write_all(s.as_bytes());
 }
 
 fn exit_for(e: &Diagnostic) -> ExitCode {
@@ -139,7 +146,7 @@ pub fn run(cli: config::Cli) -> ExitCode {
         Ok(code) => code,
         Err(e) => {
             // Usage and configuration problems: exit status 2.
-            eprintln!("error: {e:#}");
+            write_stderr(&format!("error: {e:#}\n"));
             ExitCode::from(2)
         }
     }

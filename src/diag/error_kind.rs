@@ -177,6 +177,11 @@ pub enum ErrorKind {
     TooManyPathDirs { count: usize },
     /// Lathe cycle needing a contour sub (`G71 Q...`).
     Unsupported { what: String },
+    // ------------------------------------------------------------ robustness
+    /// A fault of ngcflat itself (a panic caught while checking a file).
+    Internal { what: String },
+    /// `o[1] sub`: a definition whose label is computed.
+    ComputedSubLabel,
 }
 
 impl ErrorKind {
@@ -253,6 +258,8 @@ impl ErrorKind {
             BadDefine { .. } => "E0505",
             TooManyPathDirs { .. } => "E0506",
             Unsupported { .. } => "E0507",
+            Internal { .. } => "E0700",
+            ComputedSubLabel => "E0701",
         }
     }
 }
@@ -464,6 +471,14 @@ impl fmt::Display for ErrorKind {
                 )
             }
             Unsupported { what } => write!(f, "{what}"),
+            Internal { what } => write!(
+                f,
+                "internal error: {what}; please report it with the program"
+            ),
+            ComputedSubLabel => write!(
+                f,
+                "a subroutine definition needs a fixed label (o<name> sub or o100 sub), not a computed one"
+            ),
         }
     }
 }

@@ -4,7 +4,7 @@
 
 use std::rc::Rc;
 
-use crate::diag::{Error, ErrorKind, WarningKind};
+use crate::diag::{Diagnostic, Error, ErrorKind, WarningKind};
 use crate::parse::ast::{Label, LineKind, OKind, OLine};
 use crate::parse::{Name, integer_value};
 use crate::program::{FileIndex, control_key};
@@ -311,6 +311,43 @@ impl Interp<'_> {
 
     /// Evaluates a condition the reference evaluates but ngcflat skips; warns
     /// if it would fail there.
+    /// The expression an O-line must carry (its condition or count).
+    fn expr_of<'a>(o: &'a OLine, what: &str) -> Result<&'a crate::parse::ast::Expr, Error> {
+        o.expr.as_ref().ok_or_else(|| {
+            Diagnostic::error(
+                ErrorKind::Internal {
+                    what: format!("an O-line without its {what}"),
+                },
+                None,
+            )
+        })
+    }
+
+    /// The condition of O-line `t`, reached from another line (a
+    /// `continue` to a do loop's `while`, an `elseif` after a false
+    /// branch): the line's own error if it has one.
+    fn condition_of(
+        &mut self,
+        file: &Rc<FileIndex>,
+        t: u32,
+    ) -> Result<crate::parse::ast::Expr, Error> {
+        if let Some((k, span)) = &self.oline(file, t).exec_error {
+            let start = file.olines[t as usize].start;
+            return Err(self.error_in_line(k.clone(), file, start, *span));
+        }
+        let o = self.oline(file, t);
+        match Self::expr_of(o, "condition") {
+            Ok(e) => Ok(e.clone()),
+            Err(e) => {
+                let (a, b) = self.osite(file, t);
+                Err(Box::new(Diagnostic {
+                    site: Some(crate::diag::Site::new(&file.file, a, b)),
+                    ..*e
+                }))
+            }
+        }
+    }
+
     fn probe_condition(&mut self, file: &Rc<FileIndex>, oidx: u32) {
         if let Some(e) = self.oline(file, oidx).expr.clone()
             && let Err(f) = self.eval(&e)
@@ -354,7 +391,7 @@ impl Interp<'_> {
         };
         match o.kind {
             OKind::If => {
-                let c = self.o_eval(file, oidx, o.expr.as_ref().expect("condition"))?;
+                let c = self.o_eval(file, oidx, Self::expr_of(o, "condition")?)?;
                 // Each pass after the first finds its own record.
                 let line = file.olines[oidx as usize].line_idx;
                 let recorded = matches!(self.frame().labels.get(key),
@@ -420,7 +457,7 @@ impl Interp<'_> {
                     Some(r) => (None, r.kind == OKind::While && r.line == line),
                     None => (None, false),
                 };
-                let c = self.o_eval(file, oidx, o.expr.as_ref().expect("condition"))?;
+                let c = self.o_eval(file, oidx, Self::expr_of(o, "condition")?)?;
                 if let Some(rec) = do_rec {
                     if c != 0.0 {
                         if let Some(first_line) = self.ref_stale_break.take() {
@@ -463,7 +500,7 @@ impl Interp<'_> {
                     count = -1;
                 }
                 if count == -1 {
-                    let n = self.o_eval(file, oidx, o.expr.as_ref().expect("count"))?;
+                    let n = self.o_eval(file, oidx, Self::expr_of(o, "count")?)?;
                     count = round_half_even_int(n);
                 }
                 if count > 0 {
@@ -513,7 +550,7 @@ impl Interp<'_> {
                     }
                     (OKind::Do, Some(OKind::While), _) => {
                         self.ref_stale_continue = Some(file.olines[oidx as usize].line_idx + 1);
-                        let e = self.oline(file, t).expr.clone().expect("condition");
+                        let e = self.condition_of(file, t)?;
                         let c = self.o_eval(file, t, &e)?;
                         if c != 0.0 {
                             self.note_loop(file, rec.oidx, key);
@@ -599,11 +636,7 @@ impl Interp<'_> {
             self.current_line_start = file.olines[t as usize].start;
             match file.kind_of(t) {
                 Some(OKind::ElseIf) => {
-                    if let Some((k, span)) = &self.oline(file, t).exec_error {
-                        let start = file.olines[t as usize].start;
-                        return Err(self.error_in_line(k.clone(), file, start, *span));
-                    }
-                    let e = self.oline(file, t).expr.clone().expect("condition");
+                    let e = self.condition_of(file, t)?;
                     let c = self.o_eval(file, t, &e)?;
                     if c != 0.0 {
                         self.executed_if = true;
@@ -689,7 +722,10 @@ impl Interp<'_> {
                 oidx,
             },
         );
-        let def = file.defs.get(&oidx).cloned().expect("sub definition");
+        let Some(def) = file.defs.get(&oidx).cloned() else {
+            // Definitions are indexed by their fixed label only.
+            return Err(self.oerr(ErrorKind::ComputedSubLabel, file, oidx));
+        };
         if let Some((j, inner)) = &def.nested
             && def.end.is_none_or(|e| *j < e)
         {

@@ -84,10 +84,32 @@ impl SourceFile {
 
     /// Opens a file: small files are read, large ones streamed.
     pub fn open(path: &Path) -> io::Result<SourceFile> {
-        let meta = std::fs::metadata(path)?;
+        Self::from_file(path, File::open(path)?)
+    }
+
+    /// Opens a regular file without waiting on it: a FIFO, device or socket
+    /// (given by path, or swapped in for a file) is refused at once instead
+    /// of blocking until a writer comes (check mode).
+    pub fn open_regular(path: &Path) -> io::Result<SourceFile> {
+        use std::os::unix::fs::OpenOptionsExt;
+        let file = File::options()
+            .read(true)
+            .custom_flags(libc::O_NONBLOCK)
+            .open(path)?;
+        if !file.metadata()?.is_file() {
+            return Err(io::Error::other(
+                "not a regular file (a FIFO, device or socket); only regular files are checked",
+            ));
+        }
+        Self::from_file(path, file)
+    }
+
+    fn from_file(path: &Path, mut file: File) -> io::Result<SourceFile> {
+        let meta = file.metadata()?;
         let name = path.display().to_string();
         if !meta.is_file() || meta.len() <= IN_MEMORY_LIMIT {
-            let data = std::fs::read(path)?;
+            let mut data = Vec::new();
+            file.read_to_end(&mut data)?;
             return Ok(SourceFile::new(path.to_path_buf(), name, data));
         }
         check_size(meta.len())?;

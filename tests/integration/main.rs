@@ -6,6 +6,7 @@ mod cli;
 mod config;
 mod fixtures;
 mod generated;
+mod hostile;
 mod oracle;
 mod props;
 
