@@ -74,7 +74,10 @@ fn check_reports_every_file_whatever_one_does() {
     put(d.path(), "t/d-bad.ngc", "G0 X[1/0]\nM2\n");
     let (code, _, err) = run(d.path(), &["check", "--message-format", "short", "t"]);
     assert_eq!(code, 1, "{err}");
-    assert!(err.contains("a-sub.ngc:1:1: error: ") && err.contains("[E0701]"), "{err}");
+    assert!(
+        err.contains("a-sub.ngc:1:1: error: ") && err.contains("[E0701]"),
+        "{err}"
+    );
     assert!(err.contains("b-continue.ngc:3:8: error: "), "{err}");
     assert!(err.contains("d-bad.ngc:1:"), "{err}");
     assert!(err.contains("4 files, 3 errors"), "{err}");
