@@ -7,6 +7,7 @@ mod config;
 mod fixtures;
 mod generated;
 mod hostile;
+mod lowering;
 mod oracle;
 mod props;
 

@@ -1,0 +1,653 @@
+//! Canned cycles G73, G81–G89 as the G0/G1/G4 and spindle blocks LinuxCNC
+//! 2.9 makes of them.
+//!
+//! The rules (LinuxCNC 2.9's interpreter; the plane's first two axes are
+//! the cycle's "position" axes, the third its depth axis: G17 X Y / Z, G18
+//! Z X / Y, G19 Y Z / X):
+//!
+//! * **Initial level.** The depth-axis position when the first cycle block
+//!   since the last other motion started. Later cycle blocks keep it (even
+//!   after a G99 block left the tool at R); G98 retracts to it.
+//! * **Absolute (G90).** Position words are the hole position (missing ones
+//!   keep the current position), R and the depth word are absolute. With
+//!   polar words (G17 only) the hole is `@`·(cos, sin)(`^`), a missing word
+//!   taken from the current position.
+//! * **Incremental (G91).** R is relative to the initial level, the depth
+//!   relative to R; position words are a step added before every repeat
+//!   (polar `@`/`^` step the radius and angle of the position).
+//! * **Start.** If the initial level is below R, a rapid along the depth
+//!   axis only to R (at the current position), and R is the initial level
+//!   from then on for this block. The clearance level is R (G99) or the
+//!   initial level (G98).
+//! * **Each of L repeats.** First repeat, when the tool is above R: rapid
+//!   to the hole at the current depth-axis level, then down to R. Otherwise:
+//!   rapid to the hole at the clearance level, then to R if the clearance
+//!   is above it. Then the cycle's own moves:
+//!   - G81: feed to the depth, rapid to clearance. G82: the same with a
+//!     dwell P at the bottom.
+//!   - G73: from R, feed down Q at a time, each peck followed by a rapid up
+//!     0.254 mm (0.010 in); the last feed reaches the depth; rapid to
+//!     clearance.
+//!   - G83: as G73, but after each peck rapid up to R and rapid down to
+//!     0.254 mm (0.010 in) above the peck's bottom.
+//!   - G84 (G17 only): feed to the depth, M5, M4, dwell P (0 without),
+//!     feed to clearance, M5, M3 (LinuxCNC also disables the overrides
+//!     meanwhile; no block of the targets does that).
+//!   - G85: feed to the depth, feed to R, rapid to clearance.
+//!   - G86: feed to the depth, dwell, M5, rapid to clearance, spindle on
+//!     again in its direction.
+//!   - G87: rapid to the hole offset by I/J/K (in the plane's axes), M5,
+//!     orient (M19 R0 P2), rapid to the depth, rapid to the hole, spindle
+//!     on, feed to the back-bore level, feed to the depth, M5, orient,
+//!     rapid to the offset point, up to clearance, back to the hole,
+//!     spindle on.
+//!   - G88: feed to the depth, dwell, M5, M0 (the operator retracts),
+//!     spindle on again.
+//!   - G89: feed to the depth, dwell, feed to clearance.
+//! * **End.** The position is the last hole at the clearance level (also
+//!   after G88, where LinuxCNC assumes the operator retracted).
+//!
+//! Stickiness between blocks (a block of the same cycle may leave out R,
+//! the depth, Q, P, I/J/K) is kept by [`CycleState`]: call
+//! [`CycleState::lower`] for every cycle block and [`CycleState::end`] when
+//! any other motion (G0–G3, G80, a probe, …) runs.
+
+use super::{Distance, LowerError, PlainLine, Plane, Spindle, Units, push};
+
+/// Which cycle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CycleKind {
+    G73,
+    G81,
+    G82,
+    G83,
+    G84,
+    G85,
+    G86,
+    G87,
+    G88,
+    G89,
+}
+
+impl CycleKind {
+    fn name(self) -> &'static str {
+        match self {
+            CycleKind::G73 => "G73",
+            CycleKind::G81 => "G81",
+            CycleKind::G82 => "G82",
+            CycleKind::G83 => "G83",
+            CycleKind::G84 => "G84",
+            CycleKind::G85 => "G85",
+            CycleKind::G86 => "G86",
+            CycleKind::G87 => "G87",
+            CycleKind::G88 => "G88",
+            CycleKind::G89 => "G89",
+        }
+    }
+}
+
+/// Retract mode: G98 (back to the initial level) or G99 (to R).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Retract {
+    OldZ,
+    RPlane,
+}
+
+/// The modal state a cycle block runs in.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CycleModal {
+    pub plane: Plane,
+    pub distance: Distance,
+    pub units: Units,
+    pub retract: Retract,
+    pub spindle: Spindle,
+}
+
+/// The words of one cycle block, in program units, as written (X a radius
+/// in G7: convert diameters first). `None` is a word not on the line.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct CycleBlock {
+    /// X, Y, Z words.
+    pub axes: [Option<f64>; 3],
+    pub r: Option<f64>,
+    /// L (repeats); `None` is 1.
+    pub l: Option<u32>,
+    /// P dwell in seconds (G82, G84, G86, G88, G89).
+    pub p: Option<f64>,
+    /// Q peck (G73, G83).
+    pub q: Option<f64>,
+    /// I, J, K (G87).
+    pub ijk: [Option<f64>; 3],
+    /// `@` polar radius, `^` polar angle in degrees (G17 only).
+    pub radius: Option<f64>,
+    pub angle: Option<f64>,
+}
+
+/// The blocks of one cycle block and where it leaves the tool.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CycleOutput {
+    pub lines: Vec<PlainLine>,
+    /// X, Y, Z after the block, as LinuxCNC's interpreter has them.
+    pub end: [f64; 3],
+}
+
+/// What LinuxCNC keeps between cycle blocks. Start with `default()`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct CycleState {
+    /// The cycle in effect (`None` after any other motion).
+    active: Option<CycleKind>,
+    /// Initial level of the current run of cycle blocks.
+    initial_level: Option<f64>,
+    r: f64,
+    depth: f64,
+    /// Shared by G82/G84/G86/G88/G89 and kept across other motion, as in
+    /// LinuxCNC.
+    p: f64,
+    q: f64,
+    ijk: [f64; 3],
+}
+
+/// Which of X Y Z (0, 1, 2) are the plane's first, second and depth axes.
+fn axes_of(plane: Plane) -> [usize; 3] {
+    match plane {
+        Plane::XY => [0, 1, 2],
+        Plane::YZ => [1, 2, 0],
+        Plane::XZ => [2, 0, 1],
+    }
+}
+
+/// The rapid up after each peck of G73 and the clearance above the last
+/// peck of G83: 0.010 inch.
+fn peck_clearance(units: Units) -> f64 {
+    match units {
+        Units::Inch => 0.010,
+        Units::Mm => 0.010 * 25.4,
+    }
+}
+
+/// Writes moves in plane coordinates (a, b, c) as XYZ lines.
+struct Out {
+    map: [usize; 3],
+    lines: Vec<PlainLine>,
+}
+
+impl Out {
+    fn point(&self, a: f64, b: f64, c: f64) -> [f64; 3] {
+        let mut p = [0.0; 3];
+        p[self.map[0]] = a;
+        p[self.map[1]] = b;
+        p[self.map[2]] = c;
+        p
+    }
+    fn traverse(&mut self, a: f64, b: f64, c: f64) -> Result<(), LowerError> {
+        let p = self.point(a, b, c);
+        push(&mut self.lines, PlainLine::motion(0.0, p))
+    }
+    fn feed(&mut self, a: f64, b: f64, c: f64) -> Result<(), LowerError> {
+        let p = self.point(a, b, c);
+        push(&mut self.lines, PlainLine::motion(1.0, p))
+    }
+    fn dwell(&mut self, seconds: f64) -> Result<(), LowerError> {
+        push(
+            &mut self.lines,
+            PlainLine::new(&[(b'G', 4.0), (b'P', seconds)]),
+        )
+    }
+    fn m(&mut self, code: f64) -> Result<(), LowerError> {
+        push(&mut self.lines, PlainLine::new(&[(b'M', code)]))
+    }
+    fn spindle_on(&mut self, dir: Spindle) -> Result<(), LowerError> {
+        self.m(if dir == Spindle::Ccw { 4.0 } else { 3.0 })
+    }
+    fn orient(&mut self) -> Result<(), LowerError> {
+        push(
+            &mut self.lines,
+            PlainLine::new(&[(b'M', 19.0), (b'R', 0.0), (b'P', 2.0)]),
+        )
+    }
+}
+
+impl CycleState {
+    /// A motion other than a canned cycle ran (G0–G3, G80, G38, G5, …):
+    /// the next cycle block starts afresh.
+    pub fn end(&mut self) {
+        self.active = None;
+        self.initial_level = None;
+    }
+
+    /// Lowers one cycle block. `position` is the current X, Y, Z (`None`
+    /// when not known: an error names the axis). On success the state is
+    /// updated for the next block; on error it is unchanged.
+    pub fn lower(
+        &mut self,
+        kind: CycleKind,
+        block: &CycleBlock,
+        modal: &CycleModal,
+        position: [Option<f64>; 3],
+    ) -> Result<CycleOutput, LowerError> {
+        let mut next = *self;
+        let out = next.run(kind, block, modal, position)?;
+        *self = next;
+        Ok(out)
+    }
+
+    fn run(
+        &mut self,
+        kind: CycleKind,
+        block: &CycleBlock,
+        modal: &CycleModal,
+        position: [Option<f64>; 3],
+    ) -> Result<CycleOutput, LowerError> {
+        let name = kind.name();
+        let same = self.active == Some(kind);
+        let map = axes_of(modal.plane);
+        let axis_letter = |i: usize| ['X', 'Y', 'Z'][i];
+        let known = |i: usize| {
+            position[i].ok_or(LowerError::PositionUnknown {
+                axis: axis_letter(i),
+            })
+        };
+        let cur_a = known(map[0])?;
+        let cur_b = known(map[1])?;
+        let current_c = known(map[2])?;
+
+        if (block.radius.is_some() || block.angle.is_some()) && modal.plane != Plane::XY {
+            return Err(LowerError::NotExpressible {
+                construct: name,
+                why: "polar coordinates are only allowed in the XY plane",
+            });
+        }
+        if kind == CycleKind::G84 && modal.plane != Plane::XY {
+            return Err(LowerError::NotExpressible {
+                construct: name,
+                why: "outside G17, LinuxCNC 2.9 moves to points with the axes swapped",
+            });
+        }
+        let r_word = match (block.r, same) {
+            (Some(r), _) => r,
+            (None, true) => self.r,
+            (None, false) => {
+                return Err(LowerError::MissingWord {
+                    construct: name,
+                    letter: 'R',
+                });
+            }
+        };
+        let repeats = block.l.unwrap_or(1);
+        if repeats == 0 {
+            return Err(LowerError::BadValue {
+                construct: name,
+                what: "L 0 repeats",
+            });
+        }
+        let depth_word = match (block.axes[map[2]], same) {
+            (Some(z), _) => z,
+            (None, true) => self.depth,
+            (None, false) => {
+                return Err(LowerError::MissingWord {
+                    construct: name,
+                    letter: axis_letter(map[2]),
+                });
+            }
+        };
+        let initial = self.initial_level.unwrap_or(current_c);
+        let mut old_c = initial;
+        let mut current_c = current_c;
+
+        let (mut a, mut b) = (cur_a, cur_b);
+        let (mut a_step, mut b_step, mut radius_step, mut angle_step) = (0.0, 0.0, 0.0, 0.0);
+        let (r, bottom) = match modal.distance {
+            Distance::Absolute => {
+                if block.radius.is_some() || block.angle.is_some() {
+                    let radius = block.radius.unwrap_or_else(|| cur_b.hypot(cur_a));
+                    let theta = block
+                        .angle
+                        .map(f64::to_radians)
+                        .unwrap_or_else(|| cur_b.atan2(cur_a));
+                    a = radius * theta.cos();
+                    b = radius * theta.sin();
+                } else {
+                    a = block.axes[map[0]].unwrap_or(cur_a);
+                    b = block.axes[map[1]].unwrap_or(cur_b);
+                }
+                (r_word, depth_word)
+            }
+            Distance::Incremental => {
+                a_step = block.axes[map[0]].unwrap_or(0.0);
+                b_step = block.axes[map[1]].unwrap_or(0.0);
+                radius_step = block.radius.unwrap_or(0.0);
+                angle_step = block.angle.map(f64::to_radians).unwrap_or(0.0);
+                let r = r_word + old_c;
+                (r, r + depth_word)
+            }
+        };
+        if r < bottom {
+            return Err(LowerError::BadValue {
+                construct: name,
+                what: "R is below the depth",
+            });
+        }
+
+        let mut out = Out {
+            map,
+            lines: Vec::new(),
+        };
+        if old_c < r {
+            out.traverse(cur_a, cur_b, r)?;
+            old_c = r;
+            current_c = r;
+        }
+        let clear = match modal.retract {
+            Retract::RPlane => r,
+            Retract::OldZ => old_c,
+        };
+
+        // Per-cycle words, resolved before any motion so that an error
+        // leaves no partial output.
+        let needs = |word: Option<f64>, last: f64, letter: char| match (word, same) {
+            (Some(v), _) => Ok(v),
+            (None, true) => Ok(last),
+            (None, false) => Err(LowerError::MissingWord {
+                construct: name,
+                letter,
+            }),
+        };
+        let mut p = self.p;
+        let mut q = self.q;
+        let mut ijk = self.ijk;
+        match kind {
+            CycleKind::G82 | CycleKind::G86 | CycleKind::G88 | CycleKind::G89 => {
+                p = needs(block.p, self.p, 'P')?;
+            }
+            CycleKind::G84 => p = block.p.unwrap_or(self.p),
+            CycleKind::G73 | CycleKind::G83 => {
+                q = needs(block.q, self.q, 'Q')?;
+                if q <= 0.0 {
+                    return Err(LowerError::BadValue {
+                        construct: name,
+                        what: "Q is not above zero",
+                    });
+                }
+            }
+            CycleKind::G87 => {
+                for (n, letter) in ['I', 'J', 'K'].into_iter().enumerate() {
+                    ijk[n] = needs(block.ijk[n], self.ijk[n], letter)?;
+                }
+            }
+            CycleKind::G81 | CycleKind::G85 => {}
+        }
+        match (kind, modal.spindle) {
+            (CycleKind::G84, Spindle::Cw) => {}
+            (CycleKind::G84, _) => return Err(LowerError::Spindle { construct: name }),
+            (CycleKind::G86 | CycleKind::G87 | CycleKind::G88, Spindle::Off) => {
+                return Err(LowerError::Spindle { construct: name });
+            }
+            (CycleKind::G87, Spindle::Ccw) => {
+                return Err(LowerError::NotExpressible {
+                    construct: name,
+                    why: "LinuxCNC orients the spindle counter-clockwise (mode 3), which M19 cannot ask for",
+                });
+            }
+            _ => {}
+        }
+        let dir = modal.spindle;
+        // G87: the offset point and the back-bore level in plane order.
+        let (off_a, off_b, middle) = match modal.plane {
+            Plane::XY => (ijk[0], ijk[1], ijk[2]),
+            Plane::XZ => (ijk[2], ijk[0], ijk[1]),
+            Plane::YZ => (ijk[1], ijk[2], ijk[0]),
+        };
+        let middle = match modal.distance {
+            Distance::Incremental => bottom + middle,
+            Distance::Absolute => middle,
+        };
+        let delta = peck_clearance(modal.units);
+
+        for repeat in 0..repeats {
+            a += a_step;
+            b += b_step;
+            if radius_step != 0.0 {
+                if a == 0.0 && b == 0.0 {
+                    return Err(LowerError::PolarAtOrigin);
+                }
+                let theta = b.atan2(a);
+                let radius = b.hypot(a) + radius_step;
+                a = radius * theta.cos();
+                b = radius * theta.sin();
+            }
+            if angle_step != 0.0 {
+                if a == 0.0 && b == 0.0 {
+                    return Err(LowerError::PolarAtOrigin);
+                }
+                let theta = b.atan2(a) + angle_step;
+                let radius = b.hypot(a);
+                a = radius * theta.cos();
+                b = radius * theta.sin();
+            }
+            if repeat == 0 && current_c > r {
+                out.traverse(a, b, current_c)?;
+                out.traverse(a, b, r)?;
+            } else {
+                out.traverse(a, b, clear)?;
+                if clear > r {
+                    out.traverse(a, b, r)?;
+                }
+            }
+            match kind {
+                CycleKind::G81 => {
+                    out.feed(a, b, bottom)?;
+                    out.traverse(a, b, clear)?;
+                }
+                CycleKind::G82 => {
+                    out.feed(a, b, bottom)?;
+                    out.dwell(p)?;
+                    out.traverse(a, b, clear)?;
+                }
+                CycleKind::G73 | CycleKind::G83 => {
+                    let mut depth = r - q;
+                    while depth > bottom {
+                        out.feed(a, b, depth)?;
+                        if kind == CycleKind::G83 {
+                            out.traverse(a, b, r)?;
+                        }
+                        out.traverse(a, b, depth + delta)?;
+                        depth -= q;
+                    }
+                    out.feed(a, b, bottom)?;
+                    out.traverse(a, b, clear)?;
+                }
+                CycleKind::G84 => {
+                    out.feed(a, b, bottom)?;
+                    out.m(5.0)?;
+                    out.m(4.0)?;
+                    out.dwell(p)?;
+                    out.feed(a, b, clear)?;
+                    out.m(5.0)?;
+                    out.m(3.0)?;
+                }
+                CycleKind::G85 => {
+                    out.feed(a, b, bottom)?;
+                    out.feed(a, b, r)?;
+                    out.traverse(a, b, clear)?;
+                }
+                CycleKind::G86 => {
+                    out.feed(a, b, bottom)?;
+                    out.dwell(p)?;
+                    out.m(5.0)?;
+                    out.traverse(a, b, clear)?;
+                    out.spindle_on(dir)?;
+                }
+                CycleKind::G87 => {
+                    let (oa, ob) = (a + off_a, b + off_b);
+                    out.traverse(oa, ob, r)?;
+                    out.m(5.0)?;
+                    out.orient()?;
+                    out.traverse(oa, ob, bottom)?;
+                    out.traverse(a, b, bottom)?;
+                    out.spindle_on(dir)?;
+                    out.feed(a, b, middle)?;
+                    out.feed(a, b, bottom)?;
+                    out.m(5.0)?;
+                    out.orient()?;
+                    out.traverse(oa, ob, bottom)?;
+                    out.traverse(oa, ob, clear)?;
+                    out.traverse(a, b, clear)?;
+                    out.spindle_on(dir)?;
+                }
+                CycleKind::G88 => {
+                    out.feed(a, b, bottom)?;
+                    out.dwell(p)?;
+                    out.m(5.0)?;
+                    out.m(0.0)?;
+                    out.spindle_on(dir)?;
+                }
+                CycleKind::G89 => {
+                    out.feed(a, b, bottom)?;
+                    out.dwell(p)?;
+                    out.feed(a, b, clear)?;
+                }
+            }
+        }
+
+        self.active = Some(kind);
+        self.initial_level = Some(initial);
+        self.r = r_word;
+        self.depth = depth_word;
+        self.p = p;
+        self.q = q;
+        self.ijk = ijk;
+        let end = out.point(a, b, clear);
+        Ok(CycleOutput {
+            lines: out.lines,
+            end,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn modal(plane: Plane, distance: Distance, retract: Retract) -> CycleModal {
+        CycleModal {
+            plane,
+            distance,
+            units: Units::Mm,
+            retract,
+            spindle: Spindle::Cw,
+        }
+    }
+
+    fn text(lines: &[PlainLine]) -> Vec<String> {
+        lines
+            .iter()
+            .map(|l| {
+                l.words
+                    .iter()
+                    .map(|w| format!("{}{}", w.letter as char, w.value))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            })
+            .collect()
+    }
+
+    #[test]
+    fn g81_from_above_g98() {
+        let mut s = CycleState::default();
+        let block = CycleBlock {
+            axes: [Some(1.0), Some(2.0), Some(-5.0)],
+            r: Some(2.0),
+            ..Default::default()
+        };
+        let out = s
+            .lower(
+                CycleKind::G81,
+                &block,
+                &modal(Plane::XY, Distance::Absolute, Retract::OldZ),
+                [Some(0.0), Some(0.0), Some(10.0)],
+            )
+            .unwrap();
+        assert_eq!(
+            text(&out.lines),
+            [
+                "G0 X1 Y2 Z10",
+                "G0 X1 Y2 Z2",
+                "G1 X1 Y2 Z-5",
+                "G0 X1 Y2 Z10"
+            ]
+        );
+        assert_eq!(out.end, [1.0, 2.0, 10.0]);
+    }
+
+    #[test]
+    fn g83_pecks_back_to_r() {
+        let mut s = CycleState::default();
+        let block = CycleBlock {
+            axes: [Some(3.0), Some(2.0), Some(-3.0)],
+            r: Some(2.0),
+            q: Some(2.0),
+            ..Default::default()
+        };
+        let out = s
+            .lower(
+                CycleKind::G83,
+                &block,
+                &modal(Plane::XY, Distance::Absolute, Retract::OldZ),
+                [Some(3.0), Some(2.0), Some(10.0)],
+            )
+            .unwrap();
+        let t = text(&out.lines);
+        assert_eq!(t[2], "G1 X3 Y2 Z0");
+        assert_eq!(t[3], "G0 X3 Y2 Z2");
+        assert_eq!(t[4], "G0 X3 Y2 Z0.254");
+        assert_eq!(t.last().unwrap(), "G0 X3 Y2 Z10");
+    }
+
+    #[test]
+    fn repeat_needs_r_on_entry_and_keeps_it() {
+        let mut s = CycleState::default();
+        let m = modal(Plane::XY, Distance::Absolute, Retract::RPlane);
+        let block = CycleBlock {
+            axes: [Some(1.0), None, Some(-1.0)],
+            ..Default::default()
+        };
+        let e = s
+            .lower(CycleKind::G81, &block, &m, [Some(0.0); 3])
+            .unwrap_err();
+        assert_eq!(e.code(), "E1102");
+        let first = CycleBlock {
+            r: Some(1.0),
+            ..block
+        };
+        s.lower(CycleKind::G81, &first, &m, [Some(0.0); 3]).unwrap();
+        let again = s
+            .lower(
+                CycleKind::G81,
+                &block,
+                &m,
+                [Some(1.0), Some(0.0), Some(1.0)],
+            )
+            .unwrap();
+        assert_eq!(again.end, [1.0, 0.0, 1.0]);
+    }
+
+    #[test]
+    fn unknown_depth_axis_position() {
+        let mut s = CycleState::default();
+        let block = CycleBlock {
+            axes: [Some(1.0), None, Some(-1.0)],
+            r: Some(1.0),
+            ..Default::default()
+        };
+        let e = s
+            .lower(
+                CycleKind::G81,
+                &block,
+                &modal(Plane::XZ, Distance::Absolute, Retract::OldZ),
+                [Some(0.0), None, Some(0.0)],
+            )
+            .unwrap_err();
+        assert_eq!(e, LowerError::PositionUnknown { axis: 'Y' });
+        assert_eq!(s, CycleState::default());
+    }
+}
