@@ -140,7 +140,8 @@ pub enum ErrorKind {
     /// `o<x> sub` with no `o<x> endsub` before the end of file.
     UnterminatedSub { name: String },
     /// `G0 G1 X1`, `G1 X1 F0`, `M3 M4`: a block the reference refuses.
-    Semantic { message: String },
+    /// A block LinuxCNC refuses (codes E0601 on).
+    Block(super::BlockError),
     /// `M72` with no `M70`/`M73` before it in this call level.
     NoSavedContext,
     /// `(abort, tool broke)`
@@ -246,7 +247,7 @@ impl ErrorKind {
             Abort { .. } => "E0327",
             NoSavedContext => "E0328",
             BadCondition { .. } => "E0329",
-            Semantic { .. } => "E0013",
+            Block(e) => e.code(),
             OutputLineTooLong { .. } => "E0401",
             StepLimit { .. } => "E0402",
             OutputLimit { .. } => "E0403",
@@ -422,7 +423,7 @@ impl fmt::Display for ErrorKind {
             FanucDisabled { what } => write!(f, "{what} used but DISABLE_FANUC_STYLE_SUB is set"),
             UnterminatedSub { name } => write!(f, "subroutine o<{name}> has no endsub"),
             Abort { message } => write!(f, "program aborted: {message}"),
-            Semantic { message } => write!(f, "{message}"),
+            Block(e) => write!(f, "{e}"),
             NoSavedContext => write!(
                 f,
                 "M72 without a state saved by M70 or M73 at this call level"

@@ -1,9 +1,11 @@
 //! Diagnostics: errors and warnings as data, and their rendering.
 
+mod block_error;
 mod error_kind;
 mod render;
 mod warning_kind;
 
+pub use block_error::BlockError;
 pub use error_kind::ErrorKind;
 pub use render::{MessageFormat, render};
 pub use warning_kind::WarningKind;

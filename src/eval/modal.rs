@@ -2,6 +2,7 @@
 
 use std::rc::Rc;
 
+use crate::diag::BlockError;
 use crate::diag::{Error, ErrorKind};
 use crate::program::FileIndex;
 
@@ -701,9 +702,7 @@ impl Interp<'_> {
             }
         };
         let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
-        let bad = |m: &str| ErrorKind::Semantic {
-            message: m.to_string(),
-        };
+        let bad = ErrorKind::Block;
         match motion {
             20 | 30 => {
                 let (a0, a1, c0, c1) = match self.modal.plane {
@@ -719,10 +718,10 @@ impl Interp<'_> {
                 if let Some(r) = word(b'r') {
                     let chord = ((ex - sx).powi(2) + (ey - sy).powi(2)).sqrt();
                     if chord < 1e-12 {
-                        return Err(bad("current point same as end point of arc"));
+                        return Err(bad(BlockError::ArcSamePoint));
                     }
                     if 2.0 * r.abs() < chord * (1.0 - 1e-9) - 1e-9 {
-                        return Err(bad("arc radius too small to reach end point"));
+                        return Err(bad(BlockError::ArcRadiusTooSmall));
                     }
                     return Ok(());
                 }
@@ -737,12 +736,10 @@ impl Interp<'_> {
                 let abs_err = (r2 - r1).abs();
                 let abs_tol = if self.modal.metric { 0.0285 } else { 0.00285 };
                 if abs_err > abs_tol && abs_err > 0.0011 * r1.max(r2) {
-                    return Err(bad(&format!(
-                        "radius to end of arc differs from radius to start (r1={r1:.4} r2={r2:.4})"
-                    )));
+                    return Err(bad(BlockError::ArcRadiiDiffer { r1, r2 }));
                 }
                 if r1 < 1e-12 {
-                    return Err(bad("zero-radius arc"));
+                    return Err(bad(BlockError::ZeroRadiusArc));
                 }
             }
             382 | 384 => {
@@ -757,7 +754,7 @@ impl Interp<'_> {
                     .iter()
                     .all(|w| start(w.0).is_some() || (self.modal.absolute && w.0 >= 3));
                 if known && d < 1e-7 {
-                    return Err(bad("start point too close to probe point"));
+                    return Err(bad(BlockError::ProbeTooClose));
                 }
             }
             _ => {}

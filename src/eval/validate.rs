@@ -8,6 +8,7 @@ use crate::diag::ErrorKind;
 use super::cycle::{Cycle, depth_axis, is_cycle};
 use super::nurbs::{NO_MOTION, NURBS, Nurbs};
 use super::state::Modal;
+use crate::diag::BlockError;
 
 /// Modal group of a G-code (×10), or None for an unknown code.
 fn g_group(g: i32) -> Option<u8> {
@@ -142,14 +143,7 @@ fn full_check(
     points: &Nurbs,
     cycle: &Cycle,
 ) -> Result<(), (ErrorKind, Option<usize>)> {
-    let bad = |msg: &str, at: Option<usize>| {
-        Err((
-            ErrorKind::Semantic {
-                message: msg.to_string(),
-            },
-            at,
-        ))
-    };
+    let bad = |e: BlockError, at: Option<usize>| Err((ErrorKind::Block(e), at));
     let mut gseen: [Option<usize>; 16] = [None; 16];
     let mut mseen: [Option<usize>; 16] = [None; 16];
     // Fixed-size scratch: this runs for every line.
@@ -163,22 +157,24 @@ fn full_check(
             b'g' => {
                 let g10 = (v * 10.0).round();
                 if !(0.0..100.0).contains(&v) {
-                    return bad("G-code out of range", Some(i));
+                    return bad(BlockError::GCodeOutOfRange, Some(i));
                 }
                 if (v * 10.0 - g10).abs() > 0.0001 {
-                    return bad("unknown G-code", Some(i));
+                    return bad(BlockError::UnknownGCodeFraction, Some(i));
                 }
                 let g = g10 as i32;
                 let Some(grp) = g_group(g) else {
                     return bad(
-                        &format!("unknown G-code G{}", crate::emit::number_string(v, None)),
+                        BlockError::UnknownGCode {
+                            code: crate::emit::number_string(v, None),
+                        },
                         Some(i),
                     );
                 };
                 // G80 may share a line with another motion code (which wins).
                 let g80_pair = grp == 1 && gseen[1].is_some_and(|j| g == 800 || words[j].1 == 80.0);
                 if gseen[grp as usize].is_some() && !g80_pair {
-                    return bad("two G-codes from the same modal group", Some(i));
+                    return bad(BlockError::SameGroupG, Some(i));
                 }
                 if g80_pair && g == 800 {
                     continue;
@@ -206,21 +202,22 @@ fn full_check(
             }
             b'm' => {
                 if v.fract() != 0.0 || v < 0.0 {
-                    return bad("unknown M-code", Some(i));
+                    return bad(BlockError::UnknownMCodeFraction, Some(i));
                 }
                 let m = v as i64;
                 if m > 199 {
-                    return bad(&format!("M-code greater than 199: M{m}"), Some(i));
+                    return bad(BlockError::MCodeOver199 { m }, Some(i));
                 }
                 let Some(grp) = m_group(m) else {
-                    return bad(&format!("unknown M-code M{m}"), Some(i));
+                    return bad(BlockError::UnknownMCode { m }, Some(i));
                 };
                 if mseen[grp as usize].is_some() {
-                    return bad("two M-codes from the same modal group", Some(i));
+                    return bad(BlockError::SameGroupM, Some(i));
                 }
                 mseen[grp as usize] = Some(i);
                 if mn == mbuf.len() {
-                    return bad("too many M-codes", Some(i));
+                    // (More than four M words are refused before this.)
+                    return Err((ErrorKind::TooManyMWords, Some(i)));
                 }
                 mbuf[mn] = (m, i);
                 mn += 1;
@@ -253,13 +250,10 @@ fn full_check(
     let g53 = gs.iter().find(|g| g.0 == 53).map(|g| g.1);
     if let Some(at) = g53 {
         if modal.motion != NURBS {
-            return bad("G5.3 without a G5.2 block before it", Some(at));
+            return bad(BlockError::NurbsEndWithoutStart, Some(at));
         }
         if let Some(order) = points.short_of_order() {
-            let msg = format!(
-                "a NURBS block needs at least as many control points as its order L = {order}"
-            );
-            return bad(&msg, Some(at));
+            return bad(BlockError::NurbsTooFewPoints { order }, Some(at));
         }
     }
     // A control point: on a G5.2 line, a line of axis words in G5.2 mode, or
@@ -271,26 +265,17 @@ fn full_check(
         let pending = points.pending() && g53.is_none();
         let p = value(b'p').unwrap_or(-1.0);
         if has_at(b'x').is_some() != has_at(b'y').is_some() {
-            return bad(
-                "both X and Y are needed for a NURBS control point",
-                axis_word,
-            );
+            return bad(BlockError::NurbsPointNeedsXY, axis_word);
         }
         if pending && axis_word.is_none() && p > 0.0 {
-            return bad(
-                "a P word without X and Y is only allowed for the first NURBS control point",
-                has_at(b'p'),
-            );
+            return bad(BlockError::NurbsPWithoutXY, has_at(b'p'));
         }
         if pending && p <= 0.0 {
-            return bad(
-                "a positive weight P is needed for every NURBS control point",
-                has_at(b'p').or(axis_word),
-            );
+            return bad(BlockError::NurbsWeightNeeded, has_at(b'p').or(axis_word));
         }
         let feed = value(b'f').unwrap_or(modal.feed);
         if feed_mode == 940 && feed == 0.0 {
-            return bad("a NURBS block with a zero feed rate", has_at(b'f'));
+            return bad(BlockError::NurbsZeroFeed, has_at(b'f'));
         }
     }
     if nurbs
@@ -298,33 +283,33 @@ fn full_check(
         && axis_word.is_none()
         && let Some(i) = has_at(b'p')
     {
-        return bad("P word with no G-code or M-code to use it", Some(i));
+        return bad(BlockError::WordUnused { letter: 'p' }, Some(i));
     }
     // Motion codes that need axis words, and their required words.
     if let Some(m) = motion_here {
         let needs_axes = matches!(m, 382..=385 | 730 | 760 | 810..=890);
         if needs_axes && axis_word.is_none() && !matches!(m, 760) {
-            return bad("all axes missing with motion code", None);
+            return bad(BlockError::AxesMissing, None);
         }
         if matches!(m, 820 | 860 | 880 | 890) && !given(b'p') {
-            return bad("dwell time P word missing with G82/G86/G88/G89", None);
+            return bad(BlockError::CycleDwellMissing, None);
         }
         if matches!(m, 730 | 830) && !given(b'q') {
-            return bad("Q word missing with G73/G83", None);
+            return bad(BlockError::PeckQMissing, None);
         }
         if m == 760 && has_at(b'p').is_none() {
-            return bad("P word missing with G76", None);
+            return bad(BlockError::G76PMissing, None);
         }
         if matches!(m, 20 | 30)
             && ![b'i', b'j', b'k', b'r']
                 .iter()
                 .any(|&c| has_at(c).is_some())
         {
-            return bad("R, I, J and K words all missing for arc", None);
+            return bad(BlockError::ArcWordsMissing, None);
         }
         if matches!(m, 330 | 331) && modal.spindle == 0 && !ms.iter().any(|x| matches!(x.0, 3 | 4))
         {
-            return bad("spindle not turning in G33", None);
+            return bad(BlockError::SpindleStoppedG33, None);
         }
     }
     // G43.1 takes the axis words as offsets; with a motion code on the line
@@ -337,7 +322,7 @@ fn full_check(
     if let (Some(_), Some(_), Some(i)) = (motion_here, axis_g0, axis_word)
         && motion_here != Some(800)
     {
-        return bad("two G-codes that both use axis values", Some(i));
+        return bad(BlockError::TwoAxisGCodes, Some(i));
     }
     let motion = motion_here.unwrap_or(modal.motion);
     // A canned cycle runs: its code is on the line, or it is the motion mode
@@ -349,30 +334,24 @@ fn full_check(
         let first = modal.motion != motion;
         let (depth, name) = depth_axis(modal.plane);
         if first && has_at(depth).is_none() {
-            return bad(&format!("{name} value unspecified in canned cycle"), None);
+            return bad(BlockError::CycleDepthMissing { axis: name }, None);
         }
         if let Some(i) = [b'a', b'b', b'c'].iter().find_map(|&c| has_at(c)) {
-            return bad("cannot put a rotary axis word in a canned cycle", Some(i));
+            return bad(BlockError::RotaryInCycle, Some(i));
         }
         let r = match value(b'r') {
             Some(r) => r,
             None if !first => cycle.r,
-            None => return bad("R clearance plane unspecified in canned cycle", None),
+            None => return bad(BlockError::CycleRMissing, None),
         };
         if value(b'l') == Some(0.0) {
-            return bad(
-                "a canned cycle cannot be repeated zero times (L0)",
-                has_at(b'l'),
-            );
+            return bad(BlockError::CycleL0, has_at(b'l'));
         }
         if feed_mode == 930 {
-            return bad("canned cycles cannot use inverse time feed (G93)", None);
+            return bad(BlockError::CycleInverseTime, None);
         }
         if modal.ccomp != 400 && !g_on(&[400]) {
-            return bad(
-                "canned cycles cannot be used with cutter compensation on",
-                None,
-            );
+            return bad(BlockError::CycleWithComp, None);
         }
         // The R plane must not be below the bottom of the hole (in G91 the
         // depth is relative to R, so it must not be positive).
@@ -380,7 +359,7 @@ fn full_check(
         let absolute = g_on(&[900]) || (modal.absolute && !g_on(&[910]));
         let below = if absolute { r < cc } else { cc > 0.0 };
         if below {
-            return bad(&format!("R less than {name} in canned cycle"), has_at(b'r'));
+            return bad(BlockError::CycleRBelowDepth { axis: name }, has_at(b'r'));
         }
         let spindle = ms
             .iter()
@@ -389,10 +368,10 @@ fn full_check(
             .map_or(modal.spindle, |m| if m.0 == 5 { 0 } else { m.0 as i32 });
         let spindle_msg = match (motion, spindle) {
             (840, 0) | (740, 0) | (860, 0) | (870, 0) | (880, 0) => {
-                Some("spindle not turning in a tapping or boring cycle")
+                Some(BlockError::CycleSpindleStopped)
             }
-            (840, 4) => Some("spindle turning counterclockwise in G84"),
-            (740, 3) => Some("spindle turning clockwise in G74"),
+            (840, 4) => Some(BlockError::G84SpindleCcw),
+            (740, 3) => Some(BlockError::G74SpindleCw),
             _ => None,
         };
         if let Some(msg) = spindle_msg {
@@ -405,9 +384,9 @@ fn full_check(
     {
         return bad(
             if motion_here == Some(800) {
-                "axis values with G80"
+                BlockError::AxesWithG80
             } else {
-                "axis values without a G-code that uses them"
+                BlockError::AxesWithoutGCode
             },
             Some(i),
         );
@@ -415,27 +394,24 @@ fn full_check(
     if (has_at(b'@').is_some() || has_at(b'^').is_some())
         && (has_at(b'x').is_some() || has_at(b'y').is_some())
     {
-        return bad(
-            "polar coordinates and X/Y words together",
-            has_at(b'@').or(has_at(b'^')),
-        );
+        return bad(BlockError::PolarWithXY, has_at(b'@').or(has_at(b'^')));
     }
     for (i, &(l, v)) in words.iter().enumerate() {
         // L is read as a whole number, and never negative.
         if l == b'l' {
             let n = crate::parse::integer_value(v).map_err(|k| (k, Some(i)))?;
             if n < 0 {
-                return bad("negative L word", Some(i));
+                return bad(BlockError::NegativeL, Some(i));
             }
         }
         if l == b'f' && v < 0.0 {
-            return bad("negative F word", None);
+            return bad(BlockError::NegativeF, None);
         }
         if l == b's' && v < 0.0 {
-            return bad("negative spindle speed", None);
+            return bad(BlockError::NegativeS, None);
         }
         if l == b't' && v < 0.0 {
-            return bad("negative tool number", None);
+            return bad(BlockError::NegativeT, None);
         }
     }
     // Words that need a code to use them.
@@ -443,7 +419,7 @@ fn full_check(
         || (motion_here.is_none()
             && matches!(modal.motion, 20 | 30 | 50 | 51 | 331 | 760 | 870)
             && axis_word.is_some());
-    let uses = |letter: u8, ok: bool, msg: &str| -> Result<(), (ErrorKind, Option<usize>)> {
+    let uses = |letter: u8, ok: bool, msg: BlockError| -> Result<(), (ErrorKind, Option<usize>)> {
         match has_at(letter) {
             Some(i) if !ok => bad(msg, Some(i)),
             _ => Ok(()),
@@ -452,52 +428,52 @@ fn full_check(
     uses(
         b'i',
         arcish || (motion == 20 || motion == 30),
-        "I word with no G2, G3, G5, G5.1, G10, G33.1, G76 or G87 to use it",
+        BlockError::WordUnused { letter: 'i' },
     )?;
     uses(
         b'j',
         arcish || (motion == 20 || motion == 30),
-        "J word with no G2, G3, G5, G5.1, G10, G76 or G87 to use it",
+        BlockError::WordUnused { letter: 'j' },
     )?;
     uses(
         b'k',
         arcish || matches!(motion, 20 | 30 | 330 | 331 | 760 | 870),
-        "K word with no G2, G3, G33, G33.1, G76 or G87 to use it",
+        BlockError::WordUnused { letter: 'k' },
     )?;
     let canned = matches!(motion, 730 | 740 | 760 | 810..=890);
     uses(
         b'r',
         matches!(motion, 20 | 30) || canned || g_on(&[100]) || axis_g0 == Some(100) || m_on(&[19]),
-        "R word with no G-code that uses it",
+        BlockError::WordUnused { letter: 'r' },
     )?;
     uses(
         b'p',
         g_on(&[20, 30, 40, 100, 640, 50, 52, 760, 820, 860, 880, 890])
             || matches!(motion, 20 | 30 | 52 | 820 | 860 | 880 | 890)
             || m_on(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98]),
-        "P word with no G-code or M-code to use it",
+        BlockError::WordUnused { letter: 'p' },
     )?;
     uses(
         b'q',
         g_on(&[50, 100, 640, 730, 760, 830])
             || matches!(motion, 730 | 830)
             || m_on(&[19, 66, 67, 68, 61]),
-        "Q word with no G-code or M-code to use it",
+        BlockError::WordUnused { letter: 'q' },
     )?;
     uses(
         b'h',
         g_on(&[430, 432, 760]),
-        "H word with no G43 or G76 to use it",
+        BlockError::WordUnused { letter: 'h' },
     )?;
     uses(
         b'd',
         g_on(&[410, 411, 420, 421, 960]),
-        "D word with no G41, G42 or G96 to use it",
+        BlockError::WordUnused { letter: 'd' },
     )?;
     uses(
         b'e',
         g_on(&[760]) || m_on(&[66, 67, 68]),
-        "E word with no G76, M66, M67 or M68 to use it",
+        BlockError::WordUnused { letter: 'e' },
     )?;
     uses(
         b'l',
@@ -506,12 +482,12 @@ fn full_check(
             || (canned && motion != 740)
             || m_on(&[66, 98])
             || g_on(&[52, 53]),
-        "L word with no G10, canned cycle or M66 to use it",
+        BlockError::WordUnused { letter: 'l' },
     )?;
     uses(
         b'$',
         m_on(&[3, 4, 5, 19, 51]) || g_on(&[330, 331, 760, 950, 960, 970]),
-        "$ word with no spindle code to use it",
+        BlockError::WordUnused { letter: '$' },
     )?;
     // Whole numbers.
     for (i, &(l, v)) in words.iter().enumerate() {
@@ -519,7 +495,7 @@ fn full_check(
             return Err((ErrorKind::NonInteger { value: v }, Some(i)));
         }
         if l == b'd' && g_on(&[410, 420]) && v.fract() != 0.0 {
-            return bad("G41/G42 need a whole-number D word", Some(i));
+            return bad(BlockError::CompDNotWhole, Some(i));
         }
     }
     // Peck depths of a running G73/G83.
@@ -527,20 +503,20 @@ fn full_check(
         && (motion_here.is_some() || axis_word.is_some())
         && value(b'q').is_some_and(|q| q != -1.0 && q <= 0.0)
     {
-        return bad("negative or zero Q value in G73/G83", has_at(b'q'));
+        return bad(BlockError::PeckQNotPositive, has_at(b'q'));
     }
     if value(b'h').is_some_and(|h| h < -1.0) {
-        return bad("negative H word", has_at(b'h'));
+        return bad(BlockError::NegativeH, has_at(b'h'));
     }
     // G53 moves in machine coordinates: with G0 or G1, never incremental.
     if let Some(at) = gs.iter().find(|g| g.0 == 530).map(|g| g.1) {
         let motion_to_be = motion_here.or(axis_word.map(|_| modal.motion));
         if !matches!(motion_to_be, Some(0 | 10)) {
-            return bad("G53 needs G0 or G1", Some(at));
+            return bad(BlockError::G53NeedsG0G1, Some(at));
         }
         let incremental = g_on(&[910]) || (!modal.absolute && !g_on(&[900]));
         if incremental {
-            return bad("G53 cannot be used in incremental mode (G91)", Some(at));
+            return bad(BlockError::G53Incremental, Some(at));
         }
     }
     // G10's L and P: P is a tool number (L1, L10, L11) or a coordinate
@@ -555,39 +531,36 @@ fn full_check(
             (p - 0.5).trunc()
         };
         if !matches!(l, 1 | 2 | 10 | 11 | 20) {
-            return bad("G10 needs L1, L2, L10, L11 or L20", has_at(b'l'));
+            return bad(BlockError::G10BadL, has_at(b'l'));
         }
         if p + 0.0001 - p_int > 0.0002 {
-            return bad("G10 P value not a whole number", has_at(b'p'));
+            return bad(BlockError::G10PNotWhole, has_at(b'p'));
         }
         if matches!(l, 2 | 20) && !(0.0..=9.0).contains(&p_int) {
-            return bad("G10 L2/L20 P value out of range (0 to 9)", has_at(b'p'));
+            return bad(BlockError::G10CoordPRange, has_at(b'p'));
         }
         if matches!(l, 1 | 10 | 11) && p_int < 1.0 {
-            return bad(
-                "G10 L1/L10/L11 P value (a tool number) out of range",
-                has_at(b'p'),
-            );
+            return bad(BlockError::G10ToolPRange, has_at(b'p'));
         }
     }
     // Codes that need words.
     if g_on(&[40]) && !given(b'p') {
         return bad(
-            "dwell time missing with G4",
+            BlockError::G4PMissing,
             gs.iter().find(|g| g.0 == 40).map(|g| g.1),
         );
     }
     if g_on(&[960]) && has_at(b's').is_none() {
-        return bad("S word missing with G96", None);
+        return bad(BlockError::G96SMissing, None);
     }
     if m_on(&[62, 63, 64, 65]) && has_at(b'p').is_none() {
-        return bad("no valid P word with M62-M65", None);
+        return bad(BlockError::M62PMissing, None);
     }
     if m_on(&[66]) && !given(b'p') && has_at(b'e').is_none() {
-        return bad("M66 needs a P or an E word", None);
+        return bad(BlockError::M66PEMissing, None);
     }
     if m_on(&[61]) && has_at(b'q').is_none() {
-        return bad("M61 needs a Q word (tool number)", None);
+        return bad(BlockError::M61QMissing, None);
     }
     // Motion needing a feed rate.
     let moves = motion_here.is_some() || axis_word.is_some();
@@ -597,22 +570,22 @@ fn full_check(
             gs.iter().any(|g| g.0 == 930) || (modal.feed_mode == 930 && !g_on(&[940, 950]));
         if inverse {
             if feed.is_none() && axis_word.is_some() {
-                return bad("F word missing with an inverse time move", None);
+                return bad(BlockError::InverseTimeFMissing, None);
             }
         } else if feed.unwrap_or(modal.feed) == 0.0 {
-            return bad("cannot move at zero feed rate", None);
+            return bad(BlockError::ZeroFeed, None);
         }
         if matches!(motion, 20 | 30) && axis_word.is_some() {
             let arc = ["i", "j", "k", "r"]
                 .iter()
                 .any(|c| has[c.as_bytes()[0] as usize].is_some());
             if !arc {
-                return bad("R, I, J and K words all missing for arc", None);
+                return bad(BlockError::ArcWordsMissing, None);
             }
         }
     }
     if motion_here.is_some_and(|m| matches!(m, 330 | 331)) && has_at(b'k').is_none() {
-        return bad("K word missing with G33", None);
+        return bad(BlockError::G33KMissing, None);
     }
     Ok(())
 }

@@ -263,3 +263,33 @@ fn fixtures_match_rs274() {
     );
     eprintln!("{} fixtures agree with rs274", files.len());
 }
+
+/// Every refusal of a block (codes E0600–E0699 in `src/diag/block_error.rs`)
+/// is documented by a fixture whose snapshot shows it.
+#[test]
+fn every_block_error_has_a_fixture() {
+    let src = std::fs::read_to_string(crate::root().join("src/diag/block_error.rs"))
+        .expect("block_error.rs");
+    let codes: Vec<&str> = src
+        .split('"')
+        .filter(|t| t.len() == 5 && t.starts_with("E06"))
+        .collect();
+    assert!(codes.len() > 40, "codes found: {codes:?}");
+    let mut shown = String::new();
+    for e in walkdir::WalkDir::new(crate::root().join("tests/integration/snapshots"))
+        .into_iter()
+        .flatten()
+    {
+        if e.path().to_string_lossy().contains("@err__") {
+            shown.push_str(&std::fs::read_to_string(e.path()).unwrap_or_default());
+        }
+    }
+    let missing: Vec<&&str> = codes
+        .iter()
+        .filter(|c| !shown.contains(&format!("[{c}]")))
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "block errors without an err/ fixture: {missing:?}"
+    );
+}
