@@ -402,3 +402,283 @@ fn canned_cycles_move_as_rs274() {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
 }
+
+// ---------------------------------------------------------------- arcs
+
+/// A canon motion line: its name and numbers.
+fn parse_canon(line: &str) -> (String, Vec<f64>) {
+    let name = line.split('(').next().unwrap_or("").to_string();
+    let (_, nums) = oracle::split_numbers(line);
+    (name, nums)
+}
+
+/// In-plane axes (first, second) and normal, as indices into X Y Z, in
+/// the canon's ARC_FEED order.
+fn arc_axes(plane: Plane) -> [usize; 3] {
+    match plane {
+        Plane::XY => [0, 1, 2],
+        Plane::XZ => [2, 0, 1],
+        Plane::YZ => [1, 2, 0],
+    }
+}
+
+struct CanonArc {
+    centre: [f64; 2],
+    rotation: f64,
+    end: [f64; 3],
+}
+
+fn canon_arc(nums: &[f64], plane: Plane) -> Option<CanonArc> {
+    let [p, q, n] = arc_axes(plane);
+    let mut end = [0.0; 3];
+    end[p] = *nums.first()?;
+    end[q] = *nums.get(1)?;
+    end[n] = *nums.get(5)?;
+    Some(CanonArc {
+        centre: [*nums.get(2)?, *nums.get(3)?],
+        rotation: *nums.get(4)?,
+        end,
+    })
+}
+
+/// Angle turned by a canon arc from `from` (positive).
+fn canon_sweep(from: [f64; 3], arc: &CanonArc, plane: Plane) -> f64 {
+    use std::f64::consts::PI;
+    let [p, q, _] = arc_axes(plane);
+    let a0 = (from[q] - arc.centre[1]).atan2(from[p] - arc.centre[0]);
+    let a1 = (arc.end[q] - arc.centre[1]).atan2(arc.end[p] - arc.centre[0]);
+    let same = (from[p] - arc.end[p]).abs() < 1e-9 && (from[q] - arc.end[q]).abs() < 1e-9;
+    let mut base = if arc.rotation < 0.0 { a0 - a1 } else { a1 - a0 };
+    if same {
+        base = 2.0 * PI;
+    } else {
+        while base <= 0.0 {
+            base += 2.0 * PI;
+        }
+        while base > 2.0 * PI {
+            base -= 2.0 * PI;
+        }
+    }
+    base + 2.0 * PI * (arc.rotation.abs() - 1.0)
+}
+
+/// Compares motion where the lowered program may cut an arc into several
+/// on the same helix: every other line as text (numbers within 1e-4), an
+/// arc of the original against a run of lowered arcs with the same centre
+/// and direction, each ending on the original helix at its angle, their
+/// turns adding up to the original's and the last ending at its end.
+fn compare_with_arcs(a: &[String], b: &[String], plane: Plane) -> Result<(), String> {
+    let [p, q, n] = arc_axes(plane);
+    let (mut pa, mut pb) = ([0.0; 3], [0.0; 3]);
+    let mut j = 0;
+    let end_of = |name: &str, nums: &[f64]| -> Option<[f64; 3]> {
+        if name.starts_with("STRAIGHT_") {
+            Some([*nums.first()?, *nums.get(1)?, *nums.get(2)?])
+        } else if name == "ARC_FEED" {
+            canon_arc(nums, plane).map(|a| a.end)
+        } else {
+            None
+        }
+    };
+    for (i, la) in a.iter().enumerate() {
+        let (name, nums) = parse_canon(la);
+        if name != "ARC_FEED" {
+            let lb = b
+                .get(j)
+                .ok_or_else(|| format!("line {}: `{la}` missing from the lowered run", i + 1))?;
+            oracle::compare(std::slice::from_ref(la), std::slice::from_ref(lb), 1e-4)
+                .map_err(|e| format!("original line {}: {e}", i + 1))?;
+            if let Some(e) = end_of(&name, &nums) {
+                pa = e;
+                pb = e;
+            }
+            j += 1;
+            continue;
+        }
+        let arc = canon_arc(&nums, plane).ok_or("bad ARC_FEED")?;
+        let total = canon_sweep(pa, &arc, plane);
+        let radius = (pa[q] - arc.centre[1]).hypot(pa[p] - arc.centre[0]);
+        let a0 = (pa[q] - arc.centre[1]).atan2(pa[p] - arc.centre[0]);
+        let dir = arc.rotation.signum();
+        let mut acc = 0.0;
+        let mut parts = 0;
+        while acc < total - 1e-3 {
+            let lb = b.get(j).ok_or_else(|| {
+                format!("original line {}: lowered run ends inside `{la}`", i + 1)
+            })?;
+            let (nb, numsb) = parse_canon(lb);
+            let piece = (nb == "ARC_FEED")
+                .then(|| canon_arc(&numsb, plane))
+                .flatten()
+                .ok_or_else(|| format!("original line {}: `{la}` vs lowered `{lb}`", i + 1))?;
+            if (piece.centre[0] - arc.centre[0]).abs() > 1e-4
+                || (piece.centre[1] - arc.centre[1]).abs() > 1e-4
+                || piece.rotation.signum() != dir
+            {
+                return Err(format!(
+                    "original line {}: `{la}`: lowered arc `{lb}` has another centre or direction",
+                    i + 1
+                ));
+            }
+            acc += canon_sweep(pb, &piece, plane);
+            let angle = a0 + dir * acc;
+            let want_p = arc.centre[0] + radius * angle.cos();
+            let want_q = arc.centre[1] + radius * angle.sin();
+            let want_n = pa[n] + (arc.end[n] - pa[n]) * (acc / total).min(1.0);
+            let e = piece.end;
+            if (e[p] - want_p).abs() > 3e-4
+                || (e[q] - want_q).abs() > 3e-4
+                || (e[n] - want_n).abs() > 3e-4
+            {
+                return Err(format!(
+                    "original line {}: `{la}`: lowered arc `{lb}` leaves the helix \
+                     (at {acc} rad of {total}: want {want_p} {want_q} {want_n})",
+                    i + 1
+                ));
+            }
+            pb = e;
+            j += 1;
+            parts += 1;
+        }
+        if (acc - total).abs() > 1e-3
+            || (0..3).any(|k| (pb[k] - arc.end[k]).abs() > 1e-4)
+            || parts == 0
+        {
+            return Err(format!(
+                "original line {}: `{la}` turns {total} rad, the lowered arcs {acc} ending at {pb:?}",
+                i + 1
+            ));
+        }
+        pa = arc.end;
+    }
+    if j != b.len() {
+        return Err(format!("the lowered run has extra lines from `{}`", b[j]));
+    }
+    Ok(())
+}
+
+fn plane_code(plane: Plane) -> &'static str {
+    match plane {
+        Plane::XY => "G17",
+        Plane::XZ => "G18",
+        Plane::YZ => "G19",
+    }
+}
+
+/// Full circles without end point and P-turn arcs, written both ways.
+fn arc_program(seed: u64) -> (String, String, Plane) {
+    use ngcflat::target::lower::arc::{ArcInput, lower_arc};
+    let mut rng = Rng::new(seed);
+    let plane = rng.pick(&[Plane::XY, Plane::XZ, Plane::YZ]);
+    let [p, q, n] = arc_axes(plane);
+    let units = if rng.chance(0.3) { "G20" } else { "G21" };
+    let header = format!("{units} {} G90 G94 F120\n", plane_code(plane));
+    let (mut orig, mut low) = (header.clone(), header);
+    let letters = ['X', 'Y', 'Z'];
+    let offset_letter = ['I', 'J', 'K'];
+    let mut pos = [rng.val(-5.0, 5.0), rng.val(-5.0, 5.0), rng.val(-5.0, 5.0)];
+    let start = format!("G0 X{} Y{} Z{}\n", num(pos[0]), num(pos[1]), num(pos[2]));
+    orig.push_str(&start);
+    low.push_str(&start);
+    for _ in 0..(2 + rng.below(5)) {
+        if rng.chance(0.3) {
+            pos = [rng.val(-5.0, 5.0), rng.val(-5.0, 5.0), rng.val(-5.0, 5.0)];
+            let l = format!("G1 X{} Y{} Z{}\n", num(pos[0]), num(pos[1]), num(pos[2]));
+            orig.push_str(&l);
+            low.push_str(&l);
+        }
+        let clockwise = rng.chance(0.5);
+        let g = if clockwise { "G2" } else { "G3" };
+        // Centre offsets, radius at least 0.5.
+        let (mut op, mut oq) = (0.0f64, 0.0f64);
+        while op.hypot(oq) < 0.5 {
+            op = rng.val(-4.0, 4.0);
+            oq = rng.val(-4.0, 4.0);
+        }
+        let mut centre = pos;
+        centre[p] += op;
+        centre[q] += oq;
+        let mut end = pos;
+        let mut words = vec![g.to_string()];
+        let with_end = rng.chance(0.5);
+        if with_end {
+            let r = op.hypot(oq);
+            let phi = rng.val(-3.2, 3.2);
+            end[p] = centre[p] + r * phi.cos();
+            end[q] = centre[q] + r * phi.sin();
+            words.push(format!("{}{}", letters[p], num(end[p])));
+            words.push(format!("{}{}", letters[q], num(end[q])));
+        }
+        if rng.chance(0.5) {
+            end[n] = pos[n] + rng.val(-3.0, 3.0);
+            words.push(format!("{}{}", letters[n], num(end[n])));
+        }
+        // Offsets written in axis order (I before J before K).
+        let mut offs = [(p, op), (q, oq)];
+        offs.sort_by_key(|o| o.0);
+        for (axis, v) in offs {
+            words.push(format!("{}{}", offset_letter[axis], num(v)));
+        }
+        let turns = if !with_end || rng.chance(0.7) {
+            if rng.chance(0.5) || with_end {
+                2 + rng.below(3) as u32
+            } else {
+                1
+            }
+        } else {
+            1
+        };
+        if turns > 1 || rng.chance(0.2) {
+            words.push(format!("P{turns}"));
+        }
+        let line = words.join(" ");
+        orig.push_str(&line);
+        orig.push('\n');
+        let lowered = lower_arc(&ArcInput {
+            plane,
+            clockwise,
+            start: pos,
+            end,
+            centre,
+            turns,
+        })
+        .expect("arc lowers");
+        low.push_str(&format!("({line})\n"));
+        for l in &lowered {
+            low.push_str(&format_line(l));
+            low.push('\n');
+        }
+        pos = end;
+    }
+    orig.push_str("M2\n");
+    low.push_str("M2\n");
+    (orig, low, plane)
+}
+
+#[test]
+fn full_circles_and_turns_move_as_rs274() {
+    if !oracle::available("full_circles_and_turns_move_as_rs274") {
+        return;
+    }
+    let seed0 = first_seed();
+    let mut failures = Vec::new();
+    for seed in seed0..seed0 + cases() {
+        let (orig, low, plane) = arc_program(seed);
+        let a = oracle::run(orig.as_bytes(), "", None);
+        let b = oracle::run(low.as_bytes(), "", None);
+        let why = if !a.ok {
+            Some(format!("rs274 rejected the original: {}", a.stderr))
+        } else if !b.ok {
+            Some(format!("rs274 rejected the lowered program: {}", b.stderr))
+        } else {
+            compare_with_arcs(&motion(&a.lines), &motion(&b.lines), plane).err()
+        };
+        if let Some(why) = why {
+            failures.push(report("arcs", seed, &orig, &low, &why));
+        }
+        if failures.len() >= 3 {
+            break;
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}

@@ -77,7 +77,7 @@ fn normalize(line: &str) -> Option<String> {
     Some(cmd)
 }
 
-fn split_numbers(s: &str) -> (Vec<String>, Vec<f64>) {
+pub fn split_numbers(s: &str) -> (Vec<String>, Vec<f64>) {
     let mut text = Vec::new();
     let mut nums = Vec::new();
     let mut cur = String::new();

@@ -24,6 +24,7 @@
 //! Errors are [`LowerError`]s with their own codes (E1100–E1149); the
 //! caller adds the position of the block.
 
+pub mod arc;
 pub mod cycle;
 
 pub use cycle::{CycleBlock, CycleKind, CycleModal, CycleOutput, CycleState, Retract};

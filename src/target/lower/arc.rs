@@ -1,0 +1,186 @@
+//! Arcs a simple controller cannot take as written: a full circle without
+//! end point (`G2 I5`: GRBL wants an axis word) and arcs with P turns (no P
+//! word on GRBL-class controllers), as several G2/G3 arcs on the same
+//! helix.
+//!
+//! The rule (LinuxCNC 2.9's motion for an arc with centre C, start S, end E
+//! and P turns): the tool turns about C in the arc's direction from S's
+//! angle to E's angle — a whole turn when E is S in the plane — plus P − 1
+//! whole turns; the axis normal to the plane moves linearly with the angle
+//! turned. The lowering cuts that sweep into `n = ceil(sweep / π)` (at
+//! least 2) equal parts, each at most a half turn, each ending on the
+//! circle at its angle and at the helix height for that angle; the last
+//! ends exactly at E. Each part is written `G2|G3 X Y Z` with the centre as
+//! offsets from the part's start (I J in G17, I K in G18, J K in G19;
+//! incremental arc centres, G91.1, the default of LinuxCNC and the only
+//! form of GRBL). Axes other than X Y Z must not move during the arc.
+
+use super::{LowerError, PlainLine, Plane, push};
+use std::f64::consts::PI;
+
+/// An arc as LinuxCNC would run it. Coordinates are X, Y, Z in program
+/// units (absolute, X a radius in G7).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArcInput {
+    pub plane: Plane,
+    /// G2 (true) or G3.
+    pub clockwise: bool,
+    pub start: [f64; 3],
+    /// The end point (the start again for a full circle written without
+    /// end point; the helix axis may differ).
+    pub end: [f64; 3],
+    /// The centre; its component along the plane's normal is ignored.
+    pub centre: [f64; 3],
+    /// P turns (1 without P).
+    pub turns: u32,
+}
+
+/// The in-plane axes (first, second) and the normal axis, as indices into
+/// X Y Z, in LinuxCNC's order for the plane (G17 X Y, G18 Z X, G19 Y Z),
+/// so that G3 turns from the first axis toward the second.
+fn axes(plane: Plane) -> [usize; 3] {
+    match plane {
+        Plane::XY => [0, 1, 2],
+        Plane::XZ => [2, 0, 1],
+        Plane::YZ => [1, 2, 0],
+    }
+}
+
+/// The angle the arc turns through (radians, positive), as LinuxCNC moves
+/// it.
+pub fn sweep(a: &ArcInput) -> f64 {
+    let [p, q, _] = axes(a.plane);
+    let a0 = (a.start[q] - a.centre[q]).atan2(a.start[p] - a.centre[p]);
+    let a1 = (a.end[q] - a.centre[q]).atan2(a.end[p] - a.centre[p]);
+    let same = a.start[p] == a.end[p] && a.start[q] == a.end[q];
+    let mut base = if a.clockwise { a0 - a1 } else { a1 - a0 };
+    if same {
+        base = 2.0 * PI;
+    } else {
+        while base <= 0.0 {
+            base += 2.0 * PI;
+        }
+        while base > 2.0 * PI {
+            base -= 2.0 * PI;
+        }
+    }
+    base + 2.0 * PI * f64::from(a.turns.max(1) - 1)
+}
+
+/// Lowers a full circle or a P-turn arc into arcs of at most half a turn
+/// without P (see the module doc for the rule).
+pub fn lower_arc(a: &ArcInput) -> Result<Vec<PlainLine>, LowerError> {
+    let [p, q, n] = axes(a.plane);
+    let radius = (a.start[q] - a.centre[q]).hypot(a.start[p] - a.centre[p]);
+    if radius.is_nan() || radius <= 0.0 || !radius.is_finite() {
+        return Err(LowerError::BadArc);
+    }
+    let total = sweep(a);
+    let parts_f = (total / PI).ceil().max(2.0);
+    if parts_f > super::MAX_LINES as f64 {
+        return Err(LowerError::TooManyLines);
+    }
+    let parts = parts_f as usize;
+    let a0 = (a.start[q] - a.centre[q]).atan2(a.start[p] - a.centre[p]);
+    let sign = if a.clockwise { -1.0 } else { 1.0 };
+    let g = if a.clockwise { 2.0 } else { 3.0 };
+    // Offset letters of the plane's first and second axes.
+    let letters = [b'I', b'J', b'K'];
+    let mut out = Vec::with_capacity(parts);
+    let mut from = a.start;
+    for k in 1..=parts {
+        let to = if k == parts {
+            a.end
+        } else {
+            let t = k as f64 / parts as f64;
+            let angle = a0 + sign * total * t;
+            let mut pt = [0.0; 3];
+            pt[p] = a.centre[p] + radius * angle.cos();
+            pt[q] = a.centre[q] + radius * angle.sin();
+            pt[n] = a.start[n] + (a.end[n] - a.start[n]) * t;
+            pt
+        };
+        let (first, second) = if p < q { (p, q) } else { (q, p) };
+        push(
+            &mut out,
+            PlainLine::new(&[
+                (b'G', g),
+                (b'X', to[0]),
+                (b'Y', to[1]),
+                (b'Z', to[2]),
+                (letters[first], a.centre[first] - from[first]),
+                (letters[second], a.centre[second] - from[second]),
+            ]),
+        )?;
+        from = to;
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn words(l: &PlainLine) -> Vec<(char, f64)> {
+        l.words
+            .iter()
+            .map(|w| (w.letter as char, w.value))
+            .collect()
+    }
+
+    #[test]
+    fn full_circle_is_two_halves() {
+        let a = ArcInput {
+            plane: Plane::XY,
+            clockwise: true,
+            start: [0.0, 0.0, 1.0],
+            end: [0.0, 0.0, -1.0],
+            centre: [5.0, 0.0, 0.0],
+            turns: 1,
+        };
+        let out = lower_arc(&a).unwrap();
+        assert_eq!(out.len(), 2);
+        let w = words(&out[0]);
+        assert_eq!(w[0], ('G', 2.0));
+        assert!((w[1].1 - 10.0).abs() < 1e-12 && w[2].1.abs() < 1e-12);
+        assert_eq!(w[3], ('Z', 0.0));
+        assert_eq!((w[4], w[5]), (('I', 5.0), ('J', 0.0)));
+        let w = words(&out[1]);
+        assert_eq!(&w[1..4], &[('X', 0.0), ('Y', 0.0), ('Z', -1.0)]);
+        assert!((w[4].1 + 5.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn turns_add_whole_circles() {
+        let mut a = ArcInput {
+            plane: Plane::XZ,
+            clockwise: false,
+            start: [1.0, 0.0, 0.0],
+            end: [0.0, 0.0, 1.0],
+            centre: [0.0, 0.0, 0.0],
+            turns: 1,
+        };
+        // G18: G3 turns from Z toward X; from X to Z is three quarters.
+        assert!((sweep(&a) - 1.5 * PI).abs() < 1e-12);
+        a.turns = 3;
+        assert!((sweep(&a) - 5.5 * PI).abs() < 1e-12);
+        assert_eq!(lower_arc(&a).unwrap().len(), 6);
+        // I and K, in that order, in G18.
+        let l = &lower_arc(&a).unwrap()[0];
+        assert_eq!(l.words[4].letter, b'I');
+        assert_eq!(l.words[5].letter, b'K');
+    }
+
+    #[test]
+    fn zero_radius_refused() {
+        let a = ArcInput {
+            plane: Plane::XY,
+            clockwise: false,
+            start: [1.0, 1.0, 0.0],
+            end: [1.0, 1.0, 0.0],
+            centre: [1.0, 1.0, 0.0],
+            turns: 1,
+        };
+        assert_eq!(lower_arc(&a), Err(LowerError::BadArc));
+    }
+}
