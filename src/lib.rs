@@ -54,6 +54,23 @@ pub fn flatten(
     search: &SearchPath,
     dest: Destination,
 ) -> Result<Vec<Diagnostic>, Error> {
+    match flatten_with(source, settings, search, dest, None) {
+        (w, None) => Ok(w),
+        (_, Some(e)) => Err(e),
+    }
+}
+
+/// Flattens one program, every output line going through `consumer` when
+/// one is given. Returns every diagnostic (a consumer in check mode keeps
+/// all its errors) and the error that stopped the run. The output is
+/// released only when there is no error.
+pub fn flatten_with<'s>(
+    source: SourceFile,
+    settings: &'s Settings,
+    search: &SearchPath,
+    dest: Destination,
+    consumer: Option<Box<dyn eval::LineConsumer + 's>>,
+) -> (Vec<Diagnostic>, Option<Error>) {
     let main_dir = if source.path.as_os_str() == "<stdin>" {
         None
     } else {
@@ -67,7 +84,7 @@ pub fn flatten(
     };
     let index = Rc::new(FileIndex::build(Arc::new(source)));
     let loader = Loader::new(search.clone(), main_dir);
-    let mut sink = Sink::new(dest.clone()).map_err(|e| {
+    let sink = Sink::new(dest.clone()).map_err(|e| {
         let path = match &dest {
             Destination::File(p) => p.clone(),
             _ => PathBuf::from("<output>"),
@@ -79,9 +96,17 @@ pub fn flatten(
             },
             None,
         )
-    })?;
+    });
+    let mut sink = match sink {
+        Ok(s) => s,
+        Err(e) => return (Vec::new(), Some(e)),
+    };
     sink.refer_to(index.file.clone());
-    Interp::new(settings, loader, index, sink).run()
+    let interp = Interp::new(settings, loader, index, sink);
+    match consumer {
+        Some(c) => interp.with_consumer(c).run_all(),
+        None => interp.run_all(),
+    }
 }
 
 /// Flattens a string (for tests and tools); returns the output text.

@@ -408,7 +408,9 @@ impl Interp<'_> {
         raw: &[u8],
         repl: &[(Span, Edit)],
     ) -> Result<(), crate::diag::Error> {
-        if max_edited_len(raw.len(), repl, self.s.precision).is_some_and(|n| n <= MAX_LINE) {
+        if self.consumer.is_none()
+            && max_edited_len(raw.len(), repl, self.s.precision).is_some_and(|n| n <= MAX_LINE)
+        {
             self.count_line()?;
             return self.output.edited_line(raw, repl).map_err(output_error);
         }
@@ -429,7 +431,13 @@ impl Interp<'_> {
             let end = start + trimmed_len as u32;
             return Err(self.error(ErrorKind::OutputLineTooLong { len }, file, start, end));
         }
-        let r = self.emit_raw(&out);
+        let r = if self.consumer.is_some() {
+            let f = file.file.clone();
+            self.count_line()
+                .and_then(|_| self.consume(&f, start, &out, repl.is_empty()))
+        } else {
+            self.emit_raw(&out)
+        };
         self.out = out;
         r
     }
@@ -486,7 +494,7 @@ impl Interp<'_> {
                 .iter()
                 .rposition(|b| !b.is_ascii_whitespace())
                 .map_or(0, |p| p + 1);
-            self.emit_raw(&raw[..trimmed])?;
+            self.emit_source(file, start, &raw[..trimmed])?;
             if self.apply_words(file, start, &words, false)? {
                 self.end_program()?;
             }

@@ -27,24 +27,31 @@ impl Interp<'_> {
     }
 
     pub(super) fn osite(&self, file: &Rc<FileIndex>, oidx: u32) -> (u32, u32) {
-        let o = &file.olines[oidx as usize];
-        let end = o.start + o.line_len();
-        // Point at the O-word, not at the indentation before it.
-        let lead = file.file.memory().map_or(0, |d| {
-            d[o.start as usize..end as usize]
-                .iter()
-                .take_while(|b| matches!(b, b' ' | b'\t'))
-                .count() as u32
-        });
-        let mut e = end;
-        if let Some(d) = file.file.memory() {
-            while e > o.start + lead && matches!(d[e as usize - 1], b' ' | b'\t' | b'\r') {
-                e -= 1;
-            }
-        }
-        (o.start + lead, e)
+        osite_of(file, oidx)
     }
+}
 
+/// Span of O-line `oidx` of `file`, from its O-word to its last non-blank.
+pub(super) fn osite_of(file: &Rc<FileIndex>, oidx: u32) -> (u32, u32) {
+    let o = &file.olines[oidx as usize];
+    let end = o.start + o.line_len();
+    // Point at the O-word, not at the indentation before it.
+    let lead = file.file.memory().map_or(0, |d| {
+        d[o.start as usize..end as usize]
+            .iter()
+            .take_while(|b| matches!(b, b' ' | b'\t'))
+            .count() as u32
+    });
+    let mut e = end;
+    if let Some(d) = file.file.memory() {
+        while e > o.start + lead && matches!(d[e as usize - 1], b' ' | b'\t' | b'\r') {
+            e -= 1;
+        }
+    }
+    (o.start + lead, e)
+}
+
+impl Interp<'_> {
     fn oerr(&self, kind: ErrorKind, file: &Rc<FileIndex>, oidx: u32) -> Error {
         let (a, b) = self.osite(file, oidx);
         self.error(kind, file, a, b)

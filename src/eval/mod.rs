@@ -9,6 +9,7 @@ mod cycle;
 mod degrees;
 mod expr;
 mod fast;
+mod hook;
 mod message;
 mod modal;
 mod named;
@@ -33,6 +34,7 @@ use crate::parse::ast::{Line, LineKind, OKind, Span};
 use crate::parse::{LineParser, Name};
 use crate::program::{FileIndex, Loader, Window, next_line};
 
+pub use hook::{LineConsumer, Origin};
 pub use settings::{Define, Settings};
 
 use params::Params;
@@ -215,6 +217,22 @@ pub struct Interp<'s> {
     /// The line of an M61 not followed by a tool change, and the tool the
     /// standalone reference still has as current (see W0110).
     m61: Option<(u32, Option<f64>)>,
+    /// Reads every output line instead of the output (see [`hook`]).
+    consumer: Option<Box<dyn LineConsumer + 's>>,
+}
+
+/// The call stack of `frames` as sites, innermost caller first.
+#[allow(clippy::vec_box)]
+fn stack_of(frames: &[Box<Frame>]) -> Vec<Site> {
+    frames
+        .iter()
+        .rev()
+        .filter_map(|f| {
+            let (ret, oidx) = (f.ret.as_ref()?, f.call_oidx?);
+            let (a, b) = control::osite_of(&ret.file, oidx);
+            Some(Site::new(&ret.file.file, a, b))
+        })
+        .collect()
 }
 
 /// An error writing the output.
@@ -338,7 +356,14 @@ impl<'s> Interp<'s> {
             tlo_moved: false,
             standalone_drift: None,
             m61: None,
+            consumer: None,
         }
+    }
+
+    /// Hands every output line to `consumer` instead of the output.
+    pub fn with_consumer(mut self, consumer: Box<dyn LineConsumer + 's>) -> Interp<'s> {
+        self.consumer = Some(consumer);
+        self
     }
 
     pub fn level(&self) -> usize {
@@ -347,15 +372,7 @@ impl<'s> Interp<'s> {
 
     /// The call stack as sites, innermost caller first.
     fn stack(&self) -> Vec<Site> {
-        self.frames
-            .iter()
-            .rev()
-            .filter_map(|f| {
-                let (ret, oidx) = (f.ret.as_ref()?, f.call_oidx?);
-                let (a, b) = self.osite(&ret.file, oidx);
-                Some(Site::new(&ret.file.file, a, b))
-            })
-            .collect()
+        stack_of(&self.frames)
     }
 
     pub(crate) fn error(
@@ -404,7 +421,49 @@ impl<'s> Interp<'s> {
     }
 
     /// Runs the program to its end and releases the output.
-    pub fn run(mut self) -> Result<Vec<Diagnostic>, Error> {
+    pub fn run(self) -> Result<Vec<Diagnostic>, Error> {
+        match self.run_all() {
+            (w, None) => Ok(w),
+            (_, Some(e)) => Err(e),
+        }
+    }
+
+    /// Runs the program; returns every diagnostic (with a consumer that
+    /// keeps its errors, those too) and the error that stopped the run, if
+    /// any. The output is released only without an error.
+    pub fn run_all(mut self) -> (Vec<Diagnostic>, Option<Error>) {
+        let r = self.run_steps();
+        if r.is_ok() {
+            self.finish_warnings();
+        }
+        let Interp {
+            mut output,
+            mut warnings,
+            loader,
+            consumer,
+            ..
+        } = self;
+        warnings.extend(loader.warnings);
+        let mut err = r.err();
+        if let Some(mut c) = consumer {
+            match c.finish(&mut output) {
+                Ok(d) => warnings.extend(d),
+                Err(e) => {
+                    err.get_or_insert(e);
+                }
+            }
+        }
+        let failed = err.is_some()
+            || warnings
+                .iter()
+                .any(|d| d.level() == crate::diag::Level::Error);
+        if !failed && let Err(e) = output.finish() {
+            err = Some(output_error(e));
+        }
+        (warnings, err)
+    }
+
+    fn run_steps(&mut self) -> Result<(), Error> {
         let main = self.main.clone();
         if let Some(e) = &main.read_error {
             let k = ErrorKind::Io {
@@ -428,16 +487,7 @@ impl<'s> Interp<'s> {
         while !self.ended {
             self.step()?;
         }
-        self.finish_warnings();
-        let Interp {
-            output,
-            mut warnings,
-            loader,
-            ..
-        } = self;
-        warnings.extend(loader.warnings);
-        output.finish().map_err(output_error)?;
-        Ok(warnings)
+        Ok(())
     }
 
     fn finish_warnings(&mut self) {
@@ -724,6 +774,21 @@ impl<'s> Interp<'s> {
     /// Writes one finished output line.
     fn emit_raw(&mut self, bytes: &[u8]) -> Result<(), Error> {
         self.count_line()?;
+        if self.consumer.is_some() {
+            let file = self.cur.file.file.clone();
+            return self.consume(&file, self.current_line_start, bytes, false);
+        }
+        self.output.line(bytes).map_err(output_error)
+    }
+
+    /// Writes a source line as it is (`bytes`: its text without trailing
+    /// blanks, starting at `start` in `file`).
+    fn emit_source(&mut self, file: &Rc<FileIndex>, start: u32, bytes: &[u8]) -> Result<(), Error> {
+        self.count_line()?;
+        if self.consumer.is_some() {
+            let file = file.file.clone();
+            return self.consume(&file, start, bytes, true);
+        }
         self.output.line(bytes).map_err(output_error)
     }
 

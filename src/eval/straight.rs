@@ -426,9 +426,14 @@ impl Interp<'_> {
                 if p.text_end + 1 != p.next {
                     // Trailing blanks: the line is written trimmed.
                     self.flush_input(file, base, &buf[*batch_start..*i], *batch_start)?;
-                    self.output
-                        .line(&buf[*i..p.text_end])
-                        .map_err(output_error)?;
+                    if self.consumer.is_some() {
+                        let start = base + *i as u32;
+                        self.consume(&file.file, start, &buf[*i..p.text_end], true)?;
+                    } else {
+                        self.output
+                            .line(&buf[*i..p.text_end])
+                            .map_err(output_error)?;
+                    }
                     *batch_start = p.next;
                 } else if p.next - *batch_start >= BATCH {
                     self.flush_input(file, base, &buf[*batch_start..p.next], *batch_start)?;
@@ -562,6 +567,9 @@ impl Interp<'_> {
             return Ok(());
         }
         let start = base as u64 + at as u64;
+        if self.consumer.is_some() {
+            return self.consume_input(&file.file, start, bytes);
+        }
         self.output
             .write_input(&file.file, start, bytes)
             .map_err(output_error)

@@ -1,4 +1,10 @@
 //! The machine model for what follows evaluation: typed blocks of executed
-//! lines, the state they put the machine in, and the motion they make.
+//! lines ([`block`]), the state they put the machine in ([`model`]), and the
+//! motion they make ([`motion`]).
 
+pub mod block;
+pub mod model;
 pub mod motion;
+
+pub use block::Block;
+pub use model::Machine;

@@ -1,0 +1,876 @@
+//! A typed block: one executed (flat) line decoded once. After evaluation
+//! every word's value is a number, so decoding is reading letters and
+//! numbers; G and M codes become enums per modal group, the other words
+//! values by letter. Comments and messages are kept with their spans.
+//!
+//! The decoder is lenient about what the evaluator already checked (one
+//! word per modal group, value ranges) but never panics: a line it cannot
+//! read is an [`DecodeError`] with the span of the trouble.
+
+use std::fmt;
+
+/// A span of the decoded line (byte offsets).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Span {
+    pub start: u16,
+    pub end: u16,
+}
+
+/// Motion modes (group 1), including canned cycles and the codes that stop
+/// them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MotionMode {
+    Rapid,
+    Linear,
+    ArcCw,
+    ArcCcw,
+    /// G5 cubic spline.
+    CubicSpline,
+    /// G5.1 quadratic spline.
+    QuadSpline,
+    /// G5.2 NURBS control points.
+    Nurbs,
+    /// G5.3 end of NURBS block.
+    NurbsEnd,
+    /// G33 spindle-synchronised motion.
+    Thread,
+    /// G33.1 rigid tapping.
+    RigidTap,
+    /// G38.2–G38.5 (the sub-code 2–5).
+    Probe(u8),
+    /// G76 threading cycle.
+    ThreadCycle,
+    /// G70–G72 lathe cycles (their number).
+    LatheCycle(u8),
+    /// G73, G74, G81–G89 (their number).
+    Cycle(u8),
+    /// G80
+    CancelCycle,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Plane {
+    XY,
+    XZ,
+    YZ,
+    /// G17.1, G18.1, G19.1 (UV, WU, VW)
+    UV,
+    WU,
+    VW,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Distance {
+    Absolute,
+    Incremental,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FeedMode {
+    InverseTime,
+    PerMinute,
+    PerRev,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Units {
+    Inch,
+    Mm,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CutterComp {
+    Off,
+    Left,
+    Right,
+    /// G41.1 / G42.1 (diameter given by D)
+    DynamicLeft,
+    DynamicRight,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ToolLength {
+    /// G43 (H or the current tool)
+    Apply,
+    /// G43.1 (axis words give the offset)
+    Dynamic,
+    /// G43.2 (adds H's offset)
+    Add,
+    /// G49
+    Cancel,
+}
+
+/// G54–G59.3 as 1–9.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CoordSystem(pub u8);
+
+impl CoordSystem {
+    /// The G code ×10 (G54 → 540, G59.1 → 591).
+    pub fn code10(self) -> u16 {
+        match self.0 {
+            1..=6 => 530 + 10 * self.0 as u16,
+            n => 590 + (n as u16 - 6),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PathMode {
+    /// G61
+    Exact,
+    /// G61.1
+    ExactStop,
+    /// G64
+    Blend,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Retract {
+    /// G98
+    Initial,
+    /// G99
+    R,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SpindleMode {
+    /// G96
+    ConstantSurface,
+    /// G97
+    Rpm,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LatheMode {
+    /// G7
+    Diameter,
+    /// G8
+    Radius,
+}
+
+/// Non-modal G codes (group 0).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NonModal {
+    Dwell,
+    /// G10 (L and P say what)
+    SetData,
+    /// G28, G28.1
+    Home,
+    SetHome,
+    /// G30, G30.1
+    Home2,
+    SetHome2,
+    /// G52
+    LocalOffset,
+    /// G53
+    MachineCoords,
+    /// G92, G92.1, G92.2, G92.3
+    SetG92,
+    ResetG92,
+    SuspendG92,
+    RestoreG92,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ArcDistance {
+    /// G90.1
+    Absolute,
+    /// G91.1
+    Incremental,
+}
+
+/// A G code by modal group.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GCode {
+    Motion(MotionMode),
+    Plane(Plane),
+    Distance(Distance),
+    ArcDistance(ArcDistance),
+    FeedMode(FeedMode),
+    Units(Units),
+    CutterComp(CutterComp),
+    ToolLength(ToolLength),
+    Coord(CoordSystem),
+    Path(PathMode),
+    Retract(Retract),
+    SpindleMode(SpindleMode),
+    Lathe(LatheMode),
+    NonModal(NonModal),
+}
+
+impl GCode {
+    /// Decodes a G number (`value` as written, e.g. 59.1).
+    pub fn decode(value: f64) -> Option<GCode> {
+        let t = (value * 10.0).round();
+        if !(0.0..=1000.0).contains(&t) || (t - value * 10.0).abs() > 1e-6 {
+            return None;
+        }
+        use GCode::*;
+        use MotionMode as M;
+        Some(match t as u16 {
+            0 => Motion(M::Rapid),
+            10 => Motion(M::Linear),
+            20 => Motion(M::ArcCw),
+            30 => Motion(M::ArcCcw),
+            40 => NonModal(self::NonModal::Dwell),
+            50 => Motion(M::CubicSpline),
+            51 => Motion(M::QuadSpline),
+            52 => Motion(M::Nurbs),
+            53 => Motion(M::NurbsEnd),
+            70 => Lathe(LatheMode::Diameter),
+            80 => Lathe(LatheMode::Radius),
+            100 => NonModal(self::NonModal::SetData),
+            170 => Plane(self::Plane::XY),
+            180 => Plane(self::Plane::XZ),
+            190 => Plane(self::Plane::YZ),
+            171 => Plane(self::Plane::UV),
+            181 => Plane(self::Plane::WU),
+            191 => Plane(self::Plane::VW),
+            200 => Units(self::Units::Inch),
+            210 => Units(self::Units::Mm),
+            280 => NonModal(self::NonModal::Home),
+            281 => NonModal(self::NonModal::SetHome),
+            300 => NonModal(self::NonModal::Home2),
+            301 => NonModal(self::NonModal::SetHome2),
+            330 => Motion(M::Thread),
+            331 => Motion(M::RigidTap),
+            382..=385 => Motion(M::Probe((t as u16 - 380) as u8)),
+            400 => CutterComp(self::CutterComp::Off),
+            410 => CutterComp(self::CutterComp::Left),
+            420 => CutterComp(self::CutterComp::Right),
+            411 => CutterComp(self::CutterComp::DynamicLeft),
+            421 => CutterComp(self::CutterComp::DynamicRight),
+            430 => ToolLength(self::ToolLength::Apply),
+            431 => ToolLength(self::ToolLength::Dynamic),
+            432 => ToolLength(self::ToolLength::Add),
+            490 => ToolLength(self::ToolLength::Cancel),
+            520 => NonModal(self::NonModal::LocalOffset),
+            530 => NonModal(self::NonModal::MachineCoords),
+            540..=590 if (t as u16).is_multiple_of(10) => {
+                Coord(CoordSystem(((t as u16 - 530) / 10) as u8))
+            }
+            591..=593 => Coord(CoordSystem((t as u16 - 591 + 7) as u8)),
+            610 => Path(PathMode::Exact),
+            611 => Path(PathMode::ExactStop),
+            640 => Path(PathMode::Blend),
+            700..=720 if (t as u16).is_multiple_of(10) => {
+                Motion(M::LatheCycle((t as u16 / 10) as u8))
+            }
+            730 => Motion(M::Cycle(73)),
+            740 => Motion(M::Cycle(74)),
+            760 => Motion(M::ThreadCycle),
+            800 => Motion(M::CancelCycle),
+            810..=890 if (t as u16).is_multiple_of(10) => Motion(M::Cycle((t as u16 / 10) as u8)),
+            900 => Distance(self::Distance::Absolute),
+            910 => Distance(self::Distance::Incremental),
+            901 => ArcDistance(self::ArcDistance::Absolute),
+            911 => ArcDistance(self::ArcDistance::Incremental),
+            920 => NonModal(self::NonModal::SetG92),
+            921 => NonModal(self::NonModal::ResetG92),
+            922 => NonModal(self::NonModal::SuspendG92),
+            923 => NonModal(self::NonModal::RestoreG92),
+            930 => FeedMode(self::FeedMode::InverseTime),
+            940 => FeedMode(self::FeedMode::PerMinute),
+            950 => FeedMode(self::FeedMode::PerRev),
+            960 => SpindleMode(self::SpindleMode::ConstantSurface),
+            970 => SpindleMode(self::SpindleMode::Rpm),
+            980 => Retract(self::Retract::Initial),
+            990 => Retract(self::Retract::R),
+            _ => return None,
+        })
+    }
+
+    /// Whether the code sets modal state (everything but group 0).
+    pub fn is_modal(self) -> bool {
+        !matches!(self, GCode::NonModal(_))
+    }
+}
+
+/// M codes by what they do.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MCode {
+    /// M0, M1
+    Pause {
+        optional: bool,
+    },
+    /// M60 (pallet change pause)
+    PalletPause,
+    /// M2, M30
+    End {
+        rewind: bool,
+    },
+    /// M3, M4, M5
+    Spindle(super::motion::SpindleDir),
+    /// M19
+    Orient,
+    /// M6
+    ToolChange,
+    /// M61 (Q gives the tool)
+    SetTool,
+    /// M7, M8, M9
+    Mist,
+    Flood,
+    CoolantOff,
+    /// M48–M53: overrides and feed hold (the number)
+    Override(u8),
+    /// M70 save, M71 invalidate, M72 restore, M73 save and auto-restore
+    State(u8),
+    /// M62–M68: digital and analog I/O (the number)
+    Io(u8),
+    /// M100–M199
+    User(u8),
+    /// Anything else (the number ×10 when not whole, else the number).
+    Other(u16),
+}
+
+impl MCode {
+    pub fn decode(value: f64) -> MCode {
+        use super::motion::SpindleDir;
+        if value.fract() != 0.0 || !(0.0..=1000.0).contains(&value) {
+            return MCode::Other((value * 10.0).clamp(0.0, 60000.0) as u16);
+        }
+        match value as u16 {
+            0 => MCode::Pause { optional: false },
+            1 => MCode::Pause { optional: true },
+            2 => MCode::End { rewind: false },
+            30 => MCode::End { rewind: true },
+            60 => MCode::PalletPause,
+            3 => MCode::Spindle(SpindleDir::Cw),
+            4 => MCode::Spindle(SpindleDir::Ccw),
+            5 => MCode::Spindle(SpindleDir::Off),
+            19 => MCode::Orient,
+            6 => MCode::ToolChange,
+            61 => MCode::SetTool,
+            7 => MCode::Mist,
+            8 => MCode::Flood,
+            9 => MCode::CoolantOff,
+            n @ 48..=53 => MCode::Override(n as u8),
+            n @ 70..=73 => MCode::State(n as u8),
+            n @ 62..=68 => MCode::Io(n as u8),
+            n @ 100..=199 => MCode::User((n - 100) as u8),
+            n => MCode::Other(n),
+        }
+    }
+}
+
+/// What a word is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum WordKind {
+    G(GCode),
+    M(MCode),
+    /// Any other letter (upper case), `@` or `^`.
+    Value,
+}
+
+/// One word as written on the line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Word {
+    /// Upper-case letter, or `@` / `^` (polar words).
+    pub letter: u8,
+    pub value: f64,
+    pub kind: WordKind,
+    pub span: Span,
+}
+
+/// What a comment is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CommentKind {
+    /// `( … )` or `; …` with nothing special.
+    Plain,
+    /// `(MSG, …)`: shown to the operator.
+    Message,
+    /// `(DEBUG, …)`, `(PRINT, …)`, `(LOG…)`, `(PROBEOPEN …)` and the like:
+    /// for the interpreter's own logs.
+    Log,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Comment {
+    pub kind: CommentKind,
+    /// The whole comment, parentheses or `;` included.
+    pub span: Span,
+    /// The text inside (after `MSG,` for a message).
+    pub text: Span,
+}
+
+/// Why a line could not be decoded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DecodeError {
+    pub span: Span,
+    pub what: DecodeProblem,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum DecodeProblem {
+    /// A byte that is not a word letter.
+    BadCharacter(u8),
+    /// A letter without a number.
+    BadNumber,
+    /// An unknown G code.
+    UnknownG(f64),
+    UnclosedComment,
+    /// More than one word of a modal group.
+    GroupConflict,
+}
+
+impl fmt::Display for DecodeProblem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            DecodeProblem::BadCharacter(b) => write!(f, "unexpected byte 0x{b:02x}"),
+            DecodeProblem::BadNumber => f.write_str("a word without a number"),
+            DecodeProblem::UnknownG(v) => write!(f, "unknown G code {v}"),
+            DecodeProblem::UnclosedComment => f.write_str("unclosed comment"),
+            DecodeProblem::GroupConflict => f.write_str("two G codes of one modal group"),
+        }
+    }
+}
+
+/// A decoded flat line.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Block {
+    /// `/` at the start.
+    pub block_delete: bool,
+    /// A `%` line.
+    pub percent: bool,
+    /// The N word.
+    pub line_number: Option<(f64, Span)>,
+    /// Every word in order (G, M and value words, not N).
+    pub words: Vec<Word>,
+    pub comments: Vec<Comment>,
+    /// Index into `words` of each letter's value word (A = 0 … Z = 25),
+    /// and of `@` (26) and `^` (27).
+    value_at: [u8; 28],
+    pub motion: Option<MotionMode>,
+    pub plane: Option<Plane>,
+    pub distance: Option<Distance>,
+    pub arc_distance: Option<ArcDistance>,
+    pub feed_mode: Option<FeedMode>,
+    pub units: Option<Units>,
+    pub cutter_comp: Option<CutterComp>,
+    pub tool_length: Option<ToolLength>,
+    pub coord: Option<CoordSystem>,
+    pub path: Option<PathMode>,
+    pub retract: Option<Retract>,
+    pub spindle_mode: Option<SpindleMode>,
+    pub lathe: Option<LatheMode>,
+    pub non_modal: Option<NonModal>,
+}
+
+const NO_WORD: u8 = u8::MAX;
+
+fn slot(letter: u8) -> usize {
+    match letter {
+        b'@' => 26,
+        b'^' => 27,
+        l => (l - b'A') as usize,
+    }
+}
+
+/// Axis letters in order X Y Z A B C U V W.
+pub const AXIS_LETTERS: [u8; 9] = *b"XYZABCUVW";
+
+impl Block {
+    /// The value of a non-G/M word (`letter` upper case, or `@`/`^`).
+    #[inline]
+    pub fn value(&self, letter: u8) -> Option<f64> {
+        self.word(letter).map(|w| w.value)
+    }
+
+    /// The non-G/M word with this letter.
+    pub fn word(&self, letter: u8) -> Option<&Word> {
+        if !(letter.is_ascii_uppercase() || letter == b'@' || letter == b'^') {
+            return None;
+        }
+        let i = *self.value_at.get(slot(letter))?;
+        if i == NO_WORD {
+            None
+        } else {
+            self.words.get(i as usize)
+        }
+    }
+
+    /// Axis words by axis index (X Y Z A B C U V W).
+    pub fn axes(&self) -> [Option<f64>; 9] {
+        std::array::from_fn(|i| self.value(AXIS_LETTERS[i]))
+    }
+
+    /// Whether any axis word is present.
+    pub fn has_axis(&self) -> bool {
+        AXIS_LETTERS.iter().any(|&l| self.word(l).is_some())
+    }
+
+    /// The M codes of the line in order.
+    pub fn m_codes(&self) -> impl Iterator<Item = (MCode, &Word)> {
+        self.words.iter().filter_map(|w| match w.kind {
+            WordKind::M(m) => Some((m, w)),
+            _ => None,
+        })
+    }
+
+    /// The G codes of the line in order.
+    pub fn g_codes(&self) -> impl Iterator<Item = (GCode, &Word)> {
+        self.words.iter().filter_map(|w| match w.kind {
+            WordKind::G(g) => Some((g, w)),
+            _ => None,
+        })
+    }
+
+    /// Whether the line has nothing but comments (or nothing).
+    pub fn is_empty(&self) -> bool {
+        self.words.is_empty() && !self.percent
+    }
+
+    /// Decodes one flat line (no terminator; trailing `\r` and blanks are
+    /// fine). Blanks may appear anywhere outside comments, as in RS274NGC.
+    pub fn decode(line: &[u8]) -> Result<Block, DecodeError> {
+        let mut b = Block {
+            value_at: [NO_WORD; 28],
+            ..Block::default()
+        };
+        b.decode_into(line)?;
+        Ok(b)
+    }
+
+    /// Decodes into `self`, reusing its room.
+    pub fn decode_into(&mut self, line: &[u8]) -> Result<(), DecodeError> {
+        self.clear();
+        let n = line.len().min(u16::MAX as usize);
+        let line = &line[..n];
+        let span = |a: usize, b: usize| Span {
+            start: a as u16,
+            end: b as u16,
+        };
+        let mut i = skip_blanks(line, 0);
+        if line.get(i) == Some(&b'%') {
+            let j = skip_blanks(line, i + 1);
+            if j >= n || line[j] == b';' || line[j] == b'(' {
+                self.percent = true;
+                return self.comments_only(line, j);
+            }
+        }
+        if line.get(i) == Some(&b'/') {
+            self.block_delete = true;
+            i = skip_blanks(line, i + 1);
+        }
+        while i < n {
+            let c = line[i];
+            match c {
+                b' ' | b'\t' | b'\r' | b'\n' => i += 1,
+                b'(' => {
+                    let close = line[i..]
+                        .iter()
+                        .position(|&b| b == b')')
+                        .ok_or(DecodeError {
+                            span: span(i, n),
+                            what: DecodeProblem::UnclosedComment,
+                        })?;
+                    self.comment(line, i, i + close + 1);
+                    i += close + 1;
+                }
+                b';' => {
+                    self.comment(line, i, n);
+                    i = n;
+                }
+                _ => {
+                    let letter = c.to_ascii_uppercase();
+                    if !(letter.is_ascii_uppercase() || letter == b'@' || letter == b'^') {
+                        return Err(DecodeError {
+                            span: span(i, i + 1),
+                            what: DecodeProblem::BadCharacter(c),
+                        });
+                    }
+                    let (value, end) = read_number(line, i + 1).ok_or(DecodeError {
+                        span: span(i, i + 1),
+                        what: DecodeProblem::BadNumber,
+                    })?;
+                    self.push_word(letter, value, span(i, end))?;
+                    i = end;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn clear(&mut self) {
+        self.block_delete = false;
+        self.percent = false;
+        self.line_number = None;
+        self.words.clear();
+        self.comments.clear();
+        self.value_at = [NO_WORD; 28];
+        self.motion = None;
+        self.plane = None;
+        self.distance = None;
+        self.arc_distance = None;
+        self.feed_mode = None;
+        self.units = None;
+        self.cutter_comp = None;
+        self.tool_length = None;
+        self.coord = None;
+        self.path = None;
+        self.retract = None;
+        self.spindle_mode = None;
+        self.lathe = None;
+        self.non_modal = None;
+    }
+
+    fn comments_only(&mut self, line: &[u8], mut i: usize) -> Result<(), DecodeError> {
+        let n = line.len();
+        while i < n {
+            match line[i] {
+                b'(' => {
+                    let close = line[i..]
+                        .iter()
+                        .position(|&b| b == b')')
+                        .ok_or(DecodeError {
+                            span: Span {
+                                start: i as u16,
+                                end: n as u16,
+                            },
+                            what: DecodeProblem::UnclosedComment,
+                        })?;
+                    self.comment(line, i, i + close + 1);
+                    i += close + 1;
+                }
+                b';' => {
+                    self.comment(line, i, n);
+                    i = n;
+                }
+                _ => i += 1,
+            }
+        }
+        Ok(())
+    }
+
+    fn comment(&mut self, line: &[u8], start: usize, end: usize) {
+        let semi = line[start] == b';';
+        let inner_start = start + 1;
+        let inner_end = if semi { end } else { end - 1 };
+        let inner = &line[inner_start..inner_end];
+        let lead = inner
+            .iter()
+            .position(|b| !matches!(b, b' ' | b'\t'))
+            .unwrap_or(inner.len());
+        let body = &inner[lead..];
+        let starts = |w: &[u8]| body.len() >= w.len() && body[..w.len()].eq_ignore_ascii_case(w);
+        let (kind, text_start) = if semi {
+            (CommentKind::Plain, inner_start)
+        } else if starts(b"msg,") {
+            (CommentKind::Message, inner_start + lead + 4)
+        } else if starts(b"debug,")
+            || starts(b"print,")
+            || starts(b"log")
+            || starts(b"probe")
+            || starts(b"abort,")
+            || starts(b"py")
+        {
+            (CommentKind::Log, inner_start + lead)
+        } else {
+            (CommentKind::Plain, inner_start)
+        };
+        self.comments.push(Comment {
+            kind,
+            span: Span {
+                start: start as u16,
+                end: end as u16,
+            },
+            text: Span {
+                start: text_start.min(inner_end) as u16,
+                end: inner_end as u16,
+            },
+        });
+    }
+
+    fn push_word(&mut self, letter: u8, value: f64, span: Span) -> Result<(), DecodeError> {
+        let kind = match letter {
+            b'N' if self.words.is_empty() && self.line_number.is_none() => {
+                self.line_number = Some((value, span));
+                return Ok(());
+            }
+            b'G' => {
+                let g = GCode::decode(value).ok_or(DecodeError {
+                    span,
+                    what: DecodeProblem::UnknownG(value),
+                })?;
+                let conflict = |set: bool| {
+                    if set {
+                        Err(DecodeError {
+                            span,
+                            what: DecodeProblem::GroupConflict,
+                        })
+                    } else {
+                        Ok(())
+                    }
+                };
+                match g {
+                    GCode::Motion(m) => {
+                        conflict(self.motion.is_some())?;
+                        self.motion = Some(m);
+                    }
+                    GCode::Plane(p) => {
+                        conflict(self.plane.is_some())?;
+                        self.plane = Some(p);
+                    }
+                    GCode::Distance(d) => {
+                        conflict(self.distance.is_some())?;
+                        self.distance = Some(d);
+                    }
+                    GCode::ArcDistance(d) => {
+                        conflict(self.arc_distance.is_some())?;
+                        self.arc_distance = Some(d);
+                    }
+                    GCode::FeedMode(m) => {
+                        conflict(self.feed_mode.is_some())?;
+                        self.feed_mode = Some(m);
+                    }
+                    GCode::Units(u) => {
+                        conflict(self.units.is_some())?;
+                        self.units = Some(u);
+                    }
+                    GCode::CutterComp(c) => {
+                        conflict(self.cutter_comp.is_some())?;
+                        self.cutter_comp = Some(c);
+                    }
+                    GCode::ToolLength(t) => {
+                        conflict(self.tool_length.is_some())?;
+                        self.tool_length = Some(t);
+                    }
+                    GCode::Coord(c) => {
+                        conflict(self.coord.is_some())?;
+                        self.coord = Some(c);
+                    }
+                    GCode::Path(p) => {
+                        conflict(self.path.is_some())?;
+                        self.path = Some(p);
+                    }
+                    GCode::Retract(r) => {
+                        conflict(self.retract.is_some())?;
+                        self.retract = Some(r);
+                    }
+                    GCode::SpindleMode(s) => {
+                        conflict(self.spindle_mode.is_some())?;
+                        self.spindle_mode = Some(s);
+                    }
+                    GCode::Lathe(l) => {
+                        conflict(self.lathe.is_some())?;
+                        self.lathe = Some(l);
+                    }
+                    GCode::NonModal(m) => {
+                        conflict(self.non_modal.is_some())?;
+                        self.non_modal = Some(m);
+                    }
+                }
+                WordKind::G(g)
+            }
+            b'M' => WordKind::M(MCode::decode(value)),
+            l => {
+                let s = slot(l);
+                if self.value_at[s] != NO_WORD {
+                    return Err(DecodeError {
+                        span,
+                        what: DecodeProblem::GroupConflict,
+                    });
+                }
+                self.value_at[s] = self.words.len().min(NO_WORD as usize - 1) as u8;
+                WordKind::Value
+            }
+        };
+        self.words.push(Word {
+            letter,
+            value,
+            kind,
+            span,
+        });
+        Ok(())
+    }
+}
+
+fn skip_blanks(line: &[u8], mut i: usize) -> usize {
+    while i < line.len() && matches!(line[i], b' ' | b'\t' | b'\r') {
+        i += 1;
+    }
+    i
+}
+
+/// Reads `[+-]digits[.digits]` with blanks allowed between its characters;
+/// returns the value and the end of the number.
+fn read_number(line: &[u8], start: usize) -> Option<(f64, usize)> {
+    let mut buf = [0u8; 64];
+    let mut len = 0;
+    let mut i = skip_blanks(line, start);
+    let mut end = i;
+    if let Some(&c) = line.get(i)
+        && (c == b'-' || c == b'+')
+    {
+        buf[0] = c;
+        len = 1;
+        i += 1;
+        end = i;
+    }
+    let mut digits = 0;
+    loop {
+        i = skip_blanks(line, i);
+        match line.get(i) {
+            Some(&c) if c.is_ascii_digit() || c == b'.' => {
+                if len < buf.len() {
+                    buf[len] = c;
+                    len += 1;
+                }
+                digits += c.is_ascii_digit() as usize;
+                i += 1;
+                end = i;
+            }
+            _ => break,
+        }
+    }
+    if digits == 0 || len >= buf.len() {
+        return None;
+    }
+    let text = std::str::from_utf8(&buf[..len]).ok()?;
+    let text = text.strip_prefix('+').unwrap_or(text);
+    let v: f64 = text.parse().ok()?;
+    Some((v, end))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decodes_groups_words_and_comments() {
+        let b = Block::decode(b"N10 g20 G64 P0.01 g1 x1.5 Y - 2 f300 (MSG, hi) ; rest").unwrap();
+        assert_eq!(b.units, Some(Units::Inch));
+        assert_eq!(b.path, Some(PathMode::Blend));
+        assert_eq!(b.motion, Some(MotionMode::Linear));
+        assert_eq!(b.value(b'X'), Some(1.5));
+        assert_eq!(b.value(b'Y'), Some(-2.0));
+        assert_eq!(b.value(b'P'), Some(0.01));
+        assert_eq!(b.line_number.map(|l| l.0), Some(10.0));
+        assert_eq!(b.comments.len(), 2);
+        assert_eq!(b.comments[0].kind, CommentKind::Message);
+        assert_eq!(b.words.len(), 7);
+    }
+
+    #[test]
+    fn decodes_codes() {
+        let b = Block::decode(b"G59.1 G43.2 H2 G98 G83 M6 T3 M61 Q1").unwrap();
+        assert_eq!(b.coord, Some(CoordSystem(7)));
+        assert_eq!(b.coord.map(|c| c.code10()), Some(591));
+        assert_eq!(b.tool_length, Some(ToolLength::Add));
+        assert_eq!(b.retract, Some(Retract::Initial));
+        assert_eq!(b.motion, Some(MotionMode::Cycle(83)));
+        let ms: Vec<MCode> = b.m_codes().map(|m| m.0).collect();
+        assert_eq!(ms, vec![MCode::ToolChange, MCode::SetTool]);
+        assert!(Block::decode(b"%").unwrap().percent);
+        assert!(Block::decode(b"/G0 X1").unwrap().block_delete);
+        assert_eq!(
+            Block::decode(b"G0 X1 X2").unwrap_err().what,
+            DecodeProblem::GroupConflict
+        );
+        assert!(Block::decode(b"G0 X").is_err());
+        assert!(Block::decode(b"G0 (x").is_err());
+        assert!(Block::decode(b"G12.5").is_err());
+        assert_eq!(Block::decode(b"G54").unwrap().coord, Some(CoordSystem(1)));
+        assert_eq!(Block::decode(b"G59").unwrap().coord, Some(CoordSystem(6)));
+    }
+}

@@ -1,0 +1,905 @@
+//! The machine a flat program drives: modal state as enums, the position
+//! per axis (known or not), the offsets (G5x table, G92/G52, tool length),
+//! the tools, and the [`Motion`] each block makes. It starts from the same
+//! [`Settings`] as the evaluator and is driven by the decoded flat lines
+//! alone: the flat program and those settings determine the motion.
+//!
+//! Lengths are kept in millimetres whatever the program's units; offsets
+//! and tool data given in machine units (inches without an INI, as in the
+//! standalone interpreter) are converted when read.
+
+// Axis-indexed loops over several per-axis arrays read best by index.
+#![allow(clippy::needless_range_loop)]
+
+use crate::eval::Settings;
+use crate::eval::tools::ToolData;
+use crate::fx_hasher::FxMap;
+
+use super::block::{
+    ArcDistance, Block, CutterComp, Distance, FeedMode as BFeedMode, LatheMode, MCode, MotionMode,
+    NonModal, PathMode, Plane as BPlane, Retract, SpindleMode, ToolLength, Units,
+};
+use super::motion::{Axes, Feed, FeedMode, Motion, MoveKind, Plane, Point, SpindleDir};
+
+const MM_PER_INCH: f64 = 25.4;
+
+/// Per-axis values that may be unknown.
+pub type MaybeAxes = [Option<f64>; 9];
+
+const UNKNOWN: MaybeAxes = [None; 9];
+const ZERO: MaybeAxes = [Some(0.0); 9];
+
+/// The modal state, power-on values as LinuxCNC's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Modes {
+    pub motion: MotionMode,
+    pub plane: BPlane,
+    pub distance: Distance,
+    pub arc_distance: ArcDistance,
+    pub feed_mode: BFeedMode,
+    pub units: Units,
+    pub cutter_comp: CutterComp,
+    /// A tool length offset is in effect (G43, G43.1, G43.2).
+    pub tool_length: Option<ToolLength>,
+    /// 1 (G54) … 9 (G59.3)
+    pub coord: u8,
+    pub path: PathMode,
+    pub retract: Retract,
+    pub spindle_mode: SpindleMode,
+    pub lathe: LatheMode,
+    /// In program units (per minute, per rev or inverse time).
+    pub feed: f64,
+    pub speed: f64,
+    pub spindle: SpindleDir,
+    pub mist: bool,
+    pub flood: bool,
+}
+
+impl Default for Modes {
+    fn default() -> Modes {
+        Modes {
+            motion: MotionMode::CancelCycle,
+            plane: BPlane::XY,
+            distance: Distance::Absolute,
+            arc_distance: ArcDistance::Incremental,
+            feed_mode: BFeedMode::PerMinute,
+            units: Units::Mm,
+            cutter_comp: CutterComp::Off,
+            tool_length: None,
+            coord: 1,
+            path: PathMode::Blend,
+            retract: Retract::Initial,
+            spindle_mode: SpindleMode::Rpm,
+            lathe: LatheMode::Radius,
+            feed: 0.0,
+            speed: 0.0,
+            spindle: SpindleDir::Off,
+            mist: false,
+            flood: false,
+        }
+    }
+}
+
+/// The machine state a flat program runs on.
+#[derive(Debug, Clone)]
+pub struct Machine {
+    pub modes: Modes,
+    /// Tool-tip position in the active work coordinates, mm.
+    pub pos: MaybeAxes,
+    /// G54–G59.3 offsets, mm.
+    pub g5x: [MaybeAxes; 9],
+    /// G92/G52 offsets, mm, and whether they are applied.
+    pub g92: MaybeAxes,
+    pub g92_applied: Option<bool>,
+    /// Applied tool length offset, mm.
+    pub tlo: MaybeAxes,
+    /// G28 and G30 home positions, machine coordinates, mm.
+    pub home28: MaybeAxes,
+    pub home30: MaybeAxes,
+    /// Tool data as given (machine units); whether the table is complete.
+    pub tools: FxMap<i64, ToolData>,
+    pub tools_known: bool,
+    pub current_tool: Option<i64>,
+    pub selected_tool: Option<i64>,
+    /// Machine units are millimetres.
+    pub machine_metric: bool,
+    pub zero_start: bool,
+    /// An XY rotation is in effect (G10 L2 R): positions are not modelled.
+    pub rotated: bool,
+    /// The R plane of the last canned cycle (program units as written).
+    pub cycle_r: Option<f64>,
+    /// The Z before the first repeat of the running canned cycle, mm.
+    pub cycle_initial_z: Option<f64>,
+    /// The program ended (M2/M30).
+    pub ended: bool,
+    events: Vec<Motion>,
+}
+
+fn numbered(settings: &Settings) -> FxMap<usize, f64> {
+    let mut m = FxMap::default();
+    for d in &settings.defines {
+        if let crate::eval::Define::Numbered(i, v) = d {
+            m.insert(*i, *v);
+        }
+    }
+    m
+}
+
+impl Machine {
+    /// The machine at the start of a program run with `settings`.
+    pub fn new(settings: &Settings) -> Machine {
+        let zs = settings.zero_start;
+        let base = if zs { ZERO } else { UNKNOWN };
+        let mu = if settings.machine_metric {
+            1.0
+        } else {
+            MM_PER_INCH
+        };
+        let p = numbered(settings);
+        let from = |first: usize, base: MaybeAxes| -> MaybeAxes {
+            std::array::from_fn(|a| p.get(&(first + a)).map(|v| v * mu).or(base[a]))
+        };
+        let g5x = std::array::from_fn(|k| from(5221 + 20 * k, base));
+        let mut pos = base;
+        for &(a, v) in &settings.start_position {
+            if let Some(slot) = pos.get_mut(a) {
+                // The start position is given in the program's start units
+                // (millimetres).
+                *slot = Some(v);
+            }
+        }
+        let coord = p
+            .get(&5220)
+            .map(|v| v.round())
+            .filter(|v| (1.0..=9.0).contains(v))
+            .map_or(1, |v| v as u8);
+        let g92_applied = match p.get(&5210) {
+            Some(v) => Some(*v != 0.0),
+            None => zs.then_some(false),
+        };
+        Machine {
+            modes: Modes {
+                coord,
+                ..Modes::default()
+            },
+            pos,
+            g5x,
+            g92: from(5211, base),
+            g92_applied,
+            tlo: ZERO,
+            home28: from(5161, base),
+            home30: from(5181, base),
+            tools: settings.tool_table.iter().copied().collect(),
+            tools_known: zs,
+            current_tool: (zs || !settings.tool_table.is_empty()).then_some(0),
+            selected_tool: zs.then_some(0),
+            machine_metric: settings.machine_metric,
+            zero_start: zs,
+            rotated: false,
+            cycle_r: None,
+            cycle_initial_z: None,
+            ended: false,
+            events: Vec::new(),
+        }
+    }
+
+    /// Millimetres per program unit.
+    pub fn scale(&self) -> f64 {
+        match self.modes.units {
+            Units::Mm => 1.0,
+            Units::Inch => MM_PER_INCH,
+        }
+    }
+
+    /// Millimetres per machine unit (offsets and tool data).
+    pub fn machine_scale(&self) -> f64 {
+        if self.machine_metric {
+            1.0
+        } else {
+            MM_PER_INCH
+        }
+    }
+
+    /// The offset from work to machine coordinates (G5x, G92/G52 if applied,
+    /// tool length), per axis.
+    pub fn offset(&self) -> MaybeAxes {
+        let cs = &self.g5x[(self.modes.coord.clamp(1, 9) - 1) as usize];
+        std::array::from_fn(|a| {
+            let g92 = match self.g92_applied {
+                Some(true) => self.g92[a]?,
+                Some(false) => 0.0,
+                None => return None,
+            };
+            Some(cs[a]? + g92 + self.tlo[a]?)
+        })
+    }
+
+    /// The position in machine coordinates (controlled point), per axis.
+    pub fn machine_pos(&self) -> MaybeAxes {
+        let off = self.offset();
+        std::array::from_fn(|a| Some(self.pos[a]? + off[a]?))
+    }
+
+    /// Tool data of tool `t` in mm, if known.
+    pub fn tool(&self, t: i64) -> Option<ToolData> {
+        let s = self.machine_scale();
+        let d = match self.tools.get(&t) {
+            Some(d) => *d,
+            None if self.tools_known || t == 0 => ToolData::default(),
+            None => return None,
+        };
+        Some(ToolData {
+            offsets: d.offsets.map(|v| v * s),
+            diameter: d.diameter * s,
+            ..d
+        })
+    }
+
+    /// Takes the motion events made since the last call.
+    pub fn take_events(&mut self) -> std::vec::Drain<'_, Motion> {
+        self.events.drain(..)
+    }
+
+    fn point(&self, work: MaybeAxes) -> Point {
+        let off = self.offset();
+        let known = off.iter().all(Option::is_some);
+        Point {
+            work: work.map(|v| v.unwrap_or(f64::NAN)),
+            offset: known.then(|| off.map(|v| v.unwrap_or(0.0))),
+        }
+    }
+
+    fn feed(&self) -> Feed {
+        let (rate, mode) = match self.modes.feed_mode {
+            BFeedMode::PerMinute => (self.modes.feed * self.scale(), FeedMode::UnitsPerMinute),
+            BFeedMode::PerRev => (self.modes.feed * self.scale(), FeedMode::UnitsPerRev),
+            BFeedMode::InverseTime => (self.modes.feed, FeedMode::InverseTime),
+        };
+        Feed { rate, mode }
+    }
+
+    /// Moves to `to` (work coordinates, mm), emitting a line.
+    fn line_to(&mut self, kind: MoveKind, to: MaybeAxes) {
+        let from = self.point(self.pos);
+        let to_p = self.point(to);
+        self.events.push(Motion::Line {
+            kind,
+            from,
+            to: to_p,
+            feed: self.feed(),
+        });
+        self.pos = to;
+    }
+
+    /// Applies one decoded block in LinuxCNC's order of execution.
+    pub fn apply(&mut self, b: &Block) {
+        if b.percent || self.ended && b.words.is_empty() {
+            return;
+        }
+        if let Some(m) = b.feed_mode {
+            self.modes.feed_mode = m;
+        }
+        if let Some(f) = b.value(b'F') {
+            self.modes.feed = f;
+        }
+        if let Some(s) = b.value(b'S') {
+            self.modes.speed = s;
+            if self.modes.spindle != SpindleDir::Off {
+                self.spindle_event();
+            }
+        }
+        if let Some(t) = b.value(b'T') {
+            self.selected_tool = Some(t.round() as i64);
+        }
+        for (m, w) in b.m_codes() {
+            match m {
+                MCode::ToolChange => {
+                    self.current_tool = self.selected_tool;
+                    if let Some(t) = self.selected_tool {
+                        self.events.push(Motion::ToolChange { tool: t });
+                    }
+                }
+                MCode::SetTool => {
+                    self.current_tool = b.value(b'Q').map(|q| q.round() as i64);
+                }
+                MCode::Spindle(d) => {
+                    self.modes.spindle = d;
+                    self.spindle_event();
+                }
+                MCode::Mist | MCode::Flood | MCode::CoolantOff => {
+                    match m {
+                        MCode::Mist => self.modes.mist = true,
+                        MCode::Flood => self.modes.flood = true,
+                        _ => (self.modes.mist, self.modes.flood) = (false, false),
+                    }
+                    self.events.push(Motion::Coolant {
+                        mist: self.modes.mist,
+                        flood: self.modes.flood,
+                    });
+                }
+                _ => {
+                    let _ = w;
+                }
+            }
+        }
+        if b.non_modal == Some(NonModal::Dwell) {
+            let seconds = b.value(b'P').unwrap_or(0.0);
+            self.events.push(Motion::Dwell { seconds });
+        }
+        if let Some(p) = b.plane {
+            self.modes.plane = p;
+        }
+        if let Some(u) = b.units {
+            self.modes.units = u;
+        }
+        if let Some(c) = b.cutter_comp {
+            self.modes.cutter_comp = c;
+        }
+        if let Some(t) = b.tool_length {
+            self.tool_length(b, t);
+        }
+        if let Some(c) = b.coord {
+            let before = self.offset();
+            self.modes.coord = c.0;
+            self.shift(before);
+        }
+        if let Some(p) = b.path {
+            self.modes.path = p;
+        }
+        if let Some(d) = b.distance {
+            self.modes.distance = d;
+        }
+        if let Some(d) = b.arc_distance {
+            self.modes.arc_distance = d;
+        }
+        if let Some(r) = b.retract {
+            self.modes.retract = r;
+        }
+        if let Some(s) = b.spindle_mode {
+            self.modes.spindle_mode = s;
+        }
+        if let Some(l) = b.lathe {
+            self.modes.lathe = l;
+        }
+        let motion_used = match b.non_modal {
+            Some(n) => self.non_modal(b, n),
+            None => false,
+        } || b.tool_length == Some(ToolLength::Dynamic) && b.motion.is_none();
+        if let Some(m) = b.motion {
+            if matches!(m, MotionMode::Cycle(_))
+                && !matches!(self.modes.motion, MotionMode::Cycle(_))
+            {
+                self.cycle_initial_z = self.pos[2];
+            }
+            self.modes.motion = m;
+        }
+        if !motion_used && (b.has_axis() || b.motion.is_some_and(moves_without_axes)) {
+            self.motion(b);
+        }
+        for (m, _) in b.m_codes() {
+            match m {
+                MCode::Pause { optional } => self.events.push(Motion::Pause { optional }),
+                MCode::PalletPause => self.events.push(Motion::Pause { optional: false }),
+                MCode::End { .. } => self.end(),
+                _ => {}
+            }
+        }
+    }
+
+    fn spindle_event(&mut self) {
+        self.events.push(Motion::Spindle {
+            dir: self.modes.spindle,
+            speed: self.modes.speed,
+            css: self.modes.spindle_mode == SpindleMode::ConstantSurface,
+        });
+    }
+
+    /// Keeps the machine where it is when the offset changes from `before`.
+    fn shift(&mut self, before: MaybeAxes) {
+        let after = self.offset();
+        for a in 0..9 {
+            self.pos[a] = match (self.pos[a], before[a], after[a]) {
+                (Some(p), Some(b), Some(n)) => Some(p + b - n),
+                _ => None,
+            };
+        }
+    }
+
+    fn tool_length(&mut self, b: &Block, t: ToolLength) {
+        let before = self.offset();
+        match t {
+            ToolLength::Apply | ToolLength::Add => {
+                let h = b
+                    .value(b'H')
+                    .map(|h| h.round() as i64)
+                    .or(self.current_tool);
+                let data = h.and_then(|h| self.tool(h));
+                let add = |base: Option<f64>, v: Option<f64>| match t {
+                    ToolLength::Add => Some(base? + v?),
+                    _ => v,
+                };
+                let z = data.map(|d| d.offsets);
+                self.tlo = std::array::from_fn(|a| {
+                    // LinuxCNC applies the Z offset, and X on lathes (X and
+                    // Z carry the tool's offsets; the others are 0 unless
+                    // the table gives them).
+                    add(self.tlo[a], z.map(|o| o[a]))
+                });
+            }
+            ToolLength::Dynamic => {
+                let s = self.scale();
+                let axes = b.axes();
+                self.tlo = std::array::from_fn(|a| Some(axes[a].map_or(0.0, |v| v * s)));
+            }
+            ToolLength::Cancel => self.tlo = ZERO,
+        }
+        self.modes.tool_length = (t != ToolLength::Cancel).then_some(t);
+        self.shift(before);
+    }
+
+    /// Target of axis words in work coordinates (mm), by the distance mode.
+    fn target(&self, b: &Block) -> MaybeAxes {
+        let s = self.scale();
+        let axes = b.axes();
+        let mut t = self.pos;
+        for a in 0..9 {
+            if let Some(v) = axes[a] {
+                let v = if a == 0 && self.modes.lathe == LatheMode::Diameter {
+                    v / 2.0
+                } else {
+                    v
+                };
+                let rot = if (3..=5).contains(&a) { 1.0 } else { s };
+                t[a] = match self.modes.distance {
+                    Distance::Absolute => Some(v * rot),
+                    Distance::Incremental => self.pos[a].map(|p| p + v * rot),
+                };
+            }
+        }
+        // Polar words: @ radius, ^ angle (XY plane).
+        if b.value(b'@').is_some() || b.value(b'^').is_some() {
+            let (r, ang) = (b.value(b'@').unwrap_or(0.0), b.value(b'^').unwrap_or(0.0));
+            let (dx, dy) = (
+                r * s * ang.to_radians().cos(),
+                r * s * ang.to_radians().sin(),
+            );
+            match self.modes.distance {
+                Distance::Absolute => {
+                    t[0] = Some(dx);
+                    t[1] = Some(dy);
+                }
+                Distance::Incremental => {
+                    t[0] = self.pos[0].map(|p| p + dx);
+                    t[1] = self.pos[1].map(|p| p + dy);
+                }
+            }
+        }
+        t
+    }
+
+    fn non_modal(&mut self, b: &Block, n: NonModal) -> bool {
+        let s = self.scale();
+        let ms = self.machine_scale();
+        let axes = b.axes();
+        match n {
+            NonModal::Dwell => false,
+            NonModal::SetData => {
+                self.set_data(b);
+                true
+            }
+            NonModal::Home | NonModal::Home2 => {
+                if b.has_axis() {
+                    let mid = self.target(b);
+                    self.line_to(MoveKind::Rapid, mid);
+                }
+                let home = if n == NonModal::Home {
+                    self.home28
+                } else {
+                    self.home30
+                };
+                let off = self.offset();
+                let mut to = self.pos;
+                for a in 0..9 {
+                    if !b.has_axis() || axes[a].is_some() {
+                        to[a] = match (home[a], off[a], self.tlo[a]) {
+                            // Homes are tool-tip machine positions.
+                            (Some(h), Some(o), Some(t)) => Some(h - o + t),
+                            _ => None,
+                        };
+                    }
+                }
+                self.line_to(MoveKind::Rapid, to);
+                true
+            }
+            NonModal::SetHome | NonModal::SetHome2 => {
+                let m = self.machine_pos();
+                let tl = self.tlo;
+                let h: MaybeAxes = std::array::from_fn(|a| Some(m[a]? - tl[a]?));
+                if n == NonModal::SetHome {
+                    self.home28 = h;
+                } else {
+                    self.home30 = h;
+                }
+                false
+            }
+            NonModal::MachineCoords => {
+                let off = self.offset();
+                let mut to = self.pos;
+                for a in 0..9 {
+                    if let Some(v) = axes[a] {
+                        let rot = if (3..=5).contains(&a) { 1.0 } else { s };
+                        to[a] = off[a].map(|o| v * rot - o);
+                    }
+                }
+                let kind = if self.modes.motion == MotionMode::Rapid {
+                    MoveKind::Rapid
+                } else {
+                    MoveKind::Feed
+                };
+                if b.has_axis() {
+                    self.line_to(kind, to);
+                }
+                true
+            }
+            NonModal::SetG92 | NonModal::LocalOffset => {
+                let before = self.offset();
+                let cs = self.g5x[(self.modes.coord.clamp(1, 9) - 1) as usize];
+                for a in 0..9 {
+                    if let Some(v) = axes[a] {
+                        let rot = if (3..=5).contains(&a) { 1.0 } else { s };
+                        self.g92[a] = if n == NonModal::LocalOffset {
+                            Some(v * rot)
+                        } else {
+                            // The position becomes v: offset = machine - cs - tlo - v.
+                            match (self.pos[a], before[a], cs[a], self.tlo[a]) {
+                                (Some(p), Some(o), Some(c), Some(t)) => {
+                                    Some(p + o - c - t - v * rot)
+                                }
+                                _ => None,
+                            }
+                        };
+                    } else if self.g92_applied != Some(true) {
+                        self.g92[a] = Some(0.0);
+                    }
+                }
+                self.g92_applied = Some(true);
+                self.shift(before);
+                let _ = ms;
+                true
+            }
+            NonModal::ResetG92 | NonModal::SuspendG92 => {
+                let before = self.offset();
+                if n == NonModal::ResetG92 {
+                    self.g92 = ZERO;
+                }
+                self.g92_applied = Some(false);
+                self.shift(before);
+                false
+            }
+            NonModal::RestoreG92 => {
+                let before = self.offset();
+                self.g92_applied = Some(true);
+                self.shift(before);
+                false
+            }
+        }
+    }
+
+    fn set_data(&mut self, b: &Block) {
+        let l = b.value(b'L').map(|v| v.round() as i64);
+        let p = b.value(b'P').map(|v| v.round() as i64);
+        let s = self.scale();
+        let axes = b.axes();
+        let scaled = |a: usize, v: f64| if (3..=5).contains(&a) { v } else { v * s };
+        match l {
+            Some(2) | Some(20) => {
+                if b.value(b'R').is_some_and(|r| r != 0.0) {
+                    self.rotated = true;
+                }
+                let k = match p {
+                    Some(0) | None => self.modes.coord,
+                    Some(k) => k.clamp(1, 9) as u8,
+                } as usize
+                    - 1;
+                let before = self.offset();
+                let active = k + 1 == self.modes.coord as usize;
+                for a in 0..9 {
+                    if let Some(v) = axes[a] {
+                        self.g5x[k][a] = if l == Some(2) {
+                            Some(scaled(a, v))
+                        } else {
+                            // The current position becomes v in system k.
+                            let g92 = match self.g92_applied {
+                                Some(true) => self.g92[a],
+                                Some(false) => Some(0.0),
+                                None => None,
+                            };
+                            match (self.machine_pos()[a], g92, self.tlo[a]) {
+                                (Some(m), Some(g), Some(t)) => Some(m - g - t - scaled(a, v)),
+                                _ => None,
+                            }
+                        };
+                    }
+                }
+                if active {
+                    self.shift(before);
+                }
+            }
+            Some(1) | Some(10) | Some(11) => {
+                let Some(t) = p else { return };
+                let mut d = self.tools.get(&t).copied().unwrap_or_default();
+                let ms = self.machine_scale();
+                for a in 0..9 {
+                    if let Some(v) = axes[a] {
+                        let mm = if l == Some(1) {
+                            Some(scaled(a, v))
+                        } else {
+                            // L10/L11: the offset that makes the current
+                            // position read v (L11: in G59.3).
+                            let cs = if l == Some(11) {
+                                self.g5x[8][a]
+                            } else {
+                                self.g5x[(self.modes.coord.clamp(1, 9) - 1) as usize][a]
+                            };
+                            match (self.pos[a], self.offset()[a], self.tlo[a], cs) {
+                                (Some(p), Some(o), Some(tl), Some(c)) => {
+                                    Some(p + o - tl - c - scaled(a, v))
+                                }
+                                _ => None,
+                            }
+                        };
+                        match mm {
+                            Some(mm) => d.offsets[a] = mm / ms,
+                            None => {
+                                self.tools.remove(&t);
+                                return;
+                            }
+                        }
+                    }
+                }
+                if let Some(r) = b.value(b'R') {
+                    d.diameter = 2.0 * r * s / ms;
+                }
+                self.tools.insert(t, d);
+            }
+            _ => {}
+        }
+    }
+
+    fn motion(&mut self, b: &Block) {
+        if self.rotated {
+            self.pos = UNKNOWN;
+            return;
+        }
+        let to = self.target(b);
+        match self.modes.motion {
+            MotionMode::Rapid => self.line_to(MoveKind::Rapid, to),
+            MotionMode::Linear => self.line_to(MoveKind::Feed, to),
+            MotionMode::ArcCw | MotionMode::ArcCcw => self.arc(b, to),
+            MotionMode::Probe(_) => {
+                self.line_to(MoveKind::Probe, to);
+                if !self.zero_start {
+                    self.pos = UNKNOWN;
+                }
+            }
+            MotionMode::Thread | MotionMode::RigidTap => {
+                let from = self.pos;
+                self.line_to(MoveKind::SpindleSync, to);
+                if self.modes.motion == MotionMode::RigidTap {
+                    self.pos = from;
+                    self.pos[2] = from[2];
+                }
+            }
+            MotionMode::Cycle(_) => self.cycle(b, to),
+            // Splines and threading cycles end at their end point; their
+            // path is left to the lowerings.
+            _ => self.pos = to,
+        }
+    }
+
+    /// Where a canned cycle leaves the tool: each repeat at the XY target,
+    /// Z at the clear plane (the initial Z under G98 when above R, else R).
+    fn cycle(&mut self, b: &Block, to: MaybeAxes) {
+        let s = self.scale();
+        if let Some(r) = b.value(b'R') {
+            self.cycle_r = Some(r);
+        }
+        let initial = self.pos[2];
+        let r_mm = match (self.modes.distance, self.cycle_r) {
+            (Distance::Absolute, Some(r)) => Some(r * s),
+            (Distance::Incremental, Some(r)) => initial.map(|z| z + r * s),
+            _ => None,
+        };
+        let reps = b.value(b'L').map_or(1, |l| l.round().max(1.0) as usize);
+        let mut xy = (self.pos[0], self.pos[1]);
+        for _ in 0..reps {
+            match self.modes.distance {
+                Distance::Absolute => xy = (to[0], to[1]),
+                Distance::Incremental => {
+                    let d = b.axes();
+                    xy = (
+                        xy.0.map(|x| x + d[0].unwrap_or(0.0) * s),
+                        xy.1.map(|y| y + d[1].unwrap_or(0.0) * s),
+                    );
+                }
+            }
+        }
+        let clear = match self.modes.retract {
+            Retract::R => r_mm,
+            Retract::Initial => match (initial, r_mm) {
+                (Some(z), Some(r)) => Some(z.max(r)),
+                _ => None,
+            },
+        };
+        self.pos[0] = xy.0;
+        self.pos[1] = xy.1;
+        self.pos[2] = clear;
+    }
+
+    fn arc(&mut self, b: &Block, to: MaybeAxes) {
+        let s = self.scale();
+        let (i0, i1, plane, o0, o1) = match self.modes.plane {
+            BPlane::XY => (0, 1, Plane::XY, b'I', b'J'),
+            BPlane::XZ => (0, 2, Plane::XZ, b'I', b'K'),
+            BPlane::YZ => (1, 2, Plane::YZ, b'J', b'K'),
+            _ => {
+                self.pos = to;
+                return;
+            }
+        };
+        let ccw = self.modes.motion == MotionMode::ArcCcw;
+        let (Some(f0), Some(f1), Some(t0), Some(t1)) = (self.pos[i0], self.pos[i1], to[i0], to[i1])
+        else {
+            self.pos = to;
+            return;
+        };
+        let center = if let Some(r) = b.value(b'R') {
+            radius_center([f0, f1], [t0, t1], r * s, ccw)
+        } else {
+            let (a, c) = (
+                b.value(o0).unwrap_or(0.0) * s,
+                b.value(o1).unwrap_or(0.0) * s,
+            );
+            match self.modes.arc_distance {
+                ArcDistance::Incremental => [f0 + a, f1 + c],
+                ArcDistance::Absolute => [a, c],
+            }
+        };
+        let turns = b.value(b'P').map_or(1, |p| p.round().max(1.0) as u32);
+        let (from, to_p) = (self.point(self.pos), self.point(to));
+        self.events.push(Motion::Arc {
+            from,
+            to: to_p,
+            center,
+            plane,
+            ccw,
+            turns,
+            feed: self.feed(),
+        });
+        self.pos = to;
+    }
+
+    fn end(&mut self) {
+        let before = self.offset();
+        let m = &mut self.modes;
+        m.coord = 1;
+        m.plane = BPlane::XY;
+        m.distance = Distance::Absolute;
+        m.feed_mode = BFeedMode::PerMinute;
+        m.cutter_comp = CutterComp::Off;
+        m.motion = MotionMode::Linear;
+        m.spindle = SpindleDir::Off;
+        m.mist = false;
+        m.flood = false;
+        m.path = PathMode::Blend;
+        if self.g92_applied == Some(true) {
+            // M2 keeps G92 offsets in LinuxCNC 2.9 (DISABLE_G92_PERSISTENCE
+            // aside); nothing to change.
+        }
+        self.shift(before);
+        self.events.push(Motion::End);
+        self.ended = true;
+    }
+}
+
+/// Motion modes that act on a line without axis words.
+fn moves_without_axes(m: MotionMode) -> bool {
+    matches!(m, MotionMode::NurbsEnd)
+}
+
+/// Centre of an R-format arc from `a` to `b` (positive R: the shorter arc).
+fn radius_center(a: [f64; 2], b: [f64; 2], r: f64, ccw: bool) -> [f64; 2] {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let d = (dx * dx + dy * dy).sqrt();
+    let mid = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+    if d == 0.0 {
+        return mid;
+    }
+    let h = (r * r - d * d / 4.0).max(0.0).sqrt();
+    // Left of the chord for a clockwise arc with positive R.
+    let (nx, ny) = (-dy / d, dx / d);
+    let side = if (r > 0.0) != ccw { 1.0 } else { -1.0 };
+    [mid[0] + side * h * nx, mid[1] + side * h * ny]
+}
+
+/// Axes as a plain array (for callers that know every axis).
+pub fn known(a: &MaybeAxes) -> Option<Axes> {
+    if a.iter().all(Option::is_some) {
+        Some(a.map(|v| v.unwrap_or(0.0)))
+    } else {
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(lines: &[&str]) -> (Machine, Vec<Motion>) {
+        let s = Settings {
+            zero_start: true,
+            ..Settings::default()
+        };
+        let mut m = Machine::new(&s);
+        let mut ev = Vec::new();
+        for l in lines {
+            m.apply(&Block::decode(l.as_bytes()).unwrap());
+            ev.extend(m.take_events());
+        }
+        (m, ev)
+    }
+
+    #[test]
+    fn units_offsets_and_moves() {
+        let (m, ev) = run(&["G20 G0 X1", "G10 L2 P1 X1", "G92 X0", "G91 G1 X1 F10"]);
+        assert_eq!(m.pos[0], Some(25.4));
+        assert_eq!(m.machine_pos()[0], Some(50.8));
+        assert_eq!(ev.len(), 2);
+        let Motion::Line { kind, to, feed, .. } = &ev[1] else {
+            panic!("a line")
+        };
+        assert_eq!(*kind, MoveKind::Feed);
+        assert_eq!(to.machine().map(|a| a[0]), Some(50.8));
+        assert_eq!(feed.rate, 254.0);
+    }
+
+    #[test]
+    fn arcs_and_cycles() {
+        let (m, ev) = run(&[
+            "G0 X10 Y0 Z5",
+            "G3 X-10 Y0 R10 F100",
+            "G99 G81 X5 Y5 Z-1 R2",
+        ]);
+        let Motion::Arc { center, ccw, .. } = &ev[1] else {
+            panic!("an arc")
+        };
+        assert!(*ccw);
+        assert!(center[0].abs() < 1e-9 && center[1].abs() < 1e-9);
+        assert_eq!(
+            (m.pos[0], m.pos[1], m.pos[2]),
+            (Some(5.0), Some(5.0), Some(2.0))
+        );
+    }
+
+    #[test]
+    fn tool_length_from_the_table() {
+        let s = Settings {
+            zero_start: true,
+            machine_metric: true,
+            tool_table: vec![(
+                2,
+                ToolData {
+                    offsets: [0.0, 0.0, 5.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    ..ToolData::default()
+                },
+            )],
+            ..Settings::default()
+        };
+        let mut m = Machine::new(&s);
+        for l in ["T2 M6", "G43", "G0 Z1"] {
+            m.apply(&Block::decode(l.as_bytes()).unwrap());
+        }
+        assert_eq!(m.machine_pos()[2], Some(6.0));
+        assert_eq!(m.current_tool, Some(2));
+    }
+}
