@@ -137,13 +137,105 @@ fn simple_block_ok(words: &[(u8, f64)], modal: &Modal) -> bool {
     }
 }
 
+/// A check's result: the error and the index of the word it concerns.
+type Check = Result<(), (ErrorKind, Option<usize>)>;
+
+fn bad(e: BlockError, at: Option<usize>) -> Check {
+    Err((ErrorKind::Block(e), at))
+}
+
+/// A block's words decoded once for the checks: its G- and M-codes (×10 for
+/// G) with the index of their word, where each other letter is, and what
+/// follows from them in the modal state the block meets.
+struct Decoded<'a> {
+    words: &'a [(u8, f64)],
+    modal: &'a Modal,
+    gs: &'a [(i32, usize)],
+    ms: &'a [(i64, usize)],
+    has: &'a [Option<u8>; 128],
+    /// The first axis word.
+    axis_word: Option<usize>,
+    /// The motion code on the line.
+    motion_here: Option<i32>,
+    /// The motion mode the block runs in.
+    motion: i32,
+    /// The feed mode the block moves in (G93/G94/G95 on the line first).
+    feed_mode: i32,
+    /// A NURBS block (G5.2 ... G5.3).
+    nurbs: bool,
+    /// The G5.3 word.
+    g53: Option<usize>,
+    /// The non-motion code that takes the axis words (G43.1 without a
+    /// motion code on the line takes them as offsets).
+    axis_g0: Option<i32>,
+}
+
+impl<'a> Decoded<'a> {
+    fn new(
+        words: &'a [(u8, f64)],
+        modal: &'a Modal,
+        gs: &'a [(i32, usize)],
+        ms: &'a [(i64, usize)],
+        has: &'a [Option<u8>; 128],
+    ) -> Decoded<'a> {
+        let at = |c: u8| has[c as usize].map(usize::from);
+        let axis_word = b"xyzabcuvw".iter().find_map(|&c| at(c));
+        let motion_here = gs.iter().find(|(g, _)| g_group(*g) == Some(1)).map(|x| x.0);
+        let feed_mode = gs
+            .iter()
+            .find(|g| matches!(g.0, 930 | 940 | 950))
+            .map_or(modal.feed_mode, |g| g.0);
+        let axis_g0 = gs
+            .iter()
+            .find(|(g, _)| g_uses_axes(*g))
+            .map(|x| x.0)
+            .or_else(|| (gs.iter().any(|g| g.0 == 431) && motion_here.is_none()).then_some(431));
+        Decoded {
+            words,
+            modal,
+            gs,
+            ms,
+            has,
+            axis_word,
+            motion_here,
+            motion: motion_here.unwrap_or(modal.motion),
+            feed_mode,
+            nurbs: motion_here.unwrap_or(modal.motion) == NURBS,
+            g53: gs.iter().find(|g| g.0 == 53).map(|g| g.1),
+            axis_g0,
+        }
+    }
+
+    /// Index of the word with this letter.
+    fn has_at(&self, c: u8) -> Option<usize> {
+        self.has[c as usize].map(usize::from)
+    }
+
+    fn g_on(&self, codes: &[i32]) -> bool {
+        self.gs.iter().any(|(g, _)| codes.contains(g))
+    }
+
+    fn m_on(&self, codes: &[i64]) -> bool {
+        self.ms.iter().any(|(m, _)| codes.contains(m))
+    }
+
+    fn value(&self, c: u8) -> Option<f64> {
+        self.has_at(c).map(|i| self.words[i].1)
+    }
+
+    /// An absent P or Q reads as -1 in the reference, so a P-1 or Q-1 is
+    /// no P or Q where one is required.
+    fn given(&self, c: u8) -> bool {
+        self.value(c).is_some_and(|v| v != -1.0)
+    }
+}
+
 fn full_check(
     words: &[(u8, f64)],
     modal: &Modal,
     points: &Nurbs,
     cycle: &Cycle,
 ) -> Result<(), (ErrorKind, Option<usize>)> {
-    let bad = |e: BlockError, at: Option<usize>| Err((ErrorKind::Block(e), at));
     let mut gseen: [Option<usize>; 16] = [None; 16];
     let mut mseen: [Option<usize>; 16] = [None; 16];
     // Fixed-size scratch: this runs for every line.
@@ -229,27 +321,24 @@ fn full_check(
             }
         }
     }
-    let gs = &gbuf[..gn];
-    let ms = &mbuf[..mn];
-    let has_at = |c: u8| has[c as usize].map(usize::from);
-    let g_on = |codes: &[i32]| gs.iter().any(|(g, _)| codes.contains(g));
-    let m_on = |codes: &[i64]| ms.iter().any(|(m, _)| codes.contains(m));
-    let axis_word = b"xyzabcuvw".iter().find_map(|&c| has_at(c));
-    let motion_here = gs.iter().find(|(g, _)| g_group(*g) == Some(1)).map(|x| x.0);
-    // An absent P or Q reads as -1 in the reference, so a P-1 or Q-1 is no P
-    // or Q where one is required.
-    let value = |c: u8| has_at(c).map(|i| words[i].1);
-    let given = |c: u8| value(c).is_some_and(|v| v != -1.0);
-    // The feed mode the block moves in (G93/G94/G95 on the line first).
-    let feed_mode = gs
-        .iter()
-        .find(|g| matches!(g.0, 930 | 940 | 950))
-        .map_or(modal.feed_mode, |g| g.0);
-    // NURBS blocks (G5.2 ... G5.3).
-    let nurbs = motion_here.unwrap_or(modal.motion) == NURBS;
-    let g53 = gs.iter().find(|g| g.0 == 53).map(|g| g.1);
-    if let Some(at) = g53 {
-        if modal.motion != NURBS {
+    let d = Decoded::new(words, modal, &gbuf[..gn], &mbuf[..mn], &has);
+    check_nurbs(&d, points)?;
+    check_motion_words(&d)?;
+    check_axis_codes(&d)?;
+    check_cycle(&d, cycle)?;
+    check_axis_values(&d)?;
+    check_word_values(&d)?;
+    check_unused_words(&d)?;
+    check_whole_numbers(&d)?;
+    check_g10(&d)?;
+    check_required_words(&d)?;
+    check_feed(&d)
+}
+
+/// NURBS blocks: G5.3 after G5.2 with enough points; control points.
+fn check_nurbs(d: &Decoded<'_>, points: &Nurbs) -> Check {
+    if let Some(at) = d.g53 {
+        if d.modal.motion != NURBS {
             return bad(BlockError::NurbsEndWithoutStart, Some(at));
         }
         if let Some(order) = points.short_of_order() {
@@ -259,114 +348,126 @@ fn full_check(
     // A control point: on a G5.2 line, a line of axis words in G5.2 mode, or
     // axis words after G5.3 (which start a new block). The checks on P see
     // the points still pending, which G5.3 has just cleared.
-    let point = (nurbs && (motion_here.is_some() || axis_word.is_some()))
-        || (g53.is_some() && axis_word.is_some());
+    let point = (d.nurbs && (d.motion_here.is_some() || d.axis_word.is_some()))
+        || (d.g53.is_some() && d.axis_word.is_some());
     if point {
-        let pending = points.pending() && g53.is_none();
-        let p = value(b'p').unwrap_or(-1.0);
-        if has_at(b'x').is_some() != has_at(b'y').is_some() {
-            return bad(BlockError::NurbsPointNeedsXY, axis_word);
+        let pending = points.pending() && d.g53.is_none();
+        let p = d.value(b'p').unwrap_or(-1.0);
+        if d.has_at(b'x').is_some() != d.has_at(b'y').is_some() {
+            return bad(BlockError::NurbsPointNeedsXY, d.axis_word);
         }
-        if pending && axis_word.is_none() && p > 0.0 {
-            return bad(BlockError::NurbsPWithoutXY, has_at(b'p'));
+        if pending && d.axis_word.is_none() && p > 0.0 {
+            return bad(BlockError::NurbsPWithoutXY, d.has_at(b'p'));
         }
         if pending && p <= 0.0 {
-            return bad(BlockError::NurbsWeightNeeded, has_at(b'p').or(axis_word));
+            return bad(
+                BlockError::NurbsWeightNeeded,
+                d.has_at(b'p').or(d.axis_word),
+            );
         }
-        let feed = value(b'f').unwrap_or(modal.feed);
-        if feed_mode == 940 && feed == 0.0 {
-            return bad(BlockError::NurbsZeroFeed, has_at(b'f'));
+        let feed = d.value(b'f').unwrap_or(d.modal.feed);
+        if d.feed_mode == 940 && feed == 0.0 {
+            return bad(BlockError::NurbsZeroFeed, d.has_at(b'f'));
         }
     }
-    if nurbs
-        && motion_here.is_none()
-        && axis_word.is_none()
-        && let Some(i) = has_at(b'p')
+    if d.nurbs
+        && d.motion_here.is_none()
+        && d.axis_word.is_none()
+        && let Some(i) = d.has_at(b'p')
     {
         return bad(BlockError::WordUnused { letter: 'p' }, Some(i));
     }
-    // Motion codes that need axis words, and their required words.
-    if let Some(m) = motion_here {
+    Ok(())
+}
+
+/// Motion codes that need axis words, and their required words.
+fn check_motion_words(d: &Decoded<'_>) -> Check {
+    if let Some(m) = d.motion_here {
         let needs_axes = matches!(m, 382..=385 | 730 | 760 | 810..=890);
-        if needs_axes && axis_word.is_none() && !matches!(m, 760) {
+        if needs_axes && d.axis_word.is_none() && !matches!(m, 760) {
             return bad(BlockError::AxesMissing, None);
         }
-        if matches!(m, 820 | 860 | 880 | 890) && !given(b'p') {
+        if matches!(m, 820 | 860 | 880 | 890) && !d.given(b'p') {
             return bad(BlockError::CycleDwellMissing, None);
         }
-        if matches!(m, 730 | 830) && !given(b'q') {
+        if matches!(m, 730 | 830) && !d.given(b'q') {
             return bad(BlockError::PeckQMissing, None);
         }
-        if m == 760 && has_at(b'p').is_none() {
+        if m == 760 && d.has_at(b'p').is_none() {
             return bad(BlockError::G76PMissing, None);
         }
         if matches!(m, 20 | 30)
             && ![b'i', b'j', b'k', b'r']
                 .iter()
-                .any(|&c| has_at(c).is_some())
+                .any(|&c| d.has_at(c).is_some())
         {
             return bad(BlockError::ArcWordsMissing, None);
         }
-        if matches!(m, 330 | 331) && modal.spindle == 0 && !ms.iter().any(|x| matches!(x.0, 3 | 4))
+        if matches!(m, 330 | 331)
+            && d.modal.spindle == 0
+            && !d.ms.iter().any(|x| matches!(x.0, 3 | 4))
         {
             return bad(BlockError::SpindleStoppedG33, None);
         }
     }
-    // G43.1 takes the axis words as offsets; with a motion code on the line
-    // they are also the move's end point.
-    let axis_g0 = gs
-        .iter()
-        .find(|(g, _)| g_uses_axes(*g))
-        .map(|x| x.0)
-        .or_else(|| (g_on(&[431]) && motion_here.is_none()).then_some(431));
-    if let (Some(_), Some(_), Some(i)) = (motion_here, axis_g0, axis_word)
-        && motion_here != Some(800)
+    Ok(())
+}
+
+/// Two codes that both take the axis words.
+fn check_axis_codes(d: &Decoded<'_>) -> Check {
+    if let (Some(_), Some(_), Some(i)) = (d.motion_here, d.axis_g0, d.axis_word)
+        && d.motion_here != Some(800)
     {
         return bad(BlockError::TwoAxisGCodes, Some(i));
     }
-    let motion = motion_here.unwrap_or(modal.motion);
+    Ok(())
+}
+
+/// A canned cycle that runs: its code is on the line, or it is the motion
+/// mode and the line has axis words no other code takes.
+fn check_cycle(d: &Decoded<'_>, cycle: &Cycle) -> Check {
     // A canned cycle runs: its code is on the line, or it is the motion mode
     // and the line has axis words no other code takes.
-    let cycle_runs =
-        is_cycle(motion) && (motion_here.is_some() || (axis_word.is_some() && axis_g0.is_none()));
+    let cycle_runs = is_cycle(d.motion)
+        && (d.motion_here.is_some() || (d.axis_word.is_some() && d.axis_g0.is_none()));
     if cycle_runs {
         // Entering the cycle (not repeating it) needs the depth and R.
-        let first = modal.motion != motion;
-        let (depth, name) = depth_axis(modal.plane);
-        if first && has_at(depth).is_none() {
+        let first = d.modal.motion != d.motion;
+        let (depth, name) = depth_axis(d.modal.plane);
+        if first && d.has_at(depth).is_none() {
             return bad(BlockError::CycleDepthMissing { axis: name }, None);
         }
-        if let Some(i) = [b'a', b'b', b'c'].iter().find_map(|&c| has_at(c)) {
+        if let Some(i) = [b'a', b'b', b'c'].iter().find_map(|&c| d.has_at(c)) {
             return bad(BlockError::RotaryInCycle, Some(i));
         }
-        let r = match value(b'r') {
+        let r = match d.value(b'r') {
             Some(r) => r,
             None if !first => cycle.r,
             None => return bad(BlockError::CycleRMissing, None),
         };
-        if value(b'l') == Some(0.0) {
-            return bad(BlockError::CycleL0, has_at(b'l'));
+        if d.value(b'l') == Some(0.0) {
+            return bad(BlockError::CycleL0, d.has_at(b'l'));
         }
-        if feed_mode == 930 {
+        if d.feed_mode == 930 {
             return bad(BlockError::CycleInverseTime, None);
         }
-        if modal.ccomp != 400 && !g_on(&[400]) {
+        if d.modal.ccomp != 400 && !d.g_on(&[400]) {
             return bad(BlockError::CycleWithComp, None);
         }
         // The R plane must not be below the bottom of the hole (in G91 the
         // depth is relative to R, so it must not be positive).
-        let cc = value(depth).unwrap_or(cycle.depth);
-        let absolute = g_on(&[900]) || (modal.absolute && !g_on(&[910]));
+        let cc = d.value(depth).unwrap_or(cycle.depth);
+        let absolute = d.g_on(&[900]) || (d.modal.absolute && !d.g_on(&[910]));
         let below = if absolute { r < cc } else { cc > 0.0 };
         if below {
-            return bad(BlockError::CycleRBelowDepth { axis: name }, has_at(b'r'));
+            return bad(BlockError::CycleRBelowDepth { axis: name }, d.has_at(b'r'));
         }
-        let spindle = ms
-            .iter()
-            .rev()
-            .find(|m| matches!(m.0, 3..=5))
-            .map_or(modal.spindle, |m| if m.0 == 5 { 0 } else { m.0 as i32 });
-        let spindle_msg = match (motion, spindle) {
+        let spindle =
+            d.ms.iter()
+                .rev()
+                .find(|m| matches!(m.0, 3..=5))
+                .map_or(d.modal.spindle, |m| if m.0 == 5 { 0 } else { m.0 as i32 });
+        let spindle_msg = match (d.motion, spindle) {
             (840, 0) | (740, 0) | (860, 0) | (870, 0) | (880, 0) => {
                 Some(BlockError::CycleSpindleStopped)
             }
@@ -378,12 +479,17 @@ fn full_check(
             return bad(msg, None);
         }
     }
-    if let Some(i) = axis_word
-        && axis_g0.is_none()
-        && matches!(motion, 800 | NO_MOTION)
+    Ok(())
+}
+
+/// Axis words with nothing to use them; polar and X/Y words together.
+fn check_axis_values(d: &Decoded<'_>) -> Check {
+    if let Some(i) = d.axis_word
+        && d.axis_g0.is_none()
+        && matches!(d.motion, 800 | NO_MOTION)
     {
         return bad(
-            if motion_here == Some(800) {
+            if d.motion_here == Some(800) {
                 BlockError::AxesWithG80
             } else {
                 BlockError::AxesWithoutGCode
@@ -391,12 +497,17 @@ fn full_check(
             Some(i),
         );
     }
-    if (has_at(b'@').is_some() || has_at(b'^').is_some())
-        && (has_at(b'x').is_some() || has_at(b'y').is_some())
+    if (d.has_at(b'@').is_some() || d.has_at(b'^').is_some())
+        && (d.has_at(b'x').is_some() || d.has_at(b'y').is_some())
     {
-        return bad(BlockError::PolarWithXY, has_at(b'@').or(has_at(b'^')));
+        return bad(BlockError::PolarWithXY, d.has_at(b'@').or(d.has_at(b'^')));
     }
-    for (i, &(l, v)) in words.iter().enumerate() {
+    Ok(())
+}
+
+/// Values a word may not have.
+fn check_word_values(d: &Decoded<'_>) -> Check {
+    for (i, &(l, v)) in d.words.iter().enumerate() {
         // L is read as a whole number, and never negative.
         if l == b'l' {
             let n = crate::parse::integer_value(v).map_err(|k| (k, Some(i)))?;
@@ -414,177 +525,204 @@ fn full_check(
             return bad(BlockError::NegativeT, None);
         }
     }
-    // Words that need a code to use them.
-    let arcish = g_on(&[20, 30, 50, 51, 100, 331, 760, 870])
-        || (motion_here.is_none()
-            && matches!(modal.motion, 20 | 30 | 50 | 51 | 331 | 760 | 870)
-            && axis_word.is_some());
+    Ok(())
+}
+
+/// Words that need a code to use them.
+fn check_unused_words(d: &Decoded<'_>) -> Check {
+    let arcish = d.g_on(&[20, 30, 50, 51, 100, 331, 760, 870])
+        || (d.motion_here.is_none()
+            && matches!(d.modal.motion, 20 | 30 | 50 | 51 | 331 | 760 | 870)
+            && d.axis_word.is_some());
     let uses = |letter: u8, ok: bool, msg: BlockError| -> Result<(), (ErrorKind, Option<usize>)> {
-        match has_at(letter) {
+        match d.has_at(letter) {
             Some(i) if !ok => bad(msg, Some(i)),
             _ => Ok(()),
         }
     };
     uses(
         b'i',
-        arcish || (motion == 20 || motion == 30),
+        arcish || (d.motion == 20 || d.motion == 30),
         BlockError::WordUnused { letter: 'i' },
     )?;
     uses(
         b'j',
-        arcish || (motion == 20 || motion == 30),
+        arcish || (d.motion == 20 || d.motion == 30),
         BlockError::WordUnused { letter: 'j' },
     )?;
     uses(
         b'k',
-        arcish || matches!(motion, 20 | 30 | 330 | 331 | 760 | 870),
+        arcish || matches!(d.motion, 20 | 30 | 330 | 331 | 760 | 870),
         BlockError::WordUnused { letter: 'k' },
     )?;
-    let canned = matches!(motion, 730 | 740 | 760 | 810..=890);
+    let canned = matches!(d.motion, 730 | 740 | 760 | 810..=890);
     uses(
         b'r',
-        matches!(motion, 20 | 30) || canned || g_on(&[100]) || axis_g0 == Some(100) || m_on(&[19]),
+        matches!(d.motion, 20 | 30)
+            || canned
+            || d.g_on(&[100])
+            || d.axis_g0 == Some(100)
+            || d.m_on(&[19]),
         BlockError::WordUnused { letter: 'r' },
     )?;
     uses(
         b'p',
-        g_on(&[20, 30, 40, 100, 640, 50, 52, 760, 820, 860, 880, 890])
-            || matches!(motion, 20 | 30 | 52 | 820 | 860 | 880 | 890)
-            || m_on(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98]),
+        d.g_on(&[20, 30, 40, 100, 640, 50, 52, 760, 820, 860, 880, 890])
+            || matches!(d.motion, 20 | 30 | 52 | 820 | 860 | 880 | 890)
+            || d.m_on(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98]),
         BlockError::WordUnused { letter: 'p' },
     )?;
     uses(
         b'q',
-        g_on(&[50, 100, 640, 730, 760, 830])
-            || matches!(motion, 730 | 830)
-            || m_on(&[19, 66, 67, 68, 61]),
+        d.g_on(&[50, 100, 640, 730, 760, 830])
+            || matches!(d.motion, 730 | 830)
+            || d.m_on(&[19, 66, 67, 68, 61]),
         BlockError::WordUnused { letter: 'q' },
     )?;
     uses(
         b'h',
-        g_on(&[430, 432, 760]),
+        d.g_on(&[430, 432, 760]),
         BlockError::WordUnused { letter: 'h' },
     )?;
     uses(
         b'd',
-        g_on(&[410, 411, 420, 421, 960]),
+        d.g_on(&[410, 411, 420, 421, 960]),
         BlockError::WordUnused { letter: 'd' },
     )?;
     uses(
         b'e',
-        g_on(&[760]) || m_on(&[66, 67, 68]),
+        d.g_on(&[760]) || d.m_on(&[66, 67, 68]),
         BlockError::WordUnused { letter: 'e' },
     )?;
     uses(
         b'l',
         // (G74 takes no L in the reference.)
-        g_on(&[100, 410, 420, 760])
-            || (canned && motion != 740)
-            || m_on(&[66, 98])
-            || g_on(&[52, 53]),
+        d.g_on(&[100, 410, 420, 760])
+            || (canned && d.motion != 740)
+            || d.m_on(&[66, 98])
+            || d.g_on(&[52, 53]),
         BlockError::WordUnused { letter: 'l' },
     )?;
     uses(
         b'$',
-        m_on(&[3, 4, 5, 19, 51]) || g_on(&[330, 331, 760, 950, 960, 970]),
+        d.m_on(&[3, 4, 5, 19, 51]) || d.g_on(&[330, 331, 760, 950, 960, 970]),
         BlockError::WordUnused { letter: '$' },
     )?;
+    Ok(())
+}
+
+/// Whole numbers, peck depths, H, and G53's conditions.
+fn check_whole_numbers(d: &Decoded<'_>) -> Check {
     // Whole numbers.
-    for (i, &(l, v)) in words.iter().enumerate() {
+    for (i, &(l, v)) in d.words.iter().enumerate() {
         if matches!(l, b't' | b'h') && crate::parse::integer_value(v).is_err() {
             return Err((ErrorKind::NonInteger { value: v }, Some(i)));
         }
-        if l == b'd' && g_on(&[410, 420]) && v.fract() != 0.0 {
+        if l == b'd' && d.g_on(&[410, 420]) && v.fract() != 0.0 {
             return bad(BlockError::CompDNotWhole, Some(i));
         }
     }
     // Peck depths of a running G73/G83.
-    if matches!(motion, 730 | 830)
-        && (motion_here.is_some() || axis_word.is_some())
-        && value(b'q').is_some_and(|q| q != -1.0 && q <= 0.0)
+    if matches!(d.motion, 730 | 830)
+        && (d.motion_here.is_some() || d.axis_word.is_some())
+        && d.value(b'q').is_some_and(|q| q != -1.0 && q <= 0.0)
     {
-        return bad(BlockError::PeckQNotPositive, has_at(b'q'));
+        return bad(BlockError::PeckQNotPositive, d.has_at(b'q'));
     }
-    if value(b'h').is_some_and(|h| h < -1.0) {
-        return bad(BlockError::NegativeH, has_at(b'h'));
+    if d.value(b'h').is_some_and(|h| h < -1.0) {
+        return bad(BlockError::NegativeH, d.has_at(b'h'));
     }
     // G53 moves in machine coordinates: with G0 or G1, never incremental.
-    if let Some(at) = gs.iter().find(|g| g.0 == 530).map(|g| g.1) {
-        let motion_to_be = motion_here.or(axis_word.map(|_| modal.motion));
+    if let Some(at) = d.gs.iter().find(|g| g.0 == 530).map(|g| g.1) {
+        let motion_to_be = d.motion_here.or(d.axis_word.map(|_| d.modal.motion));
         if !matches!(motion_to_be, Some(0 | 10)) {
             return bad(BlockError::G53NeedsG0G1, Some(at));
         }
-        let incremental = g_on(&[910]) || (!modal.absolute && !g_on(&[900]));
+        let incremental = d.g_on(&[910]) || (!d.modal.absolute && !d.g_on(&[900]));
         if incremental {
             return bad(BlockError::G53Incremental, Some(at));
         }
     }
+    Ok(())
+}
+
+/// G10's L and P.
+fn check_g10(d: &Decoded<'_>) -> Check {
     // G10's L and P: P is a tool number (L1, L10, L11) or a coordinate
     // system (L2, L20), rounded half away from zero; an absent P reads as
     // -1, and only a P above its rounding by more than 0.0001 is refused.
-    if g_on(&[100]) {
-        let p = value(b'p').unwrap_or(-1.0);
-        let l = value(b'l').map_or(-1, |l| l.round() as i64);
+    if d.g_on(&[100]) {
+        let p = d.value(b'p').unwrap_or(-1.0);
+        let l = d.value(b'l').map_or(-1, |l| l.round() as i64);
         let p_int = if p >= 0.0 {
             (p + 0.5).trunc()
         } else {
             (p - 0.5).trunc()
         };
         if !matches!(l, 1 | 2 | 10 | 11 | 20) {
-            return bad(BlockError::G10BadL, has_at(b'l'));
+            return bad(BlockError::G10BadL, d.has_at(b'l'));
         }
         if p + 0.0001 - p_int > 0.0002 {
-            return bad(BlockError::G10PNotWhole, has_at(b'p'));
+            return bad(BlockError::G10PNotWhole, d.has_at(b'p'));
         }
         if matches!(l, 2 | 20) && !(0.0..=9.0).contains(&p_int) {
-            return bad(BlockError::G10CoordPRange, has_at(b'p'));
+            return bad(BlockError::G10CoordPRange, d.has_at(b'p'));
         }
         if matches!(l, 1 | 10 | 11) && p_int < 1.0 {
-            return bad(BlockError::G10ToolPRange, has_at(b'p'));
+            return bad(BlockError::G10ToolPRange, d.has_at(b'p'));
         }
     }
-    // Codes that need words.
-    if g_on(&[40]) && !given(b'p') {
+    Ok(())
+}
+
+/// Codes that need words.
+fn check_required_words(d: &Decoded<'_>) -> Check {
+    if d.g_on(&[40]) && !d.given(b'p') {
         return bad(
             BlockError::G4PMissing,
-            gs.iter().find(|g| g.0 == 40).map(|g| g.1),
+            d.gs.iter().find(|g| g.0 == 40).map(|g| g.1),
         );
     }
-    if g_on(&[960]) && has_at(b's').is_none() {
+    if d.g_on(&[960]) && d.has_at(b's').is_none() {
         return bad(BlockError::G96SMissing, None);
     }
-    if m_on(&[62, 63, 64, 65]) && has_at(b'p').is_none() {
+    if d.m_on(&[62, 63, 64, 65]) && d.has_at(b'p').is_none() {
         return bad(BlockError::M62PMissing, None);
     }
-    if m_on(&[66]) && !given(b'p') && has_at(b'e').is_none() {
+    if d.m_on(&[66]) && !d.given(b'p') && d.has_at(b'e').is_none() {
         return bad(BlockError::M66PEMissing, None);
     }
-    if m_on(&[61]) && has_at(b'q').is_none() {
+    if d.m_on(&[61]) && d.has_at(b'q').is_none() {
         return bad(BlockError::M61QMissing, None);
     }
-    // Motion needing a feed rate.
-    let moves = motion_here.is_some() || axis_word.is_some();
-    if moves && axis_g0.is_none() && matches!(motion, 10 | 20 | 30 | 50 | 51 | 730 | 810..=890) {
-        let feed = words.iter().rev().find(|w| w.0 == b'f').map(|w| w.1);
+    Ok(())
+}
+
+/// Motion needing a feed rate; arcs needing their words; G33's K.
+fn check_feed(d: &Decoded<'_>) -> Check {
+    let moves = d.motion_here.is_some() || d.axis_word.is_some();
+    if moves && d.axis_g0.is_none() && matches!(d.motion, 10 | 20 | 30 | 50 | 51 | 730 | 810..=890)
+    {
+        let feed = d.words.iter().rev().find(|w| w.0 == b'f').map(|w| w.1);
         let inverse =
-            gs.iter().any(|g| g.0 == 930) || (modal.feed_mode == 930 && !g_on(&[940, 950]));
+            d.gs.iter().any(|g| g.0 == 930) || (d.modal.feed_mode == 930 && !d.g_on(&[940, 950]));
         if inverse {
-            if feed.is_none() && axis_word.is_some() {
+            if feed.is_none() && d.axis_word.is_some() {
                 return bad(BlockError::InverseTimeFMissing, None);
             }
-        } else if feed.unwrap_or(modal.feed) == 0.0 {
+        } else if feed.unwrap_or(d.modal.feed) == 0.0 {
             return bad(BlockError::ZeroFeed, None);
         }
-        if matches!(motion, 20 | 30) && axis_word.is_some() {
+        if matches!(d.motion, 20 | 30) && d.axis_word.is_some() {
             let arc = ["i", "j", "k", "r"]
                 .iter()
-                .any(|c| has[c.as_bytes()[0] as usize].is_some());
+                .any(|c| d.has[c.as_bytes()[0] as usize].is_some());
             if !arc {
                 return bad(BlockError::ArcWordsMissing, None);
             }
         }
     }
-    if motion_here.is_some_and(|m| matches!(m, 330 | 331)) && has_at(b'k').is_none() {
+    if d.motion_here.is_some_and(|m| matches!(m, 330 | 331)) && d.has_at(b'k').is_none() {
         return bad(BlockError::G33KMissing, None);
     }
     Ok(())
