@@ -1,5 +1,6 @@
 //! Command line → validated configuration. Clap types stop here.
 
+use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -119,8 +120,12 @@ pub struct CommonArgs {
     /// or -D fixes them.
     #[arg(long)]
     pub zero_start: bool,
-    /// Known start position, e.g. `--start-position X0 Y0 Z10`.
-    #[arg(long, value_name = "AXIS_VALUE", num_args = 1..)]
+    /// Known start position in mm, in the program's coordinates (LinuxCNC
+    /// starts in G21): `--start-position X0,Y0,Z10`. A value ending in `in`
+    /// is in inches (`Z0.5in`); A, B, C are degrees. `--start-position X0 Y0
+    /// Z10` also works: the words that follow it are taken while they look
+    /// like axis words.
+    #[arg(long, value_name = "X0,Y0,Z10", value_delimiter = ',')]
     pub start_position: Vec<String>,
     /// Do not search the program's own folder for subroutine files.
     #[arg(long)]
@@ -187,6 +192,92 @@ pub fn parse_define(text: &str) -> Result<Define, ErrorKind> {
         return Err(bad());
     }
     Ok(Define::Named(name, v))
+}
+
+/// Parses one `--start-position` word: an axis letter and a number in mm
+/// (degrees for A, B, C), or in inches with an `in` suffix (`mm` is
+/// accepted too). Returns the axis index and the value in mm.
+pub fn parse_axis_word(word: &str) -> Option<(usize, f64)> {
+    let mut chars = word.chars();
+    let letter = chars.next()?.to_ascii_lowercase();
+    let axis = crate::eval::state::AXES
+        .iter()
+        .position(|&c| c as char == letter)?;
+    let rest = chars.as_str();
+    let lower = rest.to_ascii_lowercase();
+    let linear = !matches!(letter, 'a' | 'b' | 'c');
+    let (num, scale) = if let Some(n) = lower.strip_suffix("in").filter(|_| linear) {
+        (n, 25.4)
+    } else if let Some(n) = lower.strip_suffix("mm").filter(|_| linear) {
+        (n, 1.0)
+    } else {
+        (lower.as_str(), 1.0)
+    };
+    let v: f64 = num.trim().parse().ok()?;
+    let v = v * scale;
+    v.is_finite().then_some((axis, v))
+}
+
+/// Whether a command-line word is a `--start-position` value (axis words
+/// separated by commas or spaces).
+fn is_axis_list(arg: &str) -> bool {
+    let mut words = arg
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|w| !w.is_empty())
+        .peekable();
+    words.peek().is_some() && words.all(|w| parse_axis_word(w).is_some())
+}
+
+/// Rewrites `--start-position X0 Y0 Z10` (the words after the option, as
+/// long as they are axis words) into `--start-position=X0,Y0,Z10`, so that
+/// a file name after them is not taken as a value.
+pub fn normalize_args<I: IntoIterator<Item = OsString>>(args: I) -> Vec<OsString> {
+    let mut out: Vec<OsString> = Vec::new();
+    let mut it = args.into_iter().peekable();
+    while let Some(a) = it.next() {
+        if a == "--" {
+            out.push(a);
+            out.extend(it);
+            break;
+        }
+        if a != "--start-position" {
+            out.push(a);
+            continue;
+        }
+        let mut words: Vec<String> = Vec::new();
+        while let Some(next) = it.peek() {
+            match next.to_str() {
+                Some(w) if is_axis_list(w) => {
+                    words.push(w.to_string());
+                    it.next();
+                }
+                _ => break,
+            }
+        }
+        if words.is_empty() {
+            // Not axis words: let clap take the next word and the check
+            // in to_config name it.
+            out.push(a);
+        } else {
+            let joined: Vec<&str> = words
+                .iter()
+                .flat_map(|w| w.split(|c: char| c == ',' || c.is_whitespace()))
+                .filter(|w| !w.is_empty())
+                .collect();
+            out.push(OsString::from(format!(
+                "--start-position={}",
+                joined.join(",")
+            )));
+        }
+    }
+    out
+}
+
+impl Cli {
+    /// Parses the process's command line.
+    pub fn from_env() -> Cli {
+        Cli::parse_from(normalize_args(std::env::args_os()))
+    }
 }
 
 /// Reads a LinuxCNC .var file: `number value` lines in ascending order.
@@ -339,17 +430,13 @@ impl CommonArgs {
             .iter()
             .flat_map(|s| s.split_whitespace())
         {
-            let bad = || ErrorKind::BadDefine {
-                text: format!("--start-position {word}"),
-            };
-            let mut chars = word.chars();
-            let letter = chars.next().ok_or_else(bad)?.to_ascii_lowercase();
-            let axis = crate::eval::state::AXES
-                .iter()
-                .position(|&c| c as char == letter)
-                .ok_or_else(bad)?;
-            let v: f64 = chars.as_str().parse().map_err(|_| bad())?;
-            settings.start_position.push((axis, v));
+            settings
+                .start_position
+                .push(
+                    parse_axis_word(word).ok_or_else(|| ErrorKind::BadStartPosition {
+                        text: word.to_string(),
+                    })?,
+                );
         }
         let format = match self.message_format {
             FormatArg::Human => MessageFormat::Human,

@@ -1,5 +1,3 @@
-use clap::Parser;
-
 fn main() -> std::process::ExitCode {
-    ngcflat::run(ngcflat::config::Cli::parse())
+    ngcflat::run(ngcflat::config::Cli::from_env())
 }

@@ -183,6 +183,8 @@ pub enum ErrorKind {
     Internal { what: String },
     /// `o[1] sub`: a definition whose label is computed.
     ComputedSubLabel,
+    /// `--start-position part.ngc`: not a list of axis words.
+    BadStartPosition { text: String },
 }
 
 impl ErrorKind {
@@ -261,6 +263,7 @@ impl ErrorKind {
             Unsupported { .. } => "E0507",
             Internal { .. } => "E0700",
             ComputedSubLabel => "E0701",
+            BadStartPosition { .. } => "E0800",
         }
     }
 }
@@ -326,7 +329,7 @@ impl fmt::Display for ErrorKind {
             UnterminatedName => write!(f, "named parameter is not terminated by '>'"),
             UnknownPosition { axis, why } => write!(
                 f,
-                "the {} position is not known here ({why}); fix it with an absolute move first, or give --start-position / -D",
+                "the {} position is not known here ({why}); fix it with an absolute move first, or give --start-position X0,Y0,Z0 (mm)",
                 axis.to_ascii_uppercase()
             ),
             ToolNotInTable { tool } => write!(f, "tool {tool} is not in the tool table"),
@@ -479,6 +482,10 @@ impl fmt::Display for ErrorKind {
             ComputedSubLabel => write!(
                 f,
                 "a subroutine definition needs a fixed label (o<name> sub or o100 sub), not a computed one"
+            ),
+            BadStartPosition { text } => write!(
+                f,
+                "--start-position '{text}' is not a list of axis words such as X0,Y0,Z10 (mm; X0.5in for inches)"
             ),
         }
     }

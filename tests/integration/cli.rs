@@ -164,3 +164,55 @@ fn stdout_of_a_streamed_file_equals_the_spooled_output() {
     assert_eq!(piped.status.code(), Some(0));
     assert!(piped.stdout == spooled, "stdin and -o differ");
 }
+
+#[test]
+fn start_position_forms() {
+    let d = tmp();
+    std::fs::write(
+        d.path().join("part.ngc"),
+        "G91 G1 X1 F100\nG90\n(debug, #<_x> #<_z>)\nM2\n",
+    )
+    .unwrap();
+    // Every form gives X 1 and Z 10 (mm) and keeps the file name.
+    let forms: &[&[&str]] = &[
+        &["--start-position", "X0", "Y0", "Z10", "part.ngc"],
+        &["--start-position", "X0,Y0,Z10", "part.ngc"],
+        &["--start-position", "X0 Y0 Z10", "part.ngc"],
+        &["--start-position=X0,Y0,Z10", "part.ngc"],
+        &["part.ngc", "--start-position", "X0", "Y0", "Z10"],
+        &[
+            "--start-position",
+            "x0",
+            "z0.3937007874015748in",
+            "part.ngc",
+        ],
+    ];
+    for args in forms {
+        let (code, out, err) = crate::run(d.path(), args);
+        assert_eq!(code, 0, "{args:?}: {err}");
+        assert!(out.contains("X1 F100"), "{args:?}: {out}");
+        assert!(out.contains("(MSG, 1.000000 10.000000)"), "{args:?}: {out}");
+    }
+    // A word that is not an axis word is named, with the form that works.
+    let (code, _, err) = crate::run(d.path(), &["--start-position", "Q1", "part.ngc"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("E0800") && err.contains("X0,Y0,Z10"), "{err}");
+    assert!(!err.contains("-D '"), "{err}");
+    // The help shows the form and the unit.
+    let (_, help, _) = crate::run(d.path(), &["--help"]);
+    assert!(help.contains("--start-position <X0,Y0,Z10>"), "{help}");
+    assert!(help.contains("in mm"), "{help}");
+}
+
+#[test]
+fn unknown_position_error_suggests_a_working_form() {
+    let d = tmp();
+    std::fs::write(
+        d.path().join("p.ngc"),
+        "G91 G1 X1 F100\n(debug, #<_x>)\nM2\n",
+    )
+    .unwrap();
+    let (code, _, err) = crate::run(d.path(), &["p.ngc"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("--start-position X0,Y0,Z0 (mm)"), "{err}");
+}
