@@ -185,6 +185,9 @@ pub enum ErrorKind {
     ComputedSubLabel,
     /// `--start-position part.ngc`: not a list of axis words.
     BadStartPosition { text: String },
+    /// `G38.2 Z-10` then `#5063`: the probe's result exists only on the
+    /// machine (probing overwrites any -D value).
+    ProbeResultUnknown { index: usize, line: u32 },
 }
 
 impl ErrorKind {
@@ -264,6 +267,7 @@ impl ErrorKind {
             Internal { .. } => "E0700",
             ComputedSubLabel => "E0701",
             BadStartPosition { .. } => "E0800",
+            ProbeResultUnknown { .. } => "E0801",
         }
     }
 }
@@ -482,6 +486,10 @@ impl fmt::Display for ErrorKind {
             ComputedSubLabel => write!(
                 f,
                 "a subroutine definition needs a fixed label (o<name> sub or o100 sub), not a computed one"
+            ),
+            ProbeResultUnknown { index, line } => write!(
+                f,
+                "#{index} is the result of the probe at line {line}, known only on the machine; a program that uses it cannot be flattened ahead of time (--zero-start assumes the probe does not trip and reads its target, as LinuxCNC's standalone interpreter does)"
             ),
             BadStartPosition { text } => write!(
                 f,

@@ -7,7 +7,8 @@ use std::path::PathBuf;
 
 #[derive(Debug, Clone, PartialEq)]
 pub enum WarningKind {
-    /// `o1 if [1] (debug, x)`: comments on O-lines are never executed.
+    /// `o1 if [1] (debug, x)`: an active comment (debug, msg, print, log,
+    /// abort, …) on an O-line is never executed. Plain comments are fine.
     CommentOnOLine,
     /// `o<unused> sub` never called.
     UnusedSub { name: String },
@@ -75,7 +76,10 @@ impl fmt::Display for WarningKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         use WarningKind::*;
         match self {
-            CommentOnOLine => write!(f, "a comment on an O-word line is never executed"),
+            CommentOnOLine => write!(
+                f,
+                "a (debug/msg/print/log/abort,…) comment on an O-word line is never executed; put it on a line of its own"
+            ),
             UnusedSub { name } => write!(f, "subroutine o<{name}> is never called"),
             ReadBeforeSet { index } => write!(
                 f,

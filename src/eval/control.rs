@@ -384,7 +384,7 @@ impl Interp<'_> {
             let start = file.olines[oidx as usize].start;
             return Err(self.error_in_line(k.clone(), file, start, *span));
         }
-        if o.has_comment {
+        if o.active_comment {
             let (a, b) = self.osite(file, oidx);
             self.warn(WarningKind::CommentOnOLine, file, a, b);
         }

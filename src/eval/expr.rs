@@ -330,6 +330,22 @@ impl Interp<'_> {
             return Ok(v);
         }
         if !self.params.known[i] {
+            if let (Some(line), 5061..=5070) = (self.probed_at, i) {
+                return Err(fault(
+                    ErrorKind::ProbeResultUnknown { index: i, line },
+                    span,
+                ));
+            }
+            if (5400..=5413).contains(&i) {
+                return Err(fault(
+                    ErrorKind::RuntimeParam {
+                        what: format!("#{i} (tool data)"),
+                        why: "it comes from the tool table".to_string(),
+                        hint: self.tool_data_hint(),
+                    },
+                    span,
+                ));
+            }
             let (what, why) = match classify(i) {
                 ParamClass::Runtime(w, y) | ParamClass::ReadOnlyRuntime(w, y) => (w, y),
                 _ => ("value", "it depends on the machine"),

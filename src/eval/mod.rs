@@ -211,6 +211,8 @@ pub struct Interp<'s> {
     cycle: cycle::Cycle,
     /// The tool length offset changed since the last move.
     tlo_moved: bool,
+    /// Line of the last G38 probe that left the results unknown.
+    probed_at: Option<u32>,
     /// Why and since which line the standalone reference's position
     /// differs from the machine's (see W0110).
     standalone_drift: Option<(&'static str, u32)>,
@@ -354,6 +356,7 @@ impl<'s> Interp<'s> {
             nurbs: nurbs::Nurbs::default(),
             cycle: cycle::Cycle::default(),
             tlo_moved: false,
+            probed_at: None,
             standalone_drift: None,
             m61: None,
             consumer: None,

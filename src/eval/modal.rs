@@ -645,6 +645,7 @@ impl Interp<'_> {
             for i in 5061..=5070 {
                 self.params.known[i] = false;
             }
+            self.probed_at = Some(self.line_no());
             return;
         }
         let start: Vec<Option<f64>> = (0..9)

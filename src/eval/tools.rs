@@ -73,6 +73,15 @@ impl Interp<'_> {
         }
     }
 
+    /// How to make the tool data of the tool in the spindle known.
+    pub(super) fn tool_data_hint(&self) -> String {
+        if self.current_tool.is_none() {
+            "--tool-table FILE (LinuxCNC's tool table; the spindle then starts with tool 0 until an M6 or M61), or --zero-start".into()
+        } else {
+            "--tool-table FILE (LinuxCNC's tool table), or --zero-start".into()
+        }
+    }
+
     /// A tool-data parameter #5400..#5413.
     pub(super) fn tool_param(&self, i: usize) -> Option<f64> {
         let current = self.current_tool?;

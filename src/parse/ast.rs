@@ -218,7 +218,9 @@ pub struct OLine {
     pub expr: Option<Expr>,
     /// Call arguments.
     pub args: Vec<Expr>,
-    pub has_comment: bool,
+    /// Carries a comment that acts on other lines (`(debug,…)`, `(msg,…)`,
+    /// …); LinuxCNC ignores it on an O-line. Plain comments do not count.
+    pub active_comment: bool,
     /// An error that only counts when the line is executed (trailing text,
     /// missing bracket).
     pub exec_error: Option<(crate::diag::ErrorKind, Span)>,

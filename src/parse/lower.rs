@@ -333,7 +333,7 @@ impl Lowerer<'_> {
         let mut expr = None;
         let mut args = Vec::new();
         let mut exec_error = None;
-        let mut has_comment = false;
+        let mut active_comment = false;
         let cmd_end = self.raw_end(&cp);
         for q in cp.into_inner() {
             match q.as_rule() {
@@ -345,7 +345,9 @@ impl Lowerer<'_> {
                         expr = Some(e);
                     }
                 }
-                Rule::paren_comment => has_comment = true,
+                Rule::paren_comment => {
+                    active_comment |= self.lower_comment(q).kind != CommentKind::Plain;
+                }
                 r => unreachable!("{r:?} in lower_o_line args"),
             }
         }
@@ -380,7 +382,10 @@ impl Lowerer<'_> {
         let trail = it.next().expect("o_trail");
         for q in trail.into_inner() {
             match q.as_rule() {
-                Rule::paren_comment | Rule::semi_comment => has_comment = true,
+                Rule::paren_comment => {
+                    active_comment |= self.lower_comment(q).kind != CommentKind::Plain;
+                }
+                Rule::semi_comment => {}
                 Rule::o_garbage => {
                     if !q.as_str().is_empty() && exec_error.is_none() {
                         let kind =
@@ -401,7 +406,7 @@ impl Lowerer<'_> {
             kind,
             expr,
             args,
-            has_comment,
+            active_comment,
             exec_error,
         })
     }

@@ -176,7 +176,7 @@ fn warning_fixtures_warn_in_check() {
 fn warnings_from_inline_programs() {
     let cases: &[(&str, &str, &str)] = &[
         (
-            "o1 if [1] (x)\no1 endif\nM2\n",
+            "o1 if [1] (debug, x)\no1 endif\nM2\n",
             "W0001",
             "1 files, 0 errors, 1 warnings",
         ),
@@ -1037,4 +1037,20 @@ fn subroutine_file_checked_alone() {
     assert_eq!(v.get("file"), &s("lib/boom.ngc"));
     assert_eq!(v.get("line"), &n(3.0));
     assert_eq!(v.get("code"), &s("E0106"));
+}
+
+/// Plain comments on O-lines (pcb2gcode, ngcgui and most hand-written
+/// libraries carry them everywhere) are not warned about, so
+/// `--deny-warnings` can gate such repositories.
+#[test]
+fn plain_comments_on_o_lines_pass_deny_warnings() {
+    let d = tmp();
+    put(
+        d.path(),
+        "p.ngc",
+        "(pcb2gcode style)\n#100 = 0\no100 while [#100 LT 2] (Loop over passes)\n  G1 X#100 F100\n  #100 = [#100 + 1]\no100 endwhile (end loop)\no101 if [1] ; plain\no101 endif (end if)\nM2\n",
+    );
+    let (exit, _, stderr) = run(d.path(), &["check", "--deny-warnings", "p.ngc"]);
+    assert_eq!(exit, 0, "{stderr}");
+    assert!(!stderr.contains("W0001"), "{stderr}");
 }
