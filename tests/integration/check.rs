@@ -998,7 +998,7 @@ fn warning_in_file_subroutine_shows_call_stack() {
     put(
         d.path(),
         "lib/w.ngc",
-        "o<w> sub\n  o1 if [1] (note)\n  o1 endif\no<w> endsub\n",
+        "o<w> sub\n  o1 if [1] (debug, note)\n  o1 endif\no<w> endsub\n",
     );
     put(d.path(), "main.ngc", "o<w> call\nM2\n");
     let (exit, _, stderr) = run(
@@ -1015,7 +1015,7 @@ fn warning_in_file_subroutine_shows_call_stack() {
     assert_eq!(exit, 0);
     assert_eq!(
         stderr,
-        "lib/w.ngc:2:3: warning: a comment on an O-word line is never executed [W0001] (called from main.ngc:1:1)\n1 files, 0 errors, 1 warnings\n"
+        "lib/w.ngc:2:3: warning: a (debug/msg/print/log/abort,…) comment on an O-word line is never executed; put it on a line of its own [W0001] (called from main.ngc:1:1)\n1 files, 0 errors, 1 warnings\n"
     );
 }
 
