@@ -682,3 +682,518 @@ fn full_circles_and_turns_move_as_rs274() {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
 }
+
+// ---------------------------------------------------------------- polar words
+
+/// G0/G1 moves with `@`/`^` in G90 and G91, written both ways (the lowered
+/// program in absolute X Y).
+fn polar_program(seed: u64) -> Result<(String, String), String> {
+    use ngcflat::target::lower::polar::{PolarInput, polar_target};
+    let mut rng = Rng::new(seed);
+    let header = "G21 G17 G90 G94 F150\n".to_string();
+    let (mut orig, mut low) = (header.clone(), header);
+    let mut pos = [rng.val(-5.0, 5.0), rng.val(-5.0, 5.0), rng.val(-5.0, 5.0)];
+    let start = format!("G0 X{} Y{} Z{}\n", num(pos[0]), num(pos[1]), num(pos[2]));
+    orig.push_str(&start);
+    low.push_str(&start);
+    let mut distance = Distance::Absolute;
+    for _ in 0..(3 + rng.below(8)) {
+        if rng.chance(0.3) {
+            distance = if distance == Distance::Absolute {
+                orig.push_str("G91\n");
+                Distance::Incremental
+            } else {
+                orig.push_str("G90\n");
+                Distance::Absolute
+            };
+        }
+        if rng.chance(0.05) {
+            // The origin, where incremental polar motion is undefined.
+            pos = [0.0, 0.0, pos[2]];
+            let l = "G90 G0 X0 Y0\n";
+            orig.push_str(l);
+            low.push_str(l);
+            distance = Distance::Absolute;
+        }
+        let g = if rng.chance(0.3) { "G0" } else { "G1" };
+        let mut words = vec![g.to_string()];
+        let (mut radius, mut angle) = (None, None);
+        if rng.chance(0.7) {
+            let v = if distance == Distance::Absolute {
+                rng.val(0.0, 8.0)
+            } else {
+                rng.val(-2.0, 2.0)
+            };
+            radius = Some(v);
+            words.push(format!("@{}", num(v)));
+        }
+        if radius.is_none() || rng.chance(0.7) {
+            let v = rng.val(-400.0, 400.0);
+            angle = Some(v);
+            words.push(format!("^{}", num(v)));
+        }
+        let mut z = pos[2];
+        if rng.chance(0.3) {
+            let v = rng.val(-3.0, 3.0);
+            z = if distance == Distance::Absolute {
+                v
+            } else {
+                pos[2] + v
+            };
+            words.push(format!("Z{}", num(v)));
+        }
+        let line = words.join(" ");
+        let target = polar_target(&PolarInput {
+            distance,
+            current: [pos[0], pos[1]],
+            radius,
+            angle,
+        });
+        let xy = match target {
+            Ok(xy) => xy,
+            Err(e) => {
+                let probe = format!("{orig}{line}\nM2\n");
+                if oracle::run(probe.as_bytes(), "", None).ok {
+                    return Err(format!("`{line}` refused ({e}) but rs274 runs it\n{probe}"));
+                }
+                continue;
+            }
+        };
+        orig.push_str(&line);
+        orig.push('\n');
+        low.push_str(&format!(
+            "{g} X{} Y{} Z{}\n",
+            num(xy[0]),
+            num(xy[1]),
+            num(z)
+        ));
+        pos = [xy[0], xy[1], z];
+    }
+    orig.push_str("M2\n");
+    low.push_str("M2\n");
+    Ok((orig, low))
+}
+
+#[test]
+fn polar_moves_as_rs274() {
+    if !oracle::available("polar_moves_as_rs274") {
+        return;
+    }
+    let seed0 = first_seed();
+    let mut failures = Vec::new();
+    for seed in seed0..seed0 + cases() {
+        match polar_program(seed) {
+            Err(e) => failures.push(format!("polar seed {seed}: {e}")),
+            Ok((orig, low)) => {
+                if let Err(why) = compare_runs(&orig, &low) {
+                    failures.push(report("polar", seed, &orig, &low, &why));
+                }
+            }
+        }
+        if failures.len() >= 3 {
+            break;
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
+
+// ---------------------------------------------------------------- G7
+
+/// Lathe programs in G7 (X words are diameters): moves and centre-format
+/// arcs in G90 and G91, against the same program in G8 with its X words
+/// rewritten by `radius_words`.
+fn diameter_program(seed: u64) -> (String, String) {
+    use ngcflat::target::lower::Word;
+    use ngcflat::target::lower::diameter::radius_words;
+    let mut rng = Rng::new(seed);
+    let ijk = if rng.chance(0.3) { "G90.1" } else { "G91.1" };
+    let mut orig = format!("G21 G18 G7 G90 {ijk} G94 F90\n");
+    let mut low = format!("G21 G18 G8 G90 {ijk} G94 F90\n");
+    // Position (radius X, Z).
+    let mut pos = [rng.val(0.0, 10.0), rng.val(-5.0, 5.0)];
+    let mut distance = Distance::Absolute;
+    let mut lines: Vec<Vec<(u8, f64)>> =
+        vec![vec![(b'G', 0.0), (b'X', 2.0 * pos[0]), (b'Z', pos[1])]];
+    let mut modes: Vec<Option<&str>> = vec![None];
+    for _ in 0..(3 + rng.below(6)) {
+        let mut mode = None;
+        if rng.chance(0.3) {
+            distance = if distance == Distance::Absolute {
+                mode = Some("G91");
+                Distance::Incremental
+            } else {
+                mode = Some("G90");
+                Distance::Absolute
+            };
+        }
+        let (g, end, centre) = if rng.chance(0.5) {
+            let g = if rng.chance(0.3) { 0.0 } else { 1.0 };
+            (g, [rng.val(0.0, 10.0), rng.val(-5.0, 5.0)], None)
+        } else {
+            let (mut ox, mut oz) = (0.0f64, 0.0f64);
+            while ox.hypot(oz) < 0.5 {
+                ox = rng.val(-3.0, 3.0);
+                oz = rng.val(-3.0, 3.0);
+            }
+            let c = [pos[0] + ox, pos[1] + oz];
+            let r = ox.hypot(oz);
+            let phi = rng.val(-3.2, 3.2);
+            let end = [c[0] + r * phi.cos(), c[1] + r * phi.sin()];
+            (if rng.chance(0.5) { 2.0 } else { 3.0 }, end, Some((ox, oz)))
+        };
+        let (x, z) = match distance {
+            Distance::Absolute => (2.0 * end[0], end[1]),
+            Distance::Incremental => (2.0 * (end[0] - pos[0]), end[1] - pos[1]),
+        };
+        let mut words = vec![(b'G', g), (b'X', x), (b'Z', z)];
+        if let Some((ox, oz)) = centre {
+            if ijk == "G90.1" {
+                words.push((b'I', pos[0] + ox));
+                words.push((b'K', pos[1] + oz));
+            } else {
+                words.push((b'I', ox));
+                words.push((b'K', oz));
+            }
+        }
+        lines.push(words);
+        modes.push(mode);
+        pos = end;
+    }
+    for (words, mode) in lines.iter().zip(&modes) {
+        if let Some(m) = mode {
+            orig.push_str(m);
+            orig.push('\n');
+            low.push_str(m);
+            low.push('\n');
+        }
+        let mut l = PlainLine {
+            words: words
+                .iter()
+                .map(|&(letter, value)| Word { letter, value })
+                .collect(),
+        };
+        orig.push_str(&format_line(&l));
+        orig.push('\n');
+        radius_words(&mut l);
+        low.push_str(&format_line(&l));
+        low.push('\n');
+    }
+    orig.push_str("M2\n");
+    low.push_str("M2\n");
+    (orig, low)
+}
+
+#[test]
+fn diameter_mode_moves_as_rs274() {
+    if !oracle::available("diameter_mode_moves_as_rs274") {
+        return;
+    }
+    let seed0 = first_seed();
+    let mut failures = Vec::new();
+    for seed in seed0..seed0 + cases() {
+        let (orig, low) = diameter_program(seed);
+        if let Err(why) = compare_runs(&orig, &low) {
+            failures.push(report("G7", seed, &orig, &low, &why));
+        }
+        if failures.len() >= 3 {
+            break;
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
+
+// ---------------------------------------------------------------- splines
+
+/// Bernstein-form evaluation of a Bézier curve.
+fn bezier_point(ctrl: &[[f64; 2]], t: f64) -> [f64; 2] {
+    let n = ctrl.len() - 1;
+    let mut binom = 1.0;
+    let mut p = [0.0; 2];
+    for (i, c) in ctrl.iter().enumerate() {
+        if i > 0 {
+            binom = binom * (n + 1 - i) as f64 / i as f64;
+        }
+        let b = binom * t.powi(i as i32) * (1.0 - t).powi((n - i) as i32);
+        p[0] += b * c[0];
+        p[1] += b * c[1];
+    }
+    p
+}
+
+/// Cox–de Boor basis function N(i, k) at u (half-open spans; the last span
+/// closed at the end of the knot vector).
+fn basis(i: usize, k: usize, u: f64, knots: &[f64]) -> f64 {
+    if k == 1 {
+        let last = knots[knots.len() - 1];
+        let inside = knots[i] <= u && u < knots[i + 1];
+        let at_end = u == last && knots[i] < knots[i + 1] && knots[i + 1] == last;
+        return if inside || at_end { 1.0 } else { 0.0 };
+    }
+    let mut v = 0.0;
+    let d1 = knots[i + k - 1] - knots[i];
+    if d1 > 0.0 {
+        v += (u - knots[i]) / d1 * basis(i, k - 1, u, knots);
+    }
+    let d2 = knots[i + k] - knots[i + 1];
+    if d2 > 0.0 {
+        v += (knots[i + k] - u) / d2 * basis(i + 1, k - 1, u, knots);
+    }
+    v
+}
+
+/// Rational evaluation of a NURBS with LinuxCNC's clamped uniform knots.
+fn nurbs_point(pts: &[[f64; 3]], order: usize, u: f64) -> [f64; 2] {
+    let n = pts.len() - 1;
+    let knots: Vec<f64> = (0..=n + order)
+        .map(|i| {
+            if i < order {
+                0.0
+            } else if i <= n {
+                (i + 1 - order) as f64
+            } else {
+                (n + 2 - order) as f64
+            }
+        })
+        .collect();
+    let (mut x, mut y, mut w) = (0.0, 0.0, 0.0);
+    for (i, p) in pts.iter().enumerate() {
+        let b = basis(i, order, u, &knots) * p[2];
+        x += b * p[0];
+        y += b * p[1];
+        w += b;
+    }
+    [x / w, y / w]
+}
+
+fn dist_to_polyline(p: [f64; 2], poly: &[[f64; 2]]) -> f64 {
+    poly.windows(2)
+        .map(|s| {
+            let (a, b) = (s[0], s[1]);
+            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+            let len2 = dx * dx + dy * dy;
+            let t = if len2 > 0.0 {
+                (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The polyline a lowering writes, from `start`.
+fn polyline(start: [f64; 2], lines: &[PlainLine]) -> Vec<[f64; 2]> {
+    let mut poly = vec![start];
+    for l in lines {
+        assert_eq!(l.words[0].letter, b'G');
+        assert_eq!(l.words[0].value, 1.0);
+        let get = |c: u8| l.words.iter().find(|w| w.letter == c).map(|w| w.value);
+        poly.push([get(b'X').expect("X"), get(b'Y').expect("Y")]);
+    }
+    poly
+}
+
+/// Every sampled curve point within the tolerance of the polyline, and
+/// every polyline vertex on the curve's side of it (within the tolerance of
+/// a sampled curve point plus the sampling step).
+fn check_curve(
+    name: &str,
+    curve: impl Fn(f64) -> [f64; 2],
+    umax: f64,
+    poly: &[[f64; 2]],
+    tol: f64,
+) -> Result<(), String> {
+    const N: usize = 2000;
+    let samples: Vec<[f64; 2]> = (0..=N).map(|i| curve(umax * i as f64 / N as f64)).collect();
+    for (i, p) in samples.iter().enumerate() {
+        let d = dist_to_polyline(*p, poly);
+        if d > tol * (1.0 + 1e-9) + 1e-12 {
+            return Err(format!(
+                "{name}: curve point {i}/{N} {p:?} is {d} from the polyline (tolerance {tol}, {} segments)",
+                poly.len() - 1
+            ));
+        }
+    }
+    let step = samples
+        .windows(2)
+        .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+        .fold(0.0, f64::max);
+    for v in poly {
+        let d = samples
+            .iter()
+            .map(|s| (s[0] - v[0]).hypot(s[1] - v[1]))
+            .fold(f64::INFINITY, f64::min);
+        if d > step + 1e-9 {
+            return Err(format!("{name}: vertex {v:?} is {d} away from the curve"));
+        }
+    }
+    Ok(())
+}
+
+#[test]
+fn splines_stay_within_tolerance() {
+    use ngcflat::target::lower::spline::{NurbsPoint, lower_g5, lower_g5_1, lower_nurbs};
+    let seed0 = first_seed();
+    for seed in seed0..seed0 + cases() {
+        let mut rng = Rng::new(seed);
+        let tol = rng.pick(&[0.001, 0.01, 0.0004, 0.05]);
+        let mut pt = || [rng.val(-20.0, 20.0), rng.val(-20.0, 20.0)];
+        let (start, a, b, end) = (pt(), pt(), pt(), pt());
+        let ij = [a[0] - start[0], a[1] - start[1]];
+        let pq = [b[0] - end[0], b[1] - end[1]];
+        let lines = lower_g5(start, ij, pq, end, tol).expect("G5 lowers");
+        let poly = polyline(start, &lines);
+        assert_eq!(poly.last(), Some(&end), "G5 seed {seed}: end point");
+        let ctrl = [start, a, b, end];
+        check_curve("G5", |t| bezier_point(&ctrl, t), 1.0, &poly, tol)
+            .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+
+        let lines = lower_g5_1(start, ij, end, tol).expect("G5.1 lowers");
+        let poly = polyline(start, &lines);
+        assert_eq!(poly.last(), Some(&end), "G5.1 seed {seed}: end point");
+        let ctrl = [start, a, end];
+        check_curve("G5.1", |t| bezier_point(&ctrl, t), 1.0, &poly, tol)
+            .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+
+        let order = 2 + rng.below(4);
+        let count = order + rng.below(6);
+        let pts: Vec<[f64; 3]> = (0..count)
+            .map(|_| {
+                [
+                    rng.val(-20.0, 20.0),
+                    rng.val(-20.0, 20.0),
+                    rng.val(0.3, 3.0),
+                ]
+            })
+            .collect();
+        let input: Vec<NurbsPoint> = pts
+            .iter()
+            .map(|p| NurbsPoint {
+                x: p[0],
+                y: p[1],
+                weight: p[2],
+            })
+            .collect();
+        let lines = lower_nurbs(&input, order, tol).expect("NURBS lowers");
+        let first = [pts[0][0], pts[0][1]];
+        let poly = polyline(first, &lines);
+        let last = pts[count - 1];
+        assert_eq!(
+            poly.last(),
+            Some(&[last[0], last[1]]),
+            "NURBS seed {seed}: end"
+        );
+        let umax = (count + 1 - order) as f64;
+        check_curve(
+            &format!("NURBS order {order}, {count} points"),
+            |u| nurbs_point(&pts, order, u),
+            umax,
+            &poly,
+            tol,
+        )
+        .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+    }
+}
+
+/// rs274 prints no spline geometry, but where a spline leaves the tool
+/// shows: an incremental move after the spline must start from the same
+/// point in both programs.
+#[test]
+fn splines_end_where_rs274_ends_them() {
+    use ngcflat::target::lower::spline::{NurbsPoint, lower_g5, lower_g5_1, lower_nurbs};
+    if !oracle::available("splines_end_where_rs274_ends_them") {
+        return;
+    }
+    let seed0 = first_seed();
+    for seed in seed0..seed0 + cases() / 4 + 1 {
+        let mut rng = Rng::new(seed);
+        let mut pt = || [rng.val(-20.0, 20.0), rng.val(-20.0, 20.0)];
+        let (start, a, b, end) = (pt(), pt(), pt(), pt());
+        let n1 = [pt(), pt(), pt()];
+        let head = format!(
+            "G21 G17 G90 F200\nG0 X{} Y{} Z1\n",
+            num(start[0]),
+            num(start[1])
+        );
+        let ij = [a[0] - start[0], a[1] - start[1]];
+        let pq = [b[0] - end[0], b[1] - end[1]];
+        let tail = "G91 G1 X0.5 Y0.25\nM2\n";
+        let g5 = format!(
+            "G5 X{} Y{} I{} J{} P{} Q{}\n",
+            num(end[0]),
+            num(end[1]),
+            num(ij[0]),
+            num(ij[1]),
+            num(pq[0]),
+            num(pq[1])
+        );
+        let g51 = format!(
+            "G5.1 X{} Y{} I{} J{}\n",
+            num(start[0]),
+            num(start[1]),
+            num(b[0] - end[0]),
+            num(b[1] - end[1])
+        );
+        let nurbs = format!(
+            "G5.2 X{} Y{} P1.5 L3\nX{} Y{} P0.7\nX{} Y{} P1\nG5.3\n",
+            num(n1[0][0]),
+            num(n1[0][1]),
+            num(n1[1][0]),
+            num(n1[1][1]),
+            num(n1[2][0]),
+            num(n1[2][1])
+        );
+        let orig = format!("{head}{g5}{g51}{nurbs}{tail}");
+        let mut low = head.clone();
+        let mut add = |lines: Vec<PlainLine>| {
+            for l in &lines {
+                low.push_str(&format_line(l));
+                low.push('\n');
+            }
+        };
+        add(lower_g5(start, ij, pq, end, 0.001).expect("G5"));
+        add(lower_g5_1(end, [b[0] - end[0], b[1] - end[1]], start, 0.001).expect("G5.1"));
+        let pts = [
+            NurbsPoint {
+                x: start[0],
+                y: start[1],
+                weight: 1.0,
+            },
+            NurbsPoint {
+                x: n1[0][0],
+                y: n1[0][1],
+                weight: 1.5,
+            },
+            NurbsPoint {
+                x: n1[1][0],
+                y: n1[1][1],
+                weight: 0.7,
+            },
+            NurbsPoint {
+                x: n1[2][0],
+                y: n1[2][1],
+                weight: 1.0,
+            },
+        ];
+        add(lower_nurbs(&pts, 3, 0.001).expect("NURBS"));
+        low.push_str(tail);
+        let ra = oracle::run(orig.as_bytes(), "", None);
+        let rb = oracle::run(low.as_bytes(), "", None);
+        assert!(
+            ra.ok && rb.ok,
+            "seed {seed}: {}{}\n{orig}",
+            ra.stderr,
+            rb.stderr
+        );
+        let last_move = |r: &oracle::Run| {
+            r.lines
+                .iter()
+                .rev()
+                .find(|l| l.starts_with("STRAIGHT_FEED("))
+                .cloned()
+                .unwrap_or_default()
+        };
+        oracle::compare(&[last_move(&ra)], &[last_move(&rb)], 1e-4)
+            .unwrap_or_else(|e| panic!("seed {seed}: {e}\n{orig}---\n{low}"));
+    }
+}

@@ -26,6 +26,9 @@
 
 pub mod arc;
 pub mod cycle;
+pub mod diameter;
+pub mod polar;
+pub mod spline;
 
 pub use cycle::{CycleBlock, CycleKind, CycleModal, CycleOutput, CycleState, Retract};
 

@@ -1,0 +1,115 @@
+//! Polar coordinates: the `@` (radius) and `^` (angle, degrees) words of
+//! a G17 motion block, as the X Y end point LinuxCNC 2.9 moves to.
+//!
+//! The rule, about the origin of the active coordinate system:
+//!
+//! * **G90**: the end point is `@`·(cos `^`, sin `^`); a missing `@` is the
+//!   current distance from the origin, a missing `^` the current angle
+//!   (an error at the origin, where there is none).
+//! * **G91**: starting from the current point, `@` is added to its
+//!   distance from the origin (angle kept), then `^` to its angle
+//!   (distance kept). Either fails at the origin, where the angle is
+//!   undefined.
+//!
+//! X and Y words are not allowed with polar words, and polar words only in
+//! G17; the caller's block checks refuse those. The block is then written
+//! with X and Y instead of `@` and `^`: absolute values in G90, and in G91
+//! the differences from the current point (or absolute values under a G90
+//! the caller adds).
+
+use super::{Distance, LowerError};
+
+/// The polar words of a block and where the tool is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PolarInput {
+    pub distance: Distance,
+    /// Current X and Y (program coordinates).
+    pub current: [f64; 2],
+    /// `@` word.
+    pub radius: Option<f64>,
+    /// `^` word, degrees.
+    pub angle: Option<f64>,
+}
+
+/// The X Y end point of a block with polar words (absolute).
+pub fn polar_target(p: &PolarInput) -> Result<[f64; 2], LowerError> {
+    let [x, y] = p.current;
+    match p.distance {
+        Distance::Absolute => {
+            if p.angle.is_none() && x == 0.0 && y == 0.0 {
+                return Err(LowerError::PolarAtOrigin);
+            }
+            let radius = p.radius.unwrap_or_else(|| y.hypot(x));
+            let theta = p.angle.map(f64::to_radians).unwrap_or_else(|| y.atan2(x));
+            Ok([radius * theta.cos(), radius * theta.sin()])
+        }
+        Distance::Incremental => {
+            let (mut x, mut y) = (x, y);
+            if let Some(step) = p.radius {
+                if x == 0.0 && y == 0.0 {
+                    return Err(LowerError::PolarAtOrigin);
+                }
+                let theta = y.atan2(x);
+                let radius = y.hypot(x) + step;
+                x = radius * theta.cos();
+                y = radius * theta.sin();
+            }
+            if let Some(step) = p.angle {
+                if x == 0.0 && y == 0.0 {
+                    return Err(LowerError::PolarAtOrigin);
+                }
+                let theta = y.atan2(x) + step.to_radians();
+                let radius = y.hypot(x);
+                x = radius * theta.cos();
+                y = radius * theta.sin();
+            }
+            Ok([x, y])
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn absolute_and_missing_words() {
+        let t = polar_target(&PolarInput {
+            distance: Distance::Absolute,
+            current: [3.0, 4.0],
+            radius: None,
+            angle: Some(90.0),
+        })
+        .unwrap();
+        assert!(t[0].abs() < 1e-12 && (t[1] - 5.0).abs() < 1e-12);
+        let t = polar_target(&PolarInput {
+            distance: Distance::Absolute,
+            current: [3.0, 4.0],
+            radius: Some(10.0),
+            angle: None,
+        })
+        .unwrap();
+        assert!((t[0] - 6.0).abs() < 1e-12 && (t[1] - 8.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn incremental_steps_and_origin() {
+        let t = polar_target(&PolarInput {
+            distance: Distance::Incremental,
+            current: [1.0, 0.0],
+            radius: Some(1.0),
+            angle: Some(90.0),
+        })
+        .unwrap();
+        assert!(t[0].abs() < 1e-12 && (t[1] - 2.0).abs() < 1e-12);
+        assert_eq!(
+            polar_target(&PolarInput {
+                distance: Distance::Incremental,
+                current: [0.0, 0.0],
+                radius: None,
+                angle: Some(10.0),
+            }),
+            Err(LowerError::PolarAtOrigin)
+        );
+    }
+}
