@@ -111,12 +111,17 @@ pub fn flatten_with<'s>(
 
 /// Flattens a string (for tests and tools); returns the output text.
 pub fn flatten_str(text: &str, settings: &Settings) -> Result<String, Error> {
-    let dir = std::env::temp_dir();
-    let out = dir.join(format!(
-        "ngcflat-str-{}-{}.out",
-        std::process::id(),
-        unique()
-    ));
+    let io_error = |e: std::io::Error| {
+        Diagnostic::error(
+            ErrorKind::Io {
+                path: PathBuf::from("<temporary folder>"),
+                message: e.to_string(),
+            },
+            None,
+        )
+    };
+    let dir = tempfile::tempdir().map_err(io_error)?;
+    let out = dir.path().join("out.ngc");
     let src = SourceFile::new(
         PathBuf::from("<string>"),
         "<string>".into(),
@@ -129,16 +134,7 @@ pub fn flatten_str(text: &str, settings: &Settings) -> Result<String, Error> {
         Destination::File(out.clone()),
     );
     // Comments may carry bytes that are not UTF-8: keep them visible.
-    let r =
-        r.map(|_| String::from_utf8_lossy(&std::fs::read(&out).unwrap_or_default()).into_owned());
-    let _ = std::fs::remove_file(&out);
-    r
-}
-
-fn unique() -> u64 {
-    use std::sync::atomic::{AtomicU64, Ordering};
-    static N: AtomicU64 = AtomicU64::new(0);
-    N.fetch_add(1, Ordering::Relaxed)
+    r.map(|_| String::from_utf8_lossy(&std::fs::read(&out).unwrap_or_default()).into_owned())
 }
 
 /// Writes diagnostics to stderr in the chosen format.
@@ -167,6 +163,7 @@ fn exit_for(e: &Diagnostic) -> ExitCode {
 
 /// The command-line program.
 pub fn run(cli: config::Cli) -> ExitCode {
+    emit::interrupt::install();
     match run_cli(cli) {
         Ok(code) => code,
         Err(e) => {

@@ -3,6 +3,7 @@
 //! on a second thread for long evaluated programs.
 
 mod edit;
+pub mod interrupt;
 mod number;
 mod output;
 mod sink;

@@ -368,6 +368,9 @@ impl Writer {
         self.chunk.extend_from_slice(&start.to_le_bytes());
         self.chunk
             .extend_from_slice(&(bytes.len() as u64).to_le_bytes());
+        // The CRC of the bytes as evaluated, checked again on release.
+        self.chunk
+            .extend_from_slice(&crc32fast::hash(bytes).to_le_bytes());
         self.send_if_full()
     }
 
@@ -527,12 +530,12 @@ fn apply(
                 text.push(b'\n');
             }
             RANGE => {
-                let (start, len) = (r.u64(), r.u64());
+                let (start, len, crc) = (r.u64(), r.u64(), r.u32());
                 if !text.is_empty() {
                     sink.write(text)?;
                     text.clear();
                 }
-                if !sink.record_input(start, len) {
+                if !sink.record_input(start, len, crc as u32) {
                     return Err(io::Error::other("an input range could not be recorded"));
                 }
             }

@@ -2,71 +2,83 @@
 //! temporary file once large. Nothing reaches the destination until the whole
 //! program has been flattened without error. For stdout, output copied
 //! unchanged from a streamed input file is recorded as a range of that file
-//! instead of being spooled, and copied from it on release (after checking
-//! the file has not changed).
+//! instead of being spooled, and copied from it on release.
+//!
+//! Released bytes are the bytes that were evaluated: each recorded range
+//! carries the CRC-32 of the bytes the evaluator read (adjacent ranges merge
+//! and their CRCs combine). On release every range is read again and checked
+//! before anything is written, keeping a CRC per 1 MB block; the copy then
+//! checks each block again before writing it. A file changed during the run
+//! (rewritten, truncated, even with its modification time restored) is an
+//! error and nothing is written. A change in the moment between the check
+//! and the copy stops the copy before the first changed block, with an error
+//! (the reader gets a cut output and exit status 2, never an unchecked byte).
 
 use std::fs::File;
 use std::io::{self, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU32, Ordering};
 
 use crate::program::SourceFile;
 
 /// Most ranges recorded; past this, input bytes are spooled like others.
 const MAX_PARTS: usize = 1 << 14;
+/// Block size of the release check.
+const BLOCK: u64 = 1 << 20;
 
 /// A piece of the output, in order.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Part {
     /// The next bytes of the spooled stream.
     Spooled(u64),
-    /// A range of the input file.
-    Input { start: u64, len: u64 },
+    /// A range of the input file and the CRC-32 of its bytes as evaluated.
+    Input { start: u64, len: u64, crc: u32 },
 }
 
 /// Bytes kept in memory before spilling to a temporary file.
 const SPILL_AT: usize = 1 << 20;
 
-static COUNTER: AtomicU32 = AtomicU32::new(0);
-
-/// A temporary file removed on drop unless persisted.
-struct TempFile {
-    path: PathBuf,
-    file: BufWriter<File>,
-    keep: bool,
+/// The CRC-32 of the concatenation of two byte strings from theirs.
+fn crc_concat(a: u32, b: u32, b_len: u64) -> u32 {
+    let mut h = crc32fast::Hasher::new_with_initial_len(a, 0);
+    h.combine(&crc32fast::Hasher::new_with_initial_len(b, b_len));
+    h.finalize()
 }
 
-impl TempFile {
-    fn create_in(dir: &Path) -> io::Result<TempFile> {
-        for _ in 0..100 {
-            let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-            let path = dir.join(format!(".ngcflat-{}-{n}.tmp", std::process::id()));
-            match File::options()
-                .read(true)
-                .write(true)
-                .create_new(true)
-                .open(&path)
-            {
-                Ok(f) => {
-                    return Ok(TempFile {
-                        path,
-                        file: BufWriter::with_capacity(1 << 16, f),
-                        keep: false,
-                    });
-                }
-                Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
-                Err(e) => return Err(e),
-            }
-        }
-        Err(io::Error::other("cannot create a temporary file"))
+/// A spool file: unnamed for stdout (gone with the process, however it
+/// ends), or named in the target's folder for `-o` (renamed onto the target
+/// on release, removed on drop otherwise).
+struct Spool {
+    file: BufWriter<File>,
+    path: Option<tempfile::TempPath>,
+}
+
+impl Spool {
+    fn anonymous() -> io::Result<Spool> {
+        Ok(Spool {
+            file: BufWriter::with_capacity(1 << 16, tempfile::tempfile()?),
+            path: None,
+        })
+    }
+
+    fn named_in(dir: &Path) -> io::Result<Spool> {
+        let (file, path) = tempfile::Builder::new()
+            .prefix(".ngcflat-")
+            .suffix(".tmp")
+            .tempfile_in(dir)?
+            .into_parts();
+        crate::emit::interrupt::register(&path);
+        Ok(Spool {
+            file: BufWriter::with_capacity(1 << 16, file),
+            path: Some(path),
+        })
     }
 }
 
-impl Drop for TempFile {
+impl Drop for Spool {
     fn drop(&mut self) {
-        if !self.keep {
-            let _ = std::fs::remove_file(&self.path);
+        if let Some(p) = &self.path {
+            crate::emit::interrupt::unregister(p);
         }
     }
 }
@@ -83,13 +95,42 @@ pub enum Destination {
 /// Flattened output held back until the program is known to be good.
 pub struct Sink {
     mem: Vec<u8>,
-    spill: Option<TempFile>,
+    spill: Option<Spool>,
     dest: Destination,
     /// The file output may refer to.
     input: Option<Arc<SourceFile>>,
+    /// A streamed input file, watched for changes until the release.
+    watch: Option<Arc<SourceFile>>,
     /// Output as pieces; empty while no range was recorded (all spooled).
     parts: Vec<Part>,
     spooled: u64,
+}
+
+/// Test hook: with `NGCFLAT_TEST_PAUSE_DIR` set and `PHASE.wait` in that
+/// folder, the release stops at `phase`, creates `PHASE.paused` and waits
+/// until `PHASE.wait` is removed (at most a minute), so that a test can
+/// change the input at a known moment.
+fn test_pause(phase: &str) {
+    let Some(dir) = std::env::var_os("NGCFLAT_TEST_PAUSE_DIR") else {
+        return;
+    };
+    let dir = PathBuf::from(dir);
+    let wait = dir.join(format!("{phase}.wait"));
+    if !wait.exists() {
+        return;
+    }
+    let _ = std::fs::write(dir.join(format!("{phase}.paused")), b"");
+    let start = std::time::Instant::now();
+    while wait.exists() && start.elapsed() < std::time::Duration::from_secs(60) {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+}
+
+fn changed(input: &SourceFile) -> io::Error {
+    io::Error::other(format!(
+        "{} changed while it was being flattened; nothing was written",
+        input.display_name()
+    ))
 }
 
 impl Sink {
@@ -100,7 +141,7 @@ impl Sink {
                     Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
                     _ => PathBuf::from("."),
                 };
-                Some(TempFile::create_in(&dir)?)
+                Some(Spool::named_in(&dir)?)
             }
             _ => None,
         };
@@ -109,17 +150,22 @@ impl Sink {
             spill,
             dest,
             input: None,
+            watch: None,
             parts: Vec::new(),
             spooled: 0,
         })
     }
 
     /// Lets output refer to ranges of `input` (a streamed file) when it goes
-    /// to stdout.
+    /// to stdout; a streamed input is watched for changes in any case.
     pub fn refer_to(&mut self, input: Arc<SourceFile>) {
-        if matches!(self.dest, Destination::Stdout) && input.memory().is_none() {
-            self.input = Some(input);
+        if input.memory().is_some() {
+            return;
         }
+        if matches!(self.dest, Destination::Stdout) {
+            self.input = Some(input.clone());
+        }
+        self.watch = Some(input);
     }
 
     /// The file output may refer to, if any.
@@ -148,7 +194,7 @@ impl Sink {
         bytes: &[u8],
     ) -> io::Result<()> {
         let ours = self.input.as_ref().is_some_and(|f| Arc::ptr_eq(f, file));
-        if ours && self.record_input(start, bytes.len() as u64) {
+        if ours && self.record_input(start, bytes.len() as u64, crc32fast::hash(bytes)) {
             Ok(())
         } else {
             self.write(bytes)
@@ -156,9 +202,10 @@ impl Sink {
     }
 
     /// Appends `len` bytes of the input file from offset `start` on as a
-    /// range of it. False when there is no input file to refer to or no room
-    /// for another range: nothing was appended, the bytes must be written.
-    pub fn record_input(&mut self, start: u64, len: u64) -> bool {
+    /// range of it; `crc` is the CRC-32 of those bytes as they were read.
+    /// False when there is no input file to refer to or no room for another
+    /// range: nothing was appended, the bytes must be written.
+    pub fn record_input(&mut self, start: u64, len: u64, crc: u32) -> bool {
         if self.input.is_none() || self.parts.len() >= MAX_PARTS {
             return false;
         }
@@ -166,8 +213,15 @@ impl Sink {
             self.parts.push(Part::Spooled(self.spooled));
         }
         match self.parts.last_mut() {
-            Some(Part::Input { start: s, len: l }) if *s + *l == start => *l += len,
-            _ => self.parts.push(Part::Input { start, len }),
+            Some(Part::Input {
+                start: s,
+                len: l,
+                crc: c,
+            }) if *s + *l == start => {
+                *c = crc_concat(*c, crc, len);
+                *l += len;
+            }
+            _ => self.parts.push(Part::Input { start, len, crc }),
         }
         true
     }
@@ -193,26 +247,62 @@ impl Sink {
     }
 
     fn spill_now(&mut self) -> io::Result<()> {
-        if self.spill.is_none() {
-            self.spill = Some(TempFile::create_in(&std::env::temp_dir())?);
-        }
-        let t = self.spill.as_mut().expect("spill file");
+        let t = match &mut self.spill {
+            Some(t) => t,
+            None => self.spill.insert(Spool::anonymous()?),
+        };
         t.file.write_all(&self.mem)?;
         self.mem.clear();
         Ok(())
     }
 
-    /// Writes the pieces in order: spooled bytes from the spool, ranges from
-    /// the input file, which must be as it was when read.
-    fn release_parts(&mut self, out: &mut impl Write) -> io::Result<()> {
-        let input = self.input.as_ref().expect("input file");
-        if !input.unchanged()? {
-            return Err(io::Error::other(format!(
-                "{} changed while it was being flattened; nothing was written",
-                input.display_name()
-            )));
+    /// The watched input still has its size and modification time.
+    fn check_unchanged(&self) -> io::Result<()> {
+        match &self.watch {
+            Some(w) if !w.unchanged()? => Err(changed(w)),
+            _ => Ok(()),
         }
-        let mut file = File::open(&input.path)?;
+    }
+
+    /// Reads every recorded range of the input again and checks it against
+    /// the CRC taken when it was evaluated; returns a CRC per block.
+    fn verify_ranges(&self, input: &SourceFile, buf: &mut [u8]) -> io::Result<Vec<u32>> {
+        let mut blocks = Vec::new();
+        for part in &self.parts {
+            let Part::Input { start, len, crc } = *part else {
+                continue;
+            };
+            let (mut off, end, mut all) = (start, start + len, 0u32);
+            while off < end {
+                let n = (end - off).min(BLOCK) as usize;
+                if input.read_at(&mut buf[..n], off)? != n {
+                    return Err(changed(input));
+                }
+                let b = crc32fast::hash(&buf[..n]);
+                blocks.push(b);
+                all = crc_concat(all, b, n as u64);
+                off += n as u64;
+            }
+            if all != crc {
+                return Err(changed(input));
+            }
+        }
+        Ok(blocks)
+    }
+
+    /// Writes the pieces in order: spooled bytes from the spool, ranges from
+    /// the input file, each block checked before it is written.
+    fn release_parts(&mut self, out: &mut impl Write) -> io::Result<()> {
+        let input = self
+            .input
+            .clone()
+            .ok_or_else(|| io::Error::other("no input file to copy from"))?;
+        test_pause("verify");
+        self.check_unchanged()?;
+        let mut buf = vec![0u8; BLOCK as usize];
+        let blocks = self.verify_ranges(&input, &mut buf)?;
+        test_pause("copy");
+        let mut blocks = blocks.into_iter();
         let mut spool: Box<dyn Read + '_> = match self.spill.as_mut() {
             Some(t) => {
                 t.file.flush()?;
@@ -223,17 +313,27 @@ impl Sink {
             None => Box::new(&self.mem[..]),
         };
         for part in &self.parts {
-            let (copied, want) = match *part {
-                Part::Spooled(n) => (io::copy(&mut (&mut spool).take(n), out)?, n),
-                Part::Input { start, len } => {
-                    file.seek(SeekFrom::Start(start))?;
-                    (io::copy(&mut (&mut file).take(len), out)?, len)
+            match *part {
+                Part::Spooled(n) => {
+                    if io::copy(&mut (&mut spool).take(n), out)? != n {
+                        return Err(io::Error::other("the spool file was cut short"));
+                    }
                 }
-            };
-            if copied != want {
-                return Err(io::Error::other(
-                    "the input file was cut short while being copied",
-                ));
+                Part::Input { start, len, .. } => {
+                    let (mut off, end) = (start, start + len);
+                    while off < end {
+                        let n = (end - off).min(BLOCK) as usize;
+                        let got = input.read_at(&mut buf[..n], off)?;
+                        if got != n || blocks.next() != Some(crc32fast::hash(&buf[..n])) {
+                            return Err(io::Error::other(format!(
+                                "{} changed while it was being copied to the output; the output is incomplete",
+                                input.display_name()
+                            )));
+                        }
+                        out.write_all(&buf[..n])?;
+                        off += n as u64;
+                    }
+                }
             }
         }
         out.flush()
@@ -246,12 +346,19 @@ impl Sink {
             Destination::Discard => Ok(()),
             Destination::File(target) => {
                 self.spill_now()?;
-                let mut t = self.spill.take().expect("spill file");
+                let mut t = self
+                    .spill
+                    .take()
+                    .ok_or_else(|| io::Error::other("no spool file"))?;
                 t.file.flush()?;
                 t.file.get_ref().sync_all()?;
-                std::fs::rename(&t.path, &target)?;
-                t.keep = true;
-                Ok(())
+                test_pause("finish");
+                self.check_unchanged()?;
+                let path = t
+                    .path
+                    .take()
+                    .ok_or_else(|| io::Error::other("no spool file"))?;
+                crate::emit::interrupt::persist(path, &target)
             }
             Destination::Stdout => {
                 let stdout = io::stdout();
@@ -269,18 +376,12 @@ impl Sink {
         if !self.parts.is_empty() {
             return self.release_parts(out);
         }
+        self.check_unchanged()?;
         if let Some(t) = self.spill.as_mut() {
             t.file.flush()?;
             let f = t.file.get_mut();
             f.seek(SeekFrom::Start(0))?;
-            let mut buf = vec![0u8; 1 << 16];
-            loop {
-                let n = f.read(&mut buf)?;
-                if n == 0 {
-                    break;
-                }
-                out.write_all(&buf[..n])?;
-            }
+            io::copy(f, out)?;
         }
         out.write_all(&self.mem)?;
         out.flush()

@@ -5,7 +5,7 @@
 //! the lines they point at, not the file.
 
 use std::fs::File;
-use std::io::{self, Read, Seek, SeekFrom};
+use std::io::{self, Read};
 
 /// Every this many lines, a line start is kept.
 const STRIDE: usize = 256;
@@ -118,14 +118,13 @@ fn is_char_boundary(b: &[u8], i: usize) -> bool {
     i >= b.len() || (b[i] as i8) >= -0x40
 }
 
-/// Reads pieces of a file on disk for [`LineSamples::locate`].
-pub fn file_pieces(file: &mut File) -> impl FnMut(u64, &mut Vec<u8>) -> bool + '_ {
+/// Reads pieces of a file on disk for [`LineSamples::locate`] (positional
+/// reads: the handle's cursor is not moved).
+pub fn file_pieces(file: &File) -> impl FnMut(u64, &mut Vec<u8>) -> bool + '_ {
+    use std::os::unix::fs::FileExt;
     move |at, out| {
-        if file.seek(SeekFrom::Start(at)).is_err() {
-            return false;
-        }
         out.resize(1 << 16, 0);
-        match file.read(out) {
+        match file.read_at(out, at) {
             Ok(n) => {
                 out.truncate(n);
                 true

@@ -4,7 +4,7 @@
 
 use std::borrow::Cow;
 use std::fs::File;
-use std::io::{self, Read, Seek, SeekFrom, Write};
+use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};
 
 use std::sync::OnceLock;
@@ -20,7 +20,7 @@ const CHUNK: usize = 1 << 20;
 type KeptHits = Vec<(Marked, Vec<u8>)>;
 
 /// Reads until `buf` is full or the file ends; returns the bytes read.
-fn read_full(file: &mut File, buf: &mut [u8]) -> io::Result<usize> {
+fn read_full(file: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
     let mut got = 0;
     while got < buf.len() {
         let n = file.read(&mut buf[got..])?;
@@ -40,10 +40,10 @@ const LONG_LINE: usize = 4096;
 #[derive(Debug)]
 enum Text {
     Memory(Vec<u8>),
-    /// Read from `path` on demand; `temp` files are removed on drop.
-    Disk {
-        temp: bool,
-    },
+    /// Read on demand through the handle opened first, never by path
+    /// again (a file renamed or replaced meanwhile is not read). Standard
+    /// input is spooled to an unnamed temporary file.
+    Disk(File),
 }
 
 #[derive(Debug)]
@@ -60,11 +60,19 @@ pub struct SourceFile {
     samples: OnceLock<LineSamples>,
 }
 
-impl Drop for SourceFile {
-    fn drop(&mut self) {
-        if let Text::Disk { temp: true } = self.text {
-            let _ = std::fs::remove_file(&self.path);
-        }
+/// Reads a file from an offset on without moving a shared cursor, so that
+/// several readers (threads) can use one handle.
+pub struct At<'a> {
+    file: &'a File,
+    pos: u64,
+}
+
+impl Read for At<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        use std::os::unix::fs::FileExt;
+        let n = self.file.read_at(buf, self.pos)?;
+        self.pos += n as u64;
+        Ok(n)
     }
 }
 
@@ -116,7 +124,7 @@ impl SourceFile {
         Ok(SourceFile {
             path: path.to_path_buf(),
             name,
-            text: Text::Disk { temp: false },
+            text: Text::Disk(file),
             len: meta.len(),
             modified: meta.modified().ok(),
             samples: OnceLock::new(),
@@ -132,23 +140,19 @@ impl SourceFile {
         if data.len() as u64 <= IN_MEMORY_LIMIT {
             return Ok(SourceFile::new(PathBuf::from(name), name.to_string(), data));
         }
-        let path = std::env::temp_dir().join(format!(
-            ".ngcflat-in-{}-{}.ngc",
-            std::process::id(),
-            unique()
-        ));
-        let mut f = File::create(&path)?;
+        // An unnamed file: no name to guess or plant a link at, and gone
+        // with the process however it ends.
+        let mut f = tempfile::tempfile()?;
         f.write_all(&data)?;
         let copied = io::copy(&mut input, &mut f)?;
         let len = data.len() as u64 + copied;
         check_size(len)?;
         f.flush()?;
-        drop(f);
-        let modified = std::fs::metadata(&path)?.modified().ok();
+        let modified = f.metadata()?.modified().ok();
         Ok(SourceFile {
-            path,
+            path: PathBuf::from(name),
             name: name.to_string(),
-            text: Text::Disk { temp: true },
+            text: Text::Disk(f),
             len,
             modified,
             samples: OnceLock::new(),
@@ -170,8 +174,35 @@ impl SourceFile {
     /// Whether a streamed file still has the size and modification time it
     /// had when opened.
     pub fn unchanged(&self) -> io::Result<bool> {
-        let meta = std::fs::metadata(&self.path)?;
+        let Text::Disk(f) = &self.text else {
+            return Ok(true);
+        };
+        let meta = f.metadata()?;
         Ok(meta.len() == self.len && meta.modified().ok() == self.modified)
+    }
+
+    /// A reader of the streamed file from `pos` on (an error for a file held
+    /// in memory).
+    fn disk_reader(&self, pos: u64) -> io::Result<At<'_>> {
+        self.reader_at(pos)
+            .ok_or_else(|| io::Error::other("not a streamed file"))
+    }
+
+    /// A reader of the streamed file from `pos` on (None: held in memory).
+    pub fn reader_at(&self, pos: u64) -> Option<At<'_>> {
+        match &self.text {
+            Text::Disk(file) => Some(At { file, pos }),
+            Text::Memory(_) => None,
+        }
+    }
+
+    /// The streamed file's bytes from `pos` on into `buf`, as many as there
+    /// are (fewer only at its end); empty for a file held in memory.
+    pub fn read_at(&self, buf: &mut [u8], pos: u64) -> io::Result<usize> {
+        match self.reader_at(pos) {
+            Some(mut r) => read_full(&mut r, buf),
+            None => Ok(0),
+        }
     }
 
     /// The bytes, when held in memory.
@@ -194,18 +225,12 @@ impl SourceFile {
                     .get_or_init(|| LineSamples::read(&d[..]).unwrap_or_default());
                 samples.locate(offset, &mut memory_pieces(d))
             }
-            Text::Disk { .. } => {
-                let Ok(mut f) = File::open(&self.path) else {
-                    return LineCol {
-                        line: 1,
-                        col: 1,
-                        text: Vec::new(),
-                    };
-                };
+            Text::Disk(f) => {
                 let samples = self.samples.get_or_init(|| {
-                    LineSamples::read(io::BufReader::new(&mut f)).unwrap_or_default()
+                    LineSamples::read(io::BufReader::new(At { file: f, pos: 0 }))
+                        .unwrap_or_default()
                 });
-                samples.locate(offset, &mut file_pieces(&mut f))
+                samples.locate(offset, &mut file_pieces(f))
             }
         }
     }
@@ -214,7 +239,11 @@ impl SourceFile {
     pub fn bytes(&self) -> Cow<'_, [u8]> {
         match &self.text {
             Text::Memory(d) => Cow::Borrowed(d),
-            Text::Disk { .. } => Cow::Owned(std::fs::read(&self.path).unwrap_or_default()),
+            Text::Disk(f) => {
+                let mut data = Vec::new();
+                let _ = At { file: f, pos: 0 }.read_to_end(&mut data);
+                Cow::Owned(data)
+            }
         }
     }
 
@@ -277,8 +306,7 @@ impl SourceFile {
     ) -> io::Result<u32> {
         // The second half starts after the first newline from the middle.
         let mid = self.len / 2;
-        let mut file = File::open(&self.path)?;
-        file.seek(SeekFrom::Start(mid))?;
+        let mut file = self.disk_reader(mid)?;
         let mut probe = vec![0u8; LONG_LINE];
         let n = read_full(&mut file, &mut probe)?;
         let mut s = MarkedLines::new(long);
@@ -355,8 +383,7 @@ impl SourceFile {
         to: u64,
         f: &mut impl FnMut(Marked, &[u8]),
     ) -> io::Result<Vec<u8>> {
-        let mut file = File::open(&self.path)?;
-        file.seek(SeekFrom::Start(from))?;
+        let mut file = self.disk_reader(from)?;
         let mut buf = vec![0u8; CHUNK];
         // The part of the current line read in earlier chunks.
         let mut carry: Vec<u8> = Vec::new();
@@ -412,7 +439,7 @@ impl SourceFile {
                 Ok(())
             }
             Text::Disk { .. } => {
-                let mut file = File::open(&self.path)?;
+                let mut file = self.disk_reader(0)?;
                 let mut buf = vec![0u8; CHUNK];
                 let mut carry: Vec<u8> = Vec::new();
                 let mut carry_len = 0u64; // true length of the partial line
@@ -472,6 +499,7 @@ fn check_size(len: u64) -> io::Result<()> {
     Ok(())
 }
 
+#[cfg(test)]
 fn unique() -> u64 {
     use std::sync::atomic::{AtomicU64, Ordering};
     static N: AtomicU64 = AtomicU64::new(0);
@@ -489,7 +517,6 @@ pub fn next_line(data: &[u8], start: usize) -> (usize, usize, bool) {
 /// Random access to the lines of a streamed file through a window of it.
 #[derive(Default)]
 pub struct Window {
-    file: Option<File>,
     buf: Vec<u8>,
     /// File offset of `buf[0]`.
     start: u64,
@@ -509,13 +536,9 @@ impl Window {
     }
 
     fn fill(&mut self, src: &SourceFile, at: u64) -> io::Result<()> {
-        if self.file.is_none() {
-            self.file = Some(File::open(&src.path)?);
-        }
-        let f = self.file.as_mut().expect("file");
-        f.seek(SeekFrom::Start(at))?;
+        let mut f = src.disk_reader(at)?;
         self.buf.resize(CHUNK, 0);
-        let got = read_full(f, &mut self.buf)?;
+        let got = read_full(&mut f, &mut self.buf)?;
         self.buf.truncate(got);
         self.start = at;
         Ok(())
@@ -574,8 +597,7 @@ impl Window {
         // A line longer than the window: an error anyway; find its end.
         let mut scan = self.start + self.buf.len() as u64;
         let keep = self.buf.len().min(a + LONG_LINE);
-        let f = self.file.as_mut().expect("file");
-        f.seek(SeekFrom::Start(scan))?;
+        let mut f = src.disk_reader(scan)?;
         let mut tmp = vec![0u8; CHUNK];
         loop {
             let n = f.read(&mut tmp)?;
@@ -626,10 +648,12 @@ mod tests {
         let path =
             std::env::temp_dir().join(format!("scan-{}-{}.ngc", std::process::id(), unique()));
         std::fs::write(&path, data).expect("write");
+        let file = File::open(&path).expect("open");
+        let _ = std::fs::remove_file(&path);
         SourceFile {
             path,
             name: "t".into(),
-            text: Text::Disk { temp: true },
+            text: Text::Disk(file),
             len: data.len() as u64,
             modified: None,
             samples: OnceLock::new(),

@@ -126,3 +126,221 @@ fn check_does_not_wait_on_a_fifo() {
     assert!(err.contains("pipe.ngc: not a regular file"), "{err}");
     assert!(err.contains("2 files"), "{err}");
 }
+
+/// A streamed input (over the 8 MB kept in memory) of plain moves.
+fn big_input(dir: &std::path::Path) -> std::path::PathBuf {
+    let mut text = String::with_capacity(12 << 20);
+    text.push_str("F100\n");
+    for i in 0..800_000 {
+        text.push_str(&format!("G1 X{i} Y{}\n", i % 7));
+    }
+    text.push_str("M2\n");
+    let p = dir.join("big.ngc");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// Runs ngcflat on `args`, pausing at release `phase` (a test hook) to let
+/// `change` act on the input; returns the finished run.
+fn run_changing(
+    dir: &std::path::Path,
+    args: &[&str],
+    phase: &str,
+    change: impl FnOnce(),
+) -> std::process::Output {
+    let pause = dir.join("pause");
+    std::fs::create_dir_all(&pause).unwrap();
+    let wait = pause.join(format!("{phase}.wait"));
+    std::fs::write(&wait, b"").unwrap();
+    let child = Command::new(bin())
+        .current_dir(dir)
+        .args(args)
+        .env("NGCFLAT_TEST_PAUSE_DIR", &pause)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Read stdout on a thread so that a large release cannot block.
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while !pause.join(format!("{phase}.paused")).exists() {
+        assert!(Instant::now() < deadline, "the run never reached {phase}");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    change();
+    std::fs::remove_file(&wait).unwrap();
+    let out = child.wait_with_output().unwrap();
+    std::fs::remove_dir_all(&pause).unwrap();
+    out
+}
+
+/// Rewrites `len` bytes at `at` in place and puts the modification time back.
+fn rewrite_keeping_mtime(path: &std::path::Path, at: u64, bytes: &[u8]) {
+    use std::io::{Seek, SeekFrom, Write};
+    let mtime = std::fs::metadata(path).unwrap().modified().unwrap();
+    let mut f = std::fs::OpenOptions::new().write(true).open(path).unwrap();
+    f.seek(SeekFrom::Start(at)).unwrap();
+    f.write_all(bytes).unwrap();
+    f.set_modified(mtime).unwrap();
+}
+
+#[test]
+fn released_bytes_are_the_bytes_evaluated() {
+    let d = tmp();
+    let big = big_input(d.path());
+    let want = run(d.path(), &["big.ngc"]).1;
+    assert!(want.len() > 8 << 20);
+    let text = std::fs::read(&big).unwrap();
+    let line_at = |k: usize| {
+        text.split_inclusive(|&b| b == b'\n')
+            .take(k)
+            .map(|l| l.len() as u64)
+            .sum::<u64>()
+    };
+    // "G1 X1000 Y6" rewritten to as many bytes that do not evaluate, the
+    // modification time restored: not released.
+    let at = line_at(1000);
+    let out = run_changing(d.path(), &["big.ngc"], "verify", || {
+        rewrite_keeping_mtime(&big, at, b"G1 X[1/0]Y")
+    });
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(out.stdout.is_empty(), "{} bytes released", out.stdout.len());
+    assert!(err.contains("changed while it was being flattened"), "{err}");
+    std::fs::write(&big, &text).unwrap();
+    // Truncated before the release: nothing released.
+    let out = run_changing(d.path(), &["big.ngc"], "verify", || {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(&big)
+            .unwrap()
+            .set_len(text.len() as u64 / 2)
+            .unwrap()
+    });
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty(), "{} bytes released", out.stdout.len());
+    std::fs::write(&big, &text).unwrap();
+    // Changed between the check and the copy: the copy stops before the
+    // changed block; what was released is a prefix of the right output.
+    let at = line_at(700_000);
+    let out = run_changing(d.path(), &["big.ngc"], "copy", || {
+        rewrite_keeping_mtime(&big, at, b"G1 X[1/0]Y")
+    });
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.len() < want.len());
+    assert!(want.as_bytes().starts_with(&out.stdout));
+    std::fs::write(&big, &text).unwrap();
+    // Unchanged: released whole.
+    let out = run_changing(d.path(), &["big.ngc"], "verify", || {});
+    assert_eq!(out.status.code(), Some(0));
+    assert!(out.stdout == want.as_bytes());
+}
+
+#[test]
+fn an_output_file_is_not_written_from_a_changed_input() {
+    let d = tmp();
+    let big = big_input(d.path());
+    let out = run_changing(d.path(), &["-o", "out.nc", "big.ngc"], "finish", || {
+        use std::io::Write;
+        let mut f = std::fs::OpenOptions::new().append(true).open(&big).unwrap();
+        f.write_all(b"G1 X[1/0]\n").unwrap();
+    });
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("changed while it was being flattened"), "{err}");
+    let names: Vec<String> = std::fs::read_dir(d.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, ["big.ngc"], "no output and no temporary file");
+}
+
+/// Names in a folder, sorted.
+fn names(dir: &std::path::Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn standard_input_is_spooled_to_no_named_file() {
+    let d = tmp();
+    let big = big_input(d.path());
+    let text = std::fs::read(&big).unwrap();
+    let tmpdir = d.path().join("tmp");
+    std::fs::create_dir(&tmpdir).unwrap();
+    // A program with an error at its end, and a good one: neither leaves a
+    // file in the temporary folder, during the run or after it.
+    let mut bad = text[..text.len() - 3].to_vec();
+    bad.extend_from_slice(b"G1 X[1/0]\nM2\n");
+    for (input, want) in [(bad, 1), (text, 0)] {
+        let pause = d.path().join("pause");
+        std::fs::create_dir_all(&pause).unwrap();
+        std::fs::write(pause.join("verify.wait"), b"").unwrap();
+        let mut child = Command::new(bin())
+            .current_dir(d.path())
+            .env("TMPDIR", &tmpdir)
+            .env("NGCFLAT_TEST_PAUSE_DIR", &pause)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut stdin = child.stdin.take().unwrap();
+        let feeder = std::thread::spawn(move || {
+            use std::io::Write;
+            let _ = stdin.write_all(&input);
+        });
+        feeder.join().unwrap();
+        if want == 0 {
+            let deadline = Instant::now() + Duration::from_secs(120);
+            while !pause.join("verify.paused").exists() {
+                assert!(Instant::now() < deadline, "never paused");
+                std::thread::sleep(Duration::from_millis(10));
+            }
+            assert!(names(&tmpdir).is_empty(), "{:?}", names(&tmpdir));
+            std::fs::remove_file(pause.join("verify.wait")).unwrap();
+        }
+        let out = child.wait_with_output().unwrap();
+        assert_eq!(out.status.code(), Some(want));
+        assert!(names(&tmpdir).is_empty(), "{:?}", names(&tmpdir));
+        std::fs::remove_dir_all(&pause).unwrap();
+    }
+}
+
+#[test]
+fn an_interrupted_run_leaves_no_temporary_file() {
+    let d = tmp();
+    big_input(d.path());
+    for sig in ["INT", "TERM"] {
+        let pause = d.path().join("pause");
+        std::fs::create_dir_all(&pause).unwrap();
+        std::fs::write(pause.join("finish.wait"), b"").unwrap();
+        let child = Command::new(bin())
+            .current_dir(d.path())
+            .args(["-o", "out.nc", "big.ngc"])
+            .env("NGCFLAT_TEST_PAUSE_DIR", &pause)
+            .stdin(Stdio::null())
+            .spawn()
+            .unwrap();
+        let deadline = Instant::now() + Duration::from_secs(120);
+        while !pause.join("finish.paused").exists() {
+            assert!(Instant::now() < deadline, "never paused");
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        // The spool file is there, full, while the run waits.
+        assert!(names(d.path()).iter().any(|n| n.ends_with(".tmp")));
+        let st = Command::new("kill")
+            .args([format!("-{sig}"), child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(st.success());
+        let out = wait_bounded(child, 30);
+        assert!(!out.status.success());
+        std::fs::remove_dir_all(&pause).unwrap();
+        assert_eq!(names(d.path()), ["big.ngc"], "after SIG{sig}");
+    }
+}
