@@ -206,7 +206,10 @@ fn released_bytes_are_the_bytes_evaluated() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(out.stdout.is_empty(), "{} bytes released", out.stdout.len());
-    assert!(err.contains("changed while it was being flattened"), "{err}");
+    assert!(
+        err.contains("changed while it was being flattened"),
+        "{err}"
+    );
     std::fs::write(&big, &text).unwrap();
     // Truncated before the release: nothing released.
     let out = run_changing(d.path(), &["big.ngc"], "verify", || {
@@ -247,7 +250,10 @@ fn an_output_file_is_not_written_from_a_changed_input() {
     });
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
-    assert!(err.contains("changed while it was being flattened"), "{err}");
+    assert!(
+        err.contains("changed while it was being flattened"),
+        "{err}"
+    );
     let names: Vec<String> = std::fs::read_dir(d.path())
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
