@@ -7,8 +7,10 @@
 //! and P turns): the tool turns about C in the arc's direction from S's
 //! angle to E's angle — a whole turn when E is S in the plane — plus P − 1
 //! whole turns; the axis normal to the plane moves linearly with the angle
-//! turned. The lowering cuts that sweep into `n = ceil(sweep / π)` (at
-//! least 2) equal parts, each at most a half turn, each ending on the
+//! turned. The lowering cuts that sweep into `n = floor(sweep / π) + 1`
+//! equal parts, each less than a half turn (so that no controller has to
+//! decide which way a part goes between two opposite points: a full circle
+//! is three arcs of 120°), each ending on the
 //! circle at its angle and at the helix height for that angle; the last
 //! ends exactly at E. Each part is written `G2|G3 X Y Z` with the centre as
 //! offsets from the part's start (I J in G17, I K in G18, J K in G19;
@@ -67,7 +69,7 @@ pub fn sweep(a: &ArcInput) -> f64 {
     base + 2.0 * PI * f64::from(a.turns.max(1) - 1)
 }
 
-/// Lowers a full circle or a P-turn arc into arcs of at most half a turn
+/// Lowers a full circle or a P-turn arc into arcs of less than half a turn
 /// without P (see the module doc for the rule).
 pub fn lower_arc(a: &ArcInput) -> Result<Vec<PlainLine>, LowerError> {
     let [p, q, n] = axes(a.plane);
@@ -76,7 +78,7 @@ pub fn lower_arc(a: &ArcInput) -> Result<Vec<PlainLine>, LowerError> {
         return Err(LowerError::BadArc);
     }
     let total = sweep(a);
-    let parts_f = (total / PI).ceil().max(2.0);
+    let parts_f = (total / PI).floor() + 1.0;
     if parts_f > super::MAX_LINES as f64 {
         return Err(LowerError::TooManyLines);
     }
@@ -129,25 +131,27 @@ mod tests {
     }
 
     #[test]
-    fn full_circle_is_two_halves() {
+    fn full_circle_is_three_thirds() {
         let a = ArcInput {
             plane: Plane::XY,
             clockwise: true,
             start: [0.0, 0.0, 1.0],
-            end: [0.0, 0.0, -1.0],
+            end: [0.0, 0.0, -2.0],
             centre: [5.0, 0.0, 0.0],
             turns: 1,
         };
         let out = lower_arc(&a).unwrap();
-        assert_eq!(out.len(), 2);
+        assert_eq!(out.len(), 3);
+        // Clockwise from (0, 0) about (5, 0): a third of a turn ends at
+        // 180° - 120° = 60° from the centre.
         let w = words(&out[0]);
         assert_eq!(w[0], ('G', 2.0));
-        assert!((w[1].1 - 10.0).abs() < 1e-12 && w[2].1.abs() < 1e-12);
-        assert_eq!(w[3], ('Z', 0.0));
+        assert!((w[1].1 - 7.5).abs() < 1e-12);
+        assert!((w[2].1 - 5.0 * (PI / 3.0).sin()).abs() < 1e-12);
+        assert!(w[3].1.abs() < 1e-12);
         assert_eq!((w[4], w[5]), (('I', 5.0), ('J', 0.0)));
-        let w = words(&out[1]);
-        assert_eq!(&w[1..4], &[('X', 0.0), ('Y', 0.0), ('Z', -1.0)]);
-        assert!((w[4].1 + 5.0).abs() < 1e-12);
+        let w = words(&out[2]);
+        assert_eq!(&w[1..4], &[('X', 0.0), ('Y', 0.0), ('Z', -2.0)]);
     }
 
     #[test]
@@ -169,6 +173,19 @@ mod tests {
         let l = &lower_arc(&a).unwrap()[0];
         assert_eq!(l.words[4].letter, b'I');
         assert_eq!(l.words[5].letter, b'K');
+    }
+
+    #[test]
+    fn runaway_turns_refused() {
+        let a = ArcInput {
+            plane: Plane::YZ,
+            clockwise: true,
+            start: [0.0, 1.0, 0.0],
+            end: [0.0, 1.0, 0.0],
+            centre: [0.0, 0.0, 0.0],
+            turns: u32::MAX,
+        };
+        assert_eq!(lower_arc(&a), Err(LowerError::TooManyLines));
     }
 
     #[test]

@@ -390,6 +390,14 @@ impl CycleState {
             }
             _ => {}
         }
+        // Refuse a runaway (a tiny Q, a huge L) before writing anything.
+        let pecks = match kind {
+            CycleKind::G73 | CycleKind::G83 => ((r - bottom) / q).ceil().max(0.0),
+            _ => 0.0,
+        };
+        if (16.0 + 3.0 * pecks) * f64::from(repeats) + 1.0 > super::MAX_LINES as f64 {
+            return Err(LowerError::TooManyLines);
+        }
         let dir = modal.spindle;
         // G87: the offset point and the back-bore level in plane order.
         let (off_a, off_b, middle) = match modal.plane {
@@ -629,6 +637,76 @@ mod tests {
             )
             .unwrap();
         assert_eq!(again.end, [1.0, 0.0, 1.0]);
+    }
+
+    #[test]
+    fn spindle_and_inexpressible_refusals() {
+        let block = CycleBlock {
+            axes: [Some(1.0), None, Some(-1.0)],
+            r: Some(1.0),
+            p: Some(0.5),
+            ijk: [Some(0.5), Some(0.0), Some(0.0)],
+            ..Default::default()
+        };
+        let mut m = modal(Plane::XY, Distance::Absolute, Retract::OldZ);
+        m.spindle = Spindle::Ccw;
+        let pos = [Some(0.0), Some(0.0), Some(5.0)];
+        let mut s = CycleState::default();
+        let e = s.lower(CycleKind::G84, &block, &m, pos).unwrap_err();
+        assert_eq!(e.code(), "E1104");
+        let e = s.lower(CycleKind::G87, &block, &m, pos).unwrap_err();
+        assert_eq!(e.code(), "E1105");
+        m.spindle = Spindle::Off;
+        let e = s.lower(CycleKind::G86, &block, &m, pos).unwrap_err();
+        assert_eq!(e.code(), "E1104");
+        m.spindle = Spindle::Cw;
+        m.plane = Plane::XZ;
+        let e = s.lower(CycleKind::G84, &block, &m, pos).unwrap_err();
+        assert_eq!(e.code(), "E1105");
+        assert_eq!(s, CycleState::default());
+    }
+
+    #[test]
+    fn runaway_pecks_refused_before_writing() {
+        let block = CycleBlock {
+            axes: [None, None, Some(-100.0)],
+            r: Some(1.0),
+            q: Some(1e-6),
+            ..Default::default()
+        };
+        let m = modal(Plane::XY, Distance::Absolute, Retract::OldZ);
+        let e = CycleState::default()
+            .lower(CycleKind::G83, &block, &m, [Some(0.0); 3])
+            .unwrap_err();
+        assert_eq!(e, LowerError::TooManyLines);
+        let e = CycleState::default()
+            .lower(
+                CycleKind::G81,
+                &CycleBlock {
+                    l: Some(u32::MAX),
+                    q: None,
+                    ..block
+                },
+                &m,
+                [Some(0.0); 3],
+            )
+            .unwrap_err();
+        assert_eq!(e, LowerError::TooManyLines);
+    }
+
+    #[test]
+    fn g91_polar_step_at_origin_refused() {
+        let block = CycleBlock {
+            axes: [None, None, Some(-1.0)],
+            r: Some(1.0),
+            angle: Some(10.0),
+            ..Default::default()
+        };
+        let m = modal(Plane::XY, Distance::Incremental, Retract::OldZ);
+        let e = CycleState::default()
+            .lower(CycleKind::G81, &block, &m, [Some(0.0); 3])
+            .unwrap_err();
+        assert_eq!(e, LowerError::PolarAtOrigin);
     }
 
     #[test]

@@ -135,7 +135,7 @@ pub enum LowerError {
 
 /// The most blocks one lowering writes (a runaway guard: a G83 with a tiny
 /// Q, a huge L, a spline with a tiny tolerance).
-pub const MAX_LINES: usize = 10_000_000;
+pub const MAX_LINES: usize = 1_000_000;
 
 impl LowerError {
     /// The error code (E1100–E1149).
