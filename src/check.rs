@@ -238,7 +238,7 @@ pub fn run(paths: &[PathBuf], exts: &[String], deny_warnings: bool, cfg: &Config
     });
     let mut results = results.into_inner().unwrap_or_else(|e| e.into_inner());
     results.sort_by_key(|r| r.0);
-    let mut all: Vec<Diagnostic> = Vec::new();
+    let mut all: Vec<Diagnostic> = cfg.warnings.clone();
     all.append(&mut problems);
     for (_, mut d) in results {
         all.append(&mut d);

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use crate::diag::{ErrorKind, MessageFormat};
+use crate::diag::{Diagnostic, ErrorKind, MessageFormat, WarningKind};
 use crate::eval::{Define, Settings};
 use crate::program::SearchPath;
 use crate::program::ini::Ini;
@@ -130,6 +130,12 @@ pub struct CommonArgs {
     /// Do not search the program's own folder for subroutine files.
     #[arg(long)]
     pub no_program_dir: bool,
+    /// LinuxCNC's O-word errors (a `return` outside a subroutine, an
+    /// `endif` without its `if`, a `break` outside a loop...) become
+    /// warnings and the line is skipped, like the INI's
+    /// [RS274NGC]OWORD_WARNONLY = 1.
+    #[arg(long)]
+    pub oword_warn_only: bool,
     /// How diagnostics are written to stderr.
     #[arg(long, value_enum, default_value = "human")]
     pub message_format: FormatArg,
@@ -141,7 +147,13 @@ pub struct Config {
     pub settings: Settings,
     pub search: SearchPath,
     pub format: MessageFormat,
+    /// Problems of the configuration that do not stop the run (INI entries
+    /// naming missing folders, a SUBROUTINE_PATH cut to 10 folders).
+    pub warnings: Vec<Diagnostic>,
 }
+
+/// Folders of `[RS274NGC]SUBROUTINE_PATH` LinuxCNC uses.
+const MAX_SUB_DIRS: usize = 10;
 
 fn expand_tilde(p: &str) -> PathBuf {
     if let Some(rest) = p.strip_prefix("~/") {
@@ -337,6 +349,8 @@ impl CommonArgs {
             zero_start: self.zero_start,
             ..Settings::default()
         };
+        let mut warnings = Vec::new();
+        let mut warn = |kind| warnings.push(Diagnostic::warning(kind, None));
         let mut search = SearchPath {
             program_dir: !self.no_program_dir,
             ..SearchPath::default()
@@ -368,17 +382,29 @@ impl CommonArgs {
                 prefixes.push(resolve_in(&base, p));
             }
             if let Some(sp) = ini.get("RS274NGC", "SUBROUTINE_PATH") {
-                let existing: Vec<PathBuf> = sp
+                // LinuxCNC keeps the first 10 entries that exist and stops
+                // reading there; entries that do not exist do not count.
+                let mut existing: Vec<PathBuf> = Vec::new();
+                let mut ignored: Vec<PathBuf> = Vec::new();
+                for p in sp
                     .split(':')
                     .map(str::trim)
                     .filter(|s| !s.is_empty())
                     .map(|s| resolve_in(&base, s))
-                    .filter(|p| p.is_dir())
-                    .collect();
-                if existing.len() > 10 {
-                    return Err(ErrorKind::TooManyPathDirs {
-                        count: existing.len(),
-                    });
+                {
+                    if !p.is_dir() {
+                        warn(WarningKind::ConfigPathMissing {
+                            key: "[RS274NGC]SUBROUTINE_PATH",
+                            path: p,
+                        });
+                    } else if existing.len() < MAX_SUB_DIRS {
+                        existing.push(p);
+                    } else {
+                        ignored.push(p);
+                    }
+                }
+                if !ignored.is_empty() {
+                    warn(WarningKind::SubroutinePathTruncated { ignored });
                 }
                 dirs.extend(existing);
             }
@@ -391,10 +417,50 @@ impl CommonArgs {
                 let p = resolve_in(&base, v);
                 if p.is_file() {
                     var_file = Some(p);
+                } else {
+                    warn(WarningKind::ConfigPathMissing {
+                        key: "[RS274NGC]PARAMETER_FILE",
+                        path: p,
+                    });
                 }
             }
             settings.fanuc_disabled = ini.flag("RS274NGC", "DISABLE_FANUC_STYLE_SUB");
-            settings.oword_nargs = ini.flag("RS274NGC", "OWORD_NARGS");
+            // The interpreter's switches; an INI written for LinuxCNC before
+            // 2.8 has them as bits of one FEATURES mask, honoured when the
+            // separate switch is absent.
+            let features = ini.integer("RS274NGC", "FEATURES");
+            let switch = |name: &str, bit: i64, default: bool| {
+                ini.boolean("RS274NGC", name)
+                    .or(features.map(|m| m & bit != 0))
+                    .unwrap_or(default)
+            };
+            settings.retain_g43 = switch("RETAIN_G43", 0x1, false);
+            settings.oword_nargs = switch("OWORD_NARGS", 0x2, false);
+            settings.ini_vars = switch("INI_VARS", 0x4, true);
+            settings.hal_pin_vars = switch("HAL_PIN_VARS", 0x8, true);
+            settings.no_downcase_oword = switch("NO_DOWNCASE_OWORD", 0x10, false);
+            settings.oword_warn_only = switch("OWORD_WARNONLY", 0x20, false);
+            if let Some(mask) = features {
+                let names = [
+                    (0x1, "RETAIN_G43"),
+                    (0x2, "OWORD_NARGS"),
+                    (0x4, "INI_VARS"),
+                    (0x8, "HAL_PIN_VARS"),
+                    (0x10, "NO_DOWNCASE_OWORD"),
+                    (0x20, "OWORD_WARNONLY"),
+                ];
+                let on: Vec<&str> = names
+                    .iter()
+                    .filter(|(bit, _)| mask & bit != 0)
+                    .map(|(_, n)| *n)
+                    .collect();
+                let switches = if on.is_empty() {
+                    "all switches off".to_string()
+                } else {
+                    format!("on: {}", on.join(", "))
+                };
+                warn(WarningKind::FeaturesMask { mask, switches });
+            }
             settings.machine_metric = ini.get("TRAJ", "LINEAR_UNITS").is_some_and(|u| {
                 matches!(
                     u.to_ascii_lowercase().as_str(),
@@ -407,6 +473,7 @@ impl CommonArgs {
             });
             settings.ini = Some(ini);
         }
+        settings.oword_warn_only |= self.oword_warn_only;
         search.dirs = prefixes.into_iter().chain(dirs).collect();
         if let Some(v) = &var_file {
             settings.defines.extend(read_var_file(v)?);
@@ -448,6 +515,7 @@ impl CommonArgs {
             settings,
             search,
             format,
+            warnings,
         })
     }
 }

@@ -197,6 +197,7 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
                 Ok(c) => c,
                 Err(k) => return Ok(setup_error(k, args.common.format())),
             };
+            report(&cfg.warnings, cfg.format);
             let source = match read_source(args.file.as_deref()) {
                 Ok(s) => s,
                 Err(e) => {

@@ -174,8 +174,6 @@ pub enum ErrorKind {
     VarFileSyntax { text: String },
     /// A `-D` definition that is not `PARAM=VALUE`.
     BadDefine { text: String },
-    /// `SUBROUTINE_PATH` with more than ten existing folders.
-    TooManyPathDirs { count: usize },
     /// Lathe cycle needing a contour sub (`G71 Q...`).
     Unsupported { what: String },
     // ------------------------------------------------------------ robustness
@@ -262,7 +260,6 @@ impl ErrorKind {
             VarFileOrder { .. } => "E0503",
             VarFileSyntax { .. } => "E0504",
             BadDefine { .. } => "E0505",
-            TooManyPathDirs { .. } => "E0506",
             Unsupported { .. } => "E0507",
             Internal { .. } => "E0700",
             ComputedSubLabel => "E0701",
@@ -472,12 +469,6 @@ impl fmt::Display for ErrorKind {
                 f,
                 "-D '{text}' is not PARAM=VALUE (e.g. 5063=-1.25, depth=3, _depth=3)"
             ),
-            TooManyPathDirs { count } => {
-                write!(
-                    f,
-                    "SUBROUTINE_PATH has {count} folders; LinuxCNC uses at most 10"
-                )
-            }
             Unsupported { what } => write!(f, "{what}"),
             Internal { what } => write!(
                 f,

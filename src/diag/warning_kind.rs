@@ -47,6 +47,16 @@ pub enum WarningKind {
     /// change from the last move without the offset changed since, and does
     /// not change its current tool on M61.
     QuirkStandalone { why: &'static str, line: u32 },
+    /// `o1 endif` with no `o1 if`, under warn-only O-words
+    /// (`OWORD_WARNONLY`): one of LinuxCNC's O-word errors, the line skipped.
+    OWordSkipped { code: &'static str, message: String },
+    /// `[RS274NGC]FEATURES = 32` in the INI: the mask LinuxCNC read before
+    /// 2.8 (2.8 and later ignore it).
+    FeaturesMask { mask: i64, switches: String },
+    /// `[RS274NGC]SUBROUTINE_PATH` with eleven existing folders.
+    SubroutinePathTruncated { ignored: Vec<PathBuf> },
+    /// `[RS274NGC]SUBROUTINE_PATH = nothere` or `PARAMETER_FILE = gone.var`.
+    ConfigPathMissing { key: &'static str, path: PathBuf },
 }
 
 impl WarningKind {
@@ -68,6 +78,10 @@ impl WarningKind {
             QuirkL0 => "W0106",
             QuirkSkippedBreak => "W0109",
             QuirkStandalone { .. } => "W0110",
+            OWordSkipped { .. } => "W0900",
+            FeaturesMask { .. } => "W0901",
+            SubroutinePathTruncated { .. } => "W0902",
+            ConfigPathMissing { .. } => "W0903",
         }
     }
 }
@@ -133,6 +147,27 @@ impl fmt::Display for WarningKind {
             QuirkSkippedBreak => write!(
                 f,
                 "LinuxCNC acts on this break although a continue skips over it, leaving the loop; ngcflat continues the loop"
+            ),
+            OWordSkipped { code, message } => write!(
+                f,
+                "{message} ({code}); O-word errors are warnings here, so this line is skipped"
+            ),
+            FeaturesMask { mask, switches } => write!(
+                f,
+                "[RS274NGC]FEATURES = {mask} is read as LinuxCNC before 2.8 read it ({switches}); LinuxCNC 2.8 and later ignore FEATURES and read separate switches (OWORD_WARNONLY = 1, ...)"
+            ),
+            SubroutinePathTruncated { ignored } => {
+                let list: Vec<String> = ignored.iter().map(|p| p.display().to_string()).collect();
+                write!(
+                    f,
+                    "[RS274NGC]SUBROUTINE_PATH has more than 10 existing folders; as in LinuxCNC only the first 10 are searched, these are ignored: {}",
+                    list.join(", ")
+                )
+            }
+            ConfigPathMissing { key, path } => write!(
+                f,
+                "{key} entry {} does not exist; it is ignored",
+                path.display()
             ),
             QuirkL0 => write!(
                 f,

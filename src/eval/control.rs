@@ -403,8 +403,8 @@ impl Interp<'_> {
                 let line = file.olines[oidx as usize].line_idx;
                 let recorded = matches!(self.frame().labels.get(key),
                     Some(r) if r.kind == OKind::If && r.line == line);
-                if !recorded {
-                    self.record(file, oidx, key, OKind::If)?;
+                if !recorded && let Err(e) = self.record(file, oidx, key, OKind::If) {
+                    return self.soft(e, file);
                 }
                 if c != 0.0 {
                     self.executed_if = true;
@@ -415,7 +415,9 @@ impl Interp<'_> {
                 }
             }
             OKind::ElseIf | OKind::Else => {
-                self.expect(file, oidx, key, &[OKind::If], "if")?;
+                if let Err(e) = self.expect(file, oidx, key, &[OKind::If], "if") {
+                    return self.soft(e, file);
+                }
                 if o.kind == OKind::ElseIf {
                     self.probe_condition(file, oidx);
                 }
@@ -434,12 +436,17 @@ impl Interp<'_> {
                             at = t;
                         }
                         Some(OKind::Else) => at = t,
-                        _ => return self.stray(file, t, key),
+                        _ => {
+                            self.stray(file, t, key)?;
+                            at = t;
+                        }
                     }
                 }
             }
             OKind::EndIf => {
-                self.expect(file, oidx, key, &[OKind::If], "if")?;
+                if let Err(e) = self.expect(file, oidx, key, &[OKind::If], "if") {
+                    return self.soft(e, file);
+                }
                 self.executed_if = true;
                 Ok(())
             }
@@ -478,23 +485,27 @@ impl Interp<'_> {
                     }
                     return Ok(());
                 }
-                if !recorded {
-                    self.record(file, oidx, key, OKind::While)?;
+                if !recorded && let Err(e) = self.record(file, oidx, key, OKind::While) {
+                    return self.soft(e, file);
                 }
                 if c != 0.0 {
                     return Ok(());
                 }
-                let t = self.seek_loop_end(file, oidx, key)?;
-                self.loop_exit(file, t, key, OKind::EndWhile, "while")
+                self.loop_exit(file, oidx, key, OKind::EndWhile)
             }
             OKind::EndWhile => {
-                let rec = self.expect(file, oidx, key, &[OKind::While], "while")?;
+                let rec = match self.expect(file, oidx, key, &[OKind::While], "while") {
+                    Ok(r) => r,
+                    Err(e) => return self.soft(e, file),
+                };
                 self.note_loop(file, rec.oidx, key);
                 self.goto(file, rec.oidx, false);
                 Ok(())
             }
             OKind::Repeat => {
-                self.record(file, oidx, key, OKind::Repeat)?;
+                if let Err(e) = self.record(file, oidx, key, OKind::Repeat) {
+                    return self.soft(e, file);
+                }
                 let count = self.frame().labels.get(key).map(|r| r.repeat).unwrap_or(-1);
                 let mut count = count;
                 // Reached from its endrepeat, the loop goes on; reached any
@@ -519,12 +530,14 @@ impl Interp<'_> {
                     if let Some(r) = self.frame().labels.get_mut(key) {
                         r.repeat = -1;
                     }
-                    let t = self.seek_loop_end(file, oidx, key)?;
-                    self.loop_exit(file, t, key, OKind::EndRepeat, "repeat")
+                    self.loop_exit(file, oidx, key, OKind::EndRepeat)
                 }
             }
             OKind::EndRepeat => {
-                let rec = self.expect(file, oidx, key, &[OKind::Repeat], "repeat")?;
+                let rec = match self.expect(file, oidx, key, &[OKind::Repeat], "repeat") {
+                    Ok(r) => r,
+                    Err(e) => return self.soft(e, file),
+                };
                 self.note_loop(file, rec.oidx, key);
                 self.repeat_again = Some(rec.oidx);
                 self.goto(file, rec.oidx, false);
@@ -532,9 +545,26 @@ impl Interp<'_> {
             }
             OKind::Break | OKind::Continue => {
                 let expected = "while/do";
-                let rec = self.expect(file, oidx, key, &[OKind::While, OKind::Do], expected)?;
-                let t = self.seek_loop_end(file, oidx, key)?;
-                let tkind = file.kind_of(t);
+                let rec = match self.expect(file, oidx, key, &[OKind::While, OKind::Do], expected) {
+                    Ok(r) => r,
+                    Err(e) => return self.soft(e, file),
+                };
+                // The end of the loop (a line of another kind with the same
+                // label is skipped under warn-only O-words).
+                let mut at = oidx;
+                let (t, tkind) = loop {
+                    let t = self.seek_loop_end(file, at, key)?;
+                    let tkind = file.kind_of(t);
+                    match (rec.kind, tkind) {
+                        (OKind::While, Some(OKind::EndWhile)) | (OKind::Do, Some(OKind::While)) => {
+                            break (t, tkind);
+                        }
+                        _ => {
+                            self.stray(file, t, key)?;
+                            at = t;
+                        }
+                    }
+                };
                 match (rec.kind, tkind, o.kind) {
                     (OKind::While, Some(OKind::EndWhile), OKind::Break) => {
                         if let Some(first_line) = self.ref_stale_continue.take() {
@@ -567,13 +597,14 @@ impl Interp<'_> {
                         }
                         Ok(())
                     }
-                    _ => self.stray(file, t, key),
+                    _ => unreachable!("loop end checked above"),
                 }
             }
             OKind::Sub => self.reach_sub(file, oidx, key),
             OKind::EndSub | OKind::Return => {
                 if self.level() == 0 {
-                    return Err(self.oerr(ErrorKind::NotInSub, file, oidx));
+                    let e = self.oerr(ErrorKind::NotInSub, file, oidx);
+                    return self.soft(e, file);
                 }
                 if self.frame().kind == FrameKind::M98 {
                     return Err(self.oerr(ErrorKind::EndsubInFanuc, file, oidx));
@@ -609,8 +640,33 @@ impl Interp<'_> {
         }
     }
 
+    /// Under warn-only O-words (`OWORD_WARNONLY`), one of LinuxCNC's O-word
+    /// errors raised by the line being run becomes a warning and the line
+    /// is skipped (`Ok`); any other error stays an error.
+    fn soft(&mut self, e: Error, file: &Rc<FileIndex>) -> Result<(), Error> {
+        let soft = self.s.oword_warn_only
+            && matches!(
+                e.error_kind(),
+                Some(
+                    ErrorKind::NotInSub
+                        | ErrorKind::DuplicateLabel { .. }
+                        | ErrorKind::UndefinedLabel { .. }
+                        | ErrorKind::LabelMismatch { .. }
+                )
+            );
+        if !soft {
+            return Err(e);
+        }
+        let (a, b) = e.site.as_ref().map_or((0, 0), |s| (s.start, s.end));
+        let code = e.code();
+        let message = e.message();
+        self.warn(WarningKind::OWordSkipped { code, message }, file, a, b);
+        Ok(())
+    }
+
     /// A line with the label being looked for, but of a kind that does not
-    /// belong there.
+    /// belong there: an error, or under warn-only O-words a warning (`Ok`:
+    /// the line is passed over and the search goes on).
     fn stray(&mut self, file: &Rc<FileIndex>, t: u32, key: &Name) -> Result<(), Error> {
         let label = label_of_key(key);
         let found = file.kind_of(t).map(|k| k.name()).unwrap_or("?");
@@ -620,10 +676,11 @@ impl Interp<'_> {
             && matches!(r.kind, OKind::If | OKind::While | OKind::Repeat)
         {
             let first_line = r.line + 1;
-            return Err(self.oerr(ErrorKind::DuplicateLabel { label, first_line }, file, t));
+            let e = self.oerr(ErrorKind::DuplicateLabel { label, first_line }, file, t);
+            return self.soft(e, file);
         }
         let (opened, line) = rec.map(|r| (r.kind.name(), r.line + 1)).unwrap_or(("?", 0));
-        Err(self.oerr(
+        let e = self.oerr(
             ErrorKind::LabelMismatch {
                 label,
                 here: found,
@@ -632,7 +689,8 @@ impl Interp<'_> {
             },
             file,
             t,
-        ))
+        );
+        self.soft(e, file)
     }
 
     fn skip_if(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) -> Result<(), Error> {
@@ -657,23 +715,32 @@ impl Interp<'_> {
                     self.goto(file, t, true);
                     return Ok(());
                 }
-                _ => return self.stray(file, t, key),
+                _ => {
+                    self.stray(file, t, key)?;
+                    at = t;
+                }
             }
         }
     }
 
-    /// Leaves a loop at its end line `t` (found by skipping).
+    /// Leaves the loop of line `from` at its end line (of kind `end`, found
+    /// by skipping).
     fn loop_exit(
         &mut self,
         file: &Rc<FileIndex>,
-        t: u32,
+        from: u32,
         key: &Name,
         end: OKind,
-        _what: &str,
     ) -> Result<(), Error> {
-        if file.kind_of(t) != Some(end) {
-            return self.stray(file, t, key);
-        }
+        let mut at = from;
+        let t = loop {
+            let t = self.seek_loop_end(file, at, key)?;
+            if file.kind_of(t) == Some(end) {
+                break t;
+            }
+            self.stray(file, t, key)?;
+            at = t;
+        };
         if let Some(first_line) = self.ref_stale_continue.take() {
             let (a, b) = self.osite(file, t);
             self.warn(WarningKind::QuirkStaleContinue { first_line }, file, a, b);

@@ -24,6 +24,20 @@ pub struct Settings {
     pub start_position: Vec<(usize, f64)>,
     pub fanuc_disabled: bool,
     pub oword_nargs: bool,
+    /// LinuxCNC's O-word errors (a stray `return`, `endif`, `break`...)
+    /// are warnings and the line is skipped (`[RS274NGC]OWORD_WARNONLY`).
+    pub oword_warn_only: bool,
+    /// `[RS274NGC]RETAIN_G43`: a tool change while G43 is in effect applies
+    /// the new tool's length offset; unloading the tool (T0) cancels G43.
+    pub retain_g43: bool,
+    /// `[RS274NGC]INI_VARS` (default on): `#<_ini[section]name>` reads the
+    /// INI; off, it is an ordinary global parameter.
+    pub ini_vars: bool,
+    /// `[RS274NGC]HAL_PIN_VARS` (default on): `#<_hal[item]>` reads a HAL
+    /// pin (a value only the machine knows); off, it is an ordinary global.
+    pub hal_pin_vars: bool,
+    /// `[RS274NGC]NO_DOWNCASE_OWORD`: names in comments keep their case.
+    pub no_downcase_oword: bool,
     pub ini: Option<Ini>,
     /// Var-file parameters first, then `-D` values (later wins).
     pub defines: Vec<Define>,
@@ -65,6 +79,11 @@ impl Default for Settings {
             start_position: Vec::new(),
             fanuc_disabled: false,
             oword_nargs: false,
+            oword_warn_only: false,
+            retain_g43: false,
+            ini_vars: true,
+            hal_pin_vars: true,
+            no_downcase_oword: false,
             ini: None,
             defines: Vec::new(),
             warnings: true,

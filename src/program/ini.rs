@@ -54,6 +54,27 @@ impl Ini {
         self.get(&section.to_ascii_uppercase(), &name.to_ascii_uppercase())
     }
 
+    /// A LinuxCNC boolean (`1`/`TRUE`/`YES`/`ON` or `0`/`FALSE`/`NO`/`OFF`,
+    /// any case; a number is true when not 0); `None` when the entry is
+    /// absent or holds something else.
+    pub fn boolean(&self, section: &str, name: &str) -> Option<bool> {
+        let w = self.get(section, name)?.split_whitespace().next()?;
+        match w.to_ascii_uppercase().as_str() {
+            "TRUE" | "YES" | "ON" => Some(true),
+            "FALSE" | "NO" | "OFF" => Some(false),
+            _ => w.parse::<f64>().ok().map(|x| x != 0.0),
+        }
+    }
+
+    /// An integer entry, decimal or `0x` hexadecimal (`FEATURES = 0x20`).
+    pub fn integer(&self, section: &str, name: &str) -> Option<i64> {
+        let w = self.get(section, name)?.split_whitespace().next()?;
+        match w.strip_prefix("0x").or_else(|| w.strip_prefix("0X")) {
+            Some(hex) => i64::from_str_radix(hex, 16).ok(),
+            None => w.parse().ok(),
+        }
+    }
+
     pub fn flag(&self, section: &str, name: &str) -> bool {
         self.get(section, name)
             .and_then(|v| {
@@ -80,5 +101,14 @@ mod tests {
         let mixed = Ini::parse("[SEC]\nCount = 3\n");
         assert_eq!(mixed.get_upper("sec", "count"), None);
         assert_eq!(ini.get("DISPLAY", "NOPE"), None);
+        let b = Ini::parse("[R]\nA = yes\nB = False\nC = 2\nD = maybe\nF = 0x24\nG = 12\n");
+        assert_eq!(b.boolean("R", "A"), Some(true));
+        assert_eq!(b.boolean("R", "B"), Some(false));
+        assert_eq!(b.boolean("R", "C"), Some(true));
+        assert_eq!(b.boolean("R", "D"), None);
+        assert_eq!(b.boolean("R", "E"), None);
+        assert_eq!(b.integer("R", "F"), Some(0x24));
+        assert_eq!(b.integer("R", "G"), Some(12));
+        assert_eq!(b.integer("R", "D"), None);
     }
 }

@@ -110,6 +110,31 @@ const WARNING_FIXTURES: &[(&str, &str, &[&str])] = &[
         "fixtures/deviation/position/m61-keeps-current-tool.ngc",
         &[],
     ),
+    (
+        "W0900",
+        "fixtures/deviation/oword-warn-only/return-outside-sub.ngc",
+        &["--oword-warn-only"],
+    ),
+    (
+        "W0900",
+        "fixtures/deviation/oword-warn-only/endsub-outside-sub.ngc",
+        &["--ini", "warnonly.ini"],
+    ),
+    (
+        "W0901",
+        "fixtures/deviation/oword-warn-only/if-label-used-elsewhere.ngc",
+        &["--ini", "features.ini"],
+    ),
+    (
+        "W0902",
+        "fixtures/ok/ini/subroutine-path-eleven-folders.ngc",
+        &["--ini", "many.ini"],
+    ),
+    (
+        "W0903",
+        "fixtures/ok/ini/subroutine-path-eleven-folders.ngc",
+        &["--ini", "many.ini"],
+    ),
 ];
 
 /// Warning kinds declared in src/diag/warning_kind.rs that nothing in

@@ -10,6 +10,7 @@ mod hostile;
 mod lowering;
 mod oracle;
 mod props;
+mod warn_only;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
