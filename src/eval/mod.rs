@@ -171,6 +171,9 @@ pub struct Interp<'s> {
     modal: Modal,
     pos: Position,
     current_tool: Option<f64>,
+    /// RETAIN_G43 changed the tool length offset on this line: the output
+    /// line to add after it (G43 or G49).
+    retain_line: Option<bool>,
     selected_tool: Option<f64>,
     /// Pockets of the current and the selected tool, known as the standalone
     /// reference numbers them (by tool number) under `--zero-start`.
@@ -325,6 +328,7 @@ impl<'s> Interp<'s> {
             last_called: None,
             modal: Modal::default(),
             pos,
+            retain_line: None,
             current_tool: if s.zero_start || !s.tool_table.is_empty() {
                 Some(0.0)
             } else {

@@ -177,6 +177,7 @@ impl Interp<'_> {
         let mut dynamic_tlo = false;
         let mut l_word = None;
         let mut r_word = None;
+        let mut tool_changed = false;
         for &(l, v) in words {
             match l {
                 b'g' => {
@@ -218,6 +219,7 @@ impl Interp<'_> {
                             }
                             self.m61 = None;
                             self.tool_change_sync();
+                            tool_changed = true;
                         }
                         70 => self.modal.mist = true,
                         80 => self.modal.flood = true,
@@ -272,9 +274,20 @@ impl Interp<'_> {
                             p.0 = q;
                         }
                         self.tool_change_sync();
+                        tool_changed = true;
                     }
                     _ => {}
                 }
+            }
+        }
+        // RETAIN_G43: a tool change while G43 is in effect applies the new
+        // tool's offset, and unloading the tool (T0) cancels G43, before the
+        // line's own G43/G49. The output says so in a line of its own.
+        if tool_changed && self.s.retain_g43 && self.modal.tool_offset {
+            let on = self.current_tool != Some(0.0);
+            self.tool_offset_words(on);
+            if !gs.iter().any(|g| matches!(g, 430 | 431 | 432 | 490)) {
+                self.retain_line = Some(on);
             }
         }
         let mut special = None;
@@ -434,6 +447,9 @@ impl Interp<'_> {
                     self.move_to(axis_words);
                 }
             }
+        }
+        if let Some(on) = self.retain_line.take() {
+            self.emit_raw(if on { b"G43" } else { b"G49" })?;
         }
         if ends {
             self.modal.reset_at_end();

@@ -126,7 +126,7 @@ impl Interp<'_> {
                         span,
                     )));
                 }
-                if name.starts_with("_hal[") {
+                if name.starts_with("_hal[") && self.s.hal_pin_vars {
                     return Some(Err(fault(
                         ErrorKind::RuntimeParam {
                             what: format!("#<{name}>"),
@@ -136,7 +136,7 @@ impl Interp<'_> {
                         span,
                     )));
                 }
-                if let Some((sec, key)) = ini_key(name) {
+                if let Some((sec, key)) = ini_key(name).filter(|_| self.s.ini_vars) {
                     let found = self.s.ini.as_ref().and_then(|i| i.get_upper(sec, key));
                     return Some(match found.and_then(|v| v.trim().parse::<f64>().ok()) {
                         Some(v) => Ok(v),
@@ -204,8 +204,8 @@ impl Interp<'_> {
                 || (name.len() == 6
                     && name.starts_with("_abs_")
                     && AXES.contains(&name.as_bytes()[5]))
-                || name.starts_with("_ini[")
-                || name.starts_with("_hal["))
+                || (name.starts_with("_ini[") && self.s.ini_vars)
+                || (name.starts_with("_hal[") && self.s.hal_pin_vars))
     }
 
     /// Current position on an axis, or why it is unknown.
@@ -272,7 +272,9 @@ impl Interp<'_> {
     }
 
     pub(crate) fn named_exists(&mut self, name: &Name, span: Span) -> Result<bool, Fault> {
-        if name.starts_with("_ini[") || name.starts_with("_hal[") {
+        if (name.starts_with("_ini[") && self.s.ini_vars)
+            || (name.starts_with("_hal[") && self.s.hal_pin_vars)
+        {
             if self.globals.contains_key(name) {
                 return Ok(true);
             }

@@ -36,7 +36,11 @@ pub struct Settings {
     /// `[RS274NGC]HAL_PIN_VARS` (default on): `#<_hal[item]>` reads a HAL
     /// pin (a value only the machine knows); off, it is an ordinary global.
     pub hal_pin_vars: bool,
-    /// `[RS274NGC]NO_DOWNCASE_OWORD`: names in comments keep their case.
+    /// `[RS274NGC]NO_DOWNCASE_OWORD`: names in comments keep their case so
+    /// that mixed-case HAL items can be read. Read for completeness: HAL
+    /// items are never read from a machine here, and a `-D` value for one
+    /// matches whatever its case; other names are found as before (as in
+    /// rs274 2.9).
     pub no_downcase_oword: bool,
     pub ini: Option<Ini>,
     /// Var-file parameters first, then `-D` values (later wins).
