@@ -9,6 +9,7 @@ pub mod config;
 pub mod diag;
 pub mod emit;
 pub mod eval;
+pub mod geom;
 mod fx_hasher;
 pub mod machine;
 pub mod parse;

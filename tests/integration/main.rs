@@ -3,6 +3,7 @@
 
 mod check;
 mod cli;
+mod comp;
 mod config;
 mod fixtures;
 mod generated;

@@ -32,6 +32,11 @@ pub struct Run {
 /// Runs `rs274 -g` on a program text with an INI text, in a private folder
 /// (rs274 writes files under HOME and the working folder).
 pub fn run(program: &[u8], ini: &str, var: Option<&Path>) -> Run {
+    run_with(program, ini, var, None)
+}
+
+/// As [`run`], with a tool table text (`-t`) when given.
+pub fn run_with(program: &[u8], ini: &str, var: Option<&Path>, tools: Option<&str>) -> Run {
     let dir = tempfile::tempdir().expect("tempdir");
     let prog = dir.path().join("prog.ngc");
     std::fs::write(&prog, program).expect("write program");
@@ -44,6 +49,11 @@ pub fn run(program: &[u8], ini: &str, var: Option<&Path>) -> Run {
         let copy = dir.path().join("params.var");
         std::fs::copy(v, &copy).expect("copy var file");
         cmd.arg("-v").arg(copy);
+    }
+    if let Some(t) = tools {
+        let tbl = dir.path().join("tools.tbl");
+        std::fs::write(&tbl, t).expect("write tool table");
+        cmd.arg("-t").arg(tbl);
     }
     cmd.arg(&prog)
         .stdin(Stdio::null())

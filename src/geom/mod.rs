@@ -1,0 +1,3 @@
+//! Geometry computed ahead of time: cutter radius compensation.
+
+pub mod comp;
