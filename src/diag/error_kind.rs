@@ -146,6 +146,27 @@ pub enum ErrorKind {
     NoSavedContext,
     /// `(abort, tool broke)`
     Abort { message: String },
+    // ------------------------------------------------------------ cutter compensation
+    /// `G41 G1 X0.1` with a 0.25 radius tool: the compensated path cannot
+    /// be made (see [`crate::geom::comp::CompError`]).
+    CutterComp { error: crate::geom::comp::CompError },
+    /// `G41` then `G54`: something the reference refuses while
+    /// compensation is on (`action` says what).
+    CompForbids { action: &'static str },
+    /// `G41` then `G42` without `G40`.
+    CompAlreadyOn,
+    /// `G19 G41`: compensation in a plane other than XY or XZ.
+    CompPlane,
+    /// `G41` in G17, then `G18`.
+    CompPlaneChange,
+    /// `G40` then `G2 ...`: the move after compensation ends must be
+    /// straight.
+    CompArcAfterOff,
+    /// `G41.1` without a D word.
+    CompNoDiameter { g: &'static str },
+    /// `G41` with a lathe tool (orientation 1-8), or `G41.1 L3`, outside
+    /// G18.
+    CompLatheTool { what: &'static str },
     // ------------------------------------------------------------ limits and output
     /// An output line longer than 252 characters after substitution.
     OutputLineTooLong { len: usize },
@@ -251,6 +272,14 @@ impl ErrorKind {
             NoSavedContext => "E0328",
             BadCondition { .. } => "E0329",
             Block(e) => e.code(),
+            CutterComp { error } => comp_code(*error),
+            CompForbids { .. } => "E1170",
+            CompAlreadyOn => "E1171",
+            CompPlane => "E1172",
+            CompPlaneChange => "E1173",
+            CompArcAfterOff => "E1174",
+            CompNoDiameter { .. } => "E1175",
+            CompLatheTool { .. } => "E1176",
             OutputLineTooLong { .. } => "E0401",
             StepLimit { .. } => "E0402",
             OutputLimit { .. } => "E0403",
@@ -266,6 +295,29 @@ impl ErrorKind {
             BadStartPosition { .. } => "E0800",
             ProbeResultUnknown { .. } => "E0801",
         }
+    }
+}
+
+/// Codes of the compensation geometry errors: E1150 and up, in the order
+/// of [`crate::geom::comp::CompError::ALL`].
+fn comp_code(e: crate::geom::comp::CompError) -> &'static str {
+    use crate::geom::comp::CompError::*;
+    match e {
+        EntryTooShort => "E1150",
+        EntryArcTooShort => "E1151",
+        ToolTooBigForArc => "E1152",
+        StraightFeedGouge => "E1153",
+        StraightTraverseGouge => "E1154",
+        ArcGouge => "E1155",
+        ArcArcSameCenter => "E1156",
+        ArcArcGouge => "E1157",
+        ArcLineGouge => "E1158",
+        ZeroRadiusArc => "E1160",
+        RadiusMismatch => "E1161",
+        RadiusTooSmall => "E1162",
+        ArcSamePoint => "E1163",
+        Inconsistent => "E1164",
+        ArcRadiusChanged => "E1165",
     }
 }
 
@@ -428,6 +480,27 @@ impl fmt::Display for ErrorKind {
             UnterminatedSub { name } => write!(f, "subroutine o<{name}> has no endsub"),
             Abort { message } => write!(f, "program aborted: {message}"),
             Block(e) => write!(f, "{e}"),
+            CutterComp { error } => write!(f, "{error}"),
+            CompForbids { action } => {
+                write!(f, "cannot {action} with cutter radius compensation on")
+            }
+            CompAlreadyOn => write!(
+                f,
+                "cutter radius compensation is already on (turn it off with G40 first)"
+            ),
+            CompPlane => write!(
+                f,
+                "cutter radius compensation works only in the XY (G17) and XZ (G18) planes"
+            ),
+            CompPlaneChange => {
+                write!(f, "cannot change planes with cutter radius compensation on")
+            }
+            CompArcAfterOff => write!(
+                f,
+                "the move right after turning cutter compensation off (G40) must be straight, not an arc"
+            ),
+            CompNoDiameter { g } => write!(f, "{g} without a D word (the tool diameter)"),
+            CompLatheTool { what } => write!(f, "{what}, but the plane is not G18"),
             NoSavedContext => write!(
                 f,
                 "M72 without a state saved by M70 or M73 at this call level"

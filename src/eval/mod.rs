@@ -3,6 +3,7 @@
 //! by its value.
 
 mod block;
+mod ccomp;
 mod code;
 mod control;
 mod cycle;
@@ -224,6 +225,11 @@ pub struct Interp<'s> {
     m61: Option<(u32, Option<f64>)>,
     /// Reads every output line instead of the output (see [`hook`]).
     consumer: Option<Box<dyn LineConsumer + 's>>,
+    /// Cutter compensation, once a program turns it on.
+    comp: Option<Box<ccomp::CompRun>>,
+    /// G40 ended an offset path: the next move must be straight (the fast
+    /// paths leave such lines to the general one).
+    comp_pending: bool,
 }
 
 /// The call stack of `frames` as sites, innermost caller first.
@@ -362,6 +368,8 @@ impl<'s> Interp<'s> {
             tlo_moved: false,
             probed_at: None,
             standalone_drift: None,
+            comp: None,
+            comp_pending: false,
             m61: None,
             consumer: None,
         }

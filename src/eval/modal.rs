@@ -348,6 +348,18 @@ impl Interp<'_> {
             }
         }
         let _ = self.line_no();
+        if self.comp.is_some() || self.modal.ccomp != 400 {
+            for &g in gs {
+                let r = match g {
+                    400 => self.comp_off(),
+                    410 | 411 | 420 | 421 => self.comp_on(g, words),
+                    _ => Ok(()),
+                };
+                if let Err(k) = r {
+                    return Err(self.error(k, _file, _start, _start));
+                }
+            }
+        }
         match special {
             Some(920) => {
                 self.keep_active_g92();
@@ -411,6 +423,10 @@ impl Interp<'_> {
                 }
             }
             Some(530) => {
+                if self.comp_offsetting() {
+                    let k = ErrorKind::CompForbids { action: "use G53" };
+                    return Err(self.error(k, _file, _start, _start));
+                }
                 if self.modal.ccomp != 400 {
                     self.forget(&[0, 1, 2], "cutter radius compensation");
                 }
@@ -445,11 +461,25 @@ impl Interp<'_> {
                         self.note_cycle(words);
                     }
                     self.move_to(axis_words);
+                    if (self.comp.is_some() || self.modal.ccomp != 400)
+                        && let Err(k) = self.comp_move(words, self.modal.motion)
+                    {
+                        return Err(self.error(k, _file, _start, _start));
+                    }
                 }
             }
         }
         if let Some(on) = self.retain_line.take() {
             self.emit_raw(if on { b"G43" } else { b"G49" })?;
+        }
+        if self.comp.is_some() {
+            let stop = ends
+                || words
+                    .iter()
+                    .any(|&(l, v)| l == b'm' && matches!(v, 0.0 | 1.0 | 60.0));
+            if stop && let Err(k) = self.comp_stop(ends) {
+                return Err(self.error(k, _file, _start, _start));
+            }
         }
         if ends {
             self.modal.reset_at_end();
@@ -461,7 +491,7 @@ impl Interp<'_> {
     /// a plain state: as the general update below, in a few steps. False
     /// leaves the state untouched.
     fn apply_simple(&mut self, words: &[(u8, f64)]) -> bool {
-        if self.rotated || self.modal.ccomp != 400 {
+        if self.rotated || self.modal.ccomp != 400 || self.comp_pending {
             return false;
         }
         let mut motion = self.modal.motion;
@@ -598,6 +628,7 @@ impl Interp<'_> {
             }
         }
         self.modal.metric = metric;
+        self.comp_units(metric);
     }
 
     pub(super) fn select_cs(&mut self, cs: i32) {
@@ -798,10 +829,8 @@ impl Interp<'_> {
                 }
             }
             _ => {
-                if self.modal.ccomp != 400 {
-                    self.forget(&[0, 1, 2], "cutter radius compensation");
-                    return;
-                }
+                // With compensation on this is the programmed position,
+                // which is what the reference reads missing words from.
                 for &(a, v) in axis_words {
                     self.move_axis(a, v);
                 }

@@ -307,7 +307,11 @@ impl Interp<'_> {
         first_line: u32,
         stop_line: u32,
     ) -> Result<u32, Error> {
-        if !self.s.plain_runs || self.rotated || self.modal.ccomp != 400 || self.ended {
+        if !self.s.plain_runs
+            || self.rotated
+            || (self.modal.ccomp != 400 || self.comp_pending)
+            || self.ended
+        {
             return Ok(0);
         }
         let max_lines = stop_line.saturating_sub(first_line);
@@ -415,7 +419,7 @@ impl Interp<'_> {
                     Some(r) => r?,
                 }
                 *batch_start = p.next;
-                if self.ended || self.rotated || self.modal.ccomp != 400 {
+                if self.ended || self.rotated || (self.modal.ccomp != 400 || self.comp_pending) {
                     *last_start = *i;
                     *i = p.next;
                     *lines += 1;
@@ -508,7 +512,7 @@ impl Interp<'_> {
     /// (the block checks accept them and the state model is updated), false
     /// to leave them to the general checks.
     pub(super) fn fast_words(&mut self, words: &[(u8, f64)]) -> bool {
-        if self.rotated || self.modal.ccomp != 400 || !self.s.plain_runs {
+        if self.rotated || (self.modal.ccomp != 400 || self.comp_pending) || !self.s.plain_runs {
             return false;
         }
         let mut p = Plain::default();

@@ -332,7 +332,123 @@ fn full_check(
     check_whole_numbers(&d)?;
     check_g10(&d)?;
     check_required_words(&d)?;
-    check_feed(&d)
+    check_feed(&d)?;
+    if modal.ccomp != 400 || d.g_on(&[410, 411, 420, 421]) {
+        check_comp(&d)?;
+    }
+    Ok(())
+}
+
+/// What the reference refuses while cutter compensation is on, and the
+/// words G41/G42 and G41.1/G42.1 need. M-codes and the plane are checked
+/// with the state before the block, the other G-codes after the block's
+/// G40/G41/G42 (the reference's order of execution).
+fn check_comp(d: &Decoded<'_>) -> Check {
+    let g_at = |codes: &[i32]| d.gs.iter().find(|(g, _)| codes.contains(g)).map(|x| x.1);
+    let m_at = |codes: &[i64]| d.ms.iter().find(|(m, _)| codes.contains(m)).map(|x| x.1);
+    let forbid =
+        |action: &'static str, at: Option<usize>| Err((ErrorKind::CompForbids { action }, at));
+    let planes = |g: &i32| matches!(g, 170 | 180 | 190 | 171 | 181 | 191);
+    let before = d.modal.ccomp != 400;
+    let turning_on =
+        d.gs.iter()
+            .find(|(g, _)| matches!(g, 410 | 411 | 420 | 421));
+    let after = turning_on.is_some() || (before && g_at(&[400]).is_none());
+    if before {
+        if let Some(i) = m_at(&[6]) {
+            return forbid("change tools", Some(i));
+        }
+        if let Some(i) = m_at(&[62, 63, 64, 65]) {
+            return forbid("set a digital output", Some(i));
+        }
+        if let Some(i) = m_at(&[66]) {
+            return forbid("wait for an input", Some(i));
+        }
+        if let Some(i) = m_at(&[67, 68]) {
+            return forbid("set an analog output", Some(i));
+        }
+        if let Some(i) = m_at(&[48, 49, 50, 51, 52, 53]) {
+            return forbid("enable or disable overrides", Some(i));
+        }
+        if let Some(&(p, i)) = d.gs.iter().find(|(g, _)| planes(g))
+            && p != d.modal.plane
+        {
+            return Err((ErrorKind::CompPlaneChange, Some(i)));
+        }
+    }
+    let plane =
+        d.gs.iter()
+            .find(|(g, _)| planes(g))
+            .map_or(d.modal.plane, |g| g.0);
+    if let Some(&(g, i)) = turning_on {
+        if plane != 170 && plane != 180 {
+            return Err((ErrorKind::CompPlane, Some(i)));
+        }
+        if before {
+            return Err((ErrorKind::CompAlreadyOn, Some(i)));
+        }
+        if matches!(g, 411 | 421) {
+            let name = if g == 411 { "G41.1" } else { "G42.1" };
+            if d.has_at(b'd').is_none() {
+                return Err((ErrorKind::CompNoDiameter { g: name }, Some(i)));
+            }
+            if let Some(l) = d.has_at(b'l')
+                && plane != 180
+            {
+                let what = if g == 411 {
+                    "G41.1 with an L word (lathe tool orientation)"
+                } else {
+                    "G42.1 with an L word (lathe tool orientation)"
+                };
+                return Err((ErrorKind::CompLatheTool { what }, Some(l)));
+            }
+        }
+    }
+    if !after {
+        return Ok(());
+    }
+    if let Some(i) = g_at(&[430, 431, 432, 490]) {
+        return forbid("change the tool length offset", Some(i));
+    }
+    if let Some(i) = g_at(&[540, 550, 560, 570, 580, 590, 591, 592, 593]) {
+        return forbid("change the coordinate system", Some(i));
+    }
+    if let Some(i) = g_at(&[610, 611, 640]) {
+        return forbid("change the path control mode", Some(i));
+    }
+    if let Some(i) = g_at(&[980, 990]) {
+        return forbid("change the canned cycle return mode", Some(i));
+    }
+    if let Some(i) = g_at(&[100]) {
+        let l = d.value(b'l').map(|v| v.round() as i32);
+        let p = d.value(b'p').map_or(0, |v| (v + 0.0001) as i32);
+        let p = if p == 0 { d.modal.coord_index } else { p };
+        if matches!(l, Some(2 | 20)) && p == d.modal.coord_index {
+            return forbid("change the active coordinate system's offsets", Some(i));
+        }
+    }
+    if let Some(i) = g_at(&[280, 300]) {
+        return forbid("use G28 or G30", Some(i));
+    }
+    if let Some(i) = g_at(&[281, 301]) {
+        return forbid("set a home position (G28.1, G30.1)", Some(i));
+    }
+    if let Some(i) = g_at(&[520, 920, 921, 922, 923]) {
+        return forbid("change axis offsets (G52, G92)", Some(i));
+    }
+    let motion_at =
+        d.gs.iter()
+            .find(|(g, _)| g_group(*g) == Some(1))
+            .map(|x| x.1);
+    let moves = d.motion_here.is_some() || (d.axis_word.is_some() && d.axis_g0.is_none());
+    if moves {
+        match d.motion {
+            382..=385 => return forbid("probe", motion_at),
+            50 | 51 => return forbid("make a spline", motion_at),
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// NURBS blocks: G5.3 after G5.2 with enough points; control points.
@@ -451,7 +567,7 @@ fn check_cycle(d: &Decoded<'_>, cycle: &Cycle) -> Check {
         if d.feed_mode == 930 {
             return bad(BlockError::CycleInverseTime, None);
         }
-        if d.modal.ccomp != 400 && !d.g_on(&[400]) {
+        if d.modal.ccomp != 400 && !d.g_on(&[400]) || d.g_on(&[410, 411, 420, 421]) {
             return bad(BlockError::CycleWithComp, None);
         }
         // The R plane must not be below the bottom of the hole (in G91 the
@@ -597,7 +713,7 @@ fn check_unused_words(d: &Decoded<'_>) -> Check {
     uses(
         b'l',
         // (G74 takes no L in the reference.)
-        d.g_on(&[100, 410, 420, 760])
+        d.g_on(&[100, 410, 411, 420, 421, 760])
             || (canned && d.motion != 740)
             || d.m_on(&[66, 98])
             || d.g_on(&[52, 53]),
@@ -618,7 +734,9 @@ fn check_whole_numbers(d: &Decoded<'_>) -> Check {
         if matches!(l, b't' | b'h') && crate::parse::integer_value(v).is_err() {
             return Err((ErrorKind::NonInteger { value: v }, Some(i)));
         }
-        if l == b'd' && d.g_on(&[410, 420]) && v.fract() != 0.0 {
+        // The reference's test: the D value within 0.0001 of the integer
+        // (int)(D + 0.5), which also refuses every negative D.
+        if l == b'd' && d.g_on(&[410, 420]) && (((v + 0.5) as i64) as f64 - v).abs() >= 0.0001 {
             return bad(BlockError::CompDNotWhole, Some(i));
         }
     }

@@ -116,8 +116,6 @@ pub enum CompError {
     ArcArcGouge,
     /// Arc then line at a concave corner the tool cannot fit in.
     ArcLineGouge,
-    /// A line that turns straight back on the previous one.
-    ZeroDegreeCorner,
     /// A full-circle arc or an arc whose centre is its start or end.
     ZeroRadiusArc,
     /// The centre is not the same distance from start and end.
@@ -136,7 +134,7 @@ pub enum CompError {
 
 impl CompError {
     /// Every variant, for tables and tests.
-    pub const ALL: [CompError; 16] = [
+    pub const ALL: [CompError; 15] = [
         CompError::EntryTooShort,
         CompError::EntryArcTooShort,
         CompError::ToolTooBigForArc,
@@ -146,7 +144,6 @@ impl CompError {
         CompError::ArcArcSameCenter,
         CompError::ArcArcGouge,
         CompError::ArcLineGouge,
-        CompError::ZeroDegreeCorner,
         CompError::ZeroRadiusArc,
         CompError::RadiusMismatch,
         CompError::RadiusTooSmall,
@@ -160,9 +157,7 @@ impl fmt::Display for CompError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         use CompError::*;
         let s = match self {
-            EntryTooShort => {
-                "cutter compensation entry move is not longer than the tool radius"
-            }
+            EntryTooShort => "cutter compensation entry move is not longer than the tool radius",
             EntryArcTooShort => {
                 "cutter compensation entry arc ends within the tool radius of its start"
             }
@@ -183,7 +178,6 @@ impl fmt::Display for CompError {
             ArcLineGouge => {
                 "the compensated tool cannot fit in the corner between the arc and this line without gouging"
             }
-            ZeroDegreeCorner => "a zero-degree inside corner is invalid with cutter compensation",
             ZeroRadiusArc => "zero-radius arc",
             RadiusMismatch => "radius to end of arc differs from radius to start",
             RadiusTooSmall => "arc radius too small to reach end point",
@@ -310,6 +304,7 @@ fn tool_inside(side: Side, turn: i32) -> bool {
 }
 
 /// Centre and signed turns of a centre-format arc (the reference's checks).
+#[allow(clippy::too_many_arguments)]
 fn arc_ijk(
     tol: &Tolerances,
     ccw: bool,
@@ -332,8 +327,7 @@ fn arc_ijk(
     }
     let abs_err = (r1 - r2).abs();
     let rel_err = abs_err / r1.max(r2);
-    if abs_err > tol.spiral_abs * 100.0 || (rel_err > SPIRAL_RELATIVE && abs_err > tol.spiral_abs)
-    {
+    if abs_err > tol.spiral_abs * 100.0 || (rel_err > SPIRAL_RELATIVE && abs_err > tol.spiral_abs) {
         return Err(CompError::RadiusMismatch);
     }
     Ok((c, r1, if ccw { turns } else { -turns }))
@@ -520,7 +514,11 @@ impl<T: Clone> Comp<T> {
 
     /// Moves the end of every held move to `p`, checking that none is
     /// reversed or lengthened by it, and releases them.
-    fn move_end_and_release(&mut self, p: [f64; 2], out: &mut Vec<Out<T>>) -> Result<(), CompError> {
+    fn move_end_and_release(
+        &mut self,
+        p: [f64; 2],
+        out: &mut Vec<Out<T>>,
+    ) -> Result<(), CompError> {
         if self.queue.is_empty() {
             return Ok(());
         }
@@ -591,7 +589,13 @@ impl<T: Clone> Comp<T> {
         }
     }
 
-    fn entry_line(&mut self, side: Side, rapid: bool, p: [f64; 3], tag: T) -> Result<(), CompError> {
+    fn entry_line(
+        &mut self,
+        side: Side,
+        rapid: bool,
+        p: [f64; 3],
+        tag: T,
+    ) -> Result<(), CompError> {
         let c = self.current;
         let r = self.radius;
         if hypot(p[0] - c[0], p[1] - c[1]) <= r {
@@ -670,7 +674,8 @@ impl<T: Clone> Comp<T> {
             }
             _ => false,
         };
-        let concave = beta < -CORNER || beta > PI + CORNER || (beta > PI - CORNER && after_round());
+        let concave =
+            !(-CORNER..=PI + CORNER).contains(&beta) || (beta > PI - CORNER && after_round());
         if !concave && beta > CORNER {
             // Convex corner: go around it.
             self.move_end_and_release([c[0], c[1]], out)?;
@@ -722,10 +727,10 @@ impl<T: Clone> Comp<T> {
                     self.move_end_and_release(m, out)?;
                 }
                 _ => {
+                    // beta is at least -pi/2 here, so the half corner is at
+                    // least pi/4 (the reference's test for a zero-degree
+                    // corner cannot fire).
                     let half = (beta + PI) / 2.0;
-                    if half == 0.0 {
-                        return Err(CompError::ZeroDegreeCorner);
-                    }
                     let retreat = r / half.tan();
                     let m = [
                         c[0] + retreat * (theta + gamma).cos(),
@@ -780,12 +785,16 @@ impl<T: Clone> Comp<T> {
         }
     }
 
-    fn arc_data(&self, arc: Arc, start: [f64; 2], end: [f64; 2]) -> Result<([f64; 2], i32), CompError> {
+    fn arc_data(
+        &self,
+        arc: Arc,
+        start: [f64; 2],
+        end: [f64; 2],
+    ) -> Result<([f64; 2], i32), CompError> {
         match arc.center {
             ArcCenter::Radius(rr) => arc_r(&self.tol, arc.ccw, start, end, rr, arc.turns),
             ArcCenter::Offsets { i, j, absolute } => {
-                let (c, _, t) =
-                    arc_ijk(&self.tol, arc.ccw, start, end, i, j, absolute, arc.turns)?;
+                let (c, _, t) = arc_ijk(&self.tol, arc.ccw, start, end, i, j, absolute, arc.turns)?;
                 Ok((c, t))
             }
         }
@@ -912,9 +921,8 @@ impl<T: Clone> Comp<T> {
         let new_end = [p[0] + r * gamma.cos(), p[1] + r * gamma.sin()];
         let inside = tool_inside(side, turn);
         let sw = sweep(start, center, turn, pe);
-        let concave = beta < -CORNER
-            || beta > PI + CORNER
-            || ((beta - PI).abs() < CORNER && !inside);
+        let concave =
+            !(-CORNER..=PI + CORNER).contains(&beta) || ((beta - PI).abs() < CORNER && !inside);
         if concave {
             match self.front().cloned() {
                 Some(Held::Arc {
@@ -1070,5 +1078,132 @@ impl<T: Clone> Comp<T> {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn inch() -> Comp<u32> {
+        Comp::new(Tolerances::default_for(false))
+    }
+
+    fn line_end(o: &Out<u32>) -> [f64; 3] {
+        match o {
+            Out::Line { end, .. } => *end,
+            Out::Arc { .. } => panic!("expected a line, got {o:?}"),
+        }
+    }
+
+    #[test]
+    fn entry_offsets_perpendicular_and_holds_the_move() {
+        let mut c = inch();
+        let mut out = Vec::new();
+        c.start(Side::Left, 0.25, 0, false, [0.0, 0.0, 0.0]);
+        c.straight(false, [1.0, 0.0, 0.0], 1, &mut out).unwrap();
+        assert!(out.is_empty() && c.holding());
+        c.straight(false, [2.0, 0.0, 0.0], 2, &mut out).unwrap();
+        assert_eq!(out.len(), 1);
+        let e = line_end(&out[0]);
+        assert!((e[0] - 1.0).abs() < 1e-12 && (e[1] - 0.25).abs() < 1e-12);
+        // A left turn on the left side is concave: the held line is cut back.
+        c.straight(false, [2.0, 1.0, 0.0], 3, &mut out).unwrap();
+        let e = line_end(&out[1]);
+        assert!(
+            (e[0] - 1.75).abs() < 1e-12 && (e[1] - 0.25).abs() < 1e-12,
+            "{e:?}"
+        );
+        // A right turn is convex: a corner arc around the programmed corner.
+        c.straight(false, [3.0, 1.0, 0.0], 4, &mut out).unwrap();
+        match &out[3] {
+            Out::Arc { center, turn, .. } => {
+                assert_eq!(*center, [2.0, 1.0]);
+                assert_eq!(*turn, -1);
+            }
+            o => panic!("expected the corner arc, got {o:?}"),
+        }
+        assert!(c.off(&mut out).unwrap());
+        assert_eq!(c.programmed(), [3.0, 1.0, 0.0]);
+        assert!(!c.holding());
+    }
+
+    #[test]
+    fn negative_radius_swaps_the_side() {
+        let mut c = inch();
+        c.start(Side::Left, -0.1, 0, false, [0.0; 3]);
+        assert_eq!(c.side(), Some((Side::Right, 0.1)));
+    }
+
+    #[test]
+    fn entry_too_short() {
+        let mut c = inch();
+        let mut out = Vec::new();
+        c.start(Side::Right, 0.25, 0, false, [0.0; 3]);
+        let r = c.straight(false, [0.25, 0.0, 0.0], 1, &mut out);
+        assert_eq!(r, Err(CompError::EntryTooShort));
+    }
+
+    #[test]
+    fn arc_data_errors_of_the_reference() {
+        let mut c = inch();
+        let mut out = Vec::new();
+        c.start(Side::Left, 0.1, 0, false, [0.0; 3]);
+        c.straight(false, [1.0, 0.0, 0.0], 1, &mut out).unwrap();
+        let r_arc = |r: f64| Arc {
+            ccw: false,
+            center: ArcCenter::Radius(r),
+            turns: 1,
+        };
+        // An R arc whose radius cannot span the chord.
+        let r = c.arc(r_arc(0.4), [2.0, 0.0, 0.0], 2, &mut out);
+        assert_eq!(r, Err(CompError::RadiusTooSmall));
+        // An R arc ending where it starts.
+        let r = c.arc(r_arc(0.4), [1.0, 0.0, 0.0], 2, &mut out);
+        assert_eq!(r, Err(CompError::ArcSamePoint));
+        // Centre offsets of different radii.
+        let ijk = Arc {
+            ccw: true,
+            center: ArcCenter::Offsets {
+                i: 0.5,
+                j: 0.0,
+                absolute: false,
+            },
+            turns: 1,
+        };
+        let r = c.arc(ijk, [1.5, 0.6, 0.0], 2, &mut out);
+        assert_eq!(r, Err(CompError::RadiusMismatch));
+    }
+
+    #[test]
+    fn lathe_orientation_shifts_the_output() {
+        let mut c = inch();
+        let mut out = Vec::new();
+        // G18: a = Z, b = X; orientation 2 moves both back by the radius.
+        c.start(Side::Left, 0.1, 2, true, [0.0; 3]);
+        c.straight(false, [1.0, 0.0, 0.0], 1, &mut out).unwrap();
+        c.stop(true, &mut out).unwrap();
+        let e = line_end(&out[0]);
+        assert!(
+            (e[0] - 0.9).abs() < 1e-12 && (e[1] - 0.0).abs() < 1e-12,
+            "{e:?}"
+        );
+        assert!(!c.is_on());
+    }
+
+    #[test]
+    fn units_scale_held_moves() {
+        let mut c = inch();
+        let mut out = Vec::new();
+        c.start(Side::Left, 0.1, 0, false, [0.0; 3]);
+        c.straight(false, [1.0, 0.0, 0.0], 1, &mut out).unwrap();
+        c.scale(25.4);
+        assert_eq!(c.programmed(), [25.4, 0.0, 0.0]);
+        c.stop(false, &mut out).unwrap();
+        let e = line_end(&out[0]);
+        assert!(
+            (e[0] - 25.4).abs() < 1e-9 && (e[1] - 2.54).abs() < 1e-9,
+            "{e:?}"
+        );
     }
 }

@@ -51,12 +51,27 @@ impl Rng {
 /// What a program line does, for the model run.
 #[derive(Debug, Clone)]
 enum Step {
-    Plain { rapid: bool, end: [f64; 3] },
-    On { side: Side, radius: f64, orientation: i32 },
-    Straight { rapid: bool, end: [f64; 3] },
-    ArcMove { arc: Arc, end: [f64; 3] },
+    Plain {
+        rapid: bool,
+        end: [f64; 3],
+    },
+    On {
+        side: Side,
+        radius: f64,
+        orientation: i32,
+    },
+    Straight {
+        rapid: bool,
+        end: [f64; 3],
+    },
+    ArcMove {
+        arc: Arc,
+        end: [f64; 3],
+    },
     Off,
-    Stop { end: bool },
+    Stop {
+        end: bool,
+    },
 }
 
 struct Case {
@@ -79,7 +94,11 @@ impl Case {
 /// A number with `d` decimals, as written and as read back.
 fn num(v: f64, d: usize) -> (String, f64) {
     let s = format!("{v:.d$}");
-    let s = if s.trim_start_matches('-').trim_start_matches(['0', '.']).is_empty() {
+    let s = if s
+        .trim_start_matches('-')
+        .trim_start_matches(['0', '.'])
+        .is_empty()
+    {
         format!("{:.d$}", 0.0)
     } else {
         s
@@ -172,11 +191,7 @@ impl Gen {
         self.steps.push((
             l,
             Step::ArcMove {
-                arc: Arc {
-                    ccw,
-                    center,
-                    turns,
-                },
+                arc: Arc { ccw, center, turns },
                 end: p,
             },
         ));
@@ -244,7 +259,9 @@ fn generate(seed: u64) -> Case {
         let inch = tool_r_prog * 2.0 / if mm { 25.4 } else { 1.0 };
         let (d, dv) = num(if negative { -inch } else { inch }, 4);
         tools.push_str(&format!("T1 P1 D{d} Q{orientation}\n"));
-        radius = dv / 2.0 * if mm { 25.4 } else { 1.0 };
+        // As the reference converts it: through millimetres.
+        let mm_len = dv / 0.03937007874016;
+        radius = if mm { mm_len } else { mm_len / 25.4 } / 2.0;
         g.line("T1 M6".to_string());
         on_line = if g.rng.chance(0.5) {
             format!("{gside} D1")
@@ -276,11 +293,12 @@ fn generate(seed: u64) -> Case {
     let mut verts = Vec::new();
     let mut ang = g.rng.range(0.0, std::f64::consts::TAU);
     for _ in 0..n {
-        let r = size * if g.rng.chance(0.3) {
-            g.rng.range(0.2, 0.6)
-        } else {
-            g.rng.range(0.8, 1.2)
-        };
+        let r = size
+            * if g.rng.chance(0.3) {
+                g.rng.range(0.2, 0.6)
+            } else {
+                g.rng.range(0.8, 1.2)
+            };
         verts.push([center[0] + r * ang.cos(), center[1] + r * ang.sin()]);
         ang += dir * std::f64::consts::TAU / n as f64 * g.rng.range(0.5, 1.3);
     }
@@ -404,7 +422,13 @@ fn generate(seed: u64) -> Case {
             let (w, p) = g.axes(to);
             let l = g.line(format!("G40 G1 {w}"));
             g.steps.push((l, Step::Off));
-            g.steps.push((l, Step::Plain { rapid: false, end: p }));
+            g.steps.push((
+                l,
+                Step::Plain {
+                    rapid: false,
+                    end: p,
+                },
+            ));
             g.pos = p;
         }
     }
@@ -589,6 +613,42 @@ fn check(case: &Case) -> Verdict {
     if let Err(d) = oracle::compare(&theirs, &mine, 1.01e-4) {
         return Verdict::Differ(format!("moves differ: {d}"));
     }
+    // ngcflat itself: refused at the same line, or accepted.
+    let dir = crate::tmp();
+    crate::put(dir.path(), "prog.ngc", &text);
+    crate::put(dir.path(), "tools.tbl", &tools);
+    let (code, _, stderr) = crate::run(
+        dir.path(),
+        &[
+            "check",
+            "--zero-start",
+            "--tool-table",
+            "tools.tbl",
+            "--message-format",
+            "short",
+            "prog.ngc",
+        ],
+    );
+    let flat_line = stderr.lines().find_map(|l| {
+        l.strip_prefix("prog.ngc:")?
+            .split(':')
+            .next()?
+            .parse::<usize>()
+            .ok()
+    });
+    match (rs_err, code) {
+        (None, 0) => {}
+        (Some(l), 1) if l.map(|i| i + 1) == flat_line => {}
+        (r, _) => {
+            return Verdict::Differ(format!(
+                "rs274 {} but ngcflat check exits {code}: {stderr}",
+                match r {
+                    None => "accepts".to_string(),
+                    Some(l) => format!("refuses line {:?}", l.map(|i| i + 1)),
+                }
+            ));
+        }
+    }
     Verdict::Agree {
         refused: rs_err.is_some(),
     }
@@ -639,10 +699,10 @@ fn generated_comp_programs_match_rs274() {
                                 refused.fetch_add(1, Ordering::Relaxed);
                             }
                         }
-                        Verdict::Differ(d) => failures
-                            .lock()
-                            .unwrap()
-                            .push((seed, format!("{}{}---- tools\n{}---- {d}", case.text(), "", case.tools))),
+                        Verdict::Differ(d) => failures.lock().unwrap().push((
+                            seed,
+                            format!("{}{}---- tools\n{}---- {d}", case.text(), "", case.tools),
+                        )),
                     }
                 }
             });

@@ -1,0 +1,263 @@
+//! Cutter radius compensation in the evaluator: the programmed moves of
+//! blocks run while G41/G42 is on are handed to [`crate::geom::comp`], so
+//! that a program the reference would refuse (an entry move too short, a
+//! concave corner the tool cannot reach, an arc too small for the tool, ...)
+//! is refused here too, at the same line. Programs that never turn
+//! compensation on do not reach this code.
+//!
+//! The geometry is followed only while it is known: the tool's radius (from
+//! the tool table, `--zero-start`, or G41.1/G42.1's D) and the position in
+//! the plane. The position model itself keeps the programmed position,
+//! which is what the reference reads missing axis words from.
+
+use crate::diag::ErrorKind;
+use crate::geom::comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
+
+use super::Interp;
+
+/// Compensation state of a run, made when a program first turns it on.
+#[derive(Debug)]
+pub(super) struct CompRun {
+    comp: Comp<()>,
+    /// Whether the geometry is being followed (radius and position known
+    /// when compensation was turned on).
+    known: bool,
+    out: Vec<Out<()>>,
+}
+
+fn geom(error: CompError) -> ErrorKind {
+    ErrorKind::CutterComp { error }
+}
+
+impl Interp<'_> {
+    /// Axis indices of the compensation plane's coordinates (a, b, third).
+    fn comp_axes(&self) -> [usize; 3] {
+        if self.modal.plane == 180 {
+            [2, 0, 1]
+        } else {
+            [0, 1, 2]
+        }
+    }
+
+    fn comp_pos(&self) -> Option<[f64; 3]> {
+        let [a, b, c] = self.comp_axes();
+        let p = |i: usize| self.pos.axes[i].as_ref().ok().copied();
+        Some([p(a)?, p(b)?, p(c)?])
+    }
+
+    /// G41/G42 (`g` 410 or 420) or G41.1/G42.1 (411, 421) on the block
+    /// with `words`; the block checks have accepted them.
+    pub(super) fn comp_on(&mut self, g: i32, words: &[(u8, f64)]) -> Result<(), ErrorKind> {
+        let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
+        let side = if matches!(g, 410 | 411) {
+            Side::Left
+        } else {
+            Side::Right
+        };
+        let xz = self.modal.plane == 180;
+        let tool = if matches!(g, 411 | 421) {
+            word(b'd').map(|d| (d / 2.0, word(b'l').map_or(0, |l| l.round() as i32)))
+        } else {
+            let number = match word(b'd') {
+                Some(d) => {
+                    let t = ((d + 0.5) as i64) as f64;
+                    if !self.s.tool_table.is_empty()
+                        && t != 0.0
+                        && !self.tools.contains_key(&(t as i64))
+                    {
+                        return Err(ErrorKind::ToolNotInTable { tool: t as i64 });
+                    }
+                    Some(t)
+                }
+                None => self.current_tool,
+            };
+            match number.and_then(|t| self.comp_tool(t)) {
+                Some(data) => {
+                    let o = data.orientation.round() as i32;
+                    if !xz && o != 0 && o != 9 {
+                        let what = if side == Side::Left {
+                            "G41 with a lathe tool (orientation 1-8)"
+                        } else {
+                            "G42 with a lathe tool (orientation 1-8)"
+                        };
+                        return Err(ErrorKind::CompLatheTool { what });
+                    }
+                    Some((self.user_to_program(data.diameter) / 2.0, o))
+                }
+                None => None,
+            }
+        };
+        let pos = self.comp_pos();
+        let tol = Tolerances::default_for(self.modal.metric);
+        let run = self.comp.get_or_insert_with(|| {
+            Box::new(CompRun {
+                comp: Comp::new(tol),
+                known: false,
+                out: Vec::new(),
+            })
+        });
+        run.comp.set_tolerances(tol);
+        match (tool, pos) {
+            (Some((radius, orientation)), Some(pos)) => {
+                run.comp.start(side, radius, orientation, xz, pos);
+                run.known = true;
+            }
+            _ => run.known = false,
+        }
+        Ok(())
+    }
+
+    /// A tool's data for G41/G42. Under `--zero-start` without a tool
+    /// table, tools the program has not set itself have the data of the
+    /// standalone interpreter's built-in table (T1-T3 have diameters).
+    fn comp_tool(&self, t: f64) -> Option<super::tools::ToolData> {
+        let n = t.round() as i64;
+        if self.s.zero_start
+            && self.s.tool_table.is_empty()
+            && !self.tools.contains_key(&n)
+            && !self.unknown_tools.contains(&n)
+        {
+            let diameter = match n {
+                1 => 0.125,
+                2 => 0.0625,
+                3 => 0.201,
+                _ => 0.0,
+            };
+            return Some(super::tools::ToolData {
+                diameter,
+                ..Default::default()
+            });
+        }
+        self.tool(t)
+    }
+
+    /// A length from the tool table (machine units) in program units,
+    /// computed as the reference does: through millimetres, with the
+    /// standalone interpreter's inch factor (the boundary cases of the
+    /// entry-move check depend on the last bit).
+    fn user_to_program(&self, v: f64) -> f64 {
+        let ext = if self.s.machine_metric {
+            1.0
+        } else {
+            0.03937007874016
+        };
+        let mm = v / ext;
+        if self.modal.metric { mm } else { mm / 25.4 }
+    }
+
+    /// G40.
+    pub(super) fn comp_off(&mut self) -> Result<(), ErrorKind> {
+        let Some(run) = self.comp.as_mut() else {
+            return Ok(());
+        };
+        if run.known {
+            self.comp_pending = run.comp.off(&mut run.out).map_err(geom)?;
+            run.out.clear();
+        } else {
+            run.comp = Comp::new(Tolerances::default_for(self.modal.metric));
+        }
+        run.known = false;
+        Ok(())
+    }
+
+    /// The move of a block just applied to the position model (`motion`
+    /// is the motion mode, ×10).
+    pub(super) fn comp_move(&mut self, words: &[(u8, f64)], motion: i32) -> Result<(), ErrorKind> {
+        if self.modal.ccomp == 400 {
+            if self.comp_pending {
+                match motion {
+                    20 | 30 => return Err(ErrorKind::CompArcAfterOff),
+                    0 | 10 | 330 | 331 => self.comp_pending = false,
+                    _ => {}
+                }
+            }
+            return Ok(());
+        }
+        let end = self.comp_pos();
+        let xz = self.modal.plane == 180;
+        let ijk_absolute = self.modal.ijk_absolute;
+        let Some(run) = self.comp.as_mut().filter(|r| r.known) else {
+            return Ok(());
+        };
+        let Some(end) = end else {
+            run.known = false;
+            return Ok(());
+        };
+        let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
+        let r = match motion {
+            // The reference runs a G76 line with compensation on as a
+            // compensated straight feed (its threading check is never
+            // reached).
+            0 | 10 | 760 => run.comp.straight(motion == 0, end, (), &mut run.out),
+            20 | 30 => {
+                let center = match word(b'r') {
+                    Some(r) => ArcCenter::Radius(r),
+                    None => {
+                        let (i, j) = if xz {
+                            (word(b'k'), word(b'i'))
+                        } else {
+                            (word(b'i'), word(b'j'))
+                        };
+                        ArcCenter::Offsets {
+                            i: i.unwrap_or(0.0),
+                            j: j.unwrap_or(0.0),
+                            absolute: ijk_absolute,
+                        }
+                    }
+                };
+                let turns = word(b'p').map_or(1, |p| p.round() as i32);
+                let arc = Arc {
+                    ccw: motion == 30,
+                    center,
+                    turns,
+                };
+                run.comp.arc(arc, end, (), &mut run.out)
+            }
+            _ => {
+                // Other motion is refused with compensation on, or not
+                // modelled: stop following the geometry.
+                run.known = false;
+                Ok(())
+            }
+        };
+        run.out.clear();
+        r.map_err(geom)
+    }
+
+    /// Whether G53 would move with an offset path (the reference refuses it).
+    pub(super) fn comp_offsetting(&self) -> bool {
+        self.modal.ccomp != 400
+            && self
+                .comp
+                .as_ref()
+                .is_some_and(|r| r.known && r.comp.is_offsetting())
+    }
+
+    /// A program stop (M0, M1, M60) or end (M2, M30): held moves are
+    /// released; an end also turns compensation off.
+    pub(super) fn comp_stop(&mut self, end: bool) -> Result<(), ErrorKind> {
+        if end {
+            self.comp_pending = false;
+        }
+        let Some(run) = self.comp.as_mut() else {
+            return Ok(());
+        };
+        if run.known {
+            run.comp.stop(end, &mut run.out).map_err(geom)?;
+            run.out.clear();
+        }
+        if end {
+            run.comp = Comp::new(Tolerances::default_for(self.modal.metric));
+            run.known = false;
+        }
+        Ok(())
+    }
+
+    /// G20/G21 while compensation state exists.
+    pub(super) fn comp_units(&mut self, metric: bool) {
+        if let Some(run) = self.comp.as_mut() {
+            run.comp.scale(if metric { 25.4 } else { 1.0 / 25.4 });
+            run.comp.set_tolerances(Tolerances::default_for(metric));
+        }
+    }
+}
