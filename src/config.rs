@@ -136,6 +136,12 @@ pub struct CommonArgs {
     /// [RS274NGC]OWORD_WARNONLY = 1.
     #[arg(long)]
     pub oword_warn_only: bool,
+    /// Read the named-parameter syntax of the 2007 proposal on the LinuxCNC
+    /// wiki (not LinuxCNC syntax): `#[name]` and `#$name$` for `#<name>`,
+    /// `#name$` for `#<_name>`, O-word names `oname$` and `o$name$` for
+    /// `o<name>`.
+    #[arg(long)]
+    pub named_params_2007: bool,
     /// How diagnostics are written to stderr.
     #[arg(long, value_enum, default_value = "human")]
     pub message_format: FormatArg,

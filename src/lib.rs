@@ -184,6 +184,11 @@ fn setup_error(k: ErrorKind, format: MessageFormat) -> ExitCode {
 /// program problems are diagnostics.
 fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
     let env_path = std::env::var("NGCFLAT_SUBROUTINE_PATH").ok();
+    let common = match &cli.command {
+        Some(config::Command::Check(args)) => &args.common,
+        None => &cli.flatten.common,
+    };
+    parse::named2007::enable(common.named_params_2007);
     match cli.command {
         Some(config::Command::Check(args)) => {
             let cfg = match args.common.to_config(env_path) {

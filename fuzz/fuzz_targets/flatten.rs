@@ -36,6 +36,9 @@ fuzz_target!(|data: &[u8]| {
         },
         fanuc_disabled: flags & 8 != 0,
         oword_nargs: flags & 16 != 0,
+        oword_warn_only: flags & 32 != 0,
+        retain_g43: flags & 64 != 0,
+        ini_vars: flags & 128 == 0,
         ..Settings::default()
     };
     // Named like stdin so that no folder is searched for subroutine files:

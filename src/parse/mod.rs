@@ -5,6 +5,7 @@ pub mod code;
 mod grammar;
 mod lower;
 mod name;
+pub mod named2007;
 pub mod normalize;
 
 use pest::Parser as _;
@@ -99,6 +100,12 @@ impl LineParser {
         }
         if let Err((kind, at)) = normalize(raw, &mut self.norm) {
             return Err(LineError::new(kind, Span::new(at, at + 1), true));
+        }
+        if named2007::enabled()
+            && let Some((text, map)) = named2007::rewrite(&self.norm.text, &self.norm.map)
+        {
+            self.norm.text = text;
+            self.norm.map = map;
         }
         let text = self.norm.text.as_str();
         if text.is_empty() {
