@@ -212,6 +212,27 @@ fn cycle_program(seed: u64) -> Result<(String, String), String> {
                     "G99\n"
                 });
             }
+            4 if last.is_some() => {
+                // An incremental move from where LinuxCNC has the tool after
+                // the cycle (written absolute in the lowered program).
+                let d = [rng.val(-2.0, 2.0), rng.val(-2.0, 2.0), rng.val(-1.0, 3.0)];
+                orig.push_str(&format!(
+                    "G91 G0 X{} Y{} Z{}\n",
+                    num(d[0]),
+                    num(d[1]),
+                    num(d[2])
+                ));
+                pos = [pos[0] + d[0], pos[1] + d[1], pos[2] + d[2]];
+                low.push_str(&format!(
+                    "G0 X{} Y{} Z{}\n",
+                    num(pos[0]),
+                    num(pos[1]),
+                    num(pos[2])
+                ));
+                distance = Distance::Incremental;
+                state.end();
+                last = None;
+            }
             3 => {
                 distance = if distance == Distance::Absolute {
                     Distance::Incremental

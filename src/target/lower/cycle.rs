@@ -129,6 +129,12 @@ pub struct CycleOutput {
     pub lines: Vec<PlainLine>,
     /// X, Y, Z after the block, as LinuxCNC's interpreter has them.
     pub end: [f64; 3],
+    /// X, Y, Z where the written blocks leave the tool, as the target (and
+    /// rs274 running them) counts: `end`, except after G88, whose retract
+    /// LinuxCNC leaves to the operator (it assumes the clearance level while
+    /// the blocks stop at the bottom). An incremental move after a G88
+    /// block must be written from `end` in absolute form.
+    pub target_end: [f64; 3],
 }
 
 /// What LinuxCNC keeps between cycle blocks. Start with `default()`.
@@ -525,9 +531,15 @@ impl CycleState {
         self.q = q;
         self.ijk = ijk;
         let end = out.point(a, b, clear);
+        let target_end = if kind == CycleKind::G88 {
+            out.point(a, b, bottom)
+        } else {
+            end
+        };
         Ok(CycleOutput {
             lines: out.lines,
             end,
+            target_end,
         })
     }
 }
@@ -664,6 +676,28 @@ mod tests {
         let e = s.lower(CycleKind::G84, &block, &m, pos).unwrap_err();
         assert_eq!(e.code(), "E1105");
         assert_eq!(s, CycleState::default());
+    }
+
+    #[test]
+    fn g88_leaves_the_tool_at_the_bottom() {
+        let block = CycleBlock {
+            axes: [Some(1.0), Some(1.0), Some(-3.0)],
+            r: Some(1.0),
+            p: Some(0.5),
+            ..Default::default()
+        };
+        let m = modal(Plane::XY, Distance::Absolute, Retract::OldZ);
+        let out = CycleState::default()
+            .lower(
+                CycleKind::G88,
+                &block,
+                &m,
+                [Some(0.0), Some(0.0), Some(10.0)],
+            )
+            .unwrap();
+        assert_eq!(out.end, [1.0, 1.0, 10.0]);
+        assert_eq!(out.target_end, [1.0, 1.0, -3.0]);
+        assert_eq!(text(&out.lines)[3..], ["G4 P0.5", "M5", "M0", "M3"]);
     }
 
     #[test]
