@@ -163,6 +163,10 @@ pub struct Interp<'s> {
     cur: Cursor,
     output: Output,
     out_lines: u64,
+    /// Output lines allowed: `--max-output-lines` plus the main file's own
+    /// line count, so that the guard counts generated lines, not lines
+    /// copied from the input.
+    line_budget: u64,
     steps: u64,
     pub warnings: Vec<Diagnostic>,
     subs: FxMap<Name, SubRec>,
@@ -312,6 +316,9 @@ impl<'s> Interp<'s> {
             line: 0,
             next_o: 0,
         };
+        let line_budget = s
+            .max_output_lines
+            .saturating_add(u64::from(main.line_count));
         Interp {
             s,
             loader,
@@ -327,6 +334,7 @@ impl<'s> Interp<'s> {
             cur,
             output: Output::new(sink, s.precision, s.format_thread_after),
             out_lines: 0,
+            line_budget,
             steps: 0,
             warnings: Vec::new(),
             subs: FxMap::default(),
@@ -537,6 +545,10 @@ impl<'s> Interp<'s> {
         let Some(data) = main.file.memory() else {
             return;
         };
+        // Definition line ranges by start, each with the furthest end of
+        // it and those before: a line is inside one if the last range
+        // starting at or before it reaches it (a search, not a scan: a
+        // million definitions after the end stay linear).
         let mut inside: Vec<(u32, u32)> = Vec::new();
         for (&s, d) in &main.defs {
             let a = main.olines[s as usize].line_idx;
@@ -545,6 +557,12 @@ impl<'s> Interp<'s> {
                 .map(|e| main.olines[e as usize].line_idx)
                 .unwrap_or(u32::MAX);
             inside.push((a, b));
+        }
+        inside.sort_unstable();
+        let mut reach = 0;
+        for r in &mut inside {
+            reach = reach.max(r.1);
+            r.1 = reach;
         }
         let mut pos = self.cur.pos as usize;
         let mut idx = self.cur.line;
@@ -563,7 +581,8 @@ impl<'s> Interp<'s> {
             {
                 in_fanuc = true;
             }
-            let in_def = in_fanuc || inside.iter().any(|&(a, b)| idx >= a && idx <= b);
+            let k = inside.partition_point(|&(a, _)| a <= idx);
+            let in_def = in_fanuc || (k > 0 && inside[k - 1].1 >= idx);
             if in_fanuc && main.m99_lines.binary_search(&idx).is_ok() {
                 in_fanuc = false;
             }
@@ -811,7 +830,7 @@ impl<'s> Interp<'s> {
     #[inline]
     fn count_line(&mut self) -> Result<(), Error> {
         self.out_lines += 1;
-        if self.out_lines > self.s.max_output_lines {
+        if self.out_lines > self.line_budget {
             return Err(self.output_limit());
         }
         Ok(())

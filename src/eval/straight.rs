@@ -381,7 +381,7 @@ impl Interp<'_> {
             batch_start,
             last_start,
         } = run;
-        while *lines < max_lines && self.out_lines + *emitted < self.s.max_output_lines {
+        while *lines < max_lines && self.out_lines + *emitted < self.line_budget {
             let p = match src.read(*i) {
                 Read::Pause => return Ok(true),
                 Read::Stop => break,

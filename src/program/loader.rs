@@ -31,14 +31,14 @@ pub struct Loader {
 
 /// Whether a subroutine name is safe to turn into a file name.
 pub fn check_name(name: &str) -> Result<(), ErrorKind> {
+    // LinuxCNC's rule for names of subroutine files: letters, digits, '-'
+    // and '_'. No separator or dot, so a name cannot walk out of a search
+    // folder (`o<root/etc/x> call` through a link named root); a link the
+    // user put inside a search folder may point anywhere.
     let bad = name.is_empty()
-        || name.starts_with('/')
-        || name
-            .split('/')
-            .any(|c| c.is_empty() || c == "." || c == "..")
         || !name
             .bytes()
-            .all(|b| b.is_ascii_alphanumeric() || b"_-./".contains(&b));
+            .all(|b| b.is_ascii_alphanumeric() || b"_-".contains(&b));
     if bad {
         Err(ErrorKind::UnsafeSubName {
             name: name.to_string(),

@@ -9,6 +9,10 @@ use std::io::{self, Read};
 
 /// Every this many lines, a line start is kept.
 const STRIDE: usize = 256;
+/// Bytes handed to [`LineSamples::locate`] at a time: about the distance
+/// from a sample to a line, so that a diagnostic costs what it reads (a
+/// larger piece made a million warnings copy a million times its size).
+const PIECE: usize = 4096;
 /// Most bytes of a line kept for showing it.
 const SHOWN: usize = 1024;
 
@@ -123,7 +127,7 @@ fn is_char_boundary(b: &[u8], i: usize) -> bool {
 pub fn file_pieces(file: &File) -> impl FnMut(u64, &mut Vec<u8>) -> bool + '_ {
     use std::os::unix::fs::FileExt;
     move |at, out| {
-        out.resize(1 << 16, 0);
+        out.resize(PIECE, 0);
         match file.read_at(out, at) {
             Ok(n) => {
                 out.truncate(n);
@@ -138,7 +142,7 @@ pub fn file_pieces(file: &File) -> impl FnMut(u64, &mut Vec<u8>) -> bool + '_ {
 pub fn memory_pieces(data: &[u8]) -> impl FnMut(u64, &mut Vec<u8>) -> bool + '_ {
     move |at, out| {
         let at = (at as usize).min(data.len());
-        let end = (at + (1 << 16)).min(data.len());
+        let end = (at + PIECE).min(data.len());
         out.extend_from_slice(&data[at..end]);
         true
     }

@@ -615,6 +615,10 @@ fn refused_subroutine_names() {
         "a:b",
         ".",
         "..",
+        // Only letters, digits, '-' and '_' (LinuxCNC's rule): no folder
+        // part, even one that exists inside a search folder.
+        "a/x",
+        "x.v2",
     ];
     for name in names {
         put(p, "lib/p.ngc", &format!("o<{name}> call\nM2\n"));
@@ -636,13 +640,13 @@ fn refused_subroutine_names() {
             assert!(!stderr.contains("OUTSIDE"), "{name}: {stderr}");
         }
     }
-    // Plain names with '_', '-' and '.' are allowed.
+    // Plain names with '_' and '-' are allowed.
     put(
         p,
-        "lib/ok_name-1.v2.ngc",
-        "o<ok_name-1.v2> sub\n  G0 X1\no<ok_name-1.v2> endsub\n",
+        "lib/ok_name-1-v2.ngc",
+        "o<ok_name-1-v2> sub\n  G0 X1\no<ok_name-1-v2> endsub\n",
     );
-    put(p, "lib/p.ngc", "o<OK_Name-1.v2> call\nM2\n");
+    put(p, "lib/p.ngc", "o<OK_Name-1-v2> call\nM2\n");
     let (exit, stdout, stderr) = run(p, &["-I", "lib", "lib/p.ngc"]);
     assert_eq!(exit, 0, "{stderr}");
     assert_eq!(stdout, "  G0 X1\nM2\n");

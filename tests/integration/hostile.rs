@@ -350,3 +350,49 @@ fn an_interrupted_run_leaves_no_temporary_file() {
         assert_eq!(names(d.path()), ["big.ngc"], "after SIG{sig}");
     }
 }
+
+#[test]
+fn a_subroutine_name_cannot_walk_through_a_link() {
+    let d = tmp();
+    let p = d.path();
+    put(
+        p,
+        "outside/x/y.ngc",
+        "o<y> sub\n  (print, OUTSIDE)\no<y> endsub\n",
+    );
+    put(p, "lib/p.ngc", "o<root/x/y> call\nM2\n");
+    std::os::unix::fs::symlink(p.join("outside"), p.join("lib/root")).unwrap();
+    let (code, out, err) = run(p, &["-I", "lib", "lib/p.ngc"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(out.is_empty() && err.contains("[E0502]"), "{err}");
+    // A link inside a search folder, named as a plain name, may point
+    // anywhere: the user made it.
+    std::os::unix::fs::symlink(p.join("outside/x/y.ngc"), p.join("lib/y.ngc")).unwrap();
+    put(p, "lib/q.ngc", "o<y> call\nM2\n");
+    let (code, out, err) = run(p, &["-I", "lib", "lib/q.ngc"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("OUTSIDE"), "{out}");
+}
+
+#[test]
+fn the_output_line_guard_counts_generated_lines_only() {
+    let d = tmp();
+    let mut straight = String::from("F100\n");
+    for i in 0..1000 {
+        straight.push_str(&format!("G1 X{i}\n"));
+    }
+    straight.push_str("M2\n");
+    put(d.path(), "straight.ngc", &straight);
+    let (code, out, err) = run(d.path(), &["--max-output-lines", "10", "straight.ngc"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(out.lines().count(), 1002);
+    // A loop writing more than the limit beyond the file's own lines stops.
+    put(
+        d.path(),
+        "loop.ngc",
+        "F100\no1 repeat [100]\nG1 X1\no1 endrepeat\nM2\n",
+    );
+    let (code, out, err) = run(d.path(), &["--max-output-lines", "10", "loop.ngc"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(out.is_empty() && err.contains("[E0403]"), "{err}");
+}
