@@ -445,6 +445,13 @@ fn generate(seed: u64) -> Case {
 
 /// The model's moves as canon text, and the line of its error.
 fn model(case: &Case) -> (Vec<String>, Option<(usize, CompError)>) {
+    let (err, out) = model_moves(case);
+    (canon(case, &out), err)
+}
+
+/// The moves the model releases (up to an error), and the error's line.
+#[allow(clippy::type_complexity)]
+fn model_moves(case: &Case) -> (Option<(usize, CompError)>, Vec<Out<usize>>) {
     let mut comp: Comp<usize> = Comp::new(Tolerances::default_for(case.mm));
     let mut out: Vec<Out<usize>> = Vec::new();
     let mut pos = [0.0f64; 3];
@@ -506,9 +513,12 @@ fn model(case: &Case) -> (Vec<String>, Option<(usize, CompError)>) {
             pos = comp.current();
         }
     }
+    (err, out)
+}
+
+fn canon(case: &Case, out: &[Out<usize>]) -> Vec<String> {
     let f = |v: f64| format!("{v:.6}");
-    let canon = out
-        .iter()
+    out.iter()
         .map(|o| match o {
             Out::Line { rapid, end, .. } => {
                 let name = if *rapid {
@@ -538,8 +548,7 @@ fn model(case: &Case) -> (Vec<String>, Option<(usize, CompError)>) {
                 f(*end3)
             ),
         })
-        .collect();
-    (canon, err)
+        .collect()
 }
 
 fn motion(lines: &[String]) -> Vec<String> {
@@ -566,7 +575,13 @@ fn error_line(case: &Case, stderr: &str) -> Option<usize> {
 }
 
 enum Verdict {
-    Agree { refused: bool },
+    /// `refused`: rs274's first message line when it refuses the program;
+    /// `lowered`: the path for controllers without compensation was
+    /// written and compared.
+    Agree {
+        refused: Option<String>,
+        lowered: bool,
+    },
     Differ(String),
 }
 
@@ -649,9 +664,108 @@ fn check(case: &Case) -> Verdict {
             ));
         }
     }
-    Verdict::Agree {
-        refused: rs_err.is_some(),
+    let mut lowered = false;
+    if rs_err.is_none() {
+        match lowered_matches(case, &theirs) {
+            Ok(l) => lowered = l,
+            Err(d) => return Verdict::Differ(format!("the lowered path differs: {d}")),
+        }
     }
+    let refused = rs_err.map(|_| {
+        let m = run
+            .stderr
+            .lines()
+            .find(|l| *l != "executing")
+            .unwrap_or("")
+            .to_string();
+        // The arc messages carry numbers: keep their words.
+        m.split(':').next().unwrap_or("").to_string()
+    });
+    Verdict::Agree { refused, lowered }
+}
+
+/// The path written for a controller without compensation (the model's
+/// moves through the target lowering), run through rs274: the same moves as
+/// the original's, arcs possibly in several parts around the same centre.
+fn lowered_matches(case: &Case, original: &[String]) -> Result<bool, String> {
+    use ngcflat::target::lower::Plane;
+    use ngcflat::target::lower::comp::lower_comp_moves;
+    let (_, out) = model_moves(case);
+    let plane = if case.xz { Plane::XZ } else { Plane::XY };
+    let lines = match lower_comp_moves(plane, [0.0; 3], &out) {
+        Ok((lines, _)) => lines,
+        // An arc released off its circle (a stop in a concave corner):
+        // refused for controllers without compensation.
+        Err(ngcflat::target::lower::LowerError::BadArc) => return Ok(false),
+        Err(e) => return Err(e.to_string()),
+    };
+    let header = case.lines[0].split_once(' ').map_or("", |x| x.1);
+    let mut text = format!("{header}\n");
+    for (l, _) in &lines {
+        let words: Vec<String> = l
+            .words
+            .iter()
+            .map(|w| format!("{}{:.10}", w.letter as char, w.value))
+            .collect();
+        text.push_str(&words.join(" "));
+        text.push('\n');
+    }
+    text.push_str("M2\n");
+    let run = oracle::run_with(text.as_bytes(), "", None, None);
+    if !run.ok {
+        return Err(format!("rs274 refuses it: {}\n{text}", run.stderr.trim()));
+    }
+    let lowered = motion(&run.lines);
+    let parse = |l: &str| -> (String, Vec<f64>) {
+        let (name, rest) = l.split_once('(').unwrap_or((l, ""));
+        let nums = rest
+            .trim_end_matches(')')
+            .split(',')
+            .filter_map(|n| n.trim().parse().ok())
+            .collect();
+        (name.to_string(), nums)
+    };
+    let close = |a: &[f64], b: &[f64]| {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 2e-4)
+    };
+    let mut j = 0;
+    for (i, a) in original.iter().enumerate() {
+        let (na, va) = parse(a);
+        let fail = |why: &str| Err(format!("move {}: `{a}` {why}\n{text}", i + 1));
+        if na != "ARC_FEED" {
+            let Some(b) = lowered.get(j) else {
+                return fail("missing");
+            };
+            let (nb, vb) = parse(b);
+            if nb != na || !close(&va, &vb) {
+                return fail(&format!("vs `{b}`"));
+            }
+            j += 1;
+            continue;
+        }
+        // Parts around the same centre, in the same direction, up to the
+        // same end.
+        loop {
+            let Some(b) = lowered.get(j) else {
+                return fail("missing");
+            };
+            let (nb, vb) = parse(b);
+            j += 1;
+            if nb != "ARC_FEED" || vb.len() < 6 || va.len() < 6 {
+                return fail(&format!("vs `{b}`"));
+            }
+            if !close(&va[2..4], &vb[2..4]) || (va[4] > 0.0) != (vb[4] > 0.0) {
+                return fail(&format!("vs part `{b}`"));
+            }
+            if close(&va[0..2], &vb[0..2]) && close(&va[5..6], &vb[5..6]) {
+                break;
+            }
+        }
+    }
+    if j != lowered.len() {
+        return Err(format!("extra moves from {}\n{text}", j + 1));
+    }
+    Ok(true)
 }
 
 fn env_u64(name: &str) -> Option<u64> {
@@ -677,6 +791,8 @@ fn generated_comp_programs_match_rs274() {
     let next = AtomicUsize::new(0);
     let agreed = AtomicUsize::new(0);
     let refused = AtomicUsize::new(0);
+    let lowered = AtomicUsize::new(0);
+    let messages: Mutex<std::collections::BTreeMap<String, usize>> = Mutex::default();
     let failures: Mutex<Vec<(u64, String)>> = Mutex::new(Vec::new());
     let threads = std::thread::available_parallelism()
         .map(|n| n.get())
@@ -693,10 +809,17 @@ fn generated_comp_programs_match_rs274() {
                     let seed = start.wrapping_add(i as u64);
                     let case = generate(seed);
                     match check(&case) {
-                        Verdict::Agree { refused: r } => {
+                        Verdict::Agree {
+                            refused: r,
+                            lowered: l,
+                        } => {
                             agreed.fetch_add(1, Ordering::Relaxed);
-                            if r {
+                            if let Some(m) = r {
                                 refused.fetch_add(1, Ordering::Relaxed);
+                                *messages.lock().unwrap().entry(m).or_default() += 1;
+                            }
+                            if l {
+                                lowered.fetch_add(1, Ordering::Relaxed);
                             }
                         }
                         Verdict::Differ(d) => failures.lock().unwrap().push((
@@ -711,11 +834,15 @@ fn generated_comp_programs_match_rs274() {
     let mut failures = failures.into_inner().unwrap();
     failures.sort_by_key(|f| f.0);
     eprintln!(
-        "generated compensation programs: {cases} from seed {start}: {} agree ({} refused by both), {} differ",
+        "generated compensation programs: {cases} from seed {start}: {} agree ({} refused by both at the same line, {} paths lowered for controllers without compensation and run the same), {} differ",
         agreed.load(Ordering::Relaxed),
         refused.load(Ordering::Relaxed),
+        lowered.load(Ordering::Relaxed),
         failures.len()
     );
+    for (m, n) in messages.into_inner().unwrap() {
+        eprintln!("  {n:6}  refused: {m}");
+    }
     if failures.is_empty() {
         return;
     }
