@@ -32,14 +32,18 @@ fn axes(plane: Plane) -> [usize; 3] {
     }
 }
 
+/// Blocks with the tag of the move each comes from, and the position after
+/// the last move.
+pub type Lowered<'a, T> = (Vec<(PlainLine, &'a T)>, [f64; 3]);
+
 /// Plain blocks for the released moves `moves`, starting from `start` (X Y
 /// Z, program units, absolute). Returns each block with the tag of the move
 /// it comes from, and the position after the last move.
-pub fn lower_comp_moves<'a, T>(
+pub fn lower_comp_moves<T>(
     plane: Plane,
     start: [f64; 3],
-    moves: &'a [Out<T>],
-) -> Result<(Vec<(PlainLine, &'a T)>, [f64; 3]), LowerError> {
+    moves: &[Out<T>],
+) -> Result<Lowered<'_, T>, LowerError> {
     let [a, b, c] = axes(plane);
     let xyz = |p: [f64; 3]| {
         let mut v = [0.0; 3];
