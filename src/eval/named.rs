@@ -20,20 +20,121 @@ fn ini_key(name: &str) -> Option<(&str, &str)> {
     Some((&rest[..close], &rest[close + 1..]))
 }
 
+/// The predefined names with a fixed meaning (besides `_x`, `_abs_x`,
+/// `_ini[...]` and `_hal[...]`), listed once: [`predef`] names them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Predef {
+    Value,
+    ValueReturned,
+    Line,
+    CallLevel,
+    RemapLevel,
+    Task,
+    Vmajor,
+    Vminor,
+    MetricMachine,
+    Metric,
+    Imperial,
+    Absolute,
+    Incremental,
+    InverseTime,
+    UnitsPerMinute,
+    UnitsPerRev,
+    CoordSystem,
+    MotionMode,
+    Plane,
+    Ccomp,
+    ToolOffset,
+    RetractRPlane,
+    RetractOldZ,
+    SpindleRpmMode,
+    SpindleCssMode,
+    IjkAbsoluteMode,
+    LatheDiameterMode,
+    LatheRadiusMode,
+    SpindleOn,
+    SpindleCw,
+    Mist,
+    Flood,
+    SpeedOverride,
+    FeedOverride,
+    AdaptiveFeed,
+    FeedHold,
+    Feed,
+    Rpm,
+    CurrentTool,
+    SelectedTool,
+    CurrentPocket,
+    SelectedPocket,
+}
+
+/// The predefined name `name` is, if it is one with a fixed meaning.
+fn predef(name: &str) -> Option<Predef> {
+    use Predef::*;
+    Some(match name {
+        "_value" => Value,
+        "_value_returned" => ValueReturned,
+        "_line" => Line,
+        "_call_level" => CallLevel,
+        "_remap_level" => RemapLevel,
+        "_task" => Task,
+        "_vmajor" => Vmajor,
+        "_vminor" => Vminor,
+        "_metric_machine" => MetricMachine,
+        "_metric" => Metric,
+        "_imperial" => Imperial,
+        "_absolute" => Absolute,
+        "_incremental" => Incremental,
+        "_inverse_time" => InverseTime,
+        "_units_per_minute" => UnitsPerMinute,
+        "_units_per_rev" => UnitsPerRev,
+        "_coord_system" => CoordSystem,
+        "_motion_mode" => MotionMode,
+        "_plane" => Plane,
+        "_ccomp" => Ccomp,
+        "_tool_offset" => ToolOffset,
+        "_retract_r_plane" => RetractRPlane,
+        "_retract_old_z" => RetractOldZ,
+        "_spindle_rpm_mode" => SpindleRpmMode,
+        "_spindle_css_mode" => SpindleCssMode,
+        "_ijk_absolute_mode" => IjkAbsoluteMode,
+        "_lathe_diameter_mode" => LatheDiameterMode,
+        "_lathe_radius_mode" => LatheRadiusMode,
+        "_spindle_on" => SpindleOn,
+        "_spindle_cw" => SpindleCw,
+        "_mist" => Mist,
+        "_flood" => Flood,
+        "_speed_override" => SpeedOverride,
+        "_feed_override" => FeedOverride,
+        "_adaptive_feed" => AdaptiveFeed,
+        "_feed_hold" => FeedHold,
+        "_feed" => Feed,
+        "_rpm" => Rpm,
+        "_current_tool" => CurrentTool,
+        "_selected_tool" => SelectedTool,
+        "_current_pocket" => CurrentPocket,
+        "_selected_pocket" => SelectedPocket,
+        _ => return None,
+    })
+}
+
 impl Interp<'_> {
     /// Value of a predefined name, `None` if the name is not predefined.
     fn predefined(&mut self, name: &str, span: Span) -> Option<EvalResult> {
+        let Some(p) = predef(name) else {
+            return self.predefined_pattern(name, span);
+        };
         let m = &self.modal;
-        let v = match name {
-            "_value" => self.value,
-            "_value_returned" => flag(self.value_returned),
-            "_line" => (self.current_line_idx + 1) as f64,
-            "_call_level" => self.level() as f64,
-            "_remap_level" => 0.0,
-            "_task" => 0.0,
-            "_vmajor" => 2.9,
-            "_vminor" => 0.0,
-            "_metric_machine" => match self
+        let v = match p {
+            Predef::Value => self.value,
+            Predef::ValueReturned => flag(self.value_returned),
+            Predef::Line => (self.current_line_idx + 1) as f64,
+            Predef::CallLevel => self.level() as f64,
+            Predef::RemapLevel => 0.0,
+            Predef::Task => 0.0,
+            Predef::Vmajor => 2.9,
+            Predef::Vminor => 0.0,
+            Predef::MetricMachine => match self
                 .s
                 .ini
                 .as_ref()
@@ -42,14 +143,14 @@ impl Interp<'_> {
                 None => -1.0,
                 Some(u) => flag(!u.to_ascii_lowercase().starts_with("inch")),
             },
-            "_metric" => flag(m.metric),
-            "_imperial" => flag(!m.metric),
-            "_absolute" => flag(m.absolute),
-            "_incremental" => flag(!m.absolute),
-            "_inverse_time" => flag(m.feed_mode == 930),
-            "_units_per_minute" => flag(m.feed_mode == 940),
-            "_units_per_rev" => flag(m.feed_mode == 950),
-            "_coord_system" => {
+            Predef::Metric => flag(m.metric),
+            Predef::Imperial => flag(!m.metric),
+            Predef::Absolute => flag(m.absolute),
+            Predef::Incremental => flag(!m.absolute),
+            Predef::InverseTime => flag(m.feed_mode == 930),
+            Predef::UnitsPerMinute => flag(m.feed_mode == 940),
+            Predef::UnitsPerRev => flag(m.feed_mode == 950),
+            Predef::CoordSystem => {
                 let i = m.coord_index;
                 if i < 7 {
                     (530 + 10 * i) as f64
@@ -57,35 +158,38 @@ impl Interp<'_> {
                     (584 + i) as f64
                 }
             }
-            "_motion_mode" => m.motion as f64,
-            "_plane" => m.plane as f64,
-            "_ccomp" => m.ccomp as f64,
-            "_tool_offset" => flag(m.tool_offset),
-            "_retract_r_plane" => flag(m.retract_r),
-            "_retract_old_z" => flag(!m.retract_r),
-            "_spindle_rpm_mode" => flag(!m.css),
-            "_spindle_css_mode" => flag(m.css),
-            "_ijk_absolute_mode" => flag(m.ijk_absolute),
-            "_lathe_diameter_mode" => flag(m.lathe_diameter),
-            "_lathe_radius_mode" => flag(!m.lathe_diameter),
-            "_spindle_on" => flag(m.spindle != 0),
-            "_spindle_cw" => flag(m.spindle == 3),
-            "_mist" => flag(m.mist),
-            "_flood" => flag(m.flood),
-            "_speed_override" => flag(m.speed_override),
-            "_feed_override" => flag(m.feed_override),
-            "_adaptive_feed" => flag(m.adaptive_feed),
-            "_feed_hold" => flag(m.feed_hold),
-            "_feed" => m.feed,
-            "_rpm" => m.speed.abs(),
-            "_current_tool" | "_selected_tool" | "_current_pocket" | "_selected_pocket" => {
-                if name == "_current_tool" {
+            Predef::MotionMode => m.motion as f64,
+            Predef::Plane => m.plane as f64,
+            Predef::Ccomp => m.ccomp as f64,
+            Predef::ToolOffset => flag(m.tool_offset),
+            Predef::RetractRPlane => flag(m.retract_r),
+            Predef::RetractOldZ => flag(!m.retract_r),
+            Predef::SpindleRpmMode => flag(!m.css),
+            Predef::SpindleCssMode => flag(m.css),
+            Predef::IjkAbsoluteMode => flag(m.ijk_absolute),
+            Predef::LatheDiameterMode => flag(m.lathe_diameter),
+            Predef::LatheRadiusMode => flag(!m.lathe_diameter),
+            Predef::SpindleOn => flag(m.spindle != 0),
+            Predef::SpindleCw => flag(m.spindle == 3),
+            Predef::Mist => flag(m.mist),
+            Predef::Flood => flag(m.flood),
+            Predef::SpeedOverride => flag(m.speed_override),
+            Predef::FeedOverride => flag(m.feed_override),
+            Predef::AdaptiveFeed => flag(m.adaptive_feed),
+            Predef::FeedHold => flag(m.feed_hold),
+            Predef::Feed => m.feed,
+            Predef::Rpm => m.speed.abs(),
+            Predef::CurrentTool
+            | Predef::SelectedTool
+            | Predef::CurrentPocket
+            | Predef::SelectedPocket => {
+                if p == Predef::CurrentTool {
                     self.note_m61(span, false);
                 }
-                let v = match name {
-                    "_current_tool" => self.current_tool,
-                    "_selected_tool" => self.selected_tool,
-                    "_current_pocket" => self.pockets.map(|p| p.0),
+                let v = match p {
+                    Predef::CurrentTool => self.current_tool,
+                    Predef::SelectedTool => self.selected_tool,
+                    Predef::CurrentPocket => self.pockets.map(|p| p.0),
                     _ => self.pockets.map(|p| p.1),
                 };
                 return Some(v.ok_or_else(|| {
@@ -99,108 +203,67 @@ impl Interp<'_> {
                     )
                 }));
             }
-            _ => {
-                if let Some(axis) = name.strip_prefix('_').filter(|a| a.len() == 1)
-                    && let Some(i) = AXES.iter().position(|&c| c == axis.as_bytes()[0])
-                {
-                    self.note_standalone_drift(span);
-                    return Some(self.position(i, span));
-                }
-                if let Some(axis) = name.strip_prefix("_abs_").filter(|a| a.len() == 1)
-                    && let Some(i) = AXES.iter().position(|&c| c == axis.as_bytes()[0])
-                    && let Some(v) = self.abs_position(i)
-                {
-                    self.note_standalone_drift(span);
-                    return Some(Ok(v));
-                }
-                if let Some(axis) = name.strip_prefix("_abs_").filter(|a| a.len() == 1)
-                    && AXES.contains(&axis.as_bytes()[0])
-                {
-                    return Some(Err(fault(
-                        ErrorKind::RuntimeParam {
-                            what: format!("#<{name}> (machine position)"),
-                            why: "machine coordinates depend on homing and offsets".into(),
-                            hint: "--zero-start, or offsets and a position set by the program"
-                                .into(),
-                        },
-                        span,
-                    )));
-                }
-                if name.starts_with("_hal[") && self.s.hal_pin_vars {
-                    return Some(Err(fault(
-                        ErrorKind::RuntimeParam {
-                            what: format!("#<{name}>"),
-                            why: "HAL values exist only on the running machine".into(),
-                            hint: format!("-D {name}=VALUE"),
-                        },
-                        span,
-                    )));
-                }
-                if let Some((sec, key)) = ini_key(name).filter(|_| self.s.ini_vars) {
-                    let found = self.s.ini.as_ref().and_then(|i| i.get_upper(sec, key));
-                    return Some(match found.and_then(|v| v.trim().parse::<f64>().ok()) {
-                        Some(v) => Ok(v),
-                        None => Err(fault(
-                            ErrorKind::NamedUndefined {
-                                name: name.to_string(),
-                            },
-                            span,
-                        )),
-                    });
-                }
-                return None;
-            }
         };
         Some(Ok(v))
     }
 
+    /// Value of a predefined name of a pattern (`_x`, `_abs_x`, `_hal[...]`,
+    /// `_ini[...]`), `None` if the name is none of them.
+    fn predefined_pattern(&mut self, name: &str, span: Span) -> Option<EvalResult> {
+        if let Some(axis) = name.strip_prefix('_').filter(|a| a.len() == 1)
+            && let Some(i) = AXES.iter().position(|&c| c == axis.as_bytes()[0])
+        {
+            self.note_standalone_drift(span);
+            return Some(self.position(i, span));
+        }
+        if let Some(axis) = name.strip_prefix("_abs_").filter(|a| a.len() == 1)
+            && let Some(i) = AXES.iter().position(|&c| c == axis.as_bytes()[0])
+            && let Some(v) = self.abs_position(i)
+        {
+            self.note_standalone_drift(span);
+            return Some(Ok(v));
+        }
+        if let Some(axis) = name.strip_prefix("_abs_").filter(|a| a.len() == 1)
+            && AXES.contains(&axis.as_bytes()[0])
+        {
+            return Some(Err(fault(
+                ErrorKind::RuntimeParam {
+                    what: format!("#<{name}> (machine position)"),
+                    why: "machine coordinates depend on homing and offsets".into(),
+                    hint: "--zero-start, or offsets and a position set by the program".into(),
+                },
+                span,
+            )));
+        }
+        if name.starts_with("_hal[") && self.s.hal_pin_vars {
+            return Some(Err(fault(
+                ErrorKind::RuntimeParam {
+                    what: format!("#<{name}>"),
+                    why: "HAL values exist only on the running machine".into(),
+                    hint: format!("-D {name}=VALUE"),
+                },
+                span,
+            )));
+        }
+        if let Some((sec, key)) = ini_key(name).filter(|_| self.s.ini_vars) {
+            let found = self.s.ini.as_ref().and_then(|i| i.get_upper(sec, key));
+            return Some(match found.and_then(|v| v.trim().parse::<f64>().ok()) {
+                Some(v) => Ok(v),
+                None => Err(fault(
+                    ErrorKind::NamedUndefined {
+                        name: name.to_string(),
+                    },
+                    span,
+                )),
+            });
+        }
+        None
+    }
+
     pub(crate) fn is_predefined(&self, name: &str) -> bool {
         name.starts_with('_')
-            && (matches!(
-                name,
-                "_value"
-                    | "_value_returned"
-                    | "_line"
-                    | "_call_level"
-                    | "_remap_level"
-                    | "_task"
-                    | "_vmajor"
-                    | "_vminor"
-                    | "_metric_machine"
-                    | "_metric"
-                    | "_imperial"
-                    | "_absolute"
-                    | "_incremental"
-                    | "_inverse_time"
-                    | "_units_per_minute"
-                    | "_units_per_rev"
-                    | "_coord_system"
-                    | "_motion_mode"
-                    | "_plane"
-                    | "_ccomp"
-                    | "_tool_offset"
-                    | "_retract_r_plane"
-                    | "_retract_old_z"
-                    | "_spindle_rpm_mode"
-                    | "_spindle_css_mode"
-                    | "_ijk_absolute_mode"
-                    | "_lathe_diameter_mode"
-                    | "_lathe_radius_mode"
-                    | "_spindle_on"
-                    | "_spindle_cw"
-                    | "_mist"
-                    | "_flood"
-                    | "_speed_override"
-                    | "_feed_override"
-                    | "_adaptive_feed"
-                    | "_feed_hold"
-                    | "_feed"
-                    | "_rpm"
-                    | "_current_tool"
-                    | "_selected_tool"
-                    | "_current_pocket"
-                    | "_selected_pocket"
-            ) || (name.len() == 2 && AXES.contains(&name.as_bytes()[1]))
+            && (predef(name).is_some()
+                || (name.len() == 2 && AXES.contains(&name.as_bytes()[1]))
                 || (name.len() == 6
                     && name.starts_with("_abs_")
                     && AXES.contains(&name.as_bytes()[5]))
