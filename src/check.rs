@@ -108,7 +108,7 @@ fn sub_file_name(index: &FileIndex) -> Option<String> {
     first
         .key
         .as_ref()
-        .filter(|k| k.as_ref() == stem)
+        .filter(|k| AsRef::<str>::as_ref(&***k) == stem.as_str())
         .map(|k| k.to_string())
 }
 
@@ -148,11 +148,25 @@ pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
             format!("<call of {}>", path.display()),
             text.into_bytes(),
         );
-        crate::flatten(src, &settings, &search, Destination::Discard)
+        crate::view::run::flatten_observed(
+            src,
+            &settings,
+            &search,
+            Destination::Discard,
+            cfg,
+            &Default::default(),
+        )
     } else {
         drop(probe);
         match std::sync::Arc::try_unwrap(source) {
-            Ok(source) => crate::flatten(source, &settings, &cfg.search, Destination::Discard),
+            Ok(source) => crate::view::run::flatten_observed(
+                source,
+                &settings,
+                &cfg.search,
+                Destination::Discard,
+                cfg,
+                &Default::default(),
+            ),
             Err(_) => return Vec::new(),
         }
     };

@@ -41,6 +41,82 @@ pub enum Command {
     /// Check programs without writing output: every file is fully evaluated
     /// with the same rules as flattening; exit 1 if any has an error.
     Check(CheckArgs),
+    /// Statistics of a program's motion: travel per axis (work and machine
+    /// coordinates), feed and rapid path lengths, moves, arcs, tool changes
+    /// and an estimated run time.
+    Stats(StatsArgs),
+    /// Draw the toolpath as SVG (or a self-contained HTML page with the
+    /// statistics, when the output ends in .html).
+    Plot(PlotArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct StatsArgs {
+    /// Program; stdin when absent or `-`.
+    pub file: Option<PathBuf>,
+    /// Write JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub common: CommonArgs,
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ViewArg {
+    /// From above: X right, Y up.
+    #[default]
+    Xy,
+    /// From the front: X right, Z up.
+    Xz,
+    /// From the side: Y right, Z up.
+    Yz,
+    /// Isometric.
+    Iso,
+}
+
+#[derive(Args, Debug)]
+pub struct PlotArgs {
+    /// Program; stdin when absent or `-`.
+    pub file: Option<PathBuf>,
+    /// The picture: FILE.svg, or FILE.html for a page with the statistics.
+    #[arg(short, long, value_name = "FILE", required = true)]
+    pub output: PathBuf,
+    /// Which way to look at the toolpath.
+    #[arg(long, value_enum, default_value = "xy")]
+    pub view: ViewArg,
+    #[command(flatten)]
+    pub common: CommonArgs,
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum GrblEnvelopeArg {
+    /// GRBL 1.1's default build: machine zero at the home switches, travel
+    /// from -$130 to 0.
+    #[default]
+    Negative,
+    /// Builds with HOMING_FORCE_SET_ORIGIN: travel from 0 to $130.
+    Positive,
+}
+
+/// What ngcflat may know about the machine: travel limits (checked on every
+/// move when flattening and checking) and axis velocities and accelerations
+/// (used by the run-time estimate).
+#[derive(Args, Debug, Default)]
+pub struct MachineArgs {
+    /// Travel limits in machine coordinates, mm (degrees for A-C), e.g.
+    /// `X0:300,Y0:200,Z-60:0`; overrides the INI's and GRBL's per axis.
+    #[arg(long, value_name = "RANGES")]
+    pub limits: Option<String>,
+    /// A saved GRBL `$$` listing: $110-$112 max rate (mm/min), $120-$122
+    /// acceleration (mm/s²), $130-$132 max travel (mm).
+    #[arg(long, value_name = "FILE")]
+    pub grbl_settings: Option<PathBuf>,
+    /// Where GRBL's travel ($130-$132) lies in machine coordinates.
+    #[arg(long, value_enum, default_value = "negative")]
+    pub grbl_envelope: GrblEnvelopeArg,
+    /// Do not check travel limits (the INI's, GRBL's or --limits).
+    #[arg(long)]
+    pub no_limits: bool,
 }
 
 #[derive(Args, Debug)]
@@ -50,6 +126,15 @@ pub struct FlattenArgs {
     /// Write the result to FILE (atomically: on error FILE is left as it was).
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
+    /// Write a source map to FILE: one JSON line per output line with the
+    /// file, line, column and call chain that produced it.
+    #[arg(long, value_name = "FILE")]
+    pub source_map: Option<PathBuf>,
+    /// Append to each output line a `;` comment naming where it came from
+    /// (`;from part.ngc:12:1 < part.ngc:40:1`, innermost call first); left
+    /// off `%` lines and lines it would make longer than 252 characters.
+    #[arg(long)]
+    pub annotate: bool,
     #[command(flatten)]
     pub common: CommonArgs,
 }
@@ -145,6 +230,8 @@ pub struct CommonArgs {
     /// How diagnostics are written to stderr.
     #[arg(long, value_enum, default_value = "human")]
     pub message_format: FormatArg,
+    #[command(flatten)]
+    pub machine: MachineArgs,
 }
 
 /// Validated options shared by flattening and checking.
@@ -156,6 +243,10 @@ pub struct Config {
     /// Problems of the configuration that do not stop the run (INI entries
     /// naming missing folders, a SUBROUTINE_PATH cut to 10 folders).
     pub warnings: Vec<Diagnostic>,
+    /// Travel limits, velocities and accelerations of the machine's axes.
+    pub machine: crate::view::axes::MachineAxes,
+    /// Whether travel limits are checked (limits given and not --no-limits).
+    pub check_limits: bool,
 }
 
 /// Folders of `[RS274NGC]SUBROUTINE_PATH` LinuxCNC uses.
@@ -370,6 +461,7 @@ impl CommonArgs {
             dirs.extend(env.split(':').filter(|s| !s.is_empty()).map(expand_tilde));
         }
         let mut var_file = self.var_file.clone();
+        let mut machine = crate::view::axes::MachineAxes::default();
         if let Some(ini_path) = &self.ini {
             let text = std::fs::read_to_string(ini_path).map_err(|e| ErrorKind::Io {
                 path: ini_path.clone(),
@@ -477,6 +569,7 @@ impl CommonArgs {
                 c.chars()
                     .any(|ch| matches!(ch.to_ascii_uppercase(), 'U' | 'V' | 'W'))
             });
+            machine.add_ini(&ini, settings.machine_metric)?;
             settings.ini = Some(ini);
         }
         settings.oword_warn_only |= self.oword_warn_only;
@@ -511,6 +604,21 @@ impl CommonArgs {
                     })?,
                 );
         }
+        if let Some(g) = &self.machine.grbl_settings {
+            let text = std::fs::read_to_string(g).map_err(|e| ErrorKind::Io {
+                path: g.clone(),
+                message: e.to_string(),
+            })?;
+            let env = match self.machine.grbl_envelope {
+                GrblEnvelopeArg::Negative => crate::view::axes::GrblEnvelope::Negative,
+                GrblEnvelopeArg::Positive => crate::view::axes::GrblEnvelope::Positive,
+            };
+            machine.add_grbl(&text, env)?;
+        }
+        if let Some(l) = &self.machine.limits {
+            machine.add_limits(l)?;
+        }
+        let check_limits = !self.machine.no_limits && machine.has_limits();
         let format = match self.message_format {
             FormatArg::Human => MessageFormat::Human,
             FormatArg::Short => MessageFormat::Short,
@@ -522,6 +630,8 @@ impl CommonArgs {
             search,
             format,
             warnings,
+            machine,
+            check_limits,
         })
     }
 }

@@ -15,6 +15,7 @@ pub mod machine;
 pub mod parse;
 pub mod program;
 pub mod target;
+pub mod view;
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -186,6 +187,8 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
     let env_path = std::env::var("NGCFLAT_SUBROUTINE_PATH").ok();
     let common = match &cli.command {
         Some(config::Command::Check(args)) => &args.common,
+        Some(config::Command::Stats(args)) => &args.common,
+        Some(config::Command::Plot(args)) => &args.common,
         None => &cli.flatten.common,
     };
     parse::named2007::enable(common.named_params_2007);
@@ -196,6 +199,35 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
                 Err(k) => return Ok(setup_error(k, args.common.format())),
             };
             Ok(check::run(&args.paths, &args.ext, args.deny_warnings, &cfg))
+        }
+        Some(config::Command::Stats(args)) => {
+            let cfg = match args.common.to_config(env_path) {
+                Ok(c) => c,
+                Err(k) => return Ok(setup_error(k, args.common.format())),
+            };
+            Ok(view::run::stats_command(
+                args.file.as_deref(),
+                args.json,
+                &cfg,
+            ))
+        }
+        Some(config::Command::Plot(args)) => {
+            let cfg = match args.common.to_config(env_path) {
+                Ok(c) => c,
+                Err(k) => return Ok(setup_error(k, args.common.format())),
+            };
+            let view = match args.view {
+                config::ViewArg::Xy => view::plot::View::Xy,
+                config::ViewArg::Xz => view::plot::View::Xz,
+                config::ViewArg::Yz => view::plot::View::Yz,
+                config::ViewArg::Iso => view::plot::View::Iso,
+            };
+            Ok(view::run::plot_command(
+                args.file.as_deref(),
+                &args.output,
+                view,
+                &cfg,
+            ))
         }
         None => {
             let args = cli.flatten;
@@ -215,7 +247,18 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
                 Some(p) => Destination::File(p),
                 None => Destination::Stdout,
             };
-            match flatten(source, &cfg.settings, &cfg.search, dest) {
+            let extras = view::run::Extras {
+                source_map: args.source_map,
+                annotate: args.annotate,
+            };
+            match view::run::flatten_observed(
+                source,
+                &cfg.settings,
+                &cfg.search,
+                dest,
+                &cfg,
+                &extras,
+            ) {
                 Ok(warnings) => {
                     report(&warnings, cfg.format);
                     Ok(ExitCode::SUCCESS)

@@ -207,6 +207,22 @@ pub enum ErrorKind {
     /// `G38.2 Z-10` then `#5063`: the probe's result exists only on the
     /// machine (probing overwrites any -D value).
     ProbeResultUnknown { index: usize, line: u32 },
+    // ------------------------------------------------------------ machine view
+    /// `--limits X300` (not `LETTER[MIN]:[MAX],...`).
+    BadLimits { text: String },
+    /// `MAX_VELOCITY = fast` in an INI axis section, `$110=x` in GRBL settings.
+    BadMachineValue { source: String, text: String },
+    /// A move beyond a travel limit (machine coordinates).
+    TravelLimit {
+        axis: char,
+        value: f64,
+        bound: f64,
+        above: bool,
+        source: String,
+    },
+    /// Travel limits are given but the offsets from work to machine
+    /// coordinates (or the position) are not known at a move.
+    LimitNeedsOffsets,
 }
 
 impl ErrorKind {
@@ -294,6 +310,10 @@ impl ErrorKind {
             ComputedSubLabel => "E0701",
             BadStartPosition { .. } => "E0800",
             ProbeResultUnknown { .. } => "E0801",
+            BadLimits { .. } => "E1201",
+            BadMachineValue { .. } => "E1202",
+            TravelLimit { .. } => "E1203",
+            LimitNeedsOffsets => "E1204",
         }
     }
 }
@@ -558,6 +578,37 @@ impl fmt::Display for ErrorKind {
             BadStartPosition { text } => write!(
                 f,
                 "--start-position '{text}' is not a list of axis words such as X0,Y0,Z10 (mm; X0.5in for inches)"
+            ),
+            BadLimits { text } => write!(
+                f,
+                "--limits '{text}' is not a list of AXIS[MIN]:[MAX] ranges in mm (e.g. X0:300,Y0:200,Z-60:0)"
+            ),
+            BadMachineValue { source, text } => {
+                write!(f, "{source} value '{text}' is not a number")
+            }
+            TravelLimit {
+                axis,
+                value,
+                bound,
+                above,
+                source,
+            } => {
+                let unit = if matches!(axis, 'A' | 'B' | 'C') {
+                    "deg"
+                } else {
+                    "mm"
+                };
+                write!(
+                    f,
+                    "this move takes {axis} to {} {unit} (machine coordinates), {} the travel limit {} {unit} from {source}",
+                    crate::emit::number_string(*value, Some(4)),
+                    if *above { "above" } else { "below" },
+                    crate::emit::number_string(*bound, Some(4)),
+                )
+            }
+            LimitNeedsOffsets => write!(
+                f,
+                "travel limits are in machine coordinates, but where this move goes on the machine is not known (the offsets from work to machine coordinates, or the position); supply them with --zero-start, --var-file or -D (e.g. -D 5221=0 for the G54 X offset), or --start-position"
             ),
         }
     }

@@ -12,6 +12,7 @@ mod lowering;
 mod named2007;
 mod oracle;
 mod props;
+mod view;
 mod warn_only;
 
 use std::path::{Path, PathBuf};

@@ -1,0 +1,152 @@
+//! The line consumer that connects the evaluator's output to the machine
+//! model and to what looks at the motion: the travel-limit check, the
+//! statistics and picture, the source map and `--annotate`.
+
+use std::io::Write;
+
+use super::run::Observer;
+use super::source_map::{Locator, Place, SourceMap, annotation};
+use crate::diag::{Diagnostic, Error, ErrorKind, Site};
+use crate::emit::Output;
+use crate::eval::{LineConsumer, Origin, Settings};
+use crate::machine::block::Block;
+use crate::machine::model::Machine;
+
+/// Where the source map goes.
+pub type MapSink = SourceMap<std::io::BufWriter<std::fs::File>>;
+
+pub struct ViewConsumer<'a> {
+    machine: Option<Machine>,
+    block: Block,
+    pub observer: &'a mut Observer,
+    /// Write each line to the output (flattening; not for stats and plot).
+    pass_through: bool,
+    pub source_map: Option<MapSink>,
+    annotate: Option<Locator>,
+    buf: Vec<u8>,
+}
+
+impl<'a> ViewConsumer<'a> {
+    /// `observer` sees the motion of every line; `pass_through` writes the
+    /// lines to the output; `annotate` appends their origin as a comment.
+    pub fn new(
+        settings: &Settings,
+        observer: &'a mut Observer,
+        pass_through: bool,
+        source_map: Option<MapSink>,
+        annotate: bool,
+    ) -> ViewConsumer<'a> {
+        ViewConsumer {
+            machine: observer.is_active().then(|| Machine::new(settings)),
+            block: Block::default(),
+            observer,
+            pass_through,
+            source_map,
+            annotate: annotate.then(Locator::default),
+            buf: Vec::new(),
+        }
+    }
+
+    fn places(origin: &Origin<'_>) -> (Place, Vec<Place>) {
+        let at = Place {
+            file: origin.file.clone(),
+            offset: origin.line_start,
+        };
+        let calls = (origin.stack)()
+            .into_iter()
+            .map(|s| Place {
+                file: s.file,
+                offset: s.start,
+            })
+            .collect();
+        (at, calls)
+    }
+}
+
+impl LineConsumer for ViewConsumer<'_> {
+    fn line(&mut self, text: &[u8], origin: &Origin<'_>, out: &mut Output) -> Result<(), Error> {
+        if let Some(m) = &mut self.machine {
+            // Every line the evaluator writes is one it has checked; a line
+            // the block decoder does not read moves nothing it knows of.
+            if self.block.decode_into(text).is_ok() {
+                m.apply(&self.block);
+                for ev in m.take_events() {
+                    if let Err(kind) = self.observer.motion(&ev) {
+                        let mut d = Diagnostic::error(kind, Some(line_site(origin)));
+                        d.stack = (origin.stack)();
+                        return Err(d);
+                    }
+                }
+            }
+        }
+        if self.source_map.is_some() || self.annotate.is_some() {
+            let (at, calls) = Self::places(origin);
+            if let Some(sm) = &mut self.source_map {
+                sm.line(&at, &calls)
+                    .map_err(|e| io_error("<source map>", e))?;
+            }
+            if let Some(loc) = &mut self.annotate {
+                let a = loc.locate(&at);
+                let c: Vec<_> = calls.iter().map(|p| loc.locate(p)).collect();
+                let note = annotation(&a, &c);
+                // Never past the 252-character line limit: the comment is
+                // left off a line it would make too long.
+                if text.len() + note.len() <= 252 && text.first() != Some(&b'%') {
+                    self.buf.clear();
+                    self.buf.extend_from_slice(text);
+                    self.buf.extend_from_slice(note.as_bytes());
+                    return out.line(&self.buf).map_err(|e| io_error("<output>", e));
+                }
+            }
+        }
+        if self.pass_through {
+            out.line(text).map_err(|e| io_error("<output>", e))?;
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self, _out: &mut Output) -> Result<Vec<Diagnostic>, Error> {
+        if let Some(sm) = self.source_map.as_mut() {
+            sm.flush().map_err(|e| io_error("<source map>", e))?;
+        }
+        Ok(Vec::new())
+    }
+}
+
+/// The source line that made an output line, from its first non-blank
+/// character to its end.
+fn line_site(origin: &Origin<'_>) -> Site {
+    let lc = origin.file.locate(origin.line_start);
+    let line = &lc.text[..lc
+        .text
+        .iter()
+        .position(|&b| b == b'\n')
+        .unwrap_or(lc.text.len())];
+    let lead = line.iter().take_while(|b| b.is_ascii_whitespace()).count();
+    let body = line
+        .iter()
+        .rposition(|b| !b.is_ascii_whitespace())
+        .map_or(lead, |p| p + 1);
+    Site::new(
+        origin.file,
+        origin.line_start + lead as u32,
+        origin.line_start + body as u32,
+    )
+}
+
+fn io_error(what: &str, e: std::io::Error) -> Error {
+    Diagnostic::error(
+        ErrorKind::Io {
+            path: what.into(),
+            message: e.to_string(),
+        },
+        None,
+    )
+}
+
+impl<W: Write> SourceMap<W> {
+    /// Flushes what was written so far.
+    pub fn flush(&mut self) -> std::io::Result<()> {
+        self.out_mut().flush()
+    }
+}

@@ -1,0 +1,280 @@
+//! The `stats` and `plot` commands and the per-move consumer that flattening
+//! and `check` use for travel limits.
+
+use super::axes::MachineAxes;
+use super::limits::LimitCheck;
+use super::plot::{Plot, View};
+use super::stats::Stats;
+use crate::diag::ErrorKind;
+use crate::machine::motion::Motion;
+
+/// Everything that looks at the motion stream of one run. Only what was
+/// asked for is present.
+#[derive(Debug, Default)]
+pub struct Observer {
+    pub stats: Option<Stats>,
+    pub plot: Option<Plot>,
+    pub limits: Option<LimitCheck>,
+}
+
+impl Observer {
+    /// For flattening and `check`: the travel-limit check only.
+    pub fn limits(axes: &MachineAxes) -> Observer {
+        Observer {
+            limits: LimitCheck::new(axes),
+            ..Observer::default()
+        }
+    }
+
+    /// For `stats` (and `plot` with `view`).
+    pub fn stats(axes: &MachineAxes, view: Option<View>) -> Observer {
+        Observer {
+            stats: Some(Stats::new(axes.clone())),
+            plot: view.map(Plot::new),
+            limits: None,
+        }
+    }
+
+    /// Whether anything needs the motion at all.
+    pub fn is_active(&self) -> bool {
+        self.stats.is_some() || self.plot.is_some() || self.limits.is_some()
+    }
+
+    /// Feeds one motion event; an error stops the run at the line that
+    /// made it.
+    pub fn motion(&mut self, m: &Motion) -> Result<(), ErrorKind> {
+        if let Some(l) = &self.limits {
+            l.check(m)?;
+        }
+        if let Some(s) = &mut self.stats {
+            s.add(m);
+        }
+        if let Some(p) = &mut self.plot {
+            p.add(m);
+        }
+        Ok(())
+    }
+}
+
+/// Writes `data` to `path` atomically (a temporary file beside it, then a
+/// rename), so that a failed run leaves the old file.
+pub fn write_atomic(path: &std::path::Path, data: &[u8]) -> std::io::Result<()> {
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(std::path::Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    std::fs::write(&tmp, data)?;
+    std::fs::rename(&tmp, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}
+
+/// Runs a program and feeds its motion to `observer` (nothing is written).
+/// Returns the warnings.
+pub fn observe(
+    source: crate::program::SourceFile,
+    cfg: &crate::config::Config,
+    observer: &mut Observer,
+) -> Result<Vec<crate::diag::Diagnostic>, crate::diag::Error> {
+    let consumer = super::consumer::ViewConsumer::new(&cfg.settings, observer, false, None, false);
+    match crate::flatten_with(
+        source,
+        &cfg.settings,
+        &cfg.search,
+        crate::emit::Destination::Discard,
+        Some(Box::new(consumer)),
+    ) {
+        (w, None) => Ok(w),
+        (_, Some(e)) => Err(e),
+    }
+}
+
+fn program_name(file: Option<&std::path::Path>) -> String {
+    match file {
+        Some(p) if p.as_os_str() != "-" => p.display().to_string(),
+        _ => "<stdin>".into(),
+    }
+}
+
+/// Runs a program for its statistics (and picture). Err is the exit code
+/// after the diagnostics were reported.
+fn run_for_view(
+    file: Option<&std::path::Path>,
+    cfg: &crate::config::Config,
+    mut observer: Observer,
+) -> Result<Observer, std::process::ExitCode> {
+    let source = match crate::read_source(file) {
+        Ok(s) => s,
+        Err(e) => {
+            crate::report(&[*e], cfg.format);
+            return Err(std::process::ExitCode::from(2));
+        }
+    };
+    match observe(source, cfg, &mut observer) {
+        Ok(warnings) => {
+            crate::report(&warnings, cfg.format);
+            Ok(observer)
+        }
+        Err(e) => {
+            let code = match e.error_kind() {
+                Some(ErrorKind::Io { .. }) => 2,
+                _ => 1,
+            };
+            crate::report(&[*e], cfg.format);
+            Err(std::process::ExitCode::from(code))
+        }
+    }
+}
+
+/// `ngcflat stats`.
+pub fn stats_command(
+    file: Option<&std::path::Path>,
+    json: bool,
+    cfg: &crate::config::Config,
+) -> std::process::ExitCode {
+    let obs = match run_for_view(file, cfg, Observer::stats(&cfg.machine, None)) {
+        Ok(o) => o,
+        Err(code) => return code,
+    };
+    let Some(stats) = obs.stats else {
+        return std::process::ExitCode::from(2);
+    };
+    let report = stats.report(&program_name(file));
+    let text = if json { report.json() } else { report.text() };
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    if out
+        .write_all(text.as_bytes())
+        .and_then(|_| out.flush())
+        .is_err()
+    {
+        return std::process::ExitCode::from(2);
+    }
+    std::process::ExitCode::SUCCESS
+}
+
+/// `ngcflat plot`.
+pub fn plot_command(
+    file: Option<&std::path::Path>,
+    output: &std::path::Path,
+    view: View,
+    cfg: &crate::config::Config,
+) -> std::process::ExitCode {
+    let obs = match run_for_view(file, cfg, Observer::stats(&cfg.machine, Some(view))) {
+        Ok(o) => o,
+        Err(code) => return code,
+    };
+    let (Some(stats), Some(plot)) = (obs.stats, obs.plot) else {
+        return std::process::ExitCode::from(2);
+    };
+    let name = program_name(file);
+    let svg = plot.svg(&name);
+    let html = output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("html") || e.eq_ignore_ascii_case("htm"));
+    let data = if html {
+        super::html::page(&svg, &stats.report(&name))
+    } else {
+        svg
+    };
+    if let Err(e) = write_atomic(output, data.as_bytes()) {
+        crate::report(
+            &[*crate::diag::Diagnostic::error(
+                ErrorKind::Io {
+                    path: output.to_path_buf(),
+                    message: e.to_string(),
+                },
+                None,
+            )],
+            cfg.format,
+        );
+        return std::process::ExitCode::from(2);
+    }
+    std::process::ExitCode::SUCCESS
+}
+
+/// What flattening may be asked for besides the output.
+#[derive(Debug, Clone, Default)]
+pub struct Extras {
+    /// Write a source map (JSON lines) to this file.
+    pub source_map: Option<std::path::PathBuf>,
+    /// Append each line's origin as a comment.
+    pub annotate: bool,
+}
+
+/// Flattens like [`crate::flatten`], checking travel limits when the
+/// configuration has them and writing the source map and annotations when
+/// asked. Without any of these it is exactly [`crate::flatten`].
+pub fn flatten_observed(
+    source: crate::program::SourceFile,
+    settings: &crate::eval::Settings,
+    search: &crate::program::SearchPath,
+    dest: crate::emit::Destination,
+    cfg: &crate::config::Config,
+    extras: &Extras,
+) -> Result<Vec<crate::diag::Diagnostic>, crate::diag::Error> {
+    if !cfg.check_limits && extras.source_map.is_none() && !extras.annotate {
+        return crate::flatten(source, settings, search, dest);
+    }
+    let mut observer = if cfg.check_limits {
+        Observer::limits(&cfg.machine)
+    } else {
+        Observer::default()
+    };
+    let io_err = |path: &std::path::Path, e: std::io::Error| {
+        crate::diag::Diagnostic::error(
+            ErrorKind::Io {
+                path: path.to_path_buf(),
+                message: e.to_string(),
+            },
+            None,
+        )
+    };
+    // The source map goes to a temporary file beside its target, renamed
+    // into place only when the program flattened.
+    let map_tmp = extras.source_map.as_ref().map(|p| {
+        let dir = p
+            .parent()
+            .filter(|d| !d.as_os_str().is_empty())
+            .unwrap_or(std::path::Path::new("."));
+        let name = p
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        (
+            p.clone(),
+            dir.join(format!(".{name}.{}.tmp", std::process::id())),
+        )
+    });
+    let map = match &map_tmp {
+        Some((target, tmp)) => match std::fs::File::create(tmp) {
+            Ok(f) => Some(super::source_map::SourceMap::new(std::io::BufWriter::new(
+                f,
+            ))),
+            Err(e) => return Err(io_err(target, e)),
+        },
+        None => None,
+    };
+    let consumer =
+        super::consumer::ViewConsumer::new(settings, &mut observer, true, map, extras.annotate);
+    let r = match crate::flatten_with(source, settings, search, dest, Some(Box::new(consumer))) {
+        (w, None) => Ok(w),
+        (_, Some(e)) => Err(e),
+    };
+    if let Some((target, tmp)) = &map_tmp {
+        if r.is_ok() {
+            if let Err(e) = std::fs::rename(tmp, target) {
+                let _ = std::fs::remove_file(tmp);
+                return Err(io_err(target, e));
+            }
+        } else {
+            let _ = std::fs::remove_file(tmp);
+        }
+    }
+    r
+}

@@ -1,0 +1,179 @@
+//! The source map: for each output line, the file, line and column that
+//! made it and the chain of calls that led there, as JSON lines; and the
+//! same as a comment for `--annotate`.
+
+use std::collections::HashMap;
+use std::io::{self, Write};
+use std::sync::Arc;
+
+use serde::Serialize;
+
+use crate::program::SourceFile;
+
+/// A place in a program: a file and a byte offset in it.
+#[derive(Debug, Clone)]
+pub struct Place {
+    pub file: Arc<SourceFile>,
+    pub offset: u32,
+}
+
+/// A file kept for locating: the file, its bytes and its line starts.
+type Lines = (Arc<SourceFile>, Vec<u8>, Vec<u32>);
+
+/// Line starts of the files seen so far, keyed by the file's address.
+#[derive(Default)]
+pub struct Locator {
+    files: HashMap<usize, Lines>,
+}
+
+/// A located place.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Located {
+    pub file: String,
+    pub line: u32,
+    pub column: u32,
+}
+
+impl Locator {
+    /// File name, 1-based line and column (in characters) of a place.
+    pub fn locate(&mut self, p: &Place) -> Located {
+        let key = Arc::as_ptr(&p.file) as usize;
+        let (file, bytes, starts) = self.files.entry(key).or_insert_with(|| {
+            let bytes = p.file.bytes().into_owned();
+            let mut starts = vec![0u32];
+            starts.extend(memchr::memchr_iter(b'\n', &bytes).map(|i| (i + 1) as u32));
+            (Arc::clone(&p.file), bytes, starts)
+        });
+        let k = starts.partition_point(|&s| s <= p.offset).max(1) - 1;
+        let start = starts.get(k).copied().unwrap_or(0) as usize;
+        let end = (p.offset as usize).min(bytes.len()).max(start);
+        let col = bytes
+            .get(start..end)
+            .map_or(0, |b| b.iter().filter(|&&c| (c & 0xC0) != 0x80).count());
+        Located {
+            file: file.display_name(),
+            line: k as u32 + 1,
+            column: col as u32 + 1,
+        }
+    }
+}
+
+#[derive(Serialize)]
+struct Entry<'a> {
+    output_line: u64,
+    #[serde(flatten)]
+    at: &'a Located,
+    /// Call sites, innermost first.
+    calls: &'a [Located],
+}
+
+/// Writes the JSON-lines source map.
+pub struct SourceMap<W: Write> {
+    out: W,
+    locator: Locator,
+    line: u64,
+}
+
+impl<W: Write> SourceMap<W> {
+    pub fn new(out: W) -> SourceMap<W> {
+        SourceMap {
+            out,
+            locator: Locator::default(),
+            line: 0,
+        }
+    }
+
+    /// Records the next output line, made at `at` with the call sites
+    /// `calls` (innermost first).
+    pub fn line(&mut self, at: &Place, calls: &[Place]) -> io::Result<()> {
+        self.line += 1;
+        let at = self.locator.locate(at);
+        let calls: Vec<Located> = calls.iter().map(|c| self.locator.locate(c)).collect();
+        let e = Entry {
+            output_line: self.line,
+            at: &at,
+            calls: &calls,
+        };
+        serde_json::to_writer(&mut self.out, &e).map_err(io::Error::other)?;
+        self.out.write_all(b"\n")
+    }
+
+    pub fn out_mut(&mut self) -> &mut W {
+        &mut self.out
+    }
+
+    pub fn finish(mut self) -> io::Result<W> {
+        self.out.flush()?;
+        Ok(self.out)
+    }
+}
+
+/// The `--annotate` comment for a line: ` ;from file:line:col <
+/// caller:line:col`. A `;` comment, not a parenthesised one: LinuxCNC acts
+/// only on the last parenthesised comment of a line, so one added after a
+/// `(MSG,...)` would silence the message. Control characters in file names
+/// become `?`.
+pub fn annotation(at: &Located, calls: &[Located]) -> String {
+    let clean = |s: &str| s.replace(|c: char| c.is_control(), "?");
+    let mut s = format!(" ;from {}:{}:{}", clean(&at.file), at.line, at.column);
+    for c in calls {
+        s.push_str(&format!(" < {}:{}:{}", clean(&c.file), c.line, c.column));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    #[test]
+    fn lines_columns_and_chain() {
+        let f = Arc::new(SourceFile::new(
+            PathBuf::from("p.ngc"),
+            "p.ngc".into(),
+            "G0 X1\n  G1 X2 (é)\nG1 X3\n".as_bytes().to_vec(),
+        ));
+        let mut m = SourceMap::new(Vec::new());
+        m.line(
+            &Place {
+                file: f.clone(),
+                offset: 0,
+            },
+            &[],
+        )
+        .unwrap();
+        m.line(
+            &Place {
+                file: f.clone(),
+                offset: 8,
+            },
+            &[Place {
+                file: f.clone(),
+                offset: 19,
+            }],
+        )
+        .unwrap();
+        let text = String::from_utf8(m.finish().unwrap()).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(
+            lines[0],
+            r#"{"output_line":1,"file":"p.ngc","line":1,"column":1,"calls":[]}"#
+        );
+        assert_eq!(
+            lines[1],
+            r#"{"output_line":2,"file":"p.ngc","line":2,"column":3,"calls":[{"file":"p.ngc","line":3,"column":1}]}"#
+        );
+        let mut loc = Locator::default();
+        let a = loc.locate(&Place {
+            file: f.clone(),
+            offset: 17,
+        });
+        // The ')' after "  G1 X2 (é": the é is one column.
+        assert_eq!((a.line, a.column), (2, 11));
+        assert_eq!(
+            annotation(&a, std::slice::from_ref(&a)),
+            " ;from p.ngc:2:11 < p.ngc:2:11"
+        );
+    }
+}

@@ -1,0 +1,620 @@
+//! Statistics of a program's motion: travel ranges, path lengths, counts
+//! and an estimated run time.
+
+use std::collections::BTreeSet;
+use std::fmt::Write as _;
+
+use serde::Serialize;
+
+use super::axes::{LETTERS, MachineAxes, is_rotary};
+use super::geom::{ArcGeom, arc_length, extreme_points, line_length};
+use crate::machine::motion::{Axes, FeedMode, Motion, MoveKind};
+
+/// How the run time is estimated, printed with every estimate.
+pub const TIME_MODEL: &str = "each move is timed on its own as a trapezoid that starts and ends at rest: \
+it speeds up at the acceleration limit, runs at the programmed feed (rapids: the \
+maximum velocity), and slows down again; the feed and acceleration of a move are \
+capped so that no axis exceeds its own maximum velocity or acceleration, and an arc \
+at the slowest of its plane's axes and below sqrt(acceleration * radius). Without an \
+acceleration limit moves start at full speed; without a velocity limit rapids are not \
+timed. Controllers that blend moves (LinuxCNC G64, GRBL's planner) run programs of \
+many short moves faster than this estimate. Dwells count in full; pauses (M0, M1) and \
+tool changes count as no time.";
+
+/// The range of one axis.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Range {
+    pub min: f64,
+    pub max: f64,
+}
+
+impl Range {
+    fn add(r: &mut Option<Range>, v: f64) {
+        if !v.is_finite() {
+            return;
+        }
+        match r {
+            Some(r) => {
+                r.min = r.min.min(v);
+                r.max = r.max.max(v);
+            }
+            None => *r = Some(Range { min: v, max: v }),
+        }
+    }
+}
+
+/// Accumulates statistics over a motion stream.
+#[derive(Debug, Clone)]
+pub struct Stats {
+    axes: MachineAxes,
+    pub work: [Option<Range>; 9],
+    pub machine: [Option<Range>; 9],
+    /// Moves whose machine position was not known.
+    pub machine_unknown: u64,
+    pub rapid_moves: u64,
+    pub feed_moves: u64,
+    pub arcs: u64,
+    pub probes: u64,
+    pub rapid_length: f64,
+    pub feed_length: f64,
+    pub tool_changes: u64,
+    pub tools: BTreeSet<i64>,
+    pub feed_time: f64,
+    pub rapid_time: f64,
+    pub dwell_time: f64,
+    /// Feed moves that could not be timed (no feed rate, or feed per
+    /// revolution with the spindle stopped).
+    pub untimed_feeds: u64,
+    /// Rapids that could not be timed (no maximum velocity for an axis).
+    pub untimed_rapids: u64,
+    spindle_speed: f64,
+    started: bool,
+}
+
+impl Stats {
+    pub fn new(axes: MachineAxes) -> Stats {
+        Stats {
+            axes,
+            work: [None; 9],
+            machine: [None; 9],
+            machine_unknown: 0,
+            rapid_moves: 0,
+            feed_moves: 0,
+            arcs: 0,
+            probes: 0,
+            rapid_length: 0.0,
+            feed_length: 0.0,
+            tool_changes: 0,
+            tools: BTreeSet::new(),
+            feed_time: 0.0,
+            rapid_time: 0.0,
+            dwell_time: 0.0,
+            untimed_feeds: 0,
+            untimed_rapids: 0,
+            spindle_speed: 0.0,
+            started: false,
+        }
+    }
+
+    /// Adds one motion event.
+    pub fn add(&mut self, m: &Motion) {
+        match m {
+            Motion::Line {
+                kind,
+                from,
+                to,
+                feed,
+            } => {
+                self.extent(m, from.offset.zip(to.offset).map(|(o, _)| o));
+                let len = finite(line_length(&from.work, &to.work));
+                match kind {
+                    MoveKind::Rapid => {
+                        self.rapid_moves += 1;
+                        self.rapid_length += len;
+                        match self.rapid_duration(&from.work, &to.work) {
+                            Some(t) => self.rapid_time += t,
+                            None => self.untimed_rapids += 1,
+                        }
+                    }
+                    _ => {
+                        if *kind == MoveKind::Probe {
+                            self.probes += 1;
+                        }
+                        self.feed_moves += 1;
+                        self.feed_length += len;
+                        let d: Axes = std::array::from_fn(|i| to.work[i] - from.work[i]);
+                        let path = path_len(&d);
+                        let (vmax, amax) = self.line_caps(&d, path);
+                        match self.feed_speed(feed.rate, feed.mode, path) {
+                            Some(Speed::Rate(v)) => {
+                                self.feed_time += trapezoid(path, v.min(vmax), amax)
+                            }
+                            Some(Speed::Duration(t)) => self.feed_time += t,
+                            None => self.untimed_feeds += 1,
+                        }
+                    }
+                }
+            }
+            Motion::Arc {
+                from,
+                to,
+                center,
+                plane,
+                ccw,
+                turns,
+                feed,
+            } => {
+                self.extent(m, from.offset);
+                self.arcs += 1;
+                self.feed_moves += 1;
+                let g = ArcGeom::new(&from.work, &to.work, *center, *plane, *ccw, *turns);
+                let len = finite(arc_length(&g, &from.work, &to.work));
+                self.feed_length += len;
+                let cap = |f: fn(&super::axes::AxisData) -> Option<f64>| {
+                    [g.a, g.b]
+                        .iter()
+                        .filter_map(|&i| f(&self.axes.axes[i]))
+                        .fold(f64::INFINITY, f64::min)
+                };
+                let vmax_plane = cap(|a| a.max_vel);
+                let amax = cap(|a| a.max_acc);
+                let r = 0.5 * (g.r0 + g.r1);
+                let vmax = vmax_plane.min((amax * r).sqrt());
+                match self.feed_speed(feed.rate, feed.mode, len) {
+                    Some(Speed::Rate(v)) => self.feed_time += trapezoid(len, v.min(vmax), amax),
+                    Some(Speed::Duration(t)) => self.feed_time += t,
+                    None => self.untimed_feeds += 1,
+                }
+            }
+            Motion::Dwell { seconds } => self.dwell_time += seconds.max(0.0),
+            Motion::Spindle { speed, .. } => self.spindle_speed = *speed,
+            Motion::ToolChange { tool } => {
+                self.tool_changes += 1;
+                self.tools.insert(*tool);
+            }
+            _ => {}
+        }
+    }
+
+    fn extent(&mut self, m: &Motion, offset: Option<Axes>) {
+        let first = !self.started;
+        self.started = true;
+        let mut n = 0;
+        extreme_points(m, |p| {
+            n += 1;
+            // The start point counts only for the first move: later ones
+            // start where the previous move ended (in machine coordinates;
+            // in work coordinates an offset change would add a point the
+            // tool never went to in the coordinates it was in).
+            if n == 1 && !first {
+                return;
+            }
+            for (i, v) in p.iter().enumerate() {
+                Range::add(&mut self.work[i], *v);
+            }
+            if let Some(o) = offset {
+                for (i, v) in p.iter().enumerate() {
+                    Range::add(&mut self.machine[i], v + o[i]);
+                }
+            }
+        });
+        if offset.is_none() {
+            self.machine_unknown += 1;
+        }
+    }
+
+    /// Velocity and acceleration caps for a straight move of direction `d`
+    /// and path length `path` (from each axis's limits).
+    fn line_caps(&self, d: &Axes, path: f64) -> (f64, f64) {
+        let mut v = f64::INFINITY;
+        let mut a = f64::INFINITY;
+        if path <= 0.0 {
+            return (v, a);
+        }
+        for (i, di) in d.iter().enumerate() {
+            if *di == 0.0 {
+                continue;
+            }
+            let k = path / di.abs();
+            if let Some(m) = self.axes.axes[i].max_vel {
+                v = v.min(m * k);
+            }
+            if let Some(m) = self.axes.axes[i].max_acc {
+                a = a.min(m * k);
+            }
+        }
+        (v, a)
+    }
+
+    fn rapid_duration(&self, from: &Axes, to: &Axes) -> Option<f64> {
+        let d: Axes = std::array::from_fn(|i| to[i] - from[i]);
+        let path = path_len(&d);
+        if path <= 0.0 {
+            return Some(0.0);
+        }
+        if d.iter()
+            .enumerate()
+            .any(|(i, di)| *di != 0.0 && self.axes.axes[i].max_vel.is_none())
+        {
+            return None;
+        }
+        let (v, a) = self.line_caps(&d, path);
+        Some(trapezoid(path, v, a))
+    }
+
+    fn feed_speed(&self, rate: f64, mode: FeedMode, path: f64) -> Option<Speed> {
+        if path <= 0.0 {
+            return Some(Speed::Duration(0.0));
+        }
+        match mode {
+            FeedMode::UnitsPerMinute if rate > 0.0 => Some(Speed::Rate(rate / 60.0)),
+            FeedMode::InverseTime if rate > 0.0 => Some(Speed::Duration(60.0 / rate)),
+            FeedMode::UnitsPerRev if rate > 0.0 && self.spindle_speed > 0.0 => {
+                Some(Speed::Rate(rate * self.spindle_speed / 60.0))
+            }
+            _ => None,
+        }
+    }
+
+    pub fn total_time(&self) -> f64 {
+        self.feed_time + self.rapid_time + self.dwell_time
+    }
+
+    /// The axes worth reporting: X, Y and Z, and any other that moved or
+    /// sits away from 0.
+    fn shown_axes(&self) -> Vec<usize> {
+        (0..9)
+            .filter(|&i| match self.work[i] {
+                Some(r) => i < 3 || r.min != 0.0 || r.max != 0.0,
+                None => false,
+            })
+            .collect()
+    }
+
+    /// The statistics as a serialisable report.
+    pub fn report(&self, program: &str) -> Report {
+        let axes = self
+            .shown_axes()
+            .into_iter()
+            .map(|i| AxisReport {
+                axis: LETTERS[i].to_string(),
+                unit: if is_rotary(i) { "deg" } else { "mm" },
+                work: self.work[i],
+                machine: if self.machine_unknown == 0 {
+                    self.machine[i]
+                } else {
+                    None
+                },
+            })
+            .collect();
+        Report {
+            program: program.to_string(),
+            units: "mm",
+            axes,
+            machine_known: self.machine_unknown == 0,
+            moves: self.rapid_moves + self.feed_moves,
+            rapid_moves: self.rapid_moves,
+            feed_moves: self.feed_moves,
+            arcs: self.arcs,
+            probe_moves: self.probes,
+            rapid_length: self.rapid_length,
+            feed_length: self.feed_length,
+            tool_changes: self.tool_changes,
+            tools: self.tools.iter().copied().collect(),
+            time: TimeReport {
+                total_s: self.total_time(),
+                feed_s: self.feed_time,
+                rapid_s: self.rapid_time,
+                dwell_s: self.dwell_time,
+                untimed_feed_moves: self.untimed_feeds,
+                untimed_rapid_moves: self.untimed_rapids,
+                machine_limits_used: self.axes.has_dynamics(),
+                model: TIME_MODEL,
+            },
+        }
+    }
+}
+
+/// A length of a move with an unknown end counts as 0.
+fn finite(v: f64) -> f64 {
+    if v.is_finite() { v } else { 0.0 }
+}
+
+enum Speed {
+    /// mm/s
+    Rate(f64),
+    /// s
+    Duration(f64),
+}
+
+fn path_len(d: &Axes) -> f64 {
+    let d: Axes = d.map(finite);
+    let lin = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    if lin > 0.0 {
+        return lin;
+    }
+    let uvw = (d[6] * d[6] + d[7] * d[7] + d[8] * d[8]).sqrt();
+    if uvw > 0.0 {
+        return uvw;
+    }
+    (d[3] * d[3] + d[4] * d[4] + d[5] * d[5]).sqrt()
+}
+
+/// Time of a move of length `len` from rest to rest at cruise velocity `v`
+/// and acceleration `a` (infinite: no ramps).
+pub fn trapezoid(len: f64, v: f64, a: f64) -> f64 {
+    if len <= 0.0 || v.is_nan() || v <= 0.0 {
+        return 0.0;
+    }
+    if !a.is_finite() {
+        return len / v;
+    }
+    if a <= 0.0 {
+        return 0.0;
+    }
+    if len >= v * v / a {
+        len / v + v / a
+    } else {
+        2.0 * (len / a).sqrt()
+    }
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct AxisReport {
+    pub axis: String,
+    pub unit: &'static str,
+    pub work: Option<Range>,
+    pub machine: Option<Range>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct TimeReport {
+    pub total_s: f64,
+    pub feed_s: f64,
+    pub rapid_s: f64,
+    pub dwell_s: f64,
+    pub untimed_feed_moves: u64,
+    pub untimed_rapid_moves: u64,
+    pub machine_limits_used: bool,
+    pub model: &'static str,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Report {
+    pub program: String,
+    pub units: &'static str,
+    pub axes: Vec<AxisReport>,
+    /// Whether machine coordinates are known for every move.
+    pub machine_known: bool,
+    pub moves: u64,
+    pub rapid_moves: u64,
+    pub feed_moves: u64,
+    pub arcs: u64,
+    pub probe_moves: u64,
+    pub rapid_length: f64,
+    pub feed_length: f64,
+    pub tool_changes: u64,
+    pub tools: Vec<i64>,
+    pub time: TimeReport,
+}
+
+/// `h:mm:ss.s`
+pub fn hms(s: f64) -> String {
+    let s = s.max(0.0);
+    let h = (s / 3600.0).floor();
+    let m = ((s - h * 3600.0) / 60.0).floor();
+    let sec = s - h * 3600.0 - m * 60.0;
+    format!("{h}:{m:02}:{sec:04.1}")
+}
+
+fn num(v: f64) -> String {
+    let r = (v * 1000.0).round() / 1000.0;
+    if r == 0.0 {
+        "0.000".into()
+    } else {
+        format!("{r:.3}")
+    }
+}
+
+impl Report {
+    pub fn json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_default() + "\n"
+    }
+
+    /// The human-readable statistics.
+    pub fn text(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "program: {}", self.program);
+        let _ = writeln!(
+            s,
+            "travel (mm, degrees for A-C; machine = work + offsets{})",
+            if self.machine_known {
+                ""
+            } else {
+                "; machine coordinates unknown: offsets not known (give --zero-start, --var-file or -D)"
+            }
+        );
+        let _ = writeln!(
+            s,
+            "  axis {:>12} {:>12} {:>12} {:>12}",
+            "work min", "work max", "machine min", "machine max"
+        );
+        for a in &self.axes {
+            let (wmin, wmax) = a
+                .work
+                .map_or(("-".into(), "-".into()), |r| (num(r.min), num(r.max)));
+            let (mmin, mmax) = a
+                .machine
+                .map_or(("-".into(), "-".into()), |r| (num(r.min), num(r.max)));
+            let _ = writeln!(
+                s,
+                "  {:<4} {wmin:>12} {wmax:>12} {mmin:>12} {mmax:>12}",
+                a.axis
+            );
+        }
+        let _ = writeln!(
+            s,
+            "moves: {} ({} rapid, {} feed of which {} arcs{})",
+            self.moves,
+            self.rapid_moves,
+            self.feed_moves,
+            self.arcs,
+            if self.probe_moves > 0 {
+                format!(", {} probe", self.probe_moves)
+            } else {
+                String::new()
+            }
+        );
+        let _ = writeln!(
+            s,
+            "path: feed {} mm, rapid {} mm",
+            num(self.feed_length),
+            num(self.rapid_length)
+        );
+        let tools: Vec<String> = self.tools.iter().map(|t| t.to_string()).collect();
+        let _ = writeln!(
+            s,
+            "tool changes: {}{}",
+            self.tool_changes,
+            if tools.is_empty() {
+                String::new()
+            } else {
+                format!(" (tools {})", tools.join(", "))
+            }
+        );
+        let t = &self.time;
+        let _ = writeln!(
+            s,
+            "estimated time: {} (feed {}, rapid {}, dwell {}){}",
+            hms(t.total_s),
+            hms(t.feed_s),
+            hms(t.rapid_s),
+            hms(t.dwell_s),
+            if t.machine_limits_used {
+                ""
+            } else {
+                "; no machine velocity or acceleration limits given (--ini, --grbl-settings)"
+            }
+        );
+        if t.untimed_feed_moves > 0 {
+            let _ = writeln!(
+                s,
+                "  not timed: {} feed moves (no feed rate, or feed per revolution with the spindle stopped)",
+                t.untimed_feed_moves
+            );
+        }
+        if t.untimed_rapid_moves > 0 {
+            let _ = writeln!(
+                s,
+                "  not timed: {} rapid moves (no maximum velocity for an axis they move)",
+                t.untimed_rapid_moves
+            );
+        }
+        let _ = writeln!(s, "how the estimate is made: {}", t.model);
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::machine::motion::{Feed, Plane, Point};
+
+    fn pt(x: f64, y: f64, z: f64, off: Option<f64>) -> Point {
+        let mut w = [0.0; 9];
+        w[0] = x;
+        w[1] = y;
+        w[2] = z;
+        Point {
+            work: w,
+            offset: off.map(|o| [o; 9]),
+        }
+    }
+
+    fn feed(r: f64) -> Feed {
+        Feed {
+            rate: r,
+            mode: FeedMode::UnitsPerMinute,
+        }
+    }
+
+    #[test]
+    fn trapezoid_shapes() {
+        assert_eq!(trapezoid(10.0, 5.0, f64::INFINITY), 2.0);
+        // Reaches 5 mm/s after 1 s and 2.5 mm: 2.5 + 5 cruise + 2.5.
+        assert!((trapezoid(10.0, 5.0, 5.0) - 3.0).abs() < 1e-12);
+        // Triangle: 1 mm at 1 mm/s² -> 2 * sqrt(1).
+        assert!((trapezoid(1.0, 5.0, 1.0) - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn ranges_lengths_and_counts() {
+        let mut s = Stats::new(MachineAxes::default());
+        s.add(&Motion::Line {
+            kind: MoveKind::Rapid,
+            from: pt(0.0, 0.0, 0.0, Some(10.0)),
+            to: pt(3.0, 4.0, 0.0, Some(10.0)),
+            feed: feed(0.0),
+        });
+        // Half circle from (3,4) about (3,0) clockwise to (3,-4): crosses +X at (7,0).
+        s.add(&Motion::Arc {
+            from: pt(3.0, 4.0, 0.0, Some(10.0)),
+            to: pt(3.0, -4.0, 0.0, Some(10.0)),
+            center: [3.0, 0.0],
+            plane: Plane::XY,
+            ccw: false,
+            turns: 1,
+            feed: feed(600.0),
+        });
+        s.add(&Motion::ToolChange { tool: 4 });
+        assert_eq!(s.work[0], Some(Range { min: 0.0, max: 7.0 }));
+        assert_eq!(
+            s.work[1],
+            Some(Range {
+                min: -4.0,
+                max: 4.0
+            })
+        );
+        assert_eq!(
+            s.machine[0],
+            Some(Range {
+                min: 10.0,
+                max: 17.0
+            })
+        );
+        assert!((s.rapid_length - 5.0).abs() < 1e-12);
+        assert!((s.feed_length - 4.0 * std::f64::consts::PI).abs() < 1e-12);
+        assert!((s.feed_time - 4.0 * std::f64::consts::PI / 10.0).abs() < 1e-12);
+        assert_eq!(s.untimed_rapids, 1);
+        assert_eq!((s.arcs, s.tool_changes), (1, 1));
+        let r = s.report("p");
+        assert!(r.text().contains("tools 4"));
+        assert!(r.json().contains("\"feed_length\""));
+    }
+
+    #[test]
+    fn velocity_and_acceleration_caps() {
+        let mut axes = MachineAxes::default();
+        axes.axes[0].max_vel = Some(2.0);
+        axes.axes[1].max_vel = Some(100.0);
+        let mut s = Stats::new(axes);
+        // 10 mm along X at F6000 (100 mm/s), capped by X at 2 mm/s.
+        s.add(&Motion::Line {
+            kind: MoveKind::Feed,
+            from: pt(0.0, 0.0, 0.0, None),
+            to: pt(10.0, 0.0, 0.0, None),
+            feed: feed(6000.0),
+        });
+        assert!((s.feed_time - 5.0).abs() < 1e-12);
+        // A rapid moving only Y at 100 mm/s.
+        s.add(&Motion::Line {
+            kind: MoveKind::Rapid,
+            from: pt(10.0, 0.0, 0.0, None),
+            to: pt(10.0, 50.0, 0.0, None),
+            feed: feed(0.0),
+        });
+        assert!((s.rapid_time - 0.5).abs() < 1e-12);
+        assert_eq!(s.machine_unknown, 2);
+        assert!(s.report("p").axes.iter().all(|a| a.machine.is_none()));
+    }
+}

@@ -1,0 +1,544 @@
+//! Statistics, travel limits and the toolpath picture.
+//!
+//! The statistics are checked against rs274: a small reader here turns
+//! rs274's canon of the same program (STRAIGHT_TRAVERSE, STRAIGHT_FEED,
+//! ARC_FEED with the offsets and units it announces) into travel ranges and
+//! path lengths, computed independently of ngcflat's geometry.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+use crate::oracle;
+
+fn programs() -> PathBuf {
+    crate::root().join("tests/integration/view-programs")
+}
+
+#[derive(Debug, Default)]
+struct Canon {
+    /// Ranges in mm over X, Y, Z: work and machine coordinates.
+    work: [Option<(f64, f64)>; 3],
+    machine: [Option<(f64, f64)>; 3],
+    feed: f64,
+    rapid: f64,
+    moves: u64,
+    arcs: u64,
+}
+
+fn grow(r: &mut Option<(f64, f64)>, v: f64) {
+    *r = Some(match *r {
+        Some((a, b)) => (a.min(v), b.max(v)),
+        None => (v, v),
+    });
+}
+
+fn args_of(line: &str) -> Vec<f64> {
+    let inner = line
+        .split_once('(')
+        .and_then(|(_, r)| r.rsplit_once(')'))
+        .map(|(a, _)| a)
+        .unwrap_or("");
+    inner
+        .split([',', ' '])
+        .filter(|s| !s.is_empty())
+        .filter_map(|s| s.trim().parse::<f64>().ok())
+        .collect()
+}
+
+/// Reads rs274's canon lines (counter and N field already removed).
+fn canon_stats(lines: &[String]) -> Canon {
+    let mut c = Canon::default();
+    let mut k = 1.0; // mm per program unit
+    let mut plane = (0usize, 1usize, 2usize); // first, second, helix axis
+    let mut g5x = [0.0; 3];
+    let mut g92 = [0.0; 3];
+    let mut tool = [0.0; 3];
+    // Machine position (mm): the machine starts at its origin. Moves are
+    // measured on the machine: a move that follows an offset change starts
+    // where the machine is, in the new work coordinates.
+    let mut pos_m = [0.0f64; 3];
+    let mut first = true;
+    let add_point = |c: &mut Canon, p: [f64; 3], off: [f64; 3]| {
+        for i in 0..3 {
+            grow(&mut c.work[i], p[i]);
+            grow(&mut c.machine[i], p[i] + off[i]);
+        }
+    };
+    for l in lines {
+        let a = args_of(l);
+        let off = |g5x: [f64; 3], g92: [f64; 3], tool: [f64; 3]| -> [f64; 3] {
+            std::array::from_fn(|i| g5x[i] + g92[i] + tool[i])
+        };
+        if l.starts_with("USE_LENGTH_UNITS(") {
+            k = if l.contains("INCHES") { 25.4 } else { 1.0 };
+        } else if l.starts_with("SELECT_PLANE(") {
+            plane = if l.contains("XZ") {
+                (2, 0, 1)
+            } else if l.contains("YZ") {
+                (1, 2, 0)
+            } else {
+                (0, 1, 2)
+            };
+        } else if l.starts_with("SET_G5X_OFFSET(") {
+            g5x = [a[1] * k, a[2] * k, a[3] * k];
+        } else if l.starts_with("SET_G92_OFFSET(") {
+            g92 = [a[0] * k, a[1] * k, a[2] * k];
+        } else if l.starts_with("USE_TOOL_LENGTH_OFFSET(") {
+            tool = [a[0] * k, a[1] * k, a[2] * k];
+        } else if l.starts_with("STRAIGHT_TRAVERSE(") || l.starts_with("STRAIGHT_FEED(") {
+            let o = off(g5x, g92, tool);
+            let start: [f64; 3] = std::array::from_fn(|i| pos_m[i] - o[i]);
+            let end = [a[0] * k, a[1] * k, a[2] * k];
+            if first {
+                add_point(&mut c, start, o);
+                first = false;
+            }
+            add_point(&mut c, end, o);
+            let len = ((end[0] - start[0]).powi(2)
+                + (end[1] - start[1]).powi(2)
+                + (end[2] - start[2]).powi(2))
+            .sqrt();
+            if l.starts_with("STRAIGHT_TRAVERSE") {
+                c.rapid += len;
+            } else {
+                c.feed += len;
+            }
+            c.moves += 1;
+            pos_m = std::array::from_fn(|i| end[i] + o[i]);
+        } else if l.starts_with("ARC_FEED(") {
+            let o = off(g5x, g92, tool);
+            let start: [f64; 3] = std::array::from_fn(|i| pos_m[i] - o[i]);
+            if first {
+                add_point(&mut c, start, o);
+                first = false;
+            }
+            let (fa, fb, h) = plane;
+            let mut end = [0.0; 3];
+            end[fa] = a[0] * k;
+            end[fb] = a[1] * k;
+            end[h] = a[5] * k;
+            let (ca, cb) = (a[2] * k, a[3] * k);
+            let rot = a[4];
+            let r = (start[fa] - ca).hypot(start[fb] - cb);
+            let a0 = (start[fb] - cb).atan2(start[fa] - ca);
+            let a1 = (end[fb] - cb).atan2(end[fa] - ca);
+            let tau = std::f64::consts::TAU;
+            let turns = rot.abs() - 1.0;
+            // Swept angle, positive, in the direction of rotation.
+            let mut sweep = if rot > 0.0 { a1 - a0 } else { a0 - a1 };
+            while sweep <= 1e-12 {
+                sweep += tau;
+            }
+            sweep += turns * tau;
+            // Every multiple of 90 degrees passed on the way.
+            for q in 0..4 {
+                let ang = q as f64 * std::f64::consts::FRAC_PI_2;
+                let mut d = if rot > 0.0 { ang - a0 } else { a0 - ang };
+                while d < 0.0 {
+                    d += tau;
+                }
+                while d >= tau {
+                    d -= tau;
+                }
+                if d > 0.0 && d < sweep {
+                    let mut p = start;
+                    p[fa] = ca + r * ang.cos();
+                    p[fb] = cb + r * ang.sin();
+                    p[h] = start[h] + (end[h] - start[h]) * d / sweep;
+                    add_point(&mut c, p, o);
+                }
+            }
+            add_point(&mut c, end, o);
+            c.feed += ((r * sweep).powi(2) + (end[h] - start[h]).powi(2)).sqrt();
+            c.moves += 1;
+            c.arcs += 1;
+            pos_m = std::array::from_fn(|i| end[i] + o[i]);
+        }
+    }
+    c
+}
+
+fn rs274_canon(program: &Path, tools: Option<&Path>) -> Vec<String> {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let ini = dir.path().join("v.ini");
+    std::fs::write(&ini, "[RS274NGC]\n").expect("ini");
+    let mut cmd = Command::new(oracle::RS274);
+    cmd.current_dir(dir.path()).env("HOME", dir.path());
+    cmd.arg("-g").arg("-i").arg(&ini);
+    if let Some(t) = tools {
+        cmd.arg("-t").arg(t);
+    }
+    cmd.arg(program)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    let out = cmd.output().expect("run rs274");
+    assert!(out.status.success(), "rs274 fails on {}", program.display());
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter_map(|l| {
+            let t = l.trim_start();
+            let d = t.bytes().take_while(u8::is_ascii_digit).count();
+            let rest = t.get(d..)?.strip_prefix(" N")?;
+            Some(
+                rest.trim_start_matches(|c: char| c == '.' || c.is_ascii_digit())
+                    .trim()
+                    .to_string(),
+            )
+        })
+        .collect()
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-6 * a.abs().max(b.abs()) + 1e-9
+}
+
+fn stats_json(program: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args: Vec<String> = vec!["stats".into(), "--json".into(), "--zero-start".into()];
+    args.extend(extra.iter().map(|s| s.to_string()));
+    args.push(program.display().to_string());
+    let (code, out, err) = crate::outcome(crate::ngcflat(&programs(), &args, None));
+    assert_eq!(code, 0, "stats {}: {err}", program.display());
+    serde_json::from_str(&out).expect("stats --json is JSON")
+}
+
+fn compare_with_rs274(name: &str, tools: bool) {
+    if !oracle::available(&format!("view::{name}")) {
+        return;
+    }
+    let prog = programs().join(name);
+    let tbl = programs().join("tools.tbl");
+    let canon = rs274_canon(&prog, tools.then_some(tbl.as_path()));
+    let c = canon_stats(&canon);
+    assert!(c.moves > 0, "no motion in rs274's canon of {name}");
+    let extra: Vec<&str> = if tools {
+        vec!["--tool-table", "tools.tbl"]
+    } else {
+        vec![]
+    };
+    let j = stats_json(&prog, &extra);
+    let mut problems = Vec::new();
+    let num = |v: &serde_json::Value| v.as_f64().unwrap_or(f64::NAN);
+    for (key, want) in [("feed_length", c.feed), ("rapid_length", c.rapid)] {
+        let got = num(&j[key]);
+        if !close(got, want) {
+            problems.push(format!("{key}: ngcflat {got}, rs274 {want}"));
+        }
+    }
+    if j["moves"].as_u64() != Some(c.moves) || j["arcs"].as_u64() != Some(c.arcs) {
+        problems.push(format!(
+            "moves/arcs: ngcflat {}/{}, rs274 {}/{}",
+            j["moves"], j["arcs"], c.moves, c.arcs
+        ));
+    }
+    let axes = j["axes"].as_array().cloned().unwrap_or_default();
+    for (i, letter) in ["X", "Y", "Z"].iter().enumerate() {
+        let a = axes.iter().find(|a| a["axis"] == *letter);
+        let Some(a) = a else {
+            problems.push(format!("{letter}: missing from ngcflat's axes"));
+            continue;
+        };
+        for (frame, want) in [("work", c.work[i]), ("machine", c.machine[i])] {
+            let Some((lo, hi)) = want else { continue };
+            let (glo, ghi) = (num(&a[frame]["min"]), num(&a[frame]["max"]));
+            if !close(glo, lo) || !close(ghi, hi) {
+                problems.push(format!(
+                    "{letter} {frame}: ngcflat {glo}..{ghi}, rs274 {lo}..{hi}"
+                ));
+            }
+        }
+    }
+    assert!(
+        problems.is_empty(),
+        "{name}: stats disagree with rs274's canon:\n  {}",
+        problems.join("\n  ")
+    );
+}
+
+#[test]
+fn stats_match_rs274_arcs_crossing_quadrants() {
+    compare_with_rs274("arcs-quadrants.ngc", false);
+}
+
+#[test]
+fn stats_match_rs274_inch_program() {
+    compare_with_rs274("inch.ngc", false);
+}
+
+#[test]
+fn stats_match_rs274_work_offsets() {
+    compare_with_rs274("work-offsets.ngc", false);
+}
+
+#[test]
+fn stats_match_rs274_tool_length_offsets() {
+    compare_with_rs274("tool-length.ngc", true);
+}
+
+#[test]
+fn canon_reader_finds_arc_extremes() {
+    // The reader itself: a clockwise half circle from (10,0) to (-10,0)
+    // about the origin passes (0,-10).
+    let lines: Vec<String> = [
+        "STRAIGHT_TRAVERSE(10.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+        "ARC_FEED(-10.0000, 0.0000, 0.0000, 0.0000, -1, 0.0000, 0.0000, 0.0000, 0.0000)",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let c = canon_stats(&lines);
+    assert_eq!(c.work[1], Some((-10.0, 0.0)));
+    assert_eq!(c.work[0], Some((-10.0, 10.0)));
+    assert!(close(c.feed, 10.0 * std::f64::consts::PI));
+}
+
+#[test]
+fn bad_machine_options_are_usage_errors() {
+    let dir = crate::tmp();
+    crate::put(dir.path(), "p.ngc", "G0 X1\nM2\n");
+    crate::put(dir.path(), "grbl.txt", "$0=10\n$110=fast\n");
+    crate::put(dir.path(), "m.ini", "[AXIS_Z]\nMAX_LIMIT = high\n");
+    for (args, want) in [
+        (
+            vec!["--limits", "X5", "p.ngc"],
+            "error[E1201]: --limits 'X5' is not a list of AXIS[MIN]:[MAX] ranges",
+        ),
+        (
+            vec!["--limits", "X10:0", "p.ngc"],
+            "error[E1201]: --limits 'X10:0'",
+        ),
+        (
+            vec!["check", "--limits", "Q0:1", "p.ngc"],
+            "error[E1201]: --limits 'Q0:1'",
+        ),
+        (
+            vec!["--grbl-settings", "grbl.txt", "p.ngc"],
+            "error[E1202]: GRBL $110 value 'fast' is not a number",
+        ),
+        (
+            vec!["stats", "--ini", "m.ini", "p.ngc"],
+            "error[E1202]: INI [AXIS_Z]MAX_LIMIT value 'high' is not a number",
+        ),
+    ] {
+        let (code, out, err) = crate::run(dir.path(), &args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(out.is_empty());
+        assert!(err.contains(want), "{args:?}: {err}");
+    }
+}
+
+/// The installed headless browser, if any.
+fn chromium() -> Option<PathBuf> {
+    ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
+        .iter()
+        .map(PathBuf::from)
+        .find(|p| p.exists())
+}
+
+/// Pixels of a PNG that differ from its top-left (background) colour, and
+/// how many distinct colours those have.
+fn non_background(png_path: &Path) -> (usize, usize) {
+    let file = std::fs::File::open(png_path).expect("screenshot");
+    let mut dec = png::Decoder::new(std::io::BufReader::new(file));
+    dec.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+    let mut reader = dec.read_info().expect("png header");
+    let mut buf = vec![0; reader.output_buffer_size().expect("png size")];
+    let info = reader.next_frame(&mut buf).expect("png frame");
+    let ch = info.color_type.samples();
+    let px: Vec<&[u8]> = buf[..info.buffer_size()].chunks(ch).collect();
+    let bg = px[0];
+    let mut colours = std::collections::HashSet::new();
+    let mut n = 0;
+    for p in &px {
+        if *p != bg {
+            n += 1;
+            colours.insert(p.to_vec());
+        }
+    }
+    (n, colours.len())
+}
+
+/// Renders pictures of a few programs in a real headless browser and
+/// checks they are not blank. Skips (and says so) without Chromium.
+#[test]
+fn plots_render_in_a_browser() {
+    let Some(browser) = chromium() else {
+        eprintln!(
+            "SKIPPED view::plots_render_in_a_browser: no chromium (apt-get install -y chromium)"
+        );
+        return;
+    };
+    let out = crate::tmp();
+    for (prog, view) in [
+        (crate::root().join("fixtures/ok/example-pocket.ngc"), "xy"),
+        (programs().join("arcs-quadrants.ngc"), "iso"),
+        (programs().join("arcs-quadrants.ngc"), "xz"),
+        (programs().join("inch.ngc"), "xy"),
+    ] {
+        let stem = prog
+            .file_stem()
+            .expect("stem")
+            .to_string_lossy()
+            .into_owned();
+        let svg = out.path().join(format!("{stem}-{view}.svg"));
+        let (code, _, err) = crate::run(
+            out.path(),
+            &[
+                "plot",
+                "--zero-start",
+                "--view",
+                view,
+                "-o",
+                svg.to_str().expect("utf-8 path"),
+                prog.to_str().expect("utf-8 path"),
+            ],
+        );
+        assert_eq!(code, 0, "plot {stem} {view}: {err}");
+        let png = out.path().join(format!("{stem}-{view}.png"));
+        let profile = crate::tmp();
+        let status = Command::new(&browser)
+            .args([
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--disable-background-networking",
+                "--disable-component-update",
+                "--disable-sync",
+                "--no-first-run",
+                "--hide-scrollbars",
+            ])
+            .arg(format!("--user-data-dir={}", profile.path().display()))
+            .arg(format!("--screenshot={}", png.display()))
+            .arg("--window-size=1100,800")
+            .arg(&svg)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .expect("run chromium");
+        assert!(status.success(), "chromium failed on {}", svg.display());
+        let (ink, colours) = non_background(&png);
+        // The toolpath, the box, the labels: thousands of pixels in
+        // several colours (a blank or all-black page has none).
+        assert!(
+            ink > 3000 && colours > 3,
+            "{stem} ({view}): {ink} non-background pixels in {colours} colours"
+        );
+        if let Ok(dir) = std::env::var("NGCFLAT_KEEP_SCREENSHOTS") {
+            let _ = std::fs::copy(&png, Path::new(&dir).join(png.file_name().expect("name")));
+        }
+    }
+}
+
+#[test]
+fn annotated_output_keeps_rs274_motion_and_messages() {
+    if !oracle::available("view::annotated_output_keeps_rs274_motion_and_messages") {
+        return;
+    }
+    let dir = crate::tmp();
+    crate::put(
+        dir.path(),
+        "subs/edge.ngc",
+        "o<edge> sub\n  G1 X#1 (MSG, edge)\n  (debug, at #1)\no<edge> endsub\nM2\n",
+    );
+    let main = "G21 G90 F300\nG0 X0 Y0\no<edge> call [5]\no<edge> call [7]\n(MSG, done)\nG2 X9 Y2 I1 J1\nM2\n";
+    crate::put(dir.path(), "main.ngc", main);
+    let (code, out, err) = crate::run(
+        dir.path(),
+        &["--zero-start", "-I", "subs", "--annotate", "main.ngc"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("G1 X5 (MSG, edge) ;from subs/edge.ngc:2:1 < main.ngc:3:1"),
+        "{out}"
+    );
+    let ini = oracle::ini_with(&[dir.path().join("subs")], "");
+    let a = oracle::run(main.as_bytes(), &ini, None);
+    let b = oracle::run(out.as_bytes(), &oracle::ini_with(&[], ""), None);
+    assert!(a.ok && b.ok, "{} / {}", a.stderr, b.stderr);
+    assert!(a.lines.iter().any(|l| l.contains("MESSAGE(\" edge\")")));
+    oracle::compare(&a.lines, &b.lines, 1e-4).expect("same canon with --annotate");
+}
+
+#[test]
+fn source_map_has_a_line_per_output_line() {
+    let dir = crate::tmp();
+    crate::put(
+        dir.path(),
+        "subs/sq.ngc",
+        "o<sq> sub\nG1 X#1\nG1 Y#1\no<sq> endsub\nM2\n",
+    );
+    crate::put(
+        dir.path(),
+        "main.ngc",
+        "G21 F100\no1 repeat [2]\n  o<sq> call [3]\no1 endrepeat\nM2\n",
+    );
+    let (code, out, err) = crate::run(
+        dir.path(),
+        &[
+            "--zero-start",
+            "-I",
+            "subs",
+            "--source-map",
+            "map.jsonl",
+            "main.ngc",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    let map = std::fs::read_to_string(dir.path().join("map.jsonl")).expect("source map written");
+    let entries: Vec<serde_json::Value> = map
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON line"))
+        .collect();
+    assert_eq!(entries.len(), out.lines().count(), "{out}\n{map}");
+    // Output: G21 F100, then G1 X3, G1 Y3 twice, then M2.
+    let e = &entries[3];
+    assert_eq!(e["output_line"], 4);
+    assert_eq!(e["file"], "subs/sq.ngc");
+    assert_eq!(e["line"], 2);
+    assert_eq!(e["calls"][0]["file"], "main.ngc");
+    assert_eq!(e["calls"][0]["line"], 3);
+    assert_eq!(e["calls"][0]["column"], 3);
+    assert_eq!(entries[5]["line"], 5);
+    assert_eq!(entries[5]["calls"].as_array().map(Vec::len), Some(0));
+    // A program that fails leaves no source map behind.
+    crate::put(dir.path(), "bad.ngc", "G1 X[1/0]\nM2\n");
+    let (code, _, _) = crate::run(
+        dir.path(),
+        &["--zero-start", "--source-map", "bad.jsonl", "bad.ngc"],
+    );
+    assert_eq!(code, 1);
+    assert!(!dir.path().join("bad.jsonl").exists());
+}
+
+#[test]
+fn check_stops_at_the_travel_limit() {
+    let dir = crate::tmp();
+    crate::put(dir.path(), "ok.ngc", "G21 G0 X10 Y10\nG1 X90 F100\nM2\n");
+    crate::put(
+        dir.path(),
+        "far.ngc",
+        "G21 G0 X10 Y10\nG1 X110 F100\nG1 X200\nM2\n",
+    );
+    let (code, _, err) = crate::run(
+        dir.path(),
+        &["check", "--zero-start", "--limits", "X0:100,Y0:100", "."],
+    );
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("far.ngc:2:1"), "{err}");
+    assert!(err.contains("[E1203]") || err.contains("E1203"), "{err}");
+    assert!(!err.contains("ok.ngc:"), "{err}");
+    // --no-limits turns it off.
+    let (code, _, err) = crate::run(
+        dir.path(),
+        &[
+            "check",
+            "--zero-start",
+            "--limits",
+            "X0:100",
+            "--no-limits",
+            ".",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+}
