@@ -9,9 +9,13 @@
 //! minute feed (G94), the same units, plane and work offsets** as the
 //! original block: the caller switches G91 off around them and back on
 //! after, as its output needs. Each line starts with its G or M word;
-//! motion lines carry every axis of the plane's three (X, Y, Z), even when
-//! unchanged, so they do not depend on the modal motion of the target.
-//! Feeds (F) are not written: the original feed stays in effect.
+//! cycle and arc lines carry all of X, Y and Z, even when unchanged, so
+//! they do not depend on the modal motion of the target; spline lines
+//! carry X and Y (splines are XY only). Feeds (F) and spindle speeds (S)
+//! are not written: the original's stay in effect. The words used are G0,
+//! G1, G2, G3 (with I/J/K offsets from the block's start, G91.1), G4 P,
+//! M3, M4, M5, and for G87 and G88 only M19 R0 P2 and M0: a target without
+//! those refuses the cycle.
 //!
 //! | function | construct | inputs |
 //! |---|---|---|
