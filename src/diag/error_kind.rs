@@ -142,6 +142,8 @@ pub enum ErrorKind {
     /// `G0 G1 X1`, `G1 X1 F0`, `M3 M4`: a block the reference refuses.
     /// A block LinuxCNC refuses (codes E0601 on).
     Block(super::BlockError),
+    /// A lathe cycle (G70–G72) LinuxCNC refuses.
+    Lathe(super::LatheError),
     /// `M72` with no `M70`/`M73` before it in this call level.
     NoSavedContext,
     /// `(abort, tool broke)`
@@ -296,6 +298,7 @@ impl ErrorKind {
             CompArcAfterOff => "E1174",
             CompNoDiameter { .. } => "E1175",
             CompLatheTool { .. } => "E1176",
+            Lathe(e) => e.code(),
             OutputLineTooLong { .. } => "E0401",
             StepLimit { .. } => "E0402",
             OutputLimit { .. } => "E0403",
@@ -521,6 +524,7 @@ impl fmt::Display for ErrorKind {
             ),
             CompNoDiameter { g } => write!(f, "{g} without a D word (the tool diameter)"),
             CompLatheTool { what } => write!(f, "{what}, but the plane is not G18"),
+            Lathe(e) => write!(f, "{e}"),
             NoSavedContext => write!(
                 f,
                 "M72 without a state saved by M70 or M73 at this call level"

@@ -2,11 +2,13 @@
 
 mod block_error;
 mod error_kind;
+mod lathe_error;
 mod render;
 mod warning_kind;
 
 pub use block_error::BlockError;
 pub use error_kind::ErrorKind;
+pub use lathe_error::LatheError;
 pub use render::{MessageFormat, render};
 pub use warning_kind::WarningKind;
 

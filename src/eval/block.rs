@@ -132,14 +132,20 @@ impl Interp<'_> {
             }
         }
         // The reference checks the block before acting on it.
-        if !words.is_empty()
-            && let Err((k, at)) =
-                super::validate::check_block(words, &self.modal, &self.nurbs, &self.cycle)
-        {
-            let span = at
-                .and_then(|i| word_spans.get(i).copied())
-                .unwrap_or(Span::new(0, raw.len() as u32));
-            return Err(self.error_in_line(k, file, start, span));
+        if !words.is_empty() {
+            match super::validate::check_block(words, &self.modal, &self.nurbs, &self.cycle) {
+                Err((k, at)) => {
+                    let span = at
+                        .and_then(|i| word_spans.get(i).copied())
+                        .unwrap_or(Span::new(0, raw.len() as u32));
+                    return Err(self.error_in_line(k, file, start, span));
+                }
+                Ok(true) => {
+                    self.apply_assigns(num_set, named_set);
+                    return self.lathe_block(file, start, raw.len() as u32, words);
+                }
+                Ok(false) => {}
+            }
         }
         // 2. Assignments: numbered in order, then named in order.
         self.apply_assigns(num_set, named_set);
@@ -277,7 +283,7 @@ impl Interp<'_> {
     /// Reads an assignment (target checks, then the value) into the sets
     /// applied after the line is read.
     #[inline(always)]
-    fn read_assign(
+    pub(super) fn read_assign(
         &mut self,
         file: &Rc<FileIndex>,
         start: u32,
@@ -312,7 +318,11 @@ impl Interp<'_> {
     }
 
     /// The line's assignments, numbered in order, then named in order.
-    fn apply_assigns(&mut self, num_set: &[(usize, f64)], named_set: &[(crate::parse::Name, f64)]) {
+    pub(super) fn apply_assigns(
+        &mut self,
+        num_set: &[(usize, f64)],
+        named_set: &[(crate::parse::Name, f64)],
+    ) {
         for &(i, v) in num_set {
             self.params.assign(i, v);
         }
@@ -323,7 +333,7 @@ impl Interp<'_> {
 
     /// A block ended the program (M2, M30, M99 at the top): the closing `%`
     /// of a `%` program, then nothing more runs.
-    fn end_program(&mut self) -> Result<(), crate::diag::Error> {
+    pub(super) fn end_program(&mut self) -> Result<(), crate::diag::Error> {
         if self.main.percent_start {
             self.emit_raw(b"%")?;
         }
@@ -358,14 +368,16 @@ impl Interp<'_> {
             // Checked and applied: a plain move.
             return self.write_line(file, start, raw, repl);
         }
-        if let Err((k, at)) =
-            super::validate::check_block(words, &self.modal, &self.nurbs, &self.cycle)
-        {
-            let span = match at.and_then(|i| items.get(i)) {
-                Some(Item::Word(w)) => w.span,
-                _ => Span::new(0, raw.len() as u32),
-            };
-            return Err(self.error_in_line(k, file, start, span));
+        match super::validate::check_block(words, &self.modal, &self.nurbs, &self.cycle) {
+            Err((k, at)) => {
+                let span = match at.and_then(|i| items.get(i)) {
+                    Some(Item::Word(w)) => w.span,
+                    _ => Span::new(0, raw.len() as u32),
+                };
+                return Err(self.error_in_line(k, file, start, span));
+            }
+            Ok(true) => return self.lathe_block(file, start, raw.len() as u32, words),
+            Ok(false) => {}
         }
         self.write_line(file, start, raw, repl)?;
         if self.apply_words(file, start, words, false)? {
@@ -481,14 +493,16 @@ impl Interp<'_> {
             words.push((w.letter, w.value));
         }
         let r = (|| {
-            if let Err((k, at)) =
-                super::validate::check_block(&words, &self.modal, &self.nurbs, &self.cycle)
-            {
-                let span = at
-                    .and_then(|i| fw.get(i))
-                    .map(|w| Span::new(w.start as u32, w.end as u32))
-                    .unwrap_or(Span::new(0, raw.len() as u32));
-                return Err(self.error_in_line(k, file, start, span));
+            match super::validate::check_block(&words, &self.modal, &self.nurbs, &self.cycle) {
+                Err((k, at)) => {
+                    let span = at
+                        .and_then(|i| fw.get(i))
+                        .map(|w| Span::new(w.start as u32, w.end as u32))
+                        .unwrap_or(Span::new(0, raw.len() as u32));
+                    return Err(self.error_in_line(k, file, start, span));
+                }
+                Ok(true) => return self.lathe_block(file, start, raw.len() as u32, &words),
+                Ok(false) => {}
             }
             let trimmed = raw
                 .iter()

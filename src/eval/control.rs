@@ -103,7 +103,7 @@ impl Interp<'_> {
     }
 
     /// Moves reading to an O-line (`after`: to the line after it).
-    fn goto(&mut self, file: &Rc<FileIndex>, oidx: u32, after: bool) {
+    pub(super) fn goto(&mut self, file: &Rc<FileIndex>, oidx: u32, after: bool) {
         let o = &file.olines[oidx as usize];
         if Rc::ptr_eq(&self.cur.file, file) {
             // The same file (any jump within a body): no count to touch.

@@ -11,6 +11,7 @@ mod degrees;
 mod expr;
 mod fast;
 mod hook;
+mod lathe;
 mod message;
 mod modal;
 mod named;
@@ -234,6 +235,8 @@ pub struct Interp<'s> {
     /// G40 ended an offset path: the next move must be straight (the fast
     /// paths leave such lines to the general one).
     comp_pending: bool,
+    /// A lathe cycle whose contour subroutine is running.
+    lathe: Option<Box<lathe::LatheRun>>,
 }
 
 /// The call stack of `frames` as sites, innermost caller first.
@@ -380,6 +383,7 @@ impl<'s> Interp<'s> {
             comp_pending: false,
             m61: None,
             consumer: None,
+            lathe: None,
         }
     }
 
@@ -641,6 +645,9 @@ impl<'s> Interp<'s> {
 
     /// Reads and runs one line.
     fn step(&mut self) -> Result<(), Error> {
+        if self.lathe.is_some() {
+            return self.step_contour();
+        }
         let file = self.cur.file.clone();
         let start = self.cur.pos;
         if start as u64 >= file.file.len() {

@@ -73,15 +73,16 @@ fn g_uses_axes(g: i32) -> bool {
 }
 
 /// Checks a block. `words` are (letter, value) in line order; returns the
-/// error and the index of the word it concerns.
+/// error and the index of the word it concerns, or whether the block runs
+/// a lathe cycle (G70–G72).
 pub fn check_block(
     words: &[(u8, f64)],
     modal: &Modal,
     points: &Nurbs,
     cycle: &Cycle,
-) -> Result<(), (ErrorKind, Option<usize>)> {
+) -> Result<bool, (ErrorKind, Option<usize>)> {
     if simple_block_ok(words, modal) {
-        return Ok(());
+        return Ok(false);
     }
     full_check(words, modal, points, cycle)
 }
@@ -140,7 +141,7 @@ fn simple_block_ok(words: &[(u8, f64)], modal: &Modal) -> bool {
 /// A check's result: the error and the index of the word it concerns.
 type Check = Result<(), (ErrorKind, Option<usize>)>;
 
-fn bad(e: BlockError, at: Option<usize>) -> Check {
+fn bad<T>(e: BlockError, at: Option<usize>) -> Result<T, (ErrorKind, Option<usize>)> {
     Err((ErrorKind::Block(e), at))
 }
 
@@ -235,7 +236,7 @@ fn full_check(
     modal: &Modal,
     points: &Nurbs,
     cycle: &Cycle,
-) -> Result<(), (ErrorKind, Option<usize>)> {
+) -> Result<bool, (ErrorKind, Option<usize>)> {
     let mut gseen: [Option<usize>; 16] = [None; 16];
     let mut mseen: [Option<usize>; 16] = [None; 16];
     // Fixed-size scratch: this runs for every line.
@@ -244,6 +245,7 @@ fn full_check(
     let mut mbuf = [(0i64, 0usize); 16];
     let mut mn = 0;
     let mut has = [None::<u8>; 128];
+    let mut lathe = false;
     for (i, &(l, v)) in words.iter().enumerate() {
         match l {
             b'g' => {
@@ -280,13 +282,8 @@ fn full_check(
                     }
                 }
                 if matches!(g, 700 | 710 | 711 | 712 | 720 | 721 | 722) {
-                    // The lathe cycles run a contour subroutine named by Q;
-                    // a flattened program has no subroutines left.
-                    let what = format!(
-                        "G{} (lathe cycle with a contour subroutine) cannot be flattened: the controller would need the subroutine; rewrite the cycle as moves",
-                        crate::emit::number_string(v, None)
-                    );
-                    return Err((ErrorKind::Unsupported { what }, Some(i)));
+                    // The lathe cycles run a contour subroutine named by Q.
+                    lathe = true;
                 }
                 gseen[grp as usize] = Some(i);
                 gbuf[gn] = (g, i);
@@ -336,7 +333,7 @@ fn full_check(
     if modal.ccomp != 400 || d.g_on(&[410, 411, 420, 421]) {
         check_comp(&d)?;
     }
-    Ok(())
+    Ok(lathe)
 }
 
 /// What the reference refuses while cutter compensation is on, and the
@@ -656,9 +653,11 @@ fn check_unused_words(d: &Decoded<'_>) -> Check {
             _ => Ok(()),
         }
     };
+    let rough = matches!(d.motion, 710 | 711 | 712 | 720 | 721 | 722);
+    let lathe = rough || d.motion == 700;
     uses(
         b'i',
-        arcish || (d.motion == 20 || d.motion == 30),
+        arcish || (d.motion == 20 || d.motion == 30) || rough,
         BlockError::WordUnused { letter: 'i' },
     )?;
     uses(
@@ -678,13 +677,14 @@ fn check_unused_words(d: &Decoded<'_>) -> Check {
             || canned
             || d.g_on(&[100])
             || d.axis_g0 == Some(100)
-            || d.m_on(&[19]),
+            || d.m_on(&[19])
+            || rough,
         BlockError::WordUnused { letter: 'r' },
     )?;
     uses(
         b'p',
         d.g_on(&[20, 30, 40, 100, 640, 50, 52, 760, 820, 860, 880, 890])
-            || matches!(d.motion, 20 | 30 | 52 | 820 | 860 | 880 | 890)
+            || matches!(d.motion, 20 | 30 | 52 | 820 | 860 | 880 | 890 | 700)
             || d.m_on(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98]),
         BlockError::WordUnused { letter: 'p' },
     )?;
@@ -692,6 +692,7 @@ fn check_unused_words(d: &Decoded<'_>) -> Check {
         b'q',
         d.g_on(&[50, 100, 640, 730, 760, 830])
             || matches!(d.motion, 730 | 830)
+            || lathe
             || d.m_on(&[19, 66, 67, 68, 61]),
         BlockError::WordUnused { letter: 'q' },
     )?;
@@ -702,12 +703,12 @@ fn check_unused_words(d: &Decoded<'_>) -> Check {
     )?;
     uses(
         b'd',
-        d.g_on(&[410, 411, 420, 421, 960]),
+        d.g_on(&[410, 411, 420, 421, 960]) || lathe,
         BlockError::WordUnused { letter: 'd' },
     )?;
     uses(
         b'e',
-        d.g_on(&[760]) || d.m_on(&[66, 67, 68]),
+        d.g_on(&[760]) || d.m_on(&[66, 67, 68]) || d.motion == 700,
         BlockError::WordUnused { letter: 'e' },
     )?;
     uses(

@@ -1,0 +1,550 @@
+//! Lathe cycles G70–G72 in the evaluator: the cycle block rapids to its
+//! start, the contour subroutine (Q) runs with its motion collected instead
+//! of written (its parameters and control flow as usual), and on its return
+//! the moves the cycle makes (`crate::geom::lathe`) are written as plain
+//! G0/G1/G2/G3 lines and applied to the state model.
+
+use std::rc::Rc;
+
+use crate::diag::{Error, ErrorKind, LatheError};
+use crate::emit::number_string;
+use crate::geom::lathe::{C, Contour, Cycle, Move, cut};
+use crate::parse::Name;
+use crate::parse::ast::{Item, Line, LineKind};
+use crate::program::{FileIndex, Window, next_line};
+
+use super::{FrameKind, Interp, SubRec, file_key, read_error};
+
+/// A cycle whose contour subroutine is running.
+pub struct LatheRun {
+    /// Number of frames once the subroutine has returned.
+    level: usize,
+    /// The cycle line.
+    file: Rc<FileIndex>,
+    start: u32,
+    line: u32,
+    cycle: Cycle,
+    begin: C,
+    contour: Contour,
+    /// The contour's current point (where the next element starts).
+    point: C,
+    /// Motion mode the contour lines take (G-code ×10).
+    motion: i32,
+    absolute: bool,
+    ijk_absolute: bool,
+    /// Where the machine is while the contour is read (after the rapid).
+    at: (
+        Result<f64, super::state::Unknown>,
+        Result<f64, super::state::Unknown>,
+    ),
+}
+
+/// What a contour line adds.
+enum Element {
+    Line(C),
+    Arc(bool, C, C),
+}
+
+fn lathe(k: LatheError) -> ErrorKind {
+    ErrorKind::Lathe(k)
+}
+
+impl Interp<'_> {
+    fn lathe_err(&self, k: LatheError, file: &Rc<FileIndex>, start: u32, len: u32) -> Error {
+        self.error(lathe(k), file, start, start + len)
+    }
+
+    /// A block with G70–G72 (checked): its other words act first, then the
+    /// rapid to the cycle's start and the contour subroutine's call.
+    pub(super) fn lathe_block(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        len: u32,
+        words: &[(u8, f64)],
+    ) -> Result<(), Error> {
+        let mut code = 0;
+        let mut others: Vec<(u8, f64)> = Vec::new();
+        let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
+        for &(l, v) in words {
+            match l {
+                b'g' if matches!(
+                    (v * 10.0).round() as i32,
+                    700 | 710 | 711 | 712 | 720 | 721 | 722
+                ) =>
+                {
+                    code = (v * 10.0).round() as i32
+                }
+                b'q' | b'd' | b'e' | b'i' | b'p' | b'r' | b'u' | b'w' | b'x' | b'z' => {}
+                _ => others.push((l, v)),
+            }
+        }
+        let name = format!("G{}", number_string(code as f64 / 10.0, None));
+        // The block's other words act before its motion.
+        let mut ends = false;
+        if others.iter().any(|w| w.0 != b'n') {
+            let mut text = String::new();
+            for &(l, v) in &others {
+                if !text.is_empty() {
+                    text.push(' ');
+                }
+                text.push(l.to_ascii_uppercase() as char);
+                text.push_str(&number_string(v, self.s.precision));
+            }
+            self.emit_raw(text.as_bytes())?;
+            ends = self.apply_words(file, start, &others, false)?;
+        }
+        let Some(q) = word(b'q') else {
+            return Err(self.lathe_err(LatheError::NoQ { code: name }, file, start, len));
+        };
+        if self.modal.ccomp != 400 && code != 700 {
+            return Err(self.lathe_err(LatheError::WithComp { code: name }, file, start, len));
+        }
+        if self.modal.plane != 180 {
+            return Err(self.lathe_err(LatheError::NotXz { code: name }, file, start, len));
+        }
+        if q.fract() != 0.0 || !(0.0..1e9).contains(&q) {
+            return Err(self.lathe_err(LatheError::BadQ { q }, file, start, len));
+        }
+        let span = crate::parse::ast::Span::new(0, len);
+        let cx = self
+            .position(0, span)
+            .map_err(|f| self.fault_in_line(*f, file, start))?;
+        let cz = self
+            .position(2, span)
+            .map_err(|f| self.fault_in_line(*f, file, start))?;
+        let (mut x, mut z) = (cx, cz);
+        if self.modal.absolute {
+            x = word(b'x').unwrap_or(x);
+            z = word(b'z').unwrap_or(z);
+        } else {
+            x += word(b'x').unwrap_or(0.0);
+            z += word(b'z').unwrap_or(0.0);
+        }
+        let cycle = if code == 700 {
+            Cycle::Finish {
+                d: word(b'd').unwrap_or(0.0),
+                e: word(b'e').unwrap_or(0.0),
+                passes: word(b'p').unwrap_or(1.0),
+            }
+        } else {
+            Cycle::Rough {
+                face: code >= 720,
+                mode: (code % 10) as u8,
+                u: word(b'u').unwrap_or(0.0),
+                w: word(b'w').unwrap_or(0.0),
+                d: word(b'd').unwrap_or(0.0),
+                i: word(b'i').unwrap_or(1.0),
+                r: word(b'r').unwrap_or(0.5),
+            }
+        };
+        // The rapid to the start is made with the words taken as absolute.
+        let rapid = C::new(word(b'z').unwrap_or(cz), word(b'x').unwrap_or(cx));
+        self.lathe_move(file, start, len, Move::Rapid(rapid))?;
+        if ends {
+            // An M2 on the cycle line: LinuxCNC ends before the contour.
+            return self.end_program();
+        }
+        let label = Name::new(&(q as i64).to_string());
+        let target = self.contour_sub(file, start, len, &label)?;
+        // Enter the subroutine as a call without arguments.
+        let ret = self.cur.clone();
+        let level = self.frames.len();
+        let mut f = match self.frame_pool.pop() {
+            Some(mut f) => {
+                f.reset(FrameKind::Call, label.clone());
+                f
+            }
+            None => Box::new(super::Frame::new(FrameKind::Call, label.clone())),
+        };
+        if self.level() + 1 > super::MAX_CALL_LEVEL {
+            return Err(self.error(
+                ErrorKind::TooDeep {
+                    limit: super::MAX_CALL_LEVEL,
+                },
+                file,
+                start,
+                start + len,
+            ));
+        }
+        f.ret = Some(ret);
+        let mut saved = self.saved_pool.pop().unwrap_or_else(|| Box::new([0.0; 30]));
+        saved.copy_from_slice(&self.params.values[1..31]);
+        self.params.values[1..31].fill(0.0);
+        self.params.set[1..31].fill(true);
+        f.saved = Some(saved);
+        if self.s.oword_nargs {
+            f.locals.insert(Name::new("n_args"), 0.0);
+        }
+        self.frames.push(f);
+        self.subs
+            .entry(label.clone())
+            .or_insert_with(|| target.clone());
+        self.called.insert(label.clone());
+        self.last_called = Some(label);
+        self.goto(&target.file, target.oidx, true);
+        let begin = C::new(z, x);
+        self.lathe = Some(Box::new(LatheRun {
+            level,
+            file: file.clone(),
+            start,
+            line: self.current_line_idx,
+            cycle,
+            begin,
+            contour: Contour::new(begin),
+            point: begin,
+            motion: self.modal.motion,
+            absolute: self.modal.absolute,
+            ijk_absolute: self.modal.ijk_absolute,
+            at: (self.pos.axes[0].clone(), self.pos.axes[2].clone()),
+        }));
+        Ok(())
+    }
+
+    /// The contour subroutine: one already defined, one in a file of the
+    /// search path, or one defined further on in this file.
+    fn contour_sub(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        len: u32,
+        label: &Name,
+    ) -> Result<SubRec, Error> {
+        if let Some(rec) = self.subs.get(label) {
+            return Ok(rec.clone());
+        }
+        let err = |s: &Self, k: ErrorKind| s.error(k, file, start, start + len);
+        let found = self.loader.find(label).map_err(|k| err(self, k))?;
+        let (sub_file, from) = match found {
+            Some(f) => (f, 0),
+            None => (file.clone(), self.current_line_idx),
+        };
+        let target = sub_file.occ.get(label).and_then(|l| {
+            l.iter().copied().find(|&j| {
+                sub_file.kind_of(j) == Some(crate::parse::ast::OKind::Sub)
+                    && sub_file.olines[j as usize].line_idx >= from
+            })
+        });
+        match target {
+            Some(t) => Ok(SubRec {
+                file: sub_file,
+                oidx: t,
+            }),
+            None => {
+                let searched = self.loader.searched();
+                Err(err(
+                    self,
+                    ErrorKind::SubNotFound {
+                        name: label.to_string(),
+                        searched,
+                    },
+                ))
+            }
+        }
+    }
+
+    /// One line while the contour subroutine runs.
+    pub(super) fn step_contour(&mut self) -> Result<(), Error> {
+        let file = self.cur.file.clone();
+        let start = self.cur.pos;
+        if start as u64 >= file.file.len() {
+            return self.end_of_file(&file);
+        }
+        let line_idx = self.cur.line;
+        self.current_line_start = start;
+        self.current_line_idx = line_idx;
+        if let Some(o) = file.olines.get(self.cur.next_o)
+            && o.line_idx == line_idx
+        {
+            self.count_step()?;
+            let oidx = self.cur.next_o as u32;
+            self.cur.next_o += 1;
+            self.cur.pos = o.next;
+            self.cur.line += 1;
+            self.exec_oline(&file, oidx)?;
+            if self
+                .lathe
+                .as_ref()
+                .is_some_and(|l| l.level == self.frames.len())
+            {
+                let end = file.olines[oidx as usize].line_len();
+                return self.finish_lathe(&file, start, end);
+            }
+            return Ok(());
+        }
+        let mut window = std::mem::take(&mut self.window);
+        let r = self.contour_read(&file, start, line_idx, &mut window);
+        self.window = window;
+        r
+    }
+
+    fn contour_read(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        line_idx: u32,
+        window: &mut Window,
+    ) -> Result<(), Error> {
+        if let Some(data) = file.file.memory()
+            && let Some((line, _, next)) = self.cache.get(&(file_key(file), line_idx))
+        {
+            let (line, next) = (line.clone(), *next);
+            let _ = data;
+            self.cur.pos = next;
+            self.cur.line += 1;
+            return self.contour_line(file, start, &line);
+        }
+        let (raw, next, terminated): (Vec<u8>, u32, bool) = match file.file.memory() {
+            Some(data) => {
+                let (end, next, t) = next_line(data, start as usize);
+                (data[start as usize..end].to_vec(), next as u32, t)
+            }
+            None => {
+                let l = window
+                    .line(&file.file, start)
+                    .map_err(|e| read_error(file, e))?;
+                (window.bytes(&l).to_vec(), l.next, l.terminated)
+            }
+        };
+        self.cur.pos = next;
+        self.cur.line += 1;
+        let line = self.parse_line(file, start, &raw, terminated)?;
+        self.contour_line(file, start, &line)
+    }
+
+    /// A line of the contour: its assignments act; its axis, I/K/R and
+    /// A/C words and its motion code add to the contour.
+    fn contour_line(&mut self, file: &Rc<FileIndex>, start: u32, line: &Line) -> Result<(), Error> {
+        let LineKind::Items(items) = &line.kind else {
+            return Ok(());
+        };
+        let mut words: Vec<(u8, f64)> = Vec::new();
+        let mut num_set = Vec::new();
+        let mut named_set = Vec::new();
+        for item in items {
+            match item {
+                Item::Word(w) => {
+                    let v = self
+                        .eval_value(&w.value)
+                        .map_err(|f| self.fault_in_line(*f, file, start))?;
+                    words.push((w.letter, v));
+                }
+                Item::Assign(a) => {
+                    self.read_assign(file, start, a, &mut num_set, &mut named_set)?
+                }
+                Item::Comment(_) => {}
+            }
+        }
+        self.apply_assigns(&num_set, &named_set);
+        if words.is_empty() {
+            return Ok(());
+        }
+        let len = line_len(file, start);
+        let bad = |s: &Self, k: LatheError| s.lathe_err(k, file, start, len);
+        let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
+        let diameter = self.modal.lathe_diameter;
+        let Some(run) = self.lathe.as_deref() else {
+            return Ok(());
+        };
+        let (absolute, ijk_absolute, point) = (run.absolute, run.ijk_absolute, run.point);
+        let mut end = if absolute { point } else { C::new(0.0, 0.0) };
+        if let Some(u) = word(b'u') {
+            if !absolute {
+                return Err(bad(self, LatheError::UIncremental));
+            }
+            if word(b'x').is_some() {
+                return Err(bad(self, LatheError::UAndX));
+            }
+            end.im += if diameter { u / 2.0 } else { u };
+        } else if let Some(x) = word(b'x') {
+            end.im = x;
+        }
+        if let Some(w) = word(b'w') {
+            if !absolute {
+                return Err(bad(self, LatheError::WIncremental));
+            }
+            if word(b'z').is_some() {
+                return Err(bad(self, LatheError::WAndZ));
+            }
+            end.re += w;
+        } else if let Some(z) = word(b'z') {
+            end.re = z;
+        }
+        let (iw, kw) = (word(b'i'), word(b'k'));
+        let mut center = C::new(kw.unwrap_or(0.0), iw.unwrap_or(0.0));
+        if !absolute {
+            end = end + point;
+        }
+        let mut motion = run.motion;
+        for &(l, v) in &words {
+            let g = (v * 10.0).round() as i32;
+            if l == b'g' && super::validate::is_motion(g) {
+                motion = g;
+            }
+        }
+        let mut add: Option<Element> = None;
+        if end != point {
+            match motion {
+                0 | 10 => add = Some(Element::Line(end)),
+                20 | 30 => {
+                    if let Some(r) = word(b'r') {
+                        if iw.is_some() || kw.is_some() {
+                            return Err(bad(self, LatheError::ArcRAndIk));
+                        }
+                        let chord = end - point;
+                        let n = chord.re * chord.re + chord.im * chord.im;
+                        let f = ((r * r - n / 4.0) / n).sqrt();
+                        if !f.is_finite() {
+                            return Err(bad(self, LatheError::ArcRadiusTooSmall));
+                        }
+                        let mid = C::new((point.re + end.re) / 2.0, (point.im + end.im) / 2.0);
+                        // i * f * chord
+                        let d = C::new(-f * chord.im, f * chord.re);
+                        center = if motion == 30 {
+                            C::new(mid.re + d.re, mid.im + d.im)
+                        } else {
+                            C::new(mid.re - d.re, mid.im - d.im)
+                        };
+                    } else {
+                        if iw.is_none() && kw.is_none() {
+                            return Err(bad(self, LatheError::ArcNoIk));
+                        }
+                        if !ijk_absolute {
+                            center = center + point;
+                        }
+                    }
+                    let ccw = motion == 30;
+                    add = Some(Element::Arc(ccw, center, end));
+                }
+                _ => {}
+            }
+        }
+        let corner = if end != point && matches!(motion, 0 | 10 | 20 | 30) {
+            let (a, c) = (word(b'a'), word(b'c'));
+            if a.is_some() && c.is_some() {
+                return Err(bad(self, LatheError::AAndC));
+            }
+            (a, c)
+        } else {
+            (None, None)
+        };
+        let Some(run) = self.lathe.as_deref_mut() else {
+            return Ok(());
+        };
+        run.motion = motion;
+        if end != point {
+            match add {
+                Some(Element::Line(e)) => run.contour.line(e),
+                Some(Element::Arc(ccw, c, e)) => run.contour.arc(ccw, c, e),
+                None => {}
+            }
+            if let Some(a) = corner.0 {
+                run.contour.fillet(a);
+            }
+            if let Some(c) = corner.1 {
+                run.contour.chamfer(c);
+            }
+            run.point = end;
+            self.pos.axes[0] = Ok(end.im);
+            self.pos.axes[2] = Ok(end.re);
+        }
+        Ok(())
+    }
+
+    /// The contour subroutine returned (at the line `start` of `file`):
+    /// the cycle's moves.
+    fn finish_lathe(&mut self, file: &Rc<FileIndex>, start: u32, len: u32) -> Result<(), Error> {
+        let Some(run) = self.lathe.take() else {
+            return Ok(());
+        };
+        if let Cycle::Rough { i, .. } = run.cycle
+            && i <= 0.0
+            && run.contour.len() > 1
+        {
+            return Err(self.lathe_err(LatheError::INotPositive, file, start, len));
+        }
+        let moves = match cut(&run.contour, run.begin, &run.cycle) {
+            Ok(m) => m,
+            Err(g) => {
+                return Err(self.lathe_err(LatheError::Geometry(g), file, start, len));
+            }
+        };
+        // The moves start where the machine is (LinuxCNC's position is the
+        // contour's end, which only its arcs' skip test reads).
+        if !moves.is_empty() {
+            (self.pos.axes[0], self.pos.axes[2]) = run.at.clone();
+        }
+        // The moves belong to the cycle line.
+        let (cf, cs) = (run.file.clone(), run.start);
+        let saved = (self.current_line_start, self.current_line_idx);
+        self.current_line_start = cs;
+        self.current_line_idx = run.line;
+        let clen = line_len(&cf, cs);
+        for m in moves {
+            self.lathe_move(&cf, cs, clen, m)?;
+        }
+        (self.current_line_start, self.current_line_idx) = saved;
+        Ok(())
+    }
+
+    /// Writes one move of a cycle and applies it.
+    fn lathe_move(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        len: u32,
+        m: Move,
+    ) -> Result<(), Error> {
+        let cx = self.pos.axes[0].clone().unwrap_or(0.0);
+        let cz = self.pos.axes[2].clone().unwrap_or(0.0);
+        let (g, end, center) = match m {
+            Move::Rapid(e) => (0.0, e, None),
+            Move::Feed(e) => (1.0, e, None),
+            Move::Arc { ccw, center, end } => (if ccw { 3.0 } else { 2.0 }, end, Some(center)),
+        };
+        let (xw, zw) = if self.modal.absolute {
+            (end.im, end.re)
+        } else if self.modal.lathe_diameter {
+            (end.im - 2.0 * cx, end.re - cz)
+        } else {
+            (end.im - cx, end.re - cz)
+        };
+        let mut words = vec![(b'g', g), (b'x', xw), (b'z', zw)];
+        if let Some(c) = center {
+            if self.modal.ijk_absolute {
+                words.push((b'i', c.im));
+                words.push((b'k', c.re));
+            } else {
+                words.push((b'i', c.im - cx));
+                words.push((b'k', c.re - cz));
+            }
+        }
+        if let Err((k, _)) =
+            super::validate::check_block(&words, &self.modal, &self.nurbs, &self.cycle)
+        {
+            return Err(self.error(k, file, start, start + len));
+        }
+        let mut text = String::with_capacity(64);
+        for &(l, v) in &words {
+            if !text.is_empty() {
+                text.push(' ');
+            }
+            text.push(l.to_ascii_uppercase() as char);
+            text.push_str(&number_string(v, self.s.precision));
+        }
+        self.emit_raw(text.as_bytes())?;
+        self.apply_words(file, start, &words, false)?;
+        Ok(())
+    }
+}
+
+/// Length of the line at `start` (for a site), without its terminator.
+fn line_len(file: &Rc<FileIndex>, start: u32) -> u32 {
+    match file.file.memory() {
+        Some(data) => {
+            let (end, _, _) = next_line(data, start as usize);
+            (end as u32).saturating_sub(start)
+        }
+        None => 0,
+    }
+}
