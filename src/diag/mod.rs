@@ -37,7 +37,11 @@ pub(crate) struct Located {
     pub(crate) col: u32,
     pub(crate) end_line: u32,
     pub(crate) end_col: u32,
+    /// The line as shown: control characters and bytes that are not
+    /// UTF-8 escaped (see [`render::shown_line`]).
     pub(crate) text: String,
+    /// Blanks as wide as the shown text before the column, for the caret.
+    pub(crate) lead: String,
 }
 
 impl Site {
@@ -50,17 +54,19 @@ impl Site {
             let there = file.locate(end);
             (there.line, there.col)
         };
+        let (text, lead) = render::shown_line(&here.text, here.col);
         Site {
             file: Arc::clone(file),
             start,
             end,
             loc: Located {
-                file: file.display_name(),
+                file: render::shown(&file.display_name()).into_owned(),
                 line: here.line,
                 col: here.col,
                 end_line,
                 end_col,
-                text: String::from_utf8_lossy(&here.text).into_owned(),
+                text,
+                lead,
             },
         }
     }

@@ -18,6 +18,69 @@ pub enum MessageFormat {
     Github,
 }
 
+/// How a character from a program or a user is shown in a diagnostic:
+/// control characters (C0 but tab, DEL, C1) escaped as `\x1b` or `\u{85}`,
+/// so that no byte of a program can act on the terminal or the CI log.
+fn push_shown(out: &mut String, c: char) {
+    if c.is_control() && c != '\t' {
+        if (c as u32) < 0x80 {
+            let _ = write!(out, "\\x{:02x}", c as u32);
+        } else {
+            let _ = write!(out, "\\u{{{:x}}}", c as u32);
+        }
+    } else {
+        out.push(c);
+    }
+}
+
+/// Text shown as [`push_shown`] shows it (messages, file names).
+pub(crate) fn shown(s: &str) -> std::borrow::Cow<'_, str> {
+    if !s.chars().any(|c| c.is_control() && c != '\t') {
+        return std::borrow::Cow::Borrowed(s);
+    }
+    let mut out = String::with_capacity(s.len() + 8);
+    for c in s.chars() {
+        push_shown(&mut out, c);
+    }
+    std::borrow::Cow::Owned(out)
+}
+
+/// A source line as shown, and the blanks that lead to its 1-based column
+/// `col` (columns count characters, an invalid UTF-8 sequence as one, as
+/// the locating does). Bytes that are not UTF-8 are shown as `\xff`,
+/// control characters as [`push_shown`] shows them.
+pub(crate) fn shown_line(bytes: &[u8], col: u32) -> (String, String) {
+    let mut text = String::with_capacity(bytes.len());
+    let mut lead = String::new();
+    let mut n = 1u32;
+    let mut unit = |text: &mut String, lead: &mut String, before: usize, tab: bool| {
+        if n < col {
+            if tab {
+                lead.push('\t');
+            } else {
+                let w = text[before..].chars().count();
+                lead.extend(std::iter::repeat_n(' ', w));
+            }
+        }
+        n += 1;
+    };
+    for chunk in bytes.utf8_chunks() {
+        for c in chunk.valid().chars() {
+            let before = text.len();
+            push_shown(&mut text, c);
+            unit(&mut text, &mut lead, before, c == '\t');
+        }
+        if !chunk.invalid().is_empty() {
+            let before = text.len();
+            for b in chunk.invalid() {
+                let _ = write!(text, "\\x{b:02x}");
+            }
+            unit(&mut text, &mut lead, before, false);
+        }
+    }
+    (text, lead)
+}
+
 fn json_str(out: &mut String, s: &str) {
     out.push('"');
     for c in s.chars() {
@@ -51,7 +114,7 @@ fn github_prop(s: &str) -> String {
 pub fn render(d: &Diagnostic, format: MessageFormat, color: bool) -> String {
     let level = d.level();
     let code = d.code();
-    let message = d.message();
+    let message = shown(&d.message()).into_owned();
     let here = d.site.as_ref().map(|s| s.located());
     let stack: Vec<&Located> = d.stack.iter().map(|s| s.located()).collect();
     let mut out = String::new();
@@ -150,12 +213,7 @@ pub fn render(d: &Diagnostic, format: MessageFormat, color: bool) -> String {
                 } else {
                     1
                 };
-                let lead: String = l
-                    .text
-                    .chars()
-                    .take(l.col as usize - 1)
-                    .map(|c| if c == '\t' { '\t' } else { ' ' })
-                    .collect();
+                let lead = &l.lead;
                 let _ = writeln!(
                     out,
                     "{pad} {blue}|{reset} {lead}{lvl}{}{reset}",
