@@ -163,6 +163,20 @@ fn exit_for(e: &Diagnostic) -> ExitCode {
     }
 }
 
+/// Whether `-o output` names the input program (the same file by device
+/// and inode, through any links; `None` or `-` is standard input).
+fn same_file(output: &Path, input: Option<&Path>) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    let input = match input {
+        Some(p) if p.as_os_str() != "-" => p,
+        _ => Path::new("/dev/stdin"),
+    };
+    match (std::fs::metadata(output), std::fs::metadata(input)) {
+        (Ok(o), Ok(i)) => o.is_file() && o.dev() == i.dev() && o.ino() == i.ino(),
+        _ => false,
+    }
+}
+
 /// The command-line program.
 pub fn run(cli: config::Cli) -> ExitCode {
     emit::interrupt::install();
@@ -244,7 +258,13 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
                 }
             };
             let dest = match args.output {
-                Some(p) => Destination::File(p),
+                Some(p) => {
+                    if same_file(&p, args.file.as_deref()) {
+                        let k = ErrorKind::OutputIsInput { output: p };
+                        return Ok(setup_error(k, cfg.format));
+                    }
+                    Destination::File(p)
+                }
                 None => Destination::Stdout,
             };
             let extras = view::run::Extras {

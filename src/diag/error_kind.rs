@@ -204,6 +204,8 @@ pub enum ErrorKind {
     Internal { what: String },
     /// `o[1] sub`: a definition whose label is computed.
     ComputedSubLabel,
+    /// `ngcflat -o part.ngc part.ngc` (also through links).
+    OutputIsInput { output: PathBuf },
     /// `--start-position part.ngc`: not a list of axis words.
     BadStartPosition { text: String },
     /// `G38.2 Z-10` then `#5063`: the probe's result exists only on the
@@ -311,6 +313,7 @@ impl ErrorKind {
             Unsupported { .. } => "E0507",
             Internal { .. } => "E0700",
             ComputedSubLabel => "E0701",
+            OutputIsInput { .. } => "E0702",
             BadStartPosition { .. } => "E0800",
             ProbeResultUnknown { .. } => "E0801",
             BadLimits { .. } => "E1201",
@@ -570,6 +573,11 @@ impl fmt::Display for ErrorKind {
             Internal { what } => write!(
                 f,
                 "internal error: {what}; please report it with the program"
+            ),
+            OutputIsInput { output } => write!(
+                f,
+                "the output {} is the program being flattened; choose another output file",
+                output.display()
             ),
             ComputedSubLabel => write!(
                 f,

@@ -61,12 +61,30 @@ impl Spool {
         })
     }
 
-    fn named_in(dir: &Path) -> io::Result<Spool> {
+    /// A spool in `dir` to be renamed onto `target`: with the target's
+    /// permissions if it exists, else those of a new file (0666 less the
+    /// umask).
+    fn named_in(dir: &Path, target: &Path) -> io::Result<Spool> {
+        use std::os::unix::fs::PermissionsExt;
+        let keep = std::fs::metadata(target).ok().map(|m| m.permissions());
         let (file, path) = tempfile::Builder::new()
             .prefix(".ngcflat-")
             .suffix(".tmp")
-            .tempfile_in(dir)?
+            .permissions(std::fs::Permissions::from_mode(0o666))
+            .tempfile_in(dir)
+            .map_err(|e| {
+                io::Error::new(
+                    e.kind(),
+                    format!(
+                        "cannot create a temporary file in the folder {} (the output is written there, then renamed): {e}",
+                        dir.display()
+                    ),
+                )
+            })?
             .into_parts();
+        if let Some(p) = keep {
+            file.set_permissions(p)?;
+        }
         crate::emit::interrupt::register(&path);
         Ok(Spool {
             file: BufWriter::with_capacity(1 << 16, file),
@@ -87,9 +105,43 @@ impl Drop for Spool {
 #[derive(Debug, Clone)]
 pub enum Destination {
     Stdout,
+    /// `-o`: a regular file is replaced atomically (a temporary file in its
+    /// folder renamed onto it; through a symbolic link, the link's target);
+    /// a FIFO or a device is opened and written (see [`resolve_output`]).
     File(PathBuf),
     /// Thrown away (check mode).
     Discard,
+    /// A FIFO, device or socket named by `-o` (after links): opened for
+    /// writing on release, not replaced.
+    Special(PathBuf),
+}
+
+/// Where `-o PATH` really writes: the file a chain of symbolic links ends
+/// at (the link is kept, its target replaced), and whether that is a FIFO,
+/// device or socket, written in place rather than replaced.
+pub fn resolve_output(path: &Path) -> io::Result<(PathBuf, bool)> {
+    let mut p = path.to_path_buf();
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&p) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let to = std::fs::read_link(&p)?;
+                p = match p.parent() {
+                    Some(dir) => dir.join(to),
+                    None => to,
+                };
+            }
+            Ok(m) => {
+                let ft = m.file_type();
+                if ft.is_dir() {
+                    return Err(io::Error::other("is a folder"));
+                }
+                return Ok((p, !ft.is_file()));
+            }
+            Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok((p, false)),
+            Err(e) => return Err(e),
+        }
+    }
+    Err(io::Error::other("too many levels of symbolic links"))
 }
 
 /// Flattened output held back until the program is known to be good.
@@ -135,13 +187,23 @@ fn changed(input: &SourceFile) -> io::Error {
 
 impl Sink {
     pub fn new(dest: Destination) -> io::Result<Sink> {
+        let mut dest = dest;
         let spill = match &dest {
             Destination::File(p) => {
-                let dir = match p.parent() {
-                    Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-                    _ => PathBuf::from("."),
-                };
-                Some(Spool::named_in(&dir)?)
+                let (target, special) = resolve_output(p)?;
+                if special {
+                    // Written in place on release; spooled like stdout.
+                    dest = Destination::Special(target);
+                    None
+                } else {
+                    let dir = match target.parent() {
+                        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+                        _ => PathBuf::from("."),
+                    };
+                    let spool = Spool::named_in(&dir, &target)?;
+                    dest = Destination::File(target);
+                    Some(spool)
+                }
             }
             _ => None,
         };
@@ -359,6 +421,11 @@ impl Sink {
                     .take()
                     .ok_or_else(|| io::Error::other("no spool file"))?;
                 crate::emit::interrupt::persist(path, &target)
+            }
+            Destination::Special(target) => {
+                let f = File::options().write(true).open(&target)?;
+                let mut out = BufWriter::with_capacity(1 << 16, f);
+                self.release(&mut out)
             }
             Destination::Stdout => {
                 let stdout = io::stdout();

@@ -396,3 +396,135 @@ fn the_output_line_guard_counts_generated_lines_only() {
     assert_eq!(code, 1, "{err}");
     assert!(out.is_empty() && err.contains("[E0403]"), "{err}");
 }
+
+#[test]
+fn the_output_cannot_be_the_program() {
+    let d = tmp();
+    let p = d.path();
+    let prog = "G0 X[1+1]\nM2\n";
+    put(p, "part.ngc", prog);
+    std::os::unix::fs::symlink("part.ngc", p.join("link.ngc")).unwrap();
+    std::fs::hard_link(p.join("part.ngc"), p.join("hard.ngc")).unwrap();
+    for (out, input) in [
+        ("part.ngc", "part.ngc"),
+        ("./part.ngc", "part.ngc"),
+        ("link.ngc", "part.ngc"),
+        ("hard.ngc", "part.ngc"),
+        ("part.ngc", "link.ngc"),
+    ] {
+        let (code, _, err) = run(p, &["-o", out, input]);
+        assert_eq!(code, 2, "-o {out} {input}: {err}");
+        assert!(err.contains("[E0702]"), "{err}");
+        assert_eq!(std::fs::read_to_string(p.join("part.ngc")).unwrap(), prog);
+    }
+    // From standard input too.
+    let out = Command::new(bin())
+        .current_dir(p)
+        .args(["-o", "part.ngc"])
+        .stdin(std::fs::File::open(p.join("part.ngc")).unwrap())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(std::fs::read_to_string(p.join("part.ngc")).unwrap(), prog);
+}
+
+#[test]
+fn the_output_keeps_links_fifos_and_modes() {
+    use std::os::unix::fs::PermissionsExt;
+    let d = tmp();
+    let p = d.path();
+    put(p, "part.ngc", "G0 X[1+1]\nM2\n");
+    let want = "G0 X2\nM2\n";
+    // A symbolic link: its target is replaced, the link kept.
+    put(p, "real/out.nc", "OLD\n");
+    std::os::unix::fs::symlink("real/out.nc", p.join("out.nc")).unwrap();
+    let (code, _, err) = run(p, &["-o", "out.nc", "part.ngc"]);
+    assert_eq!(code, 0, "{err}");
+    let m = std::fs::symlink_metadata(p.join("out.nc")).unwrap();
+    assert!(m.file_type().is_symlink());
+    assert_eq!(
+        std::fs::read_to_string(p.join("real/out.nc")).unwrap(),
+        want
+    );
+    assert_eq!(names(&p.join("real")), ["out.nc"]);
+    // An existing file's mode is kept.
+    for mode in [0o600, 0o755, 0o640] {
+        put(p, "m.nc", "OLD\n");
+        std::fs::set_permissions(p.join("m.nc"), std::fs::Permissions::from_mode(mode)).unwrap();
+        let (code, _, err) = run(p, &["-o", "m.nc", "part.ngc"]);
+        assert_eq!(code, 0, "{err}");
+        let got = std::fs::metadata(p.join("m.nc"))
+            .unwrap()
+            .permissions()
+            .mode()
+            & 0o7777;
+        assert_eq!(got, mode);
+        assert_eq!(std::fs::read_to_string(p.join("m.nc")).unwrap(), want);
+    }
+    // A new file gets the usual mode (0666 less the umask), not 0600.
+    let (code, _, _) = run(p, &["-o", "new.nc", "part.ngc"]);
+    assert_eq!(code, 0);
+    let got = std::fs::metadata(p.join("new.nc"))
+        .unwrap()
+        .permissions()
+        .mode()
+        & 0o777;
+    assert_ne!(got & 0o044, 0, "mode {got:o}");
+    // A FIFO is written into, not replaced.
+    let fifo = p.join("fifo.nc");
+    assert!(
+        Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success()
+    );
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::read_to_string(fifo).unwrap())
+    };
+    let child = Command::new(bin())
+        .current_dir(p)
+        .args(["-o", "fifo.nc", "part.ngc"])
+        .stdin(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let out = wait_bounded(child, 30);
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(reader.join().unwrap(), want);
+    use std::os::unix::fs::FileTypeExt;
+    assert!(
+        std::fs::symlink_metadata(&fifo)
+            .unwrap()
+            .file_type()
+            .is_fifo()
+    );
+    let left: Vec<String> = names(p)
+        .into_iter()
+        .filter(|n| n.ends_with(".tmp"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}
+
+#[test]
+fn an_unwritable_folder_is_named() {
+    use std::os::unix::fs::PermissionsExt;
+    let d = tmp();
+    let p = d.path();
+    put(p, "part.ngc", "G0 X1\nM2\n");
+    // A folder that is not there (testable as any user): named.
+    let (code, _, err) = run(p, &["-o", "nodir/out.nc", "part.ngc"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("in the folder nodir"), "{err}");
+    put(p, "ro/out.nc", "OLD\n");
+    std::fs::set_permissions(p.join("ro"), std::fs::Permissions::from_mode(0o555)).unwrap();
+    if std::fs::write(p.join("ro/probe"), b"").is_ok() {
+        eprintln!("SKIPPED: permissions are not enforced for this user");
+        return;
+    }
+    let (code, _, err) = run(p, &["-o", "ro/out.nc", "part.ngc"]);
+    std::fs::set_permissions(p.join("ro"), std::fs::Permissions::from_mode(0o755)).unwrap();
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("in the folder ro"), "{err}");
+}
