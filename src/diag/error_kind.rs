@@ -620,7 +620,7 @@ impl fmt::Display for ErrorKind {
             }
             LimitNeedsOffsets => write!(
                 f,
-                "travel limits are in machine coordinates, but where this move goes on the machine is not known (the offsets from work to machine coordinates, or the position); supply them with --zero-start, --var-file or -D (e.g. -D 5221=0 for the G54 X offset), or --start-position"
+                "travel limits are in machine coordinates, but where this move goes on the machine is not known (the offsets from work to machine coordinates, or the position); supply them with --zero-start, --var-file or -D (e.g. -D 5221=0 for the G54 X offset) and --start-position, or turn the check off with --no-limits"
             ),
         }
     }

@@ -542,3 +542,120 @@ fn check_stops_at_the_travel_limit() {
     );
     assert_eq!(code, 0, "{err}");
 }
+
+#[test]
+fn run_time_estimate_uses_grbl_rates_and_accelerations() {
+    let dir = crate::tmp();
+    // X: 100 mm/s (6000 mm/min), 50 mm/s²; Y: 25 mm/s, 10 mm/s².
+    crate::put(
+        dir.path(),
+        "grbl.txt",
+        "$110=6000.000\n$111=1500.000\n$112=600\n$120=50.000\n$121=10\n$122=10\n",
+    );
+    // A 200 mm rapid along X, a 5 mm rapid along Y, then a 100 mm feed
+    // along X at F1200 (20 mm/s) and a 1 s dwell.
+    crate::put(
+        dir.path(),
+        "p.ngc",
+        "G21 G90 G94\nG0 X200\nG0 Y5\nG1 X100 F1200\nG4 P1\nM2\n",
+    );
+    let (code, out, err) = crate::run(
+        dir.path(),
+        &[
+            "stats",
+            "--json",
+            "--zero-start",
+            "--grbl-settings",
+            "grbl.txt",
+            "p.ngc",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    let j: serde_json::Value = serde_json::from_str(&out).expect("json");
+    // Rest to rest: accelerate to v at a, cruise, brake; a triangle when
+    // the move is too short to reach v.
+    let trapezoid = |len: f64, v: f64, a: f64| {
+        if len >= v * v / a {
+            len / v + v / a
+        } else {
+            2.0 * (len / a).sqrt()
+        }
+    };
+    let rapid = trapezoid(200.0, 100.0, 50.0) + trapezoid(5.0, 25.0, 10.0);
+    let feed = trapezoid(100.0, 20.0, 50.0);
+    let t = &j["time"];
+    assert!(close(t["rapid_s"].as_f64().unwrap_or(0.0), rapid), "{t}");
+    assert!(close(t["feed_s"].as_f64().unwrap_or(0.0), feed), "{t}");
+    assert!(close(t["dwell_s"].as_f64().unwrap_or(0.0), 1.0), "{t}");
+    assert!(
+        close(t["total_s"].as_f64().unwrap_or(0.0), rapid + feed + 1.0),
+        "{t}"
+    );
+    assert_eq!(t["machine_limits_used"], true);
+    // GRBL's envelope was not given ($130-$132 absent): no limits.
+    let (code, text, err) = crate::run(
+        dir.path(),
+        &[
+            "stats",
+            "--zero-start",
+            "--grbl-settings",
+            "grbl.txt",
+            "p.ngc",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        text.contains("how the estimate is made: each move is timed"),
+        "{text}"
+    );
+}
+
+#[test]
+fn stats_without_known_offsets_leave_machine_coordinates_out() {
+    let dir = crate::tmp();
+    crate::put(
+        dir.path(),
+        "p.ngc",
+        "G21 G90\nG0 X1 Y2 Z3\nG1 X4 F100\nM2\n",
+    );
+    let (code, text, err) = crate::run(dir.path(), &["stats", "p.ngc"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(text.contains("machine coordinates unknown"), "{text}");
+    let (_, json, _) = crate::run(dir.path(), &["stats", "--json", "p.ngc"]);
+    let j: serde_json::Value = serde_json::from_str(&json).expect("json");
+    assert_eq!(j["machine_known"], false);
+    assert!(j["axes"][0]["machine"].is_null());
+    assert_eq!(j["axes"][0]["work"]["max"], 4.0);
+}
+
+#[test]
+fn html_page_is_self_contained() {
+    let dir = crate::tmp();
+    crate::put(
+        dir.path(),
+        "p.ngc",
+        "(a <test> & more)\nG21 G90 F100\nT3 M6\nG0 X10 Y0\nG2 X0 Y10 I-10 J0\nM2\n",
+    );
+    let (code, _, err) = crate::run(
+        dir.path(),
+        &["plot", "--zero-start", "-o", "p.html", "p.ngc"],
+    );
+    assert_eq!(code, 0, "{err}");
+    let html = std::fs::read_to_string(dir.path().join("p.html")).expect("page written");
+    assert!(html.starts_with("<!DOCTYPE html>"));
+    assert!(html.contains("<svg xmlns=\"http://www.w3.org/2000/svg\""));
+    assert!(html.contains("<td>arcs</td><td>1</td>"), "{html}");
+    assert!(html.contains("<td>tools</td><td>T3</td>"), "{html}");
+    assert!(html.contains("How the estimate is made"));
+    // No external resources.
+    for bad in ["<script", "<link", "src=", "url(", "@import"] {
+        assert!(!html.contains(bad), "{bad} in the page");
+    }
+    assert_eq!(html.matches("http").count(), 1, "only the SVG namespace");
+    // An unwritable output is an I/O error (exit 2) and writes nothing.
+    let (code, _, err) = crate::run(
+        dir.path(),
+        &["plot", "--zero-start", "-o", "no/such/dir/p.svg", "p.ngc"],
+    );
+    assert_eq!(code, 2, "{err}");
+}
