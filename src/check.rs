@@ -112,6 +112,16 @@ fn sub_file_name(index: &FileIndex) -> Option<String> {
         .map(|k| k.to_string())
 }
 
+/// A plain run's result in the form of a consumer run's.
+fn observed(
+    r: Result<Vec<Diagnostic>, crate::diag::Error>,
+) -> (Vec<Diagnostic>, Option<crate::diag::Error>) {
+    match r {
+        Ok(w) => (w, None),
+        Err(e) => (Vec::new(), Some(e)),
+    }
+}
+
 /// Checks one program; returns its diagnostics.
 pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
     let source = match crate::program::SourceFile::open_regular(path) {
@@ -130,6 +140,10 @@ pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
     let probe = FileIndex::build(source.clone());
     let mut settings = cfg.settings.clone();
     settings.warnings = true;
+    let target = cfg.target.clone().map(|mut t| {
+        t.check = true;
+        t
+    });
     let result = if let Some(name) = sub_file_name(&probe) {
         // A subroutine file: check it by calling it from a tiny program in
         // its own folder.
@@ -148,31 +162,54 @@ pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
             format!("<call of {}>", path.display()),
             text.into_bytes(),
         );
-        crate::view::run::flatten_observed(
-            src,
-            &settings,
-            &search,
-            Destination::Discard,
-            cfg,
-            &Default::default(),
-        )
-    } else {
-        drop(probe);
-        match std::sync::Arc::try_unwrap(source) {
-            Ok(source) => crate::view::run::flatten_observed(
-                source,
+        match crate::lowering(&settings, target.clone()) {
+            Some(consumer) => crate::flatten_with(
+                src,
                 &settings,
-                &cfg.search,
+                &search,
+                Destination::Discard,
+                Some(consumer),
+            ),
+            None => observed(crate::view::run::flatten_observed(
+                src,
+                &settings,
+                &search,
                 Destination::Discard,
                 cfg,
                 &Default::default(),
-            ),
+            )),
+        }
+    } else {
+        drop(probe);
+        match std::sync::Arc::try_unwrap(source) {
+            Ok(source) => match crate::lowering(&settings, target.clone()) {
+                Some(consumer) => crate::flatten_with(
+                    source,
+                    &settings,
+                    &cfg.search,
+                    Destination::Discard,
+                    Some(consumer),
+                ),
+                None => observed(crate::view::run::flatten_observed(
+                    source,
+                    &settings,
+                    &cfg.search,
+                    Destination::Discard,
+                    cfg,
+                    &Default::default(),
+                )),
+            },
             Err(_) => return Vec::new(),
         }
     };
     match result {
-        Ok(w) => w,
-        Err(e) => vec![*e],
+        (w, None) => w,
+        (mut w, Some(e)) => {
+            // Target problems found before the error come first.
+            w.retain(|d| d.level() == Level::Error);
+            w.push(*e);
+            w
+        }
     }
 }
 

@@ -40,7 +40,7 @@ pub struct Cli {
 pub enum Command {
     /// Check programs without writing output: every file is fully evaluated
     /// with the same rules as flattening; exit 1 if any has an error.
-    Check(CheckArgs),
+    Check(Box<CheckArgs>),
     /// Statistics of a program's motion: travel per axis (work and machine
     /// coordinates), feed and rapid path lengths, moves, arcs, tool changes
     /// and an estimated run time.
@@ -48,6 +48,8 @@ pub enum Command {
     /// Draw the toolpath as SVG (or a self-contained HTML page with the
     /// statistics, when the output ends in .html).
     Plot(PlotArgs),
+    /// List the target controllers with their limits.
+    Targets,
 }
 
 #[derive(Args, Debug)]
@@ -155,6 +157,22 @@ pub struct CheckArgs {
 }
 
 #[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ToolChangeArg {
+    /// M0 (a pause for a manual change; the default where the target has no M6).
+    Pause,
+    /// M6 as written.
+    Keep,
+    /// No M6 at all.
+    Drop,
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OnOff {
+    On,
+    Off,
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
 pub enum FormatArg {
     Human,
     Short,
@@ -232,6 +250,24 @@ pub struct CommonArgs {
     pub message_format: FormatArg,
     #[command(flatten)]
     pub machine: MachineArgs,
+    /// Write for this controller: linuxcnc (the default: the flattened
+    /// program as it is), grbl, ...; `list` prints them. Also
+    /// $NGCFLAT_TARGET.
+    #[arg(long, value_name = "NAME")]
+    pub target: Option<String>,
+    /// What M6 becomes for a target: pause (M0; the default where the
+    /// target has no M6), keep, drop.
+    #[arg(long, value_enum, value_name = "POLICY")]
+    pub tool_change: Option<ToolChangeArg>,
+    /// LinuxCNC's block-delete switch for a target: on skips `/` lines, off
+    /// (the default, as rs274) runs them; the `/` itself is never written
+    /// for a controller that ignores it.
+    #[arg(long, value_enum, value_name = "on|off")]
+    pub block_delete: Option<OnOff>,
+    /// Largest deviation of lowered curves (splines) from the original, in
+    /// millimetres (scaled for inch programs).
+    #[arg(long, value_name = "MM", default_value_t = 0.001)]
+    pub tolerance: f64,
 }
 
 /// Validated options shared by flattening and checking.
@@ -247,6 +283,8 @@ pub struct Config {
     pub machine: crate::view::axes::MachineAxes,
     /// Whether travel limits are checked (limits given and not --no-limits).
     pub check_limits: bool,
+    /// A target other than linuxcnc (none: the flattened program as it is).
+    pub target: Option<crate::target::TargetOptions>,
 }
 
 /// Folders of `[RS274NGC]SUBROUTINE_PATH` LinuxCNC uses.
@@ -434,6 +472,36 @@ impl CommonArgs {
             FormatArg::Json => MessageFormat::Json,
             FormatArg::Github => MessageFormat::Github,
         }
+    }
+
+    /// The target's name: --target, else $NGCFLAT_TARGET.
+    pub fn target_name(&self) -> Option<String> {
+        self.target
+            .clone()
+            .or_else(|| std::env::var("NGCFLAT_TARGET").ok())
+            .filter(|t| !t.is_empty())
+    }
+
+    fn target_options(&self) -> Result<Option<crate::target::TargetOptions>, ErrorKind> {
+        use crate::target::{TargetOptions, ToolChange};
+        let Some(name) = self.target_name() else {
+            return Ok(None);
+        };
+        let profile = crate::target::find(&name).ok_or(ErrorKind::UnknownTarget { name })?;
+        if !(self.tolerance > 0.0 && self.tolerance.is_finite()) {
+            return Err(ErrorKind::BadDefine {
+                text: format!("--tolerance {}", self.tolerance),
+            });
+        }
+        let mut t = TargetOptions::new(profile);
+        t.tool_change = self.tool_change.map(|c| match c {
+            ToolChangeArg::Pause => ToolChange::Pause,
+            ToolChangeArg::Keep => ToolChange::Keep,
+            ToolChangeArg::Drop => ToolChange::Drop,
+        });
+        t.block_delete = self.block_delete == Some(OnOff::On);
+        t.tolerance_mm = self.tolerance;
+        Ok(t.active().then_some(t))
     }
 
     /// Builds the configuration; `env_path` is $NGCFLAT_SUBROUTINE_PATH.
@@ -625,6 +693,7 @@ impl CommonArgs {
             FormatArg::Json => MessageFormat::Json,
             FormatArg::Github => MessageFormat::Github,
         };
+        let target = self.target_options()?;
         Ok(Config {
             settings,
             search,
@@ -632,6 +701,7 @@ impl CommonArgs {
             warnings,
             machine,
             check_limits,
+            target,
         })
     }
 }

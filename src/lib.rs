@@ -139,6 +139,27 @@ pub fn flatten_str(text: &str, settings: &Settings) -> Result<String, Error> {
     r.map(|_| String::from_utf8_lossy(&std::fs::read(&out).unwrap_or_default()).into_owned())
 }
 
+/// The consumer that writes for a target, if one is chosen.
+pub fn lowering<'s>(
+    settings: &'s Settings,
+    target: Option<target::TargetOptions>,
+) -> Option<Box<dyn eval::LineConsumer + 's>> {
+    target
+        .filter(target::TargetOptions::active)
+        .map(|t| Box::new(target::Lowering::new(settings, t)) as Box<dyn eval::LineConsumer>)
+}
+
+/// `ngcflat targets`: the profiles with their limits.
+fn print_targets() -> ExitCode {
+    let mut s = String::new();
+    for p in target::PROFILES {
+        s.push_str(&p.describe());
+        s.push('\n');
+    }
+    print!("{s}");
+    ExitCode::SUCCESS
+}
+
 /// Writes diagnostics to stderr in the chosen format.
 pub fn report(diags: &[Diagnostic], format: MessageFormat) {
     let color = format == MessageFormat::Human && std::io::stderr().is_terminal();
@@ -203,10 +224,21 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
         Some(config::Command::Check(args)) => &args.common,
         Some(config::Command::Stats(args)) => &args.common,
         Some(config::Command::Plot(args)) => &args.common,
+        Some(config::Command::Targets) => return Ok(print_targets()),
         None => &cli.flatten.common,
     };
     parse::named2007::enable(common.named_params_2007);
+    let list = |name: Option<String>| name.is_some_and(|n| n.eq_ignore_ascii_case("list"));
+    match &cli.command {
+        Some(config::Command::Targets) => return Ok(print_targets()),
+        Some(config::Command::Check(a)) if list(a.common.target_name()) => {
+            return Ok(print_targets());
+        }
+        None if list(cli.flatten.common.target_name()) => return Ok(print_targets()),
+        _ => {}
+    }
     match cli.command {
+        Some(config::Command::Targets) => Ok(print_targets()),
         Some(config::Command::Check(args)) => {
             let cfg = match args.common.to_config(env_path) {
                 Ok(c) => c,
@@ -267,18 +299,20 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
                 }
                 None => Destination::Stdout,
             };
-            let extras = view::run::Extras {
-                source_map: args.source_map,
-                annotate: args.annotate,
+            let r = if cfg.target.is_some() {
+                let consumer = lowering(&cfg.settings, cfg.target.clone());
+                match flatten_with(source, &cfg.settings, &cfg.search, dest, consumer) {
+                    (w, None) => Ok(w),
+                    (_, Some(e)) => Err(e),
+                }
+            } else {
+                let extras = view::run::Extras {
+                    source_map: args.source_map,
+                    annotate: args.annotate,
+                };
+                view::run::flatten_observed(source, &cfg.settings, &cfg.search, dest, &cfg, &extras)
             };
-            match view::run::flatten_observed(
-                source,
-                &cfg.settings,
-                &cfg.search,
-                dest,
-                &cfg,
-                &extras,
-            ) {
+            match r {
                 Ok(warnings) => {
                     report(&warnings, cfg.format);
                     Ok(ExitCode::SUCCESS)

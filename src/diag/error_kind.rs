@@ -199,6 +199,36 @@ pub enum ErrorKind {
     BadDefine { text: String },
     /// Lathe cycle needing a contour sub (`G71 Q...`).
     Unsupported { what: String },
+    // ------------------------------------------------------------ targets
+    /// `G33 Z-1 K1` with `--target grbl`: a construct the target cannot run
+    /// and no exact lowering exists.
+    TargetRefused {
+        target: &'static str,
+        what: String,
+        why: String,
+    },
+    /// `G43` with `--target grbl` and the tool's length unknown: the
+    /// lowering needs a value only the machine knows.
+    TargetNeedsValue {
+        target: &'static str,
+        what: String,
+        value: String,
+        option: String,
+    },
+    /// A line longer than the target's line buffer, as the firmware counts.
+    TargetLineTooLong {
+        target: &'static str,
+        len: usize,
+        limit: usize,
+    },
+    /// `--target nosuch`
+    UnknownTarget { name: String },
+    /// A lowering that failed (its own code, E1100–E1149).
+    TargetLowering {
+        target: &'static str,
+        code: &'static str,
+        message: String,
+    },
     // ------------------------------------------------------------ robustness
     /// A fault of ngcflat itself (a panic caught while checking a file).
     Internal { what: String },
@@ -311,6 +341,11 @@ impl ErrorKind {
             VarFileSyntax { .. } => "E0504",
             BadDefine { .. } => "E0505",
             Unsupported { .. } => "E0507",
+            TargetRefused { .. } => "E1000",
+            TargetNeedsValue { .. } => "E1001",
+            TargetLineTooLong { .. } => "E1002",
+            UnknownTarget { .. } => "E1003",
+            TargetLowering { code, .. } => code,
             Internal { .. } => "E0700",
             ComputedSubLabel => "E0701",
             OutputIsInput { .. } => "E0702",
@@ -570,6 +605,28 @@ impl fmt::Display for ErrorKind {
                 "-D '{text}' is not PARAM=VALUE (e.g. 5063=-1.25, depth=3, _depth=3)"
             ),
             Unsupported { what } => write!(f, "{what}"),
+            TargetRefused { target, what, why } => {
+                write!(f, "{what} cannot run on {target}: {why}")
+            }
+            TargetNeedsValue {
+                target,
+                what,
+                value,
+                option,
+            } => write!(
+                f,
+                "{what} for {target} needs {value}, which is not known here; give it with {option}"
+            ),
+            TargetLineTooLong { target, len, limit } => write!(
+                f,
+                "this line is {len} bytes as {target} counts it, over its line buffer of {limit}; lines are never split"
+            ),
+            UnknownTarget { name } => {
+                write!(f, "unknown target '{name}' (`ngcflat targets` lists them)")
+            }
+            TargetLowering {
+                target, message, ..
+            } => write!(f, "{message} (lowering for {target})"),
             Internal { what } => write!(
                 f,
                 "internal error: {what}; please report it with the program"

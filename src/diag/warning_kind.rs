@@ -57,6 +57,19 @@ pub enum WarningKind {
     SubroutinePathTruncated { ignored: Vec<PathBuf> },
     /// `[RS274NGC]SUBROUTINE_PATH = nothere` or `PARAMETER_FILE = gone.var`.
     ConfigPathMissing { key: &'static str, path: PathBuf },
+    /// `G64 P0.01` with `--target grbl`: dropped, with what it changes.
+    TargetDropped {
+        target: &'static str,
+        what: String,
+        why: String,
+    },
+    /// `G95` with `--target grbl`: written another way, with the condition
+    /// under which that is exact.
+    TargetRewritten {
+        target: &'static str,
+        what: String,
+        how: String,
+    },
 }
 
 impl WarningKind {
@@ -82,6 +95,8 @@ impl WarningKind {
             FeaturesMask { .. } => "W0901",
             SubroutinePathTruncated { .. } => "W0902",
             ConfigPathMissing { .. } => "W0903",
+            TargetDropped { .. } => "W1000",
+            TargetRewritten { .. } => "W1001",
         }
     }
 }
@@ -173,6 +188,12 @@ impl fmt::Display for WarningKind {
                 f,
                 "M98 with L0: LinuxCNC leaves a call frame behind; ngcflat does not"
             ),
+            TargetDropped { target, what, why } => {
+                write!(f, "{what} is dropped for {target}: {why}")
+            }
+            TargetRewritten { target, what, how } => {
+                write!(f, "{what} is written for {target} as {how}")
+            }
         }
     }
 }

@@ -135,6 +135,16 @@ const WARNING_FIXTURES: &[(&str, &str, &[&str])] = &[
         "fixtures/ok/ini/subroutine-path-eleven-folders.ngc",
         &["--ini", "many.ini"],
     ),
+    (
+        "W1000",
+        "fixtures/target/grbl/ok/modal-words-survive.ngc",
+        &["--target", "grbl"],
+    ),
+    (
+        "W1001",
+        "fixtures/target/grbl/ok/feed-per-rev.ngc",
+        &["--target", "grbl"],
+    ),
 ];
 
 /// Warning kinds declared in src/diag/warning_kind.rs that nothing in

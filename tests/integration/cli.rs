@@ -216,3 +216,105 @@ fn unknown_position_error_suggests_a_working_form() {
     assert_eq!(code, 1);
     assert!(err.contains("--start-position X0,Y0,Z0 (mm)"), "{err}");
 }
+
+/// A program with three constructs GRBL cannot run, each on its own line.
+const THREE_PROBLEMS: &str = "G21 G90\nG0 X1 A5\nM7\nM3 S100\nG33 Z-1 K1\nM2\n";
+
+#[test]
+fn check_with_a_target_reports_every_problem_at_its_place() {
+    let d = tmp();
+    std::fs::write(d.path().join("p.ngc"), THREE_PROBLEMS).unwrap();
+    let (code, out, err) = crate::run(
+        d.path(),
+        &[
+            "check",
+            "--target",
+            "grbl",
+            "--message-format",
+            "short",
+            "p.ngc",
+        ],
+    );
+    assert_eq!(code, 1, "{err}");
+    assert!(out.is_empty());
+    for at in [
+        "p.ngc:2:7: error:",
+        "p.ngc:3:1: error:",
+        "p.ngc:5:1: error:",
+    ] {
+        assert!(err.contains(at), "{at} missing:\n{err}");
+    }
+    assert_eq!(err.matches("[E1000]").count(), 3, "{err}");
+    assert!(err.contains("1 files, 3 errors"), "{err}");
+    // Flattening stops at the first, and writes nothing.
+    let (code, out, err) = crate::run(d.path(), &["--target", "grbl", "p.ngc"]);
+    assert_eq!((code, out.as_str()), (1, ""), "{err}");
+    assert_eq!(err.matches("error[E1000]").count(), 1, "{err}");
+    // Without a target the program is fine.
+    let (code, _, err) = crate::run(d.path(), &["check", "p.ngc"]);
+    assert_eq!(code, 0, "{err}");
+}
+
+#[test]
+fn targets_are_listed_and_chosen() {
+    let d = tmp();
+    for args in [
+        &["targets"][..],
+        &["--target", "list"][..],
+        &["check", "--target", "list", "x"][..],
+    ] {
+        let (code, out, err) = crate::run(d.path(), args);
+        assert_eq!(code, 0, "{args:?}: {err}");
+        assert!(
+            out.contains("grbl ") && out.contains("79 bytes per line"),
+            "{out}"
+        );
+        assert!(out.contains("linuxcnc "), "{out}");
+    }
+    std::fs::write(d.path().join("p.ngc"), "G21 G64 P0.01\nG0 X1\nM2\n").unwrap();
+    let (code, _, err) = crate::run(d.path(), &["--target", "nosuch", "p.ngc"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("E1003") && err.contains("nosuch"), "{err}");
+    // NGCFLAT_TARGET chooses the target; --target wins over it.
+    let env = |args: &[&str]| {
+        let out = Command::new(bin())
+            .current_dir(d.path())
+            .args(args)
+            .env("NGCFLAT_TARGET", "grbl")
+            .stdin(Stdio::null())
+            .output()
+            .expect("run");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    assert_eq!(env(&["p.ngc"]), "G21\nG0 X1\nM2\n");
+    assert_eq!(
+        env(&["--target", "linuxcnc", "p.ngc"]),
+        "G21 G64 P0.01\nG0 X1\nM2\n"
+    );
+}
+
+#[test]
+fn the_linuxcnc_target_is_the_flattened_program_byte_for_byte() {
+    let d = tmp();
+    let program =
+        "%\n(a comment! ~)\nG21 G64 P0.01\n#1=2\nG0 X[#1] A3 (ü)\n/G1 X2 F100\nT1 M6\nG43 H1\n%\n";
+    std::fs::write(d.path().join("p.ngc"), program).unwrap();
+    let plain = crate::run(d.path(), &["--zero-start", "p.ngc"]);
+    let target = crate::run(d.path(), &["--zero-start", "--target", "linuxcnc", "p.ngc"]);
+    assert_eq!(plain.0, 0, "{}", plain.2);
+    assert_eq!(plain, target);
+}
+
+#[test]
+fn grbl_output_holds_no_real_time_byte() {
+    let d = tmp();
+    let program = "G21 (stop! why? ~ \u{e4})\n(MSG, hold! ~)\nG0 X1 ; what?\nM2\n";
+    std::fs::write(d.path().join("p.ngc"), program).unwrap();
+    let out = ngcflat(
+        d.path(),
+        &["--target".into(), "grbl".into(), "p.ngc".into()],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(String::from_utf8_lossy(&out.stdout), "G21\nG0 X1\nM2\n");
+}

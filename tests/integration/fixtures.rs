@@ -9,6 +9,10 @@
 //! * `deviation/**/*.ngc` depend on a documented rs274 bug ngcflat does not
 //!   copy (README "Deviations"): they flatten with a warning; no comparison.
 //!
+//! * `target/NAME/ok|refuse/**/*.ngc` run with `--target NAME`: lowered
+//!   output snapshotted and compared with the original by machine motion
+//!   (`motion.rs`), or refused.
+//!
 //! A fixture may have `NAME.args` beside it (extra arguments, relative to
 //! the fixture's folder). Folders named `subs` hold subroutine files, not
 //! fixtures. Adding a case is adding a file.
@@ -19,10 +23,26 @@ use crate::oracle;
 
 pub fn read_args(ngc: &Path) -> Vec<String> {
     let args = ngc.with_extension("args");
-    match std::fs::read_to_string(args) {
-        Ok(t) => t.split_whitespace().map(str::to_string).collect(),
-        Err(_) => Vec::new(),
+    let mut v: Vec<String> = target_of(ngc)
+        .map(|t| vec!["--target".to_string(), t])
+        .unwrap_or_default();
+    if let Ok(t) = std::fs::read_to_string(args) {
+        v.extend(t.split_whitespace().map(str::to_string));
     }
+    v
+}
+
+/// The target of a fixture under `fixtures/target/NAME/`.
+pub fn target_of(ngc: &Path) -> Option<String> {
+    let parts: Vec<String> = ngc
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    parts
+        .windows(3)
+        .rev()
+        .find(|w| w[0] == "fixtures" && w[1] == "target")
+        .map(|w| w[2].clone())
 }
 
 fn is_fixture(p: &Path) -> bool {
@@ -42,7 +62,7 @@ fn category(p: &Path) -> &'static str {
     }
 }
 
-fn run_fixture(path: &Path, extra: &[&str]) -> (i32, String, String) {
+pub fn run_fixture(path: &Path, extra: &[&str]) -> (i32, String, String) {
     let dir = path.parent().expect("dir");
     let mut args = read_args(path);
     args.extend(extra.iter().map(|s| s.to_string()));
@@ -149,6 +169,9 @@ pub fn differential(path: &Path) -> Result<Option<String>, String> {
     let cat = category(path);
     if cat == "refuse" || cat == "deviation" {
         return Ok(Some("not comparable by design".into()));
+    }
+    if target_of(path).is_some() {
+        return Ok(Some("compared by machine motion (motion.rs)".into()));
     }
     let dir = path.parent().expect("dir");
     let args = read_args(path);

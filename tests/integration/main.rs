@@ -9,6 +9,7 @@ mod fixtures;
 mod generated;
 mod hostile;
 mod lowering;
+mod motion;
 mod named2007;
 mod oracle;
 mod props;

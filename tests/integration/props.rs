@@ -957,3 +957,89 @@ proptest! {
         }
     }
 }
+
+/// One line of a program for the target property: modal codes a GRBL-class
+/// controller may or may not have, moves with numbers of any size,
+/// comments with bytes the firmware acts on in real time, and parameters.
+fn target_line() -> impl Strategy<Value = String> {
+    let num = prop_oneof![
+        (-1000i32..1000).prop_map(|v| format!("{v}")),
+        (-1.0e6f64..1.0e6).prop_map(|v| format!("{v:.9}")),
+        (0.0f64..1.0e-3).prop_map(|v| format!("{v:.12}")),
+    ];
+    let comment = proptest::collection::vec(
+        prop_oneof![
+            Just('!'),
+            Just('?'),
+            Just('~'),
+            Just('\u{18}'),
+            Just('ü'),
+            Just('a'),
+            Just(' ')
+        ],
+        0..6,
+    )
+    .prop_map(|c| c.into_iter().collect::<String>());
+    prop_oneof![
+        Just("G20".to_string()),
+        Just("G21".to_string()),
+        Just("G64 P0.01 G17".to_string()),
+        Just("G61.1 G90".to_string()),
+        Just("G91".to_string()),
+        Just("G90".to_string()),
+        Just("G8 G97 G94 M48".to_string()),
+        Just("M3 S1000".to_string()),
+        Just("M5 M9".to_string()),
+        Just("M8".to_string()),
+        Just("T1 M6".to_string()),
+        Just("M61 Q0".to_string()),
+        Just("N123 G1 X1 F10".to_string()),
+        num.clone().prop_map(|v| format!("G0 X{v}")),
+        (num.clone(), num.clone(), num).prop_map(|(a, b, c)| format!("G1 X{a} Y{b} Z{c} F100")),
+        comment.clone().prop_map(|c| format!("(c {c})")),
+        comment.clone().prop_map(|c| format!("(MSG, {c})")),
+        comment.prop_map(|c| format!("G0 X1 ; {c}")),
+        (1i32..100).prop_map(|v| format!("#1=[{v}/7]\nG0 Y#1")),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// Every line written for GRBL uses only its codes and words, fits its
+    /// line buffer and holds no byte it acts on in real time.
+    #[test]
+    fn grbl_output_uses_only_what_grbl_has(lines in proptest::collection::vec(target_line(), 1..12)) {
+        use ngcflat::machine::block::{Block, WordKind};
+        use ngcflat::target::{TargetOptions, find, significant_len};
+        let program = format!("{}\nM2\n", lines.join("\n"));
+        let profile = find("grbl").expect("grbl");
+        let settings = Settings { zero_start: true, ..Settings::default() };
+        let dir = tempfile::tempdir().expect("dir");
+        let out = dir.path().join("out");
+        let src = SourceFile::new("<stdin>".into(), "<stdin>".into(), program.clone().into_bytes());
+        let consumer = ngcflat::lowering(&settings, Some(TargetOptions::new(profile)));
+        let (_, err) = ngcflat::flatten_with(
+            src, &settings, &SearchPath::default(), Destination::File(out.clone()), consumer,
+        );
+        if err.is_none() {
+            let text = std::fs::read(&out).expect("output");
+            for line in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
+                let shown = String::from_utf8_lossy(line);
+                prop_assert!(!line.iter().any(|&b| profile.is_realtime(b)), "real-time byte in {shown}");
+                prop_assert!(significant_len(line) < 80, "too long: {shown}");
+                let b = Block::decode(line).expect("decodes");
+                prop_assert!(!b.block_delete && !b.percent, "{shown}");
+                for w in &b.words {
+                    let ok = match w.kind {
+                        WordKind::G(_) => profile.has_g((w.value * 10.0).round() as u16),
+                        WordKind::M(_) => profile.has_m(w.value as u16),
+                        WordKind::Value => profile.has_word(w.letter),
+                    };
+                    prop_assert!(ok, "{shown}: {} not in the profile", w.letter as char);
+                }
+                prop_assert!(!shown.contains('e') && !shown.contains('E'), "exponent in {shown}");
+            }
+        }
+    }
+}

@@ -1,0 +1,1022 @@
+//! The lowering driver: reads each flat line (as the evaluator's consumer),
+//! decodes it, runs it on the machine model, and writes what the target
+//! profile accepts: each word kept, dropped (with a warning where the
+//! motion may differ), rewritten, lowered into other blocks, or refused
+//! with the position of the word and the reason.
+
+use std::collections::HashSet;
+use std::sync::Arc;
+
+use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};
+use crate::emit::Output;
+use crate::eval::{LineConsumer, Origin, Settings};
+use crate::machine::Machine;
+use crate::machine::block::{
+    ArcDistance, Block, CommentKind, CoordSystem, CutterComp, DecodeError, Distance, FeedMode,
+    GCode, LatheMode, MCode, MotionMode, NonModal, PathMode, Plane, SpindleMode, ToolLength, Units,
+    Word, WordKind,
+};
+use crate::machine::motion::SpindleDir;
+use crate::program::SourceFile;
+
+use super::TargetOptions;
+use super::format::LineWriter;
+use super::lower::{self, PlainLine};
+use super::profile::{Profile, ToolChange};
+
+/// A problem found on a line: the word it is about and what it is.
+struct Problem {
+    span: Option<crate::machine::block::Span>,
+    kind: ErrorKind,
+}
+
+/// What happens to one word of a block.
+#[derive(Clone, Copy, PartialEq)]
+enum Fate {
+    Keep,
+    Drop,
+}
+
+/// The consumer that writes a program for a target.
+pub struct Lowering {
+    p: &'static Profile,
+    opts: TargetOptions,
+    /// The machine as LinuxCNC runs the program.
+    m: Machine,
+    block: Block,
+    w: LineWriter,
+    /// Errors kept in check mode.
+    errors: Vec<Diagnostic>,
+    warnings: Vec<Diagnostic>,
+    warned: HashSet<(&'static str, String)>,
+    cycles: lower::CycleState,
+    /// The feed last written, when feeds are rewritten (G95 lowered).
+    feed_rewrite: bool,
+    written_feed: Option<f64>,
+    /// The target is in G93 (inverse time) as written.
+    target_inverse: bool,
+    /// A line with words was read (a `%` after it ends the program).
+    seen_words: bool,
+}
+
+impl Lowering {
+    pub fn new(settings: &Settings, opts: TargetOptions) -> Lowering {
+        let p = opts.profile;
+        Lowering {
+            p,
+            opts,
+            m: Machine::new(settings),
+            block: Block::default(),
+            w: LineWriter::new(p),
+            errors: Vec::new(),
+            warnings: Vec::new(),
+            warned: HashSet::new(),
+            cycles: lower::CycleState::default(),
+            feed_rewrite: false,
+            written_feed: None,
+            target_inverse: false,
+            seen_words: false,
+        }
+    }
+
+    fn name(&self) -> &'static str {
+        self.p.name
+    }
+
+    fn refuse(&self, what: impl Into<String>, why: impl Into<String>) -> ErrorKind {
+        ErrorKind::TargetRefused {
+            target: self.name(),
+            what: what.into(),
+            why: why.into(),
+        }
+    }
+
+    fn warn(&mut self, site: Option<Site>, kind: WarningKind) {
+        let key = (kind.code(), kind.to_string());
+        if self.warned.insert(key) {
+            self.warnings.push(Diagnostic::warning(kind, site));
+        }
+    }
+
+    fn dropped(&mut self, site: &Option<Site>, what: &str, why: &str) {
+        let k = WarningKind::TargetDropped {
+            target: self.name(),
+            what: what.into(),
+            why: why.into(),
+        };
+        self.warn(site.clone(), k);
+    }
+}
+
+/// The site of `span` of a flat line from `origin`: exact on a line written
+/// as read; otherwise the same-lettered word of the source line (by its
+/// rank), or the whole line.
+fn site_of(origin: &Origin<'_>, text: &[u8], span: Option<crate::machine::block::Span>) -> Site {
+    let file: &Arc<SourceFile> = origin.file;
+    let start = origin.line_start;
+    let Some(span) = span else {
+        return Site::new(file, start, start + line_len(file, start));
+    };
+    if origin.verbatim {
+        return Site::new(file, start + span.start as u32, start + span.end as u32);
+    }
+    let letter = text.get(span.start as usize).map(u8::to_ascii_uppercase);
+    if let (Some(letter), Some(data)) = (letter, file.memory()) {
+        let rank = words_with(text, letter)
+            .iter()
+            .position(|&i| i == span.start as usize);
+        let from = (start as usize).min(data.len());
+        let end = memchr::memchr(b'\n', &data[from..]).map_or(data.len(), |p| from + p);
+        if let Some(rank) = rank
+            && let Some(&i) = words_with(&data[from..end], letter).get(rank)
+        {
+            return Site::new(file, (from + i) as u32, (from + i + 1) as u32);
+        }
+    }
+    Site::new(file, start, start + line_len(file, start))
+}
+
+fn line_len(file: &SourceFile, start: u32) -> u32 {
+    file.memory().map_or(0, |d| {
+        let from = (start as usize).min(d.len());
+        let end = memchr::memchr(b'\n', &d[from..]).map_or(d.len(), |p| from + p);
+        let mut e = end;
+        while e > from && d[e - 1].is_ascii_whitespace() {
+            e -= 1;
+        }
+        (e - from) as u32
+    })
+}
+
+/// Offsets of the letters `letter` outside comments.
+fn words_with(text: &[u8], letter: u8) -> Vec<usize> {
+    let mut out = Vec::new();
+    let mut depth = false;
+    for (i, &c) in text.iter().enumerate() {
+        match c {
+            b'(' => depth = true,
+            b')' => depth = false,
+            b';' if !depth => break,
+            c if !depth && c.to_ascii_uppercase() == letter => out.push(i),
+            _ => {}
+        }
+    }
+    out
+}
+
+fn decode_problem(e: DecodeError) -> Problem {
+    Problem {
+        span: Some(e.span),
+        kind: ErrorKind::Unsupported {
+            what: format!("cannot read this flattened line: {}", e.what),
+        },
+    }
+}
+
+/// G number ×10 of a word.
+fn code10(w: &Word) -> u16 {
+    (w.value * 10.0).round().clamp(0.0, 60000.0) as u16
+}
+
+fn g_name(w: &Word) -> String {
+    let c = code10(w);
+    if c.is_multiple_of(10) {
+        format!("G{}", c / 10)
+    } else {
+        format!("G{}.{}", c / 10, c % 10)
+    }
+}
+
+impl LineConsumer for Lowering {
+    fn line(&mut self, text: &[u8], origin: &Origin<'_>, out: &mut Output) -> Result<(), Error> {
+        if self.p.passthrough {
+            return out.line(text).map_err(io_error);
+        }
+        let mut block = std::mem::take(&mut self.block);
+        let problems = match block.decode_into(text) {
+            Ok(()) => self.lower_block(&block, text, origin, out),
+            Err(e) => Ok(vec![decode_problem(e)]),
+        };
+        self.block = block;
+        let problems = problems?;
+        for p in problems {
+            let mut d = Diagnostic::error(p.kind, Some(site_of(origin, text, p.span)));
+            d.stack = (origin.stack)();
+            if !self.opts.check {
+                return Err(d);
+            }
+            self.errors.push(*d);
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self, _out: &mut Output) -> Result<Vec<Diagnostic>, Error> {
+        let mut all = std::mem::take(&mut self.warnings);
+        all.append(&mut self.errors);
+        Ok(all)
+    }
+}
+
+fn io_error(e: std::io::Error) -> Error {
+    Diagnostic::error(
+        ErrorKind::Io {
+            path: "<output>".into(),
+            message: e.to_string(),
+        },
+        None,
+    )
+}
+
+impl Lowering {
+    /// Decides every word of `b`, runs it on the machine model and writes
+    /// the target's lines. Returns the problems (the line is not written
+    /// when there are any).
+    fn lower_block(
+        &mut self,
+        b: &Block,
+        text: &[u8],
+        origin: &Origin<'_>,
+        out: &mut Output,
+    ) -> Result<Vec<Problem>, Error> {
+        let site = Some(site_of(origin, text, None));
+        if b.percent && !self.p.percent {
+            // A program ended by `%` alone ends there: the target gets M2
+            // (the opening `%` is simply dropped).
+            if self.seen_words && !self.m.ended {
+                self.m.ended = true;
+                out.line(b"M2").map_err(io_error)?;
+            }
+            return Ok(Vec::new());
+        }
+        if !b.words.is_empty() {
+            self.seen_words = true;
+        }
+        if b.block_delete && self.opts.block_delete {
+            // The switch is on: LinuxCNC skips the line.
+            return Ok(Vec::new());
+        }
+        let mut problems = Vec::new();
+        let mut fates = vec![Fate::Keep; b.words.len()];
+        // Words written after the line's own (G43.1 Z for G43, M0 for M6).
+        let mut extra: Vec<(u8, f64)> = Vec::new();
+        let mut extra_lines: Vec<Vec<(u8, f64)>> = Vec::new();
+        // Lines written before the line (G43.1 Z: an axis command of its own).
+        let mut pre_lines: Vec<Vec<(u8, f64)>> = Vec::new();
+        let before = self.m.clone();
+        for (i, w) in b.words.iter().enumerate() {
+            let fate = match w.kind {
+                WordKind::G(g) => self.g_fate(b, w, g, &site, &mut problems),
+                WordKind::M(m) => self.m_fate(b, w, m, &site, &mut problems, &mut extra_lines),
+                WordKind::Value => self.value_fate(b, w, &mut problems),
+            };
+            fates[i] = fate;
+        }
+        // Words that belong to a dropped code go with it.
+        self.drop_owned(b, &mut fates);
+        self.m.apply(b);
+        let _ = self.m.take_events();
+        if !problems.is_empty() {
+            return Ok(problems);
+        }
+        // Rewrites that need the state after the block.
+        if b.tool_length
+            .is_some_and(|t| matches!(t, ToolLength::Apply | ToolLength::Add))
+            && !self.p.has_g(if b.tool_length == Some(ToolLength::Apply) {
+                430
+            } else {
+                432
+            })
+        {
+            match self.tool_length_words(b, &before) {
+                Ok(ws) => pre_lines.push(ws),
+                Err(k) => {
+                    return Ok(vec![Problem {
+                        span: g_span(b, 430, 432),
+                        kind: k,
+                    }]);
+                }
+            }
+        }
+        // Lowered motion replaces the line's motion words.
+        let lowered = match self.lower_motion(b, &before) {
+            Ok(l) => l,
+            Err(k) => {
+                return Ok(vec![Problem {
+                    span: b.motion.and_then(|_| {
+                        b.g_codes()
+                            .find(|(g, _)| matches!(g, GCode::Motion(_)))
+                            .map(|(_, w)| w.span)
+                    }),
+                    kind: k,
+                }]);
+            }
+        };
+        if let Some(lines) = &lowered {
+            for (i, w) in b.words.iter().enumerate() {
+                let motion_word = matches!(w.kind, WordKind::G(GCode::Motion(_)))
+                    || matches!(w.kind, WordKind::Value) && b"XYZIJKRPLQ@^".contains(&w.letter);
+                if motion_word {
+                    fates[i] = Fate::Drop;
+                }
+            }
+            let _ = lines;
+        }
+        self.feed_words(b, &before, &mut fates, &mut extra);
+        // The line itself.
+        let incremental_lowered =
+            lowered.is_some() && self.m.modes.distance == Distance::Incremental;
+        let mut after_lowered: Vec<(u8, f64)> = Vec::new();
+        let mut written = Vec::new();
+        self.w.begin(b, self.m.modes.units);
+        for (i, w) in b.words.iter().enumerate() {
+            if fates[i] != Fate::Keep {
+                continue;
+            }
+            if incremental_lowered && matches!(w.kind, WordKind::G(GCode::Distance(_))) {
+                // The lowered blocks are absolute; G91 comes after them.
+                continue;
+            }
+            if lowered.is_some()
+                && matches!(w.kind, WordKind::M(MCode::Pause { .. } | MCode::End { .. }))
+            {
+                // Stops act after the motion.
+                after_lowered.push((b'M', w.value));
+                continue;
+            }
+            let v = self.out_value(w, &before);
+            self.w.word(w.letter, v, w.kind);
+        }
+        for &(l, v) in &extra {
+            self.w.word(l, v, WordKind::Value);
+        }
+        self.w.comments(b, text);
+        if let Some(p) = self.w.finish_line(&mut written) {
+            return Ok(vec![Problem {
+                span: None,
+                kind: p,
+            }]);
+        }
+        let mut lines: Vec<Vec<u8>> = Vec::new();
+        for l in &pre_lines {
+            let mut buf = Vec::new();
+            if let Some(k) = self.plain_line(&words_line(l), &mut buf) {
+                return Ok(vec![Problem {
+                    span: None,
+                    kind: k,
+                }]);
+            }
+            lines.push(buf);
+        }
+        if !written.is_empty() {
+            lines.push(written);
+        }
+        if let Some(lowered) = lowered {
+            if incremental_lowered {
+                lines.push(b"G90".to_vec());
+            }
+            for l in &lowered {
+                let mut buf = Vec::new();
+                if let Some(k) = self.plain_line(l, &mut buf) {
+                    return Ok(vec![Problem {
+                        span: None,
+                        kind: k,
+                    }]);
+                }
+                lines.push(buf);
+            }
+            if incremental_lowered {
+                lines.push(b"G91".to_vec());
+            }
+            for w in after_lowered {
+                extra_lines.push(vec![w]);
+            }
+        }
+        for l in &extra_lines {
+            let mut buf = Vec::new();
+            if let Some(k) = self.plain_line(&words_line(l), &mut buf) {
+                return Ok(vec![Problem {
+                    span: None,
+                    kind: k,
+                }]);
+            }
+            lines.push(buf);
+        }
+        for l in &lines {
+            out.line(l).map_err(io_error)?;
+        }
+        Ok(Vec::new())
+    }
+
+    /// Writes a lowered block; a code the target lacks is refused.
+    fn plain_line(&mut self, l: &PlainLine, buf: &mut Vec<u8>) -> Option<ErrorKind> {
+        for w in &l.words {
+            let ok = match w.letter {
+                b'G' => self.p.has_g((w.value * 10.0).round() as u16),
+                b'M' => self.p.has_m(w.value.round() as u16),
+                l => self.p.has_word(l),
+            };
+            if !ok {
+                return Some(self.refuse(
+                    format!("{}{}", w.letter as char, w.value),
+                    "the lowering needs it and the target does not have it",
+                ));
+            }
+        }
+        self.w.plain(l, self.m.modes.units, buf)
+    }
+
+    fn g_fate(
+        &mut self,
+        b: &Block,
+        w: &Word,
+        g: GCode,
+        site: &Option<Site>,
+        problems: &mut Vec<Problem>,
+    ) -> Fate {
+        let c = code10(w);
+        let p = self.p;
+        let refuse = |s: &Self, why: &str| Problem {
+            span: Some(w.span),
+            kind: s.refuse(g_name(w), why),
+        };
+        match g {
+            GCode::Motion(m) => match m {
+                MotionMode::Thread | MotionMode::RigidTap | MotionMode::ThreadCycle
+                    if !p.spindle_sync || !p.has_g(c) =>
+                {
+                    problems.push(refuse(
+                        self,
+                        "spindle-synchronised motion needs spindle synchronisation, which the target does not have",
+                    ));
+                    Fate::Drop
+                }
+                MotionMode::Cycle(_) if !p.has_g(c) => Fate::Drop,
+                // Without canned cycles G80 only stops axis words from
+                // being used by G10/G28/G92/G43.1 (GRBL's error 31): the
+                // source has no cycle running on the target to cancel.
+                MotionMode::CancelCycle if !p.has_g(810) => Fate::Drop,
+                MotionMode::CubicSpline
+                | MotionMode::QuadSpline
+                | MotionMode::Nurbs
+                | MotionMode::NurbsEnd
+                    if !p.has_g(c) =>
+                {
+                    problems.push(refuse(
+                        self,
+                        "splines are not lowered yet; the target has no spline moves",
+                    ));
+                    Fate::Drop
+                }
+                _ if p.has_g(c) => Fate::Keep,
+                _ => {
+                    problems.push(refuse(self, "the target does not have this motion"));
+                    Fate::Drop
+                }
+            },
+            _ if p.has_g(c) => Fate::Keep,
+            GCode::Path(PathMode::Blend) | GCode::Path(PathMode::ExactStop) => {
+                self.dropped(
+                    site,
+                    &g_name(w),
+                    "the target has no such path mode; the path may blend differently at corners",
+                );
+                Fate::Drop
+            }
+            GCode::Path(PathMode::Exact) => {
+                self.dropped(
+                    site,
+                    "G61",
+                    "the target has no exact-path mode; corners may blend",
+                );
+                Fate::Drop
+            }
+            GCode::Lathe(LatheMode::Radius) => Fate::Drop,
+            GCode::Lathe(LatheMode::Diameter) => Fate::Drop,
+            GCode::SpindleMode(SpindleMode::Rpm) => Fate::Drop,
+            GCode::SpindleMode(SpindleMode::ConstantSurface) => {
+                problems.push(refuse(
+                    self,
+                    "constant surface speed needs spindle speed control from the axis position, which the target does not have",
+                ));
+                Fate::Drop
+            }
+            GCode::FeedMode(FeedMode::PerMinute) => {
+                // G94 after a lowered G95 changes nothing on the target.
+                Fate::Drop
+            }
+            GCode::FeedMode(FeedMode::PerRev) => {
+                let s = b.value(b'S').unwrap_or(self.m.modes.speed);
+                if s > 0.0 && self.m.modes.spindle_mode == SpindleMode::Rpm {
+                    self.feed_rewrite = true;
+                    let k = WarningKind::TargetRewritten {
+                        target: self.name(),
+                        what: "G95 (feed per revolution)".into(),
+                        how: "feed per minute at the programmed spindle speed; exact only if the spindle holds that speed".into(),
+                    };
+                    self.warn(site.clone(), k);
+                } else {
+                    problems.push(Problem {
+                        span: Some(w.span),
+                        kind: ErrorKind::TargetNeedsValue {
+                            target: self.name(),
+                            what: "G95 (feed per revolution)".into(),
+                            value: "a constant spindle speed".into(),
+                            option: "an S word before G95 (and G97)".into(),
+                        },
+                    });
+                }
+                Fate::Drop
+            }
+            GCode::ArcDistance(ArcDistance::Absolute) => Fate::Drop,
+            GCode::ArcDistance(ArcDistance::Incremental) => Fate::Drop,
+            GCode::Retract(_) => Fate::Drop,
+            GCode::ToolLength(ToolLength::Apply | ToolLength::Add) if p.has_g(431) => Fate::Drop,
+            GCode::CutterComp(CutterComp::Off) => Fate::Drop,
+            GCode::CutterComp(_) => {
+                problems.push(refuse(
+                    self,
+                    "cutter radius compensation is not lowered for this target yet",
+                ));
+                Fate::Drop
+            }
+            GCode::Coord(CoordSystem(n)) => {
+                let _ = n;
+                problems.push(refuse(self, "the target has only G54–G59"));
+                Fate::Drop
+            }
+            GCode::NonModal(NonModal::SetData) => {
+                let l = b.value(b'L').unwrap_or(0.0).round() as u8;
+                if matches!(l, 1 | 10 | 11) {
+                    // Tool table writes: the model keeps them for G43.
+                    Fate::Drop
+                } else {
+                    problems.push(refuse(self, format!("G10 L{l} is not available").as_str()));
+                    Fate::Drop
+                }
+            }
+            _ => {
+                problems.push(refuse(self, "the target does not have this code"));
+                Fate::Drop
+            }
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn m_fate(
+        &mut self,
+        b: &Block,
+        w: &Word,
+        m: MCode,
+        site: &Option<Site>,
+        problems: &mut Vec<Problem>,
+        extra_lines: &mut Vec<Vec<(u8, f64)>>,
+    ) -> Fate {
+        let n = w.value.round() as u16;
+        let p = self.p;
+        if m == MCode::ToolChange {
+            let policy = self.opts.tool_change.unwrap_or(p.tool_change);
+            return match policy {
+                ToolChange::Keep => Fate::Keep,
+                ToolChange::Drop => Fate::Drop,
+                ToolChange::Pause => {
+                    let tool = b
+                        .value(b'T')
+                        .map(|t| t.round() as i64)
+                        .or(self.m.selected_tool);
+                    let what = match tool {
+                        Some(t) => format!("M6 (change to tool {t})"),
+                        None => "M6 (tool change)".into(),
+                    };
+                    let k = WarningKind::TargetRewritten {
+                        target: self.name(),
+                        what,
+                        how: "M0: the program pauses for a manual tool change (--tool-change keep|drop to change that)".into(),
+                    };
+                    self.warn(site.clone(), k);
+                    extra_lines.push(vec![(b'M', 0.0)]);
+                    Fate::Drop
+                }
+            };
+        }
+        if p.has_m(n) && w.value.fract() == 0.0 {
+            return Fate::Keep;
+        }
+        match m {
+            MCode::SetTool | MCode::State(_) => Fate::Drop,
+            MCode::Override(_) => {
+                self.dropped(
+                    site,
+                    &format!("M{n}"),
+                    "the target has no such override switch; overrides stay as the operator sets them",
+                );
+                Fate::Drop
+            }
+            MCode::PalletPause => {
+                extra_lines.push(vec![(b'M', 0.0)]);
+                Fate::Drop
+            }
+            MCode::Mist => {
+                problems.push(Problem {
+                    span: Some(w.span),
+                    kind: self.refuse("M7 (mist coolant)", "the target has no mist coolant output"),
+                });
+                Fate::Drop
+            }
+            _ => {
+                problems.push(Problem {
+                    span: Some(w.span),
+                    kind: self.refuse(
+                        format!("M{}", crate::emit::number_string(w.value, None)),
+                        "the target does not have this code",
+                    ),
+                });
+                Fate::Drop
+            }
+        }
+    }
+
+    fn value_fate(&mut self, b: &Block, w: &Word, problems: &mut Vec<Problem>) -> Fate {
+        let l = w.letter;
+        let axis = crate::machine::block::AXIS_LETTERS.contains(&l);
+        if axis && !self.p.has_axis(l) {
+            problems.push(Problem {
+                span: Some(w.span),
+                kind: self.refuse(
+                    format!("axis word {}", l as char),
+                    "the target has no such axis",
+                ),
+            });
+            return Fate::Drop;
+        }
+        match l {
+            b'T' if w.value > self.p.max_tool => return Fate::Drop,
+            b'@' | b'^' => return Fate::Keep,
+            _ => {}
+        }
+        if self.p.has_word(l) {
+            return Fate::Keep;
+        }
+        // Words of codes that are dropped or lowered go with them (see
+        // drop_owned); others are refused.
+        let owned = matches!(l, b'Q' | b'H' | b'D' | b'E' | b'P' | b'L' | b'R');
+        if !owned {
+            problems.push(Problem {
+                span: Some(w.span),
+                kind: self.refuse(
+                    format!("the {} word", l as char),
+                    "the target does not read it",
+                ),
+            });
+        }
+        let _ = b;
+        Fate::Drop
+    }
+
+    /// Drops the value words of dropped codes (G64's P and Q, M61's Q,
+    /// G43's H, G10 L1's words, P on an arc of one turn).
+    fn drop_owned(&self, b: &Block, fates: &mut [Fate]) {
+        let snapshot = fates.to_vec();
+        let dropped_g = |c: u16| {
+            b.words.iter().zip(snapshot.iter()).any(|(w, f)| {
+                *f == Fate::Drop && matches!(w.kind, WordKind::G(_)) && code10(w) == c
+            })
+        };
+        let mut drop = |letter: u8| {
+            for (i, w) in b.words.iter().enumerate() {
+                if w.letter == letter && matches!(w.kind, WordKind::Value) {
+                    fates[i] = Fate::Drop;
+                }
+            }
+        };
+        if dropped_g(640) {
+            drop(b'P');
+            drop(b'Q');
+        }
+        if b.m_codes().any(|(m, _)| m == MCode::SetTool) && !self.p.has_m(61) {
+            drop(b'Q');
+        }
+        if dropped_g(430) || dropped_g(432) {
+            drop(b'H');
+        }
+        if b.non_modal == Some(NonModal::SetData)
+            && matches!(b.value(b'L').map(|l| l.round() as i64), Some(1 | 10 | 11))
+        {
+            for l in *b"LPRXYZABCUVWIJQ" {
+                drop(l);
+            }
+        }
+        let arc = matches!(b.motion, Some(MotionMode::ArcCw | MotionMode::ArcCcw))
+            || b.motion.is_none()
+                && matches!(self.m.modes.motion, MotionMode::ArcCw | MotionMode::ArcCcw)
+                && b.has_axis();
+        if arc && b.value(b'P') == Some(1.0) {
+            drop(b'P');
+        }
+        if b.retract.is_some() && !self.p.has_g(980) {
+            // Nothing else belongs to G98/G99.
+        }
+    }
+
+    /// G43/G43.2 as the target's G43.1 Z (the offset in program units).
+    fn tool_length_words(&self, b: &Block, before: &Machine) -> Result<Vec<(u8, f64)>, ErrorKind> {
+        let s = self.m.scale();
+        let tlo = self.m.tlo;
+        let need = |axis: &str| ErrorKind::TargetNeedsValue {
+            target: self.name(),
+            what: "G43 (tool length offset)".into(),
+            value: format!("the tool's {axis} length"),
+            option: "--tool-table (the tool table of the machine)".into(),
+        };
+        // The tool's data must really be known: from --tool-table or a G10
+        // L1/L10/L11 of the program (--zero-start's zeros are not the
+        // machine's tools).
+        let h = b
+            .value(b'H')
+            .map(|h| h.round() as i64)
+            .or(before.current_tool);
+        if !h.is_some_and(|h| h == 0 || before.tools.contains_key(&h)) {
+            return Err(need("Z"));
+        }
+        let z = tlo[2].ok_or_else(|| need("Z"))?;
+        for (a, v) in tlo.iter().enumerate() {
+            if a != 2 && v.is_some_and(|v| v != 0.0) && self.p.g43_1_z_only {
+                return Err(self.refuse(
+                    "G43 with an X or other non-Z tool offset",
+                    "the target's G43.1 takes only Z",
+                ));
+            }
+        }
+        if !self.p.has_g(431) {
+            return Err(self.refuse("G43", "the target has no tool length offset"));
+        }
+        Ok(vec![(b'G', 43.1), (b'Z', z / s)])
+    }
+
+    /// The value written for a kept word: X halved in G7, otherwise as is.
+    fn out_value(&self, w: &Word, before: &Machine) -> f64 {
+        if w.letter == b'X'
+            && matches!(w.kind, WordKind::Value)
+            && before.modes.lathe == LatheMode::Diameter
+            && !self.p.has_g(70)
+        {
+            return w.value / 2.0;
+        }
+        w.value
+    }
+
+    /// With G95 lowered, feed words become per-minute feeds at the spindle
+    /// speed, written whenever they change.
+    fn feed_words(
+        &mut self,
+        b: &Block,
+        _before: &Machine,
+        fates: &mut [Fate],
+        extra: &mut Vec<(u8, f64)>,
+    ) {
+        if let Some(m) = b.feed_mode {
+            self.target_inverse = m == FeedMode::InverseTime;
+        }
+        if !self.feed_rewrite {
+            return;
+        }
+        for (i, w) in b.words.iter().enumerate() {
+            if w.letter == b'F' && matches!(w.kind, WordKind::Value) {
+                fates[i] = Fate::Drop;
+            }
+        }
+        let modes = &self.m.modes;
+        let want = match modes.feed_mode {
+            FeedMode::PerRev => modes.feed * modes.speed,
+            _ => modes.feed,
+        };
+        let feeds = matches!(
+            modes.motion,
+            MotionMode::Linear | MotionMode::ArcCw | MotionMode::ArcCcw | MotionMode::Cycle(_)
+        ) && b.has_axis();
+        if (feeds || b.value(b'F').is_some()) && self.written_feed != Some(want) {
+            extra.push((b'F', want));
+            self.written_feed = Some(want);
+        }
+    }
+
+    /// Arcs with P turns, full circles without end point and canned cycles
+    /// as plain blocks; `None` when the line's motion is written as is.
+    fn lower_motion(
+        &mut self,
+        b: &Block,
+        before: &Machine,
+    ) -> Result<Option<Vec<PlainLine>>, ErrorKind> {
+        let motion = b.motion.unwrap_or(before.modes.motion);
+        let moves = b.has_axis() || b.value(b'@').is_some() || b.value(b'^').is_some();
+        let other_axis_use = b.non_modal.is_some_and(|n| !matches!(n, NonModal::Dwell))
+            || b.tool_length == Some(ToolLength::Dynamic);
+        match motion {
+            MotionMode::Cycle(n) if !self.p.has_g(n as u16 * 10) => {
+                if !moves || other_axis_use {
+                    return Ok(None);
+                }
+                self.lower_cycle(n, b, before).map(Some)
+            }
+            MotionMode::ArcCw | MotionMode::ArcCcw => {
+                self.cycles.end();
+                let turns = b.value(b'P').map_or(1.0, |p| p.round());
+                let ijk_only = !b.has_axis()
+                    && (b.value(b'I').is_some()
+                        || b.value(b'J').is_some()
+                        || b.value(b'K').is_some());
+                let p_ok = self.p.arc_turns;
+                if ijk_only || (turns != 1.0 && !p_ok) {
+                    if other_axis_use {
+                        return Ok(None);
+                    }
+                    return self.lower_arc(b, before, motion, turns).map(Some);
+                }
+                Ok(None)
+            }
+            MotionMode::Cycle(_) => Ok(None),
+            _ => {
+                if moves && !other_axis_use {
+                    self.cycles.end();
+                }
+                Ok(None)
+            }
+        }
+    }
+
+    fn prog_pos(&self, m: &Machine) -> [Option<f64>; 3] {
+        let s = m.scale();
+        [
+            m.pos[0].map(|v| v / s),
+            m.pos[1].map(|v| v / s),
+            m.pos[2].map(|v| v / s),
+        ]
+    }
+
+    fn lower_error(&self, e: lower::LowerError) -> ErrorKind {
+        match e {
+            lower::LowerError::PositionUnknown { axis } => ErrorKind::TargetNeedsValue {
+                target: self.name(),
+                what: "this block's lowering".into(),
+                value: format!("the current {axis} position"),
+                option: format!(
+                    "--start-position {axis}… (or --zero-start), or an absolute move first"
+                ),
+            },
+            e => ErrorKind::TargetLowering {
+                target: self.name(),
+                code: e.code(),
+                message: e.to_string(),
+            },
+        }
+    }
+
+    fn plane(m: &Machine) -> Result<lower::Plane, ErrorKind> {
+        match m.modes.plane {
+            Plane::XY => Ok(lower::Plane::XY),
+            Plane::XZ => Ok(lower::Plane::XZ),
+            Plane::YZ => Ok(lower::Plane::YZ),
+            _ => Err(ErrorKind::Unsupported {
+                what: "arcs and cycles in the UVW planes are not lowered".into(),
+            }),
+        }
+    }
+
+    fn lower_arc(
+        &mut self,
+        b: &Block,
+        before: &Machine,
+        motion: MotionMode,
+        turns: f64,
+    ) -> Result<Vec<PlainLine>, ErrorKind> {
+        let start = self.prog_pos(before);
+        let end = self.prog_pos(&self.m);
+        let known = |v: [Option<f64>; 3], what: &str| -> Result<[f64; 3], ErrorKind> {
+            let mut o = [0.0; 3];
+            for i in 0..3 {
+                o[i] = v[i].ok_or_else(|| ErrorKind::TargetNeedsValue {
+                    target: self.name(),
+                    what: format!("this arc's lowering ({what})"),
+                    value: format!("the current {} position", ['X', 'Y', 'Z'][i]),
+                    option: "--start-position (or --zero-start), or an absolute move first".into(),
+                })?;
+            }
+            Ok(o)
+        };
+        let start = known(start, "start")?;
+        let end = known(end, "end")?;
+        if b.value(b'R').is_some() {
+            return Err(self.refuse(
+                "an R-form arc with P turns",
+                "only centre-form arcs are lowered",
+            ));
+        }
+        let plane = Self::plane(&self.m)?;
+        let ijk = [b.value(b'I'), b.value(b'J'), b.value(b'K')];
+        let mut centre = start;
+        for i in 0..3 {
+            if let Some(v) = ijk[i] {
+                centre[i] = match self.m.modes.arc_distance {
+                    ArcDistance::Incremental => start[i] + v,
+                    ArcDistance::Absolute => v,
+                };
+            }
+        }
+        let input = lower::arc::ArcInput {
+            plane,
+            clockwise: motion == MotionMode::ArcCw,
+            start,
+            end,
+            centre,
+            turns: turns.max(1.0) as u32,
+        };
+        lower::arc::lower_arc(&input).map_err(|e| self.lower_error(e))
+    }
+
+    fn lower_cycle(
+        &mut self,
+        n: u8,
+        b: &Block,
+        before: &Machine,
+    ) -> Result<Vec<PlainLine>, ErrorKind> {
+        use lower::CycleKind as K;
+        let kind = match n {
+            73 => K::G73,
+            81 => K::G81,
+            82 => K::G82,
+            83 => K::G83,
+            84 => K::G84,
+            85 => K::G85,
+            86 => K::G86,
+            87 => K::G87,
+            88 => K::G88,
+            89 => K::G89,
+            _ => return Err(self.refuse(format!("G{n}"), "the target has no such cycle")),
+        };
+        let block = lower::CycleBlock {
+            axes: [b.value(b'X'), b.value(b'Y'), b.value(b'Z')],
+            r: b.value(b'R'),
+            l: b.value(b'L').map(|l| l.round().max(0.0) as u32),
+            p: b.value(b'P'),
+            q: b.value(b'Q'),
+            ijk: [b.value(b'I'), b.value(b'J'), b.value(b'K')],
+            radius: b.value(b'@'),
+            angle: b.value(b'^'),
+        };
+        let m = &self.m.modes;
+        let modal = lower::CycleModal {
+            plane: Self::plane(&self.m)?,
+            distance: match m.distance {
+                Distance::Absolute => lower::Distance::Absolute,
+                Distance::Incremental => lower::Distance::Incremental,
+            },
+            units: match m.units {
+                Units::Mm => lower::Units::Mm,
+                Units::Inch => lower::Units::Inch,
+            },
+            retract: match m.retract {
+                crate::machine::block::Retract::Initial => lower::Retract::OldZ,
+                crate::machine::block::Retract::R => lower::Retract::RPlane,
+            },
+            spindle: match m.spindle {
+                SpindleDir::Off => lower::Spindle::Off,
+                SpindleDir::Cw => lower::Spindle::Cw,
+                SpindleDir::Ccw => lower::Spindle::Ccw,
+            },
+        };
+        let pos = self.prog_pos(before);
+        let out = self
+            .cycles
+            .lower(kind, &block, &modal, pos)
+            .map_err(|e| self.lower_error(e))?;
+        // The model follows LinuxCNC's end position.
+        let s = self.m.scale();
+        for i in 0..3 {
+            self.m.pos[i] = Some(out.end[i] * s);
+        }
+        Ok(out.lines)
+    }
+}
+
+fn words_line(l: &[(u8, f64)]) -> PlainLine {
+    PlainLine {
+        words: l
+            .iter()
+            .map(|&(letter, value)| lower::Word { letter, value })
+            .collect(),
+    }
+}
+
+fn g_span(b: &Block, a: u16, c: u16) -> Option<crate::machine::block::Span> {
+    b.words
+        .iter()
+        .find(|w| matches!(w.kind, WordKind::G(_)) && (code10(w) == a || code10(w) == c))
+        .map(|w| w.span)
+}
+
+#[allow(dead_code)]
+fn comment_kind_is_message(k: CommentKind) -> bool {
+    k == CommentKind::Message
+}
+
+#[allow(dead_code)]
+fn spindle_mode(_: SpindleMode) {}

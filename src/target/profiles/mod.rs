@@ -1,0 +1,4 @@
+//! One profile per controller.
+
+pub mod grbl;
+pub mod linuxcnc;

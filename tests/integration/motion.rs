@@ -1,0 +1,455 @@
+//! Machine-motion comparison for programs lowered to a target: rs274 runs
+//! the original and the lowered program, each canon stream is replayed into
+//! the tool path in machine coordinates and millimetres (G5x and G92
+//! offsets, tool length offset and units applied, arcs sampled), cut into
+//! runs of one move kind and feed, interleaved with the spindle, coolant,
+//! dwell and program-end events; the two are compared within a tolerance.
+//! Lowering legitimately changes the canon text (a cycle becomes G0/G1, a
+//! dropped G64 loses its canon call), not this.
+//!
+//! Tool changes and pauses are not compared (M6 becomes M0 or disappears
+//! for a controller without a tool changer, as the tool-change option says).
+
+use std::path::Path;
+use std::process::{Command, Stdio};
+
+use crate::fixtures;
+use crate::oracle;
+
+type P3 = [f64; 3];
+
+#[derive(Debug, Clone, PartialEq)]
+enum Item {
+    Run {
+        kind: &'static str,
+        feed: f64,
+        pts: Vec<P3>,
+    },
+    Event(String),
+}
+
+/// rs274's canon lines for `program` (with tool table `tbl`, and the folder
+/// of the program as its working folder).
+fn rs274(program: &[u8], tbl: Option<&Path>) -> Result<Vec<String>, String> {
+    let dir = tempfile::tempdir().map_err(|e| e.to_string())?;
+    let prog = dir.path().join("prog.ngc");
+    std::fs::write(&prog, program).map_err(|e| e.to_string())?;
+    let ini = dir.path().join("empty.ini");
+    std::fs::write(&ini, "").map_err(|e| e.to_string())?;
+    let mut cmd = Command::new("rs274");
+    cmd.current_dir(dir.path()).env("HOME", dir.path());
+    cmd.arg("-g").arg("-i").arg(&ini);
+    if let Some(t) = tbl {
+        cmd.arg("-t").arg(t);
+    }
+    let out = cmd
+        .arg(&prog)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .output()
+        .map_err(|e| e.to_string())?;
+    if !out.status.success() {
+        return Err(String::from_utf8_lossy(&out.stderr).into_owned());
+    }
+    Ok(String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(str::to_string)
+        .collect())
+}
+
+/// Name and numbers of a canon line (`   12 N..... NAME(1, 2 3, X)`).
+fn canon(line: &str) -> Option<(&str, Vec<f64>, &str)> {
+    let open = line.find('(')?;
+    let head = line[..open].trim_end();
+    let name = head.rsplit(' ').next()?;
+    let args = line[open + 1..].trim_end().trim_end_matches(')');
+    let nums = args
+        .split([',', ' '])
+        .filter_map(|t| t.trim().parse::<f64>().ok())
+        .collect();
+    Some((name, nums, args))
+}
+
+struct Replay {
+    scale: f64,
+    g5x: [f64; 3],
+    g92: [f64; 3],
+    tlo: [f64; 3],
+    /// Program position, mm.
+    pos: P3,
+    plane: u8,
+    feed: f64,
+    items: Vec<Item>,
+    spindle: (i32, f64),
+    dwell: f64,
+    /// Feed per revolution (G95): compared as the feed per minute at the
+    /// spindle speed, which is what a lowering to G94 writes.
+    per_rev: bool,
+}
+
+impl Replay {
+    fn machine(&self, p: P3) -> P3 {
+        std::array::from_fn(|i| p[i] + self.g5x[i] + self.g92[i] + self.tlo[i])
+    }
+
+    fn event(&mut self, e: String) {
+        if self.dwell > 0.0 {
+            let d = format!("dwell {:.3}", self.dwell);
+            self.dwell = 0.0;
+            self.items.push(Item::Event(d));
+        }
+        self.items.push(Item::Event(e));
+    }
+
+    fn segment(&mut self, kind: &'static str, pts: Vec<P3>) {
+        if self.dwell > 0.0 {
+            self.event(String::new());
+            self.items.pop();
+        }
+        let feed = match kind {
+            "rapid" => 0.0,
+            _ if self.per_rev => self.feed * self.spindle.1,
+            _ => self.feed,
+        };
+        let pts: Vec<P3> = pts.into_iter().map(|p| self.machine(p)).collect();
+        let start = self.machine(self.pos);
+        if let Some(Item::Run {
+            kind: k,
+            feed: f,
+            pts: run,
+        }) = self.items.last_mut()
+            && *k == kind
+            && (*f - feed).abs() <= 1e-6 * feed.abs().max(1.0)
+        {
+            run.extend(pts);
+            return;
+        }
+        let mut run = vec![start];
+        run.extend(pts);
+        self.items.push(Item::Run {
+            kind,
+            feed,
+            pts: run,
+        });
+    }
+
+    fn line(&mut self, kind: &'static str, n: &[f64]) {
+        let to = [n[0] * self.scale, n[1] * self.scale, n[2] * self.scale];
+        self.segment(kind, vec![to]);
+        self.pos = to;
+    }
+
+    fn arc(&mut self, n: &[f64]) {
+        let s = self.scale;
+        // first end, second end, first centre, second centre, rotation,
+        // normal-axis end.
+        let (f, sec, nrm) = match self.plane {
+            0 => (0, 1, 2),
+            1 => (2, 0, 1),
+            _ => (1, 2, 0),
+        };
+        let (e1, e2, c1, c2, rot, en) = (n[0] * s, n[1] * s, n[2] * s, n[3] * s, n[4], n[5] * s);
+        let p = self.pos;
+        let r = (p[f] - c1).hypot(p[sec] - c2);
+        let a0 = (p[sec] - c2).atan2(p[f] - c1);
+        let a1 = (e2 - c2).atan2(e1 - c1);
+        let ccw = rot > 0.0;
+        let turns = rot.abs().max(1.0) - 1.0;
+        let mut sweep = if ccw { a1 - a0 } else { a0 - a1 };
+        while sweep <= 1e-12 {
+            sweep += std::f64::consts::TAU;
+        }
+        sweep += turns * std::f64::consts::TAU;
+        let steps = ((sweep / 0.02).ceil() as usize).max(2);
+        let mut pts = Vec::with_capacity(steps);
+        for k in 1..=steps {
+            let t = k as f64 / steps as f64;
+            let a = if ccw { a0 + sweep * t } else { a0 - sweep * t };
+            let mut q = p;
+            q[f] = c1 + r * a.cos();
+            q[sec] = c2 + r * a.sin();
+            q[nrm] = p[nrm] + (en - p[nrm]) * t;
+            pts.push(q);
+        }
+        let mut end = p;
+        end[f] = e1;
+        end[sec] = e2;
+        end[nrm] = en;
+        if let Some(last) = pts.last_mut() {
+            *last = end;
+        }
+        self.segment("feed", pts);
+        self.pos = end;
+    }
+
+    fn run(lines: &[String]) -> Vec<Item> {
+        let mut r = Replay {
+            scale: 1.0,
+            g5x: [0.0; 3],
+            g92: [0.0; 3],
+            tlo: [0.0; 3],
+            pos: [0.0; 3],
+            plane: 0,
+            feed: 0.0,
+            items: Vec::new(),
+            spindle: (0, 0.0),
+            dwell: 0.0,
+            per_rev: false,
+        };
+        for l in lines {
+            let Some((name, n, args)) = canon(l) else {
+                continue;
+            };
+            let s = r.scale;
+            match name {
+                "USE_LENGTH_UNITS" => r.scale = if args.contains("INCH") { 25.4 } else { 1.0 },
+                "SET_G5X_OFFSET" if n.len() >= 4 => r.g5x = [n[1] * s, n[2] * s, n[3] * s],
+                "SET_G92_OFFSET" if n.len() >= 3 => r.g92 = [n[0] * s, n[1] * s, n[2] * s],
+                "USE_TOOL_LENGTH_OFFSET" if n.len() >= 3 => r.tlo = [n[0] * s, n[1] * s, n[2] * s],
+                "SELECT_PLANE" => {
+                    r.plane = if args.contains("XZ") {
+                        1
+                    } else if args.contains("YZ") {
+                        2
+                    } else {
+                        0
+                    }
+                }
+                "SET_FEED_RATE" if !n.is_empty() => r.feed = n[0] * s,
+                "STRAIGHT_TRAVERSE" if n.len() >= 3 => r.line("rapid", &n),
+                "STRAIGHT_FEED" if n.len() >= 3 => r.line("feed", &n),
+                "STRAIGHT_PROBE" if n.len() >= 3 => r.line("probe", &n),
+                "ARC_FEED" if n.len() >= 6 => r.arc(&n),
+                "DWELL" if !n.is_empty() => r.dwell += n[0],
+                "START_SPINDLE_CLOCKWISE" => {
+                    r.spindle.0 = 1;
+                    let sp = r.spindle;
+                    r.event(format!("spindle {} {:.3}", sp.0, sp.1));
+                }
+                "START_SPINDLE_COUNTERCLOCKWISE" => {
+                    r.spindle.0 = -1;
+                    let sp = r.spindle;
+                    r.event(format!("spindle {} {:.3}", sp.0, sp.1));
+                }
+                "STOP_SPINDLE_TURNING" if r.spindle.0 != 0 => {
+                    r.spindle.0 = 0;
+                    r.event("spindle off".into());
+                }
+                "SET_SPINDLE_SPEED" if n.len() >= 2 && r.spindle.1 != n[1] => {
+                    r.spindle.1 = n[1];
+                    if r.spindle.0 != 0 {
+                        let sp = r.spindle;
+                        r.event(format!("spindle {} {:.3}", sp.0, sp.1));
+                    }
+                }
+                "FLOOD_ON" | "FLOOD_OFF" | "MIST_ON" | "MIST_OFF" => r.event(name.to_string()),
+                // A program ended by `%` finishes without PROGRAM_END.
+                "PROGRAM_END" | "FINISH" => r.event("end".into()),
+                "SET_FEED_MODE" if !n.is_empty() => r.per_rev = n[n.len() - 1] != 0.0,
+                _ => {}
+            }
+        }
+        if r.dwell > 0.0 {
+            r.event(String::new());
+            r.items.pop();
+        }
+        // Moves that go nowhere are not motion.
+        r.items.retain(|i| match i {
+            Item::Run { pts, .. } => pts.windows(2).any(|w| dist(w[0], w[1]) > 1e-9),
+            Item::Event(_) => true,
+        });
+        r.items
+    }
+}
+
+fn dist(a: P3, b: P3) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// Distance from `p` to the polyline `line`, looking at the segments from
+/// `*hint` on (the points come in path order) and moving the hint to the
+/// nearest one.
+fn to_polyline(p: P3, line: &[P3], hint: &mut usize) -> f64 {
+    let mut best = f64::INFINITY;
+    let from = hint.saturating_sub(50);
+    let to = (from + 2000).min(line.len());
+    let mut best_i = *hint;
+    for (j, w) in line[from..to].windows(2).enumerate() {
+        let (a, b) = (w[0], w[1]);
+        let d: P3 = std::array::from_fn(|i| b[i] - a[i]);
+        let len2 = d.iter().map(|v| v * v).sum::<f64>();
+        let t = if len2 == 0.0 {
+            0.0
+        } else {
+            ((0..3).map(|i| (p[i] - a[i]) * d[i]).sum::<f64>() / len2).clamp(0.0, 1.0)
+        };
+        let q: P3 = std::array::from_fn(|i| a[i] + t * d[i]);
+        if dist(p, q) < best {
+            best = dist(p, q);
+            best_i = from + j;
+        }
+    }
+    *hint = best_i;
+    if line.len() == 1 {
+        best = dist(p, line[0]);
+    }
+    best
+}
+
+/// Points of a polyline, with extra points so none is farther than `step`
+/// from the next.
+fn densify(line: &[P3], step: f64) -> Vec<P3> {
+    let mut out = Vec::new();
+    for w in line.windows(2) {
+        let n = ((dist(w[0], w[1]) / step).ceil() as usize).clamp(1, 10_000);
+        for k in 0..n {
+            let t = k as f64 / n as f64;
+            out.push(std::array::from_fn(|i| w[0][i] + t * (w[1][i] - w[0][i])));
+        }
+    }
+    out.extend(line.last().copied());
+    out
+}
+
+fn compare(a: &[Item], b: &[Item], tol: f64) -> Result<(), String> {
+    for (i, pair) in a.iter().zip(b.iter()).enumerate() {
+        match pair {
+            (Item::Event(x), Item::Event(y)) if x == y => {}
+            (
+                Item::Run {
+                    kind: ka,
+                    feed: fa,
+                    pts: pa,
+                },
+                Item::Run {
+                    kind: kb,
+                    feed: fb,
+                    pts: pb,
+                },
+            ) => {
+                if ka != kb || (fa - fb).abs() > 1e-3 * fa.abs().max(1.0) {
+                    return Err(format!("item {i}: {ka} F{fa} against {kb} F{fb}"));
+                }
+                let ends = dist(pa[0], pb[0]).max(dist(pa[pa.len() - 1], pb[pb.len() - 1]));
+                let mut worst = ends;
+                let mut hint = 0;
+                for p in densify(pa, 0.25) {
+                    worst = worst.max(to_polyline(p, pb, &mut hint));
+                }
+                let mut hint = 0;
+                for p in densify(pb, 0.25) {
+                    worst = worst.max(to_polyline(p, pa, &mut hint));
+                }
+                if worst > tol {
+                    return Err(format!(
+                        "item {i}: {ka} paths differ by {worst:.5} mm (from {:?} to {:?} against {:?} to {:?})",
+                        pa[0],
+                        pa[pa.len() - 1],
+                        pb[0],
+                        pb[pb.len() - 1]
+                    ));
+                }
+            }
+            (x, y) => return Err(format!("item {i}: {x:?} against {y:?}")),
+        }
+    }
+    if a.len() != b.len() {
+        return Err(format!(
+            "{} items against {}; first extra: {:?}",
+            a.len(),
+            b.len(),
+            a.get(b.len()).or(b.get(a.len()))
+        ));
+    }
+    Ok(())
+}
+
+/// Flattens `path` for its target and compares the motion with the
+/// original's.
+fn motion_check(path: &Path) -> Result<(), String> {
+    let args = fixtures::read_args(path);
+    let dir = path.parent().expect("dir");
+    let tbl = args
+        .iter()
+        .position(|a| a == "--tool-table")
+        .and_then(|i| args.get(i + 1))
+        .map(|t| dir.join(t));
+    let zero: &[&str] = if args.iter().any(|a| a == "--zero-start") {
+        &[]
+    } else {
+        &["--zero-start"]
+    };
+    let (code, stdout, stderr) = fixtures::run_fixture(path, zero);
+    if code != 0 {
+        return Err(format!("ngcflat refuses it: {stderr}"));
+    }
+    let mut original = std::fs::read(path).map_err(|e| e.to_string())?;
+    if args
+        .windows(2)
+        .any(|w| w[0] == "--block-delete" && w[1] == "on")
+    {
+        // rs274's switch is off: the original with its / lines removed.
+        let text = String::from_utf8_lossy(&original).into_owned();
+        original = text
+            .lines()
+            .filter(|l| !l.trim_start().starts_with('/'))
+            .map(|l| format!("{l}\n"))
+            .collect::<String>()
+            .into_bytes();
+    }
+    let a = rs274(&original, tbl.as_deref()).map_err(|e| format!("rs274 on the original: {e}"))?;
+    let b = rs274(stdout.as_bytes(), tbl.as_deref())
+        .map_err(|e| format!("rs274 rejects the lowered output: {e}\n{stdout}"))?;
+    compare(&Replay::run(&a), &Replay::run(&b), 0.002)
+}
+
+#[test]
+fn lowered_fixtures_move_as_the_originals() {
+    if !oracle::available("lowered_fixtures_move_as_the_originals") {
+        return;
+    }
+    let files: Vec<_> = fixtures::all_fixtures()
+        .into_iter()
+        .filter(|p| fixtures::target_of(p).is_some() && !p.to_string_lossy().contains("/refuse/"))
+        .collect();
+    assert!(!files.is_empty());
+    let failures: Vec<String> = files
+        .iter()
+        .filter_map(|f| {
+            motion_check(f)
+                .err()
+                .map(|e| format!("{}: {e}", f.display()))
+        })
+        .collect();
+    assert!(
+        failures.is_empty(),
+        "{} of {} lowered fixtures move differently:\n{}",
+        failures.len(),
+        files.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn the_comparison_sees_a_different_path() {
+    // A program against one whose second move ends elsewhere, and against
+    // one that is the same motion written differently (a split move).
+    let a = [
+        "1 N..... STRAIGHT_TRAVERSE(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)".to_string(),
+        "2 N..... SET_FEED_RATE(100.0000)".into(),
+        "3 N..... STRAIGHT_FEED(2.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)".into(),
+    ];
+    let mut b = a.clone();
+    b[2] = "3 N..... STRAIGHT_FEED(2.0000, 0.0100, 0.0000, 0.0000, 0.0000, 0.0000)".into();
+    assert!(compare(&Replay::run(&a), &Replay::run(&b), 0.002).is_err());
+    let mut c = a.to_vec();
+    c.insert(
+        2,
+        "3 N..... STRAIGHT_FEED(1.5000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)".into(),
+    );
+    assert_eq!(compare(&Replay::run(&a), &Replay::run(&c), 0.002), Ok(()));
+    let mut d = a.to_vec();
+    d[1] = "2 N..... SET_FEED_RATE(200.0000)".into();
+    assert!(compare(&Replay::run(&a), &Replay::run(&d), 0.002).is_err());
+}
