@@ -124,7 +124,7 @@ fn observed(
 
 /// Checks one program; returns its diagnostics.
 pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
-    let source = match crate::program::SourceFile::open_regular(path) {
+    let source = match crate::program::SourceFile::open_regular(path, cfg.settings.input) {
         Ok(s) => s,
         Err(e) => {
             return vec![*Diagnostic::error(

@@ -217,6 +217,18 @@ pub struct CommonArgs {
     /// Stop when the output grows beyond this many lines.
     #[arg(long, value_name = "N", default_value_t = 50_000_000)]
     pub max_output_lines: u64,
+    /// Refuse programs larger than this many bytes (files, pipes, devices;
+    /// at most 4 GiB - 1).
+    #[arg(long, value_name = "BYTES", default_value_t = 2 << 30)]
+    pub max_input_bytes: u64,
+    /// Refuse a line longer than this read from a pipe or device (lines of
+    /// regular files are never read whole).
+    #[arg(long, value_name = "BYTES", default_value_t = 1 << 20)]
+    pub max_line_bytes: u64,
+    /// Stop when the output grows beyond the program's own size plus this
+    /// many bytes.
+    #[arg(long, value_name = "BYTES", default_value_t = 4 << 30)]
+    pub max_output_bytes: u64,
     /// Assume the state LinuxCNC's standalone interpreter starts in: position
     /// 0, all offsets, tool data and probe results 0 (as in conformance
     /// runs). Without it, reading such values is an error until the program
@@ -511,6 +523,11 @@ impl CommonArgs {
             strip_comments: self.strip_comments,
             max_steps: self.max_steps,
             max_output_lines: self.max_output_lines,
+            input: crate::program::InputLimits {
+                max_bytes: self.max_input_bytes,
+                max_line: self.max_line_bytes,
+            },
+            max_output_bytes: self.max_output_bytes,
             zero_start: self.zero_start,
             ..Settings::default()
         };

@@ -30,6 +30,14 @@ use program::{FileIndex, Loader, SearchPath, SourceFile};
 
 /// Reads a program from a path (`-` is stdin).
 pub fn read_source(path: Option<&Path>) -> Result<SourceFile, Error> {
+    read_source_limited(path, program::InputLimits::default())
+}
+
+/// [`read_source`] within bounds on size and line length.
+pub fn read_source_limited(
+    path: Option<&Path>,
+    lim: program::InputLimits,
+) -> Result<SourceFile, Error> {
     let io_err = |path: PathBuf, e: std::io::Error| {
         Diagnostic::error(
             ErrorKind::Io {
@@ -41,9 +49,9 @@ pub fn read_source(path: Option<&Path>) -> Result<SourceFile, Error> {
     };
     match path {
         Some(p) if p.as_os_str() != "-" => {
-            SourceFile::open(p).map_err(|e| io_err(p.to_path_buf(), e))
+            SourceFile::open_limited(p, lim).map_err(|e| io_err(p.to_path_buf(), e))
         }
-        _ => SourceFile::read_stream(std::io::stdin().lock(), "<stdin>")
+        _ => SourceFile::read_stream_limited(std::io::stdin().lock(), "<stdin>", lim)
             .map_err(|e| io_err(PathBuf::from("<stdin>"), e)),
     }
 }
@@ -103,6 +111,7 @@ pub fn flatten_with<'s>(
         Ok(s) => s,
         Err(e) => return (Vec::new(), Some(e)),
     };
+    sink.limit_bytes(settings.max_output_bytes, index.file.len());
     sink.refer_to(index.file.clone());
     let interp = Interp::new(settings, loader, index, sink);
     match consumer {
@@ -282,7 +291,7 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
                 Err(k) => return Ok(setup_error(k, args.common.format())),
             };
             report(&cfg.warnings, cfg.format);
-            let source = match read_source(args.file.as_deref()) {
+            let source = match read_source_limited(args.file.as_deref(), cfg.settings.input) {
                 Ok(s) => s,
                 Err(e) => {
                     report(&[*e], cfg.format);

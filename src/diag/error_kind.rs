@@ -236,6 +236,8 @@ pub enum ErrorKind {
     ComputedSubLabel,
     /// `ngcflat -o part.ngc part.ngc` (also through links).
     OutputIsInput { output: PathBuf },
+    /// A loop of long lines writing more than `--max-output-bytes`.
+    OutputBytesLimit { limit: u64 },
     /// `--start-position part.ngc`: not a list of axis words.
     BadStartPosition { text: String },
     /// `G38.2 Z-10` then `#5063`: the probe's result exists only on the
@@ -349,6 +351,7 @@ impl ErrorKind {
             Internal { .. } => "E0700",
             ComputedSubLabel => "E0701",
             OutputIsInput { .. } => "E0702",
+            OutputBytesLimit { .. } => "E0703",
             BadStartPosition { .. } => "E0800",
             ProbeResultUnknown { .. } => "E0801",
             BadLimits { .. } => "E1201",
@@ -630,6 +633,10 @@ impl fmt::Display for ErrorKind {
             Internal { what } => write!(
                 f,
                 "internal error: {what}; please report it with the program"
+            ),
+            OutputBytesLimit { limit } => write!(
+                f,
+                "the output grew past {limit} bytes (the program's size plus --max-output-bytes); runaway loop? (raise with --max-output-bytes)"
             ),
             OutputIsInput { output } => write!(
                 f,

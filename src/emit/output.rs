@@ -536,7 +536,7 @@ fn apply(
                     text.clear();
                 }
                 if !sink.record_input(start, len, crc as u32) {
-                    return Err(io::Error::other("an input range could not be recorded"));
+                    return Err(sink.not_recorded(len));
                 }
             }
             tag => unreachable!("output command {tag}"),

@@ -156,7 +156,26 @@ pub struct Sink {
     /// Output as pieces; empty while no range was recorded (all spooled).
     parts: Vec<Part>,
     spooled: u64,
+    /// Bytes recorded as input ranges.
+    ranged: u64,
+    /// Most bytes of output (`--max-output-bytes` plus the input's size).
+    byte_budget: u64,
 }
+
+/// The output grew past `--max-output-bytes` (carried in an `io::Error`
+/// from the sink to the evaluator).
+#[derive(Debug)]
+pub struct OutputTooLarge {
+    pub limit: u64,
+}
+
+impl std::fmt::Display for OutputTooLarge {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "the output grew past {} bytes", self.limit)
+    }
+}
+
+impl std::error::Error for OutputTooLarge {}
 
 /// Test hook: with `NGCFLAT_TEST_PAUSE_DIR` set and `PHASE.wait` in that
 /// folder, the release stops at `phase`, creates `PHASE.paused` and waits
@@ -215,6 +234,8 @@ impl Sink {
             watch: None,
             parts: Vec::new(),
             spooled: 0,
+            ranged: 0,
+            byte_budget: u64::MAX,
         })
     }
 
@@ -228,6 +249,28 @@ impl Sink {
             self.input = Some(input.clone());
         }
         self.watch = Some(input);
+    }
+
+    /// Bounds the output to `extra` bytes beyond the input's `input_len`.
+    pub fn limit_bytes(&mut self, extra: u64, input_len: u64) {
+        self.byte_budget = extra.saturating_add(input_len);
+    }
+
+    /// Why [`Sink::record_input`] refused `len` bytes.
+    #[cold]
+    pub fn not_recorded(&self, len: u64) -> io::Error {
+        if self.spooled + self.ranged + len > self.byte_budget {
+            self.too_large()
+        } else {
+            io::Error::other("an input range could not be recorded")
+        }
+    }
+
+    #[cold]
+    fn too_large(&self) -> io::Error {
+        io::Error::other(OutputTooLarge {
+            limit: self.byte_budget,
+        })
     }
 
     /// The file output may refer to, if any.
@@ -271,6 +314,11 @@ impl Sink {
         if self.input.is_none() || self.parts.len() >= MAX_PARTS {
             return false;
         }
+        if self.spooled + self.ranged + len > self.byte_budget {
+            // Written instead, and refused there.
+            return false;
+        }
+        self.ranged += len;
         if self.parts.is_empty() && self.spooled > 0 {
             self.parts.push(Part::Spooled(self.spooled));
         }
@@ -294,8 +342,11 @@ impl Sink {
         if matches!(self.dest, Destination::Discard) {
             return Ok(());
         }
-        self.mem.extend_from_slice(bytes);
         let len = bytes.len() as u64;
+        if self.spooled + self.ranged + len > self.byte_budget {
+            return Err(self.too_large());
+        }
+        self.mem.extend_from_slice(bytes);
         self.spooled += len;
         match self.parts.last_mut() {
             None => {}

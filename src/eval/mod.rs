@@ -255,6 +255,12 @@ fn stack_of(frames: &[Box<Frame>]) -> Vec<Site> {
 
 /// An error writing the output.
 fn output_error(e: std::io::Error) -> Error {
+    if let Some(t) = e
+        .get_ref()
+        .and_then(|i| i.downcast_ref::<crate::emit::OutputTooLarge>())
+    {
+        return Diagnostic::error(ErrorKind::OutputBytesLimit { limit: t.limit }, None);
+    }
     Diagnostic::error(
         ErrorKind::Io {
             path: "<output>".into(),

@@ -70,6 +70,12 @@ pub struct Settings {
     /// output writing move to a second thread (0: from the first line;
     /// `usize::MAX`: never). Output that is thrown away never moves.
     pub format_thread_after: usize,
+    /// Bounds on reading the program (`--max-input-bytes`,
+    /// `--max-line-bytes`).
+    pub input: crate::program::InputLimits,
+    /// Output bytes allowed beyond the program's own size
+    /// (`--max-output-bytes`).
+    pub max_output_bytes: u64,
 }
 
 impl Default for Settings {
@@ -98,6 +104,8 @@ impl Default for Settings {
             uvw_axes: false,
             machine_metric: false,
             tool_table: Vec::new(),
+            input: crate::program::InputLimits::default(),
+            max_output_bytes: 4 << 30,
         }
     }
 }

@@ -12,6 +12,45 @@ use std::sync::OnceLock;
 use super::locate::{LineCol, LineSamples, file_pieces, memory_pieces};
 use super::marked_lines::{Marked, MarkedLines};
 
+/// Bounds on reading a program.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct InputLimits {
+    /// Most bytes of a program (`--max-input-bytes`; offsets are 32-bit, so
+    /// never more than 4 GiB - 1).
+    pub max_bytes: u64,
+    /// Longest line read from a pipe or device (`--max-line-bytes`); lines
+    /// of regular files are never read whole (they are read through 1 MB
+    /// windows and cut at 4 kB).
+    pub max_line: u64,
+}
+
+impl Default for InputLimits {
+    fn default() -> Self {
+        InputLimits {
+            max_bytes: 2 << 30,
+            max_line: 1 << 20,
+        }
+    }
+}
+
+impl InputLimits {
+    fn max_bytes(&self) -> u64 {
+        self.max_bytes.min(u32::MAX as u64)
+    }
+
+    fn too_large(&self) -> io::Error {
+        let hard = self.max_bytes > u32::MAX as u64;
+        io::Error::other(if hard {
+            "programs of 4 GiB or more are not supported".to_string()
+        } else {
+            format!(
+                "the program is larger than {} bytes (raise with --max-input-bytes, up to 4 GiB - 1)",
+                self.max_bytes
+            )
+        })
+    }
+}
+
 /// Files up to this size are kept in memory.
 pub const IN_MEMORY_LIMIT: u64 = 8 << 20;
 /// Bytes read from disk at a time.
@@ -92,13 +131,19 @@ impl SourceFile {
 
     /// Opens a file: small files are read, large ones streamed.
     pub fn open(path: &Path) -> io::Result<SourceFile> {
-        Self::from_file(path, File::open(path)?)
+        Self::open_limited(path, InputLimits::default())
+    }
+
+    /// [`SourceFile::open`] within `lim`: a regular file over the size bound
+    /// is refused before it is read; a FIFO or device is read as a stream.
+    pub fn open_limited(path: &Path, lim: InputLimits) -> io::Result<SourceFile> {
+        Self::from_file(path, File::open(path)?, lim)
     }
 
     /// Opens a regular file without waiting on it: a FIFO, device or socket
     /// (given by path, or swapped in for a file) is refused at once instead
     /// of blocking until a writer comes (check mode).
-    pub fn open_regular(path: &Path) -> io::Result<SourceFile> {
+    pub fn open_regular(path: &Path, lim: InputLimits) -> io::Result<SourceFile> {
         use std::os::unix::fs::OpenOptionsExt;
         let file = File::options()
             .read(true)
@@ -109,18 +154,25 @@ impl SourceFile {
                 "not a regular file (a FIFO, device or socket); only regular files are checked",
             ));
         }
-        Self::from_file(path, file)
+        Self::from_file(path, file, lim)
     }
 
-    fn from_file(path: &Path, mut file: File) -> io::Result<SourceFile> {
+    fn from_file(path: &Path, mut file: File, lim: InputLimits) -> io::Result<SourceFile> {
         let meta = file.metadata()?;
         let name = path.display().to_string();
-        if !meta.is_file() || meta.len() <= IN_MEMORY_LIMIT {
+        if !meta.is_file() {
+            let mut s = Self::read_stream_limited(file, &name, lim)?;
+            s.path = path.to_path_buf();
+            return Ok(s);
+        }
+        if meta.len() > lim.max_bytes() {
+            return Err(lim.too_large());
+        }
+        if meta.len() <= IN_MEMORY_LIMIT {
             let mut data = Vec::new();
             file.read_to_end(&mut data)?;
             return Ok(SourceFile::new(path.to_path_buf(), name, data));
         }
-        check_size(meta.len())?;
         Ok(SourceFile {
             path: path.to_path_buf(),
             name,
@@ -132,28 +184,111 @@ impl SourceFile {
     }
 
     /// Reads a stream; spills to a temporary file when it is large.
-    pub fn read_stream(mut input: impl Read, name: &str) -> io::Result<SourceFile> {
+    pub fn read_stream(input: impl Read, name: &str) -> io::Result<SourceFile> {
+        Self::read_stream_limited(input, name, InputLimits::default())
+    }
+
+    /// Reads a stream within `lim` (its size and line length are checked as
+    /// it arrives, so `/dev/zero` or `yes` stop at the bound); spills to an
+    /// unnamed temporary file when it is large.
+    pub fn read_stream_limited(
+        mut input: impl Read,
+        name: &str,
+        lim: InputLimits,
+    ) -> io::Result<SourceFile> {
         let mut data = Vec::new();
-        (&mut input)
-            .take(IN_MEMORY_LIMIT + 1)
-            .read_to_end(&mut data)?;
-        if data.len() as u64 <= IN_MEMORY_LIMIT {
-            return Ok(SourceFile::new(PathBuf::from(name), name.to_string(), data));
-        }
         // An unnamed file: no name to guess or plant a link at, and gone
         // with the process however it ends.
-        let mut f = tempfile::tempfile()?;
-        f.write_all(&data)?;
-        let copied = io::copy(&mut input, &mut f)?;
-        let len = data.len() as u64 + copied;
-        check_size(len)?;
-        f.flush()?;
+        let mut spool: Option<io::BufWriter<File>> = None;
+        let mut buf = vec![0u8; 1 << 16];
+        let (mut total, mut line_len, mut line_no) = (0u64, 0u64, 1u64);
+        let mut prefix: Vec<u8> = Vec::new();
+        loop {
+            let n = match input.read(&mut buf) {
+                Ok(0) => break,
+                Ok(n) => n,
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+                Err(e) => return Err(e),
+            };
+            let chunk = &buf[..n];
+            total += n as u64;
+            if total > lim.max_bytes() {
+                return Err(lim.too_large());
+            }
+            // Lines inside the chunk are shorter than the chunk; with a bound
+            // below the chunk size every line is measured.
+            let first = memchr::memchr(b'\n', chunk);
+            let over = match first {
+                None => line_len + n as u64 > lim.max_line,
+                Some(f) => {
+                    line_len + f as u64 > lim.max_line
+                        || (lim.max_line < buf.len() as u64
+                            && chunk[f + 1..]
+                                .split(|&b| b == b'\n')
+                                .any(|l| l.len() as u64 > lim.max_line))
+                }
+            };
+            if over {
+                // Where: the first line that is too long.
+                let mut len = line_len;
+                for seg in chunk.split_inclusive(|&b| b == b'\n') {
+                    let body = seg.strip_suffix(b"\n").unwrap_or(seg);
+                    if len == 0 {
+                        prefix.clear();
+                    }
+                    let room = 40usize.saturating_sub(prefix.len());
+                    prefix.extend_from_slice(&body[..body.len().min(room)]);
+                    len += body.len() as u64;
+                    if len > lim.max_line {
+                        break;
+                    }
+                    if body.len() < seg.len() {
+                        len = 0;
+                        line_no += 1;
+                    }
+                }
+                return Err(io::Error::other(format!(
+                    "line {line_no} is longer than {} bytes (raise with --max-line-bytes); it starts: {}...",
+                    lim.max_line,
+                    String::from_utf8_lossy(&prefix)
+                )));
+            }
+            match memchr::memrchr(b'\n', chunk) {
+                Some(last) => {
+                    line_no += chunk.iter().filter(|&&b| b == b'\n').count() as u64;
+                    let tail = &chunk[last + 1..];
+                    line_len = tail.len() as u64;
+                    prefix.clear();
+                    prefix.extend_from_slice(&tail[..tail.len().min(40)]);
+                }
+                None => {
+                    line_len += n as u64;
+                    let room = 40usize.saturating_sub(prefix.len());
+                    prefix.extend_from_slice(&chunk[..n.min(room)]);
+                }
+            }
+            match &mut spool {
+                None if data.len() + n <= IN_MEMORY_LIMIT as usize => data.extend_from_slice(chunk),
+                None => {
+                    let mut f = io::BufWriter::with_capacity(1 << 20, tempfile::tempfile()?);
+                    f.write_all(&data)?;
+                    f.write_all(chunk)?;
+                    data = Vec::new();
+                    spool = Some(f);
+                }
+                Some(f) => f.write_all(chunk)?,
+            }
+        }
+        let Some(f) = spool else {
+            return Ok(SourceFile::new(PathBuf::from(name), name.to_string(), data));
+        };
+        let f = f.into_inner().map_err(|e| e.into_error())?;
         let modified = f.metadata()?.modified().ok();
         Ok(SourceFile {
             path: PathBuf::from(name),
             name: name.to_string(),
             text: Text::Disk(f),
-            len,
+            len: total,
             modified,
             samples: OnceLock::new(),
         })
@@ -488,15 +623,6 @@ impl SourceFile {
             }
         }
     }
-}
-
-fn check_size(len: u64) -> io::Result<()> {
-    if len > u32::MAX as u64 {
-        return Err(io::Error::other(
-            "programs larger than 4 GiB are not supported",
-        ));
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -528,3 +528,97 @@ fn an_unwritable_folder_is_named() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("in the folder ro"), "{err}");
 }
+
+#[test]
+fn endless_input_stops_at_a_bound_and_leaves_nothing() {
+    let d = tmp();
+    let p = d.path();
+    let tmpdir = p.join("tmp");
+    std::fs::create_dir(&tmpdir).unwrap();
+    let ngcflat = |args: &[&str], stdin: Stdio| {
+        let child = Command::new(bin())
+            .current_dir(p)
+            .args(args)
+            .env("TMPDIR", &tmpdir)
+            .stdin(stdin)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        wait_bounded(child, 20)
+    };
+    // A device given by path, and as standard input: one endless line.
+    let zero = || std::fs::File::open("/dev/zero").unwrap().into();
+    for out in [ngcflat(&["/dev/zero"], Stdio::null()), ngcflat(&[], zero())] {
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains("line 1 is longer than 1048576 bytes"), "{err}");
+        assert!(err.len() < 400, "the line is not echoed whole: {err}");
+        assert!(out.stdout.is_empty());
+    }
+    // `yes`: endless short lines, stopped by the size bound.
+    let mut yes = Command::new("yes").stdout(Stdio::piped()).spawn().unwrap();
+    let out = ngcflat(
+        &["--max-input-bytes", "20000000"],
+        yes.stdout.take().unwrap().into(),
+    );
+    let _ = yes.kill();
+    let _ = yes.wait();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("larger than 20000000 bytes"), "{err}");
+    assert!(names(&tmpdir).is_empty(), "{:?}", names(&tmpdir));
+    // A line bound below the read size, from a pipe.
+    let long = format!("G0 X1\nG0 X2 ({})\nM2\n", "a".repeat(3000));
+    let out = crate::ngcflat(
+        p,
+        &["--max-line-bytes".into(), "1000".into()],
+        Some(long.as_bytes()),
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("line 2 is longer than 1000 bytes"), "{err}");
+}
+
+#[test]
+fn programs_over_the_size_bound_are_refused_before_reading() {
+    let d = tmp();
+    let p = d.path();
+    put(p, "small.ngc", "G0 X1\nM2\n");
+    let (code, _, err) = run(p, &["--max-input-bytes", "5", "small.ngc"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("larger than 5 bytes"), "{err}");
+    // Over 4 GiB (a sparse file): offsets are 32-bit, refused whatever the
+    // bound.
+    let f = std::fs::File::create(p.join("huge.ngc")).unwrap();
+    f.set_len(5 << 30).unwrap();
+    let (code, _, err) = run(p, &["--max-input-bytes", "6000000000", "huge.ngc"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("4 GiB or more are not supported"), "{err}");
+}
+
+#[test]
+fn the_output_byte_bound_stops_a_runaway_loop() {
+    let d = tmp();
+    let p = d.path();
+    put(
+        p,
+        "loop.ngc",
+        &format!(
+            "F100\no1 repeat [100000]\nG1 X1 ({})\no1 endrepeat\nM2\n",
+            "c".repeat(200)
+        ),
+    );
+    for args in [
+        &["--max-output-bytes", "1000000", "loop.ngc"][..],
+        &["--max-output-bytes", "1000000", "-o", "out.nc", "loop.ngc"][..],
+    ] {
+        let (code, out, err) = run(p, args);
+        assert_eq!(code, 1, "{err}");
+        assert!(out.is_empty() && err.contains("[E0703]"), "{err}");
+        assert_eq!(names(p), ["loop.ngc"]);
+    }
+    let (code, out, _) = run(p, &["--max-output-bytes", "100000000", "loop.ngc"]);
+    assert_eq!(code, 0);
+    assert_eq!(out.lines().count(), 100_002);
+}
