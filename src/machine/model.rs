@@ -754,7 +754,10 @@ impl Machine {
             return;
         };
         let center = if let Some(r) = b.value(b'R') {
-            radius_center([f0, f1], [t0, t1], r * s, ccw)
+            // The centre is worked out in ascending axis order; in the XZ
+            // plane that is (X, Z), where G2/G3 turn the other way round
+            // (LinuxCNC's XZ frame is Z-X).
+            radius_center([f0, f1], [t0, t1], r * s, ccw != (plane == Plane::XZ))
         } else {
             let (a, c) = (
                 b.value(o0).unwrap_or(0.0) * s,
@@ -816,9 +819,10 @@ fn radius_center(a: [f64; 2], b: [f64; 2], r: f64, ccw: bool) -> [f64; 2] {
         return mid;
     }
     let h = (r * r - d * d / 4.0).max(0.0).sqrt();
-    // Left of the chord for a clockwise arc with positive R.
+    // (nx, ny) is the left of the chord; a clockwise arc with positive R
+    // (the shorter way) has its centre on the right.
     let (nx, ny) = (-dy / d, dx / d);
-    let side = if (r > 0.0) != ccw { 1.0 } else { -1.0 };
+    let side = if (r > 0.0) != ccw { -1.0 } else { 1.0 };
     [mid[0] + side * h * nx, mid[1] + side * h * ny]
 }
 
@@ -879,6 +883,28 @@ mod tests {
             (m.pos[0], m.pos[1], m.pos[2]),
             (Some(5.0), Some(5.0), Some(2.0))
         );
+    }
+
+    #[test]
+    fn radius_arcs_take_the_shorter_way_round() {
+        // G2 from (0,0) to (2,2) with R2 turns about (2,0); G3 about (0,2);
+        // a negative R takes the other centre; in G18 the frame is Z-X.
+        for (lines, want) in [
+            (["G17 G0 X0 Y0 Z0", "G2 X2 Y2 R2 F100"], [2.0, 0.0]),
+            (["G17 G0 X0 Y0 Z0", "G3 X2 Y2 R2 F100"], [0.0, 2.0]),
+            (["G17 G0 X0 Y0 Z0", "G2 X2 Y2 R-2 F100"], [0.0, 2.0]),
+            (["G18 G0 X0 Y0 Z0", "G2 X2 Z2 R2 F100"], [0.0, 2.0]),
+            (["G18 G0 X0 Y0 Z0", "G3 X2 Z2 R2 F100"], [2.0, 0.0]),
+        ] {
+            let (_, ev) = run(&lines);
+            let Motion::Arc { center, .. } = &ev[1] else {
+                panic!("an arc")
+            };
+            assert!(
+                (center[0] - want[0]).abs() < 1e-9 && (center[1] - want[1]).abs() < 1e-9,
+                "{lines:?}: {center:?}"
+            );
+        }
     }
 
     #[test]
