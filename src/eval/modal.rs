@@ -763,31 +763,41 @@ impl Interp<'_> {
                 else {
                     return Ok(());
                 };
-                if let Some(r) = word(b'r') {
-                    let chord = ((ex - sx).powi(2) + (ey - sy).powi(2)).sqrt();
-                    if chord < 1e-12 {
-                        return Err(bad(BlockError::ArcSamePoint));
-                    }
-                    if 2.0 * r.abs() < chord * (1.0 - 1e-9) - 1e-9 {
+                // The reference's checks (arc_data_r / arc_data_ijk), with
+                // its tolerances for the program's units.
+                use crate::geom::comp::{Arc, ArcCenter, CompError, Tolerances, arc_center};
+                let center = match word(b'r') {
+                    Some(r) => ArcCenter::Radius(r),
+                    None => ArcCenter::Offsets {
+                        i: word(c0).unwrap_or(0.0),
+                        j: word(c1).unwrap_or(0.0),
+                        absolute: self.modal.ijk_absolute,
+                    },
+                };
+                let arc = Arc {
+                    ccw: motion == 30,
+                    center,
+                    turns: 1,
+                };
+                let tol = Tolerances::default_for(self.modal.metric);
+                match arc_center(&tol, arc, [sx, sy], [ex, ey]) {
+                    Ok(_) => {}
+                    Err(CompError::ArcSamePoint) => return Err(bad(BlockError::ArcSamePoint)),
+                    Err(CompError::RadiusTooSmall) => {
                         return Err(bad(BlockError::ArcRadiusTooSmall));
                     }
-                    return Ok(());
-                }
-                let (ci, cj) = (word(c0).unwrap_or(0.0), word(c1).unwrap_or(0.0));
-                let (cx, cy) = if self.modal.ijk_absolute {
-                    (ci, cj)
-                } else {
-                    (sx + ci, sy + cj)
-                };
-                let r1 = ((sx - cx).powi(2) + (sy - cy).powi(2)).sqrt();
-                let r2 = ((ex - cx).powi(2) + (ey - cy).powi(2)).sqrt();
-                let abs_err = (r2 - r1).abs();
-                let abs_tol = if self.modal.metric { 0.0285 } else { 0.00285 };
-                if abs_err > abs_tol && abs_err > 0.0011 * r1.max(r2) {
-                    return Err(bad(BlockError::ArcRadiiDiffer { r1, r2 }));
-                }
-                if r1 < 1e-12 {
-                    return Err(bad(BlockError::ZeroRadiusArc));
+                    Err(CompError::ZeroRadiusArc) => return Err(bad(BlockError::ZeroRadiusArc)),
+                    Err(_) => {
+                        let (ci, cj) = (word(c0).unwrap_or(0.0), word(c1).unwrap_or(0.0));
+                        let (cx, cy) = if self.modal.ijk_absolute {
+                            (ci, cj)
+                        } else {
+                            (sx + ci, sy + cj)
+                        };
+                        let r1 = (sx - cx).hypot(sy - cy);
+                        let r2 = (ex - cx).hypot(ey - cy);
+                        return Err(bad(BlockError::ArcRadiiDiffer { r1, r2 }));
+                    }
                 }
             }
             382 | 384 => {

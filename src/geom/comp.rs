@@ -365,6 +365,24 @@ fn arc_r(
     Ok((c, if ccw { turns } else { -turns }))
 }
 
+/// The centre and signed turns of a programmed arc from `start` to `end`
+/// (plane coordinates), with the reference's checks of its words: the
+/// same ones it makes without compensation.
+pub fn arc_center(
+    tol: &Tolerances,
+    arc: Arc,
+    start: [f64; 2],
+    end: [f64; 2],
+) -> Result<([f64; 2], i32), CompError> {
+    match arc.center {
+        ArcCenter::Radius(rr) => arc_r(tol, arc.ccw, start, end, rr, arc.turns),
+        ArcCenter::Offsets { i, j, absolute } => {
+            let (c, _, t) = arc_ijk(tol, arc.ccw, start, end, i, j, absolute, arc.turns)?;
+            Ok((c, t))
+        }
+    }
+}
+
 impl<T: Clone> Comp<T> {
     /// Compensation off, tool at `pos`.
     pub fn new(tol: Tolerances) -> Self {
@@ -791,13 +809,7 @@ impl<T: Clone> Comp<T> {
         start: [f64; 2],
         end: [f64; 2],
     ) -> Result<([f64; 2], i32), CompError> {
-        match arc.center {
-            ArcCenter::Radius(rr) => arc_r(&self.tol, arc.ccw, start, end, rr, arc.turns),
-            ArcCenter::Offsets { i, j, absolute } => {
-                let (c, _, t) = arc_ijk(&self.tol, arc.ccw, start, end, i, j, absolute, arc.turns)?;
-                Ok((c, t))
-            }
-        }
+        arc_center(&self.tol, arc, start, end)
     }
 
     fn entry_arc(&mut self, side: Side, arc: Arc, p: [f64; 3], tag: T) -> Result<(), CompError> {
