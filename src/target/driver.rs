@@ -57,6 +57,8 @@ pub struct Lowering {
     target_inverse: bool,
     /// A line with words was read (a `%` after it ends the program).
     seen_words: bool,
+    /// P and Q of the last G5 (a G5 without I J continues from them).
+    last_pq: Option<[f64; 2]>,
 }
 
 impl Lowering {
@@ -76,6 +78,7 @@ impl Lowering {
             written_feed: None,
             target_inverse: false,
             seen_words: false,
+            last_pq: None,
         }
     }
 
@@ -455,15 +458,12 @@ impl Lowering {
                 // being used by G10/G28/G92/G43.1 (GRBL's error 31): the
                 // source has no cycle running on the target to cancel.
                 MotionMode::CancelCycle if !p.has_g(810) => Fate::Drop,
-                MotionMode::CubicSpline
-                | MotionMode::QuadSpline
-                | MotionMode::Nurbs
-                | MotionMode::NurbsEnd
-                    if !p.has_g(c) =>
-                {
+                // Lowered into G1 segments (lower_motion).
+                MotionMode::CubicSpline | MotionMode::QuadSpline if !p.has_g(c) => Fate::Drop,
+                MotionMode::Nurbs | MotionMode::NurbsEnd if !p.has_g(c) => {
                     problems.push(refuse(
                         self,
-                        "splines are not lowered yet; the target has no spline moves",
+                        "NURBS blocks are not lowered yet; the target has no spline moves",
                     ));
                     Fate::Drop
                 }
@@ -650,7 +650,8 @@ impl Lowering {
         }
         match l {
             b'T' if w.value > self.p.max_tool => return Fate::Drop,
-            b'@' | b'^' => return Fate::Keep,
+            // Polar words are lowered with their motion (lower_motion).
+            b'@' | b'^' => return Fate::Drop,
             _ => {}
         }
         if self.p.has_word(l) {
@@ -834,6 +835,25 @@ impl Lowering {
                 Ok(None)
             }
             MotionMode::Cycle(_) => Ok(None),
+            MotionMode::CubicSpline | MotionMode::QuadSpline
+                if !self.p.has_g(if motion == MotionMode::CubicSpline {
+                    50
+                } else {
+                    51
+                }) =>
+            {
+                self.cycles.end();
+                if other_axis_use || !moves {
+                    return Ok(None);
+                }
+                self.lower_spline(b, before, motion).map(Some)
+            }
+            MotionMode::Rapid | MotionMode::Linear
+                if b.value(b'@').is_some() || b.value(b'^').is_some() =>
+            {
+                self.cycles.end();
+                self.lower_polar(b, before, motion).map(Some)
+            }
             _ => {
                 if moves && !other_axis_use {
                     self.cycles.end();
@@ -930,6 +950,93 @@ impl Lowering {
             turns: turns.max(1.0) as u32,
         };
         lower::arc::lower_arc(&input).map_err(|e| self.lower_error(e))
+    }
+
+    /// The current X Y (program units), which a lowering needs.
+    fn xy_known(&self, m: &Machine, what: &str) -> Result<[f64; 2], ErrorKind> {
+        let p = self.prog_pos(m);
+        let need = |axis: char| ErrorKind::TargetNeedsValue {
+            target: self.name(),
+            what: what.into(),
+            value: format!("the current {axis} position"),
+            option: "--start-position (or --zero-start), or an absolute move first".into(),
+        };
+        Ok([
+            p[0].ok_or_else(|| need('X'))?,
+            p[1].ok_or_else(|| need('Y'))?,
+        ])
+    }
+
+    /// G5/G5.1 as G1 segments within the tolerance.
+    fn lower_spline(
+        &mut self,
+        b: &Block,
+        before: &Machine,
+        motion: MotionMode,
+    ) -> Result<Vec<PlainLine>, ErrorKind> {
+        if self.m.modes.plane != Plane::XY {
+            return Err(self.refuse("a spline outside G17", "LinuxCNC draws them only in XY"));
+        }
+        let name = if motion == MotionMode::CubicSpline {
+            "G5"
+        } else {
+            "G5.1"
+        };
+        let start = self.xy_known(before, &format!("{name} (spline)"))?;
+        let end = self.xy_known(&self.m, &format!("{name} (spline)"))?;
+        let tol = self.opts.tolerance_mm / self.m.scale();
+        let ij = match (b.value(b'I'), b.value(b'J')) {
+            (None, None) if motion == MotionMode::CubicSpline => {
+                // After a G5, the previous P Q reflected.
+                self.last_pq.map(|[p, q]| [-p, -q]).unwrap_or([0.0, 0.0])
+            }
+            (i, j) => [i.unwrap_or(0.0), j.unwrap_or(0.0)],
+        };
+        let r = if motion == MotionMode::CubicSpline {
+            let pq = [b.value(b'P').unwrap_or(0.0), b.value(b'Q').unwrap_or(0.0)];
+            self.last_pq = Some(pq);
+            lower::spline::lower_g5(start, ij, pq, end, tol)
+        } else {
+            lower::spline::lower_g5_1(start, ij, end, tol)
+        };
+        r.map_err(|e| self.lower_error(e))
+    }
+
+    /// G0/G1 with polar words as G0/G1 X Y (and Z).
+    fn lower_polar(
+        &mut self,
+        b: &Block,
+        before: &Machine,
+        motion: MotionMode,
+    ) -> Result<Vec<PlainLine>, ErrorKind> {
+        let current = self.xy_known(before, "polar coordinates (@ ^)")?;
+        let distance = match self.m.modes.distance {
+            Distance::Absolute => lower::Distance::Absolute,
+            Distance::Incremental => lower::Distance::Incremental,
+        };
+        let input = lower::polar::PolarInput {
+            distance,
+            current,
+            radius: b.value(b'@'),
+            angle: b.value(b'^'),
+        };
+        let [x, y] = lower::polar::polar_target(&input).map_err(|e| self.lower_error(e))?;
+        // The model follows the lowered target.
+        let s = self.m.scale();
+        self.m.pos[0] = Some(x * s);
+        self.m.pos[1] = Some(y * s);
+        let g = if motion == MotionMode::Rapid {
+            0.0
+        } else {
+            1.0
+        };
+        let mut words = vec![(b'G', g), (b'X', x), (b'Y', y)];
+        if b.value(b'Z').is_some()
+            && let Some(z) = self.prog_pos(&self.m)[2]
+        {
+            words.push((b'Z', z));
+        }
+        Ok(vec![words_line(&words)])
     }
 
     fn lower_cycle(

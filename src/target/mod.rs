@@ -17,7 +17,12 @@ pub use format::{format_number, significant_len};
 pub use profile::{Comments, LineCount, Profile, ToolChange};
 
 /// Every profile, the default first.
-pub const PROFILES: &[&Profile] = &[&profiles::linuxcnc::PROFILE, &profiles::grbl::PROFILE];
+pub const PROFILES: &[&Profile] = &[
+    &profiles::linuxcnc::PROFILE,
+    &profiles::grbl::PROFILE,
+    &profiles::grblhal::PROFILE,
+    &profiles::fluidnc::PROFILE,
+];
 
 /// The profile called `name` (case-insensitive).
 pub fn find(name: &str) -> Option<&'static Profile> {
