@@ -703,10 +703,13 @@ impl Block {
                     }
                 };
                 match g {
-                    GCode::Motion(m) => {
-                        conflict(self.motion.is_some())?;
-                        self.motion = Some(m);
-                    }
+                    // G80 beside another motion code is allowed (the
+                    // other one acts), as in LinuxCNC.
+                    GCode::Motion(m) => match self.motion {
+                        None | Some(MotionMode::CancelCycle) => self.motion = Some(m),
+                        Some(_) if m == MotionMode::CancelCycle => {}
+                        Some(_) => conflict(true)?,
+                    },
                     GCode::Plane(p) => {
                         conflict(self.plane.is_some())?;
                         self.plane = Some(p);
@@ -835,6 +838,19 @@ fn read_number(line: &[u8], start: usize) -> Option<(f64, usize)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn g80_beside_another_motion_code() {
+        for (line, want) in [
+            ("G80 G0 X1", MotionMode::Rapid),
+            ("G1 G80 X2", MotionMode::Linear),
+            ("G80 G81 X3 R1 Z-1", MotionMode::Cycle(81)),
+        ] {
+            let b = Block::decode(line.as_bytes()).unwrap();
+            assert_eq!(b.motion, Some(want), "{line}");
+        }
+        assert!(Block::decode(b"G0 G1 X1").is_err());
+    }
 
     #[test]
     fn decodes_groups_words_and_comments() {

@@ -66,9 +66,23 @@ impl<'a> ViewConsumer<'a> {
 impl LineConsumer for ViewConsumer<'_> {
     fn line(&mut self, text: &[u8], origin: &Origin<'_>, out: &mut Output) -> Result<(), Error> {
         if let Some(m) = &mut self.machine {
-            // Every line the evaluator writes is one it has checked; a line
-            // the block decoder does not read moves nothing it knows of.
-            if self.block.decode_into(text).is_ok() {
+            // Every line the evaluator writes is one it has checked and the
+            // block decoder reads; one it cannot read is a fault of ngcflat,
+            // not of the program, and the motion must not be skipped.
+            if let Err(e) = self.block.decode_into(text) {
+                let mut d = Diagnostic::error(
+                    ErrorKind::Internal {
+                        what: format!(
+                            "the machine model cannot read the output line '{}' ({})",
+                            String::from_utf8_lossy(text),
+                            e.what
+                        ),
+                    },
+                    Some(line_site(origin)),
+                );
+                d.stack = (origin.stack)();
+                return Err(d);
+            } else {
                 m.apply(&self.block);
                 for ev in m.take_events() {
                     if let Err(kind) = self.observer.motion(&ev) {
