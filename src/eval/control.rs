@@ -338,7 +338,8 @@ impl Interp<'_> {
         file: &Rc<FileIndex>,
         t: u32,
     ) -> Result<crate::parse::ast::Expr, Error> {
-        if let Some((k, span)) = &self.oline(file, t).exec_error {
+        if let Some(b) = &self.oline(file, t).exec_error {
+            let (k, span) = &**b;
             let start = file.olines[t as usize].start;
             return Err(self.error_in_line(k.clone(), file, start, *span));
         }
@@ -380,7 +381,8 @@ impl Interp<'_> {
             LineKind::M98(m) => return self.exec_m98(file, oidx, m),
             _ => return Ok(()),
         };
-        if let Some((k, span)) = &o.exec_error {
+        if let Some(b) = &o.exec_error {
+            let (k, span) = &**b;
             let start = file.olines[oidx as usize].start;
             return Err(self.error_in_line(k.clone(), file, start, *span));
         }

@@ -223,7 +223,9 @@ pub struct OLine {
     pub active_comment: bool,
     /// An error that only counts when the line is executed (trailing text,
     /// missing bracket).
-    pub exec_error: Option<(crate::diag::ErrorKind, Span)>,
+    /// Boxed: rare, and an O-line stays small (a file of a million labels
+    /// keeps a million of them).
+    pub exec_error: Option<Box<(crate::diag::ErrorKind, Span)>>,
 }
 
 #[derive(Debug, Clone, PartialEq)]

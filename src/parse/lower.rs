@@ -407,7 +407,7 @@ impl Lowerer<'_> {
             expr,
             args,
             active_comment,
-            exec_error,
+            exec_error: exec_error.map(Box::new),
         })
     }
 
