@@ -39,6 +39,9 @@ pub enum WarningKind {
     /// `o1 continue` then `o1 break` in the same loop body: the reference
     /// acts on the skipped break.
     QuirkSkippedBreak,
+    /// `G41` without `--tool-table` or `--zero-start`: the compensated path
+    /// cannot be computed, so its errors are not looked for.
+    CompNotChecked { why: &'static str },
     /// `M98 P.. L0`: the reference leaks a call frame.
     QuirkL0,
     /// `G43 H1`, `G20`, then `#<_abs_z>`; `G43 H1`, `M6`, then `#<_z>`; or
@@ -90,6 +93,7 @@ impl WarningKind {
             QuirkRepeatRecursion => "W0105",
             QuirkL0 => "W0106",
             QuirkSkippedBreak => "W0109",
+            CompNotChecked { .. } => "W1150",
             QuirkStandalone { .. } => "W0110",
             OWordSkipped { .. } => "W0900",
             FeaturesMask { .. } => "W0901",
@@ -159,6 +163,9 @@ impl fmt::Display for WarningKind {
                 f,
                 "since {why} at line {line}, LinuxCNC's standalone interpreter (rs274) reads a different value here; ngcflat gives the machine's"
             ),
+            CompNotChecked { why } => {
+                write!(f, "cutter radius compensation is not checked here: {why}")
+            }
             QuirkSkippedBreak => write!(
                 f,
                 "LinuxCNC acts on this break although a continue skips over it, leaving the loop; ngcflat continues the loop"

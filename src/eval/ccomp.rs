@@ -10,7 +10,7 @@
 //! the plane. The position model itself keeps the programmed position,
 //! which is what the reference reads missing axis words from.
 
-use crate::diag::ErrorKind;
+use crate::diag::{ErrorKind, WarningKind};
 use crate::geom::comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
 
 use super::Interp;
@@ -47,7 +47,13 @@ impl Interp<'_> {
 
     /// G41/G42 (`g` 410 or 420) or G41.1/G42.1 (411, 421) on the block
     /// with `words`; the block checks have accepted them.
-    pub(super) fn comp_on(&mut self, g: i32, words: &[(u8, f64)]) -> Result<(), ErrorKind> {
+    pub(super) fn comp_on(
+        &mut self,
+        g: i32,
+        words: &[(u8, f64)],
+        file: &std::rc::Rc<crate::program::FileIndex>,
+        start: u32,
+    ) -> Result<(), ErrorKind> {
         let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
         let side = if matches!(g, 410 | 411) {
             Side::Left
@@ -102,7 +108,15 @@ impl Interp<'_> {
                 run.comp.start(side, radius, orientation, xz, pos);
                 run.known = true;
             }
-            _ => run.known = false,
+            (tool, _) => {
+                run.known = false;
+                let why = if tool.is_none() {
+                    "the tool's diameter is not known (give --tool-table, or --zero-start)"
+                } else {
+                    "the position is not known (give --start-position, or --zero-start)"
+                };
+                self.warn(WarningKind::CompNotChecked { why }, file, start, start);
+            }
         }
         Ok(())
     }

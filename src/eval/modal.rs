@@ -352,7 +352,7 @@ impl Interp<'_> {
             for &g in gs {
                 let r = match g {
                     400 => self.comp_off(),
-                    410 | 411 | 420 | 421 => self.comp_on(g, words),
+                    410 | 411 | 420 | 421 => self.comp_on(g, words, _file, _start),
                     _ => Ok(()),
                 };
                 if let Err(k) = r {

@@ -145,6 +145,11 @@ const WARNING_FIXTURES: &[(&str, &str, &[&str])] = &[
         "fixtures/target/grbl/ok/feed-per-rev.ngc",
         &["--target", "grbl"],
     ),
+    (
+        "W1150",
+        "fixtures/ok/comp/not-checked-without-tool-data.ngc",
+        &[],
+    ),
 ];
 
 /// Warning kinds declared in src/diag/warning_kind.rs that nothing in
