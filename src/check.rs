@@ -163,11 +163,13 @@ pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
             text.into_bytes(),
         );
         match crate::lowering(&settings, target.clone()) {
-            Some(consumer) => crate::flatten_with(
+            Some(consumer) => crate::view::run::flatten_chained(
                 src,
                 &settings,
                 &search,
                 Destination::Discard,
+                cfg,
+                &Default::default(),
                 Some(consumer),
             ),
             None => observed(crate::view::run::flatten_observed(
@@ -183,11 +185,13 @@ pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
         drop(probe);
         match std::sync::Arc::try_unwrap(source) {
             Ok(source) => match crate::lowering(&settings, target.clone()) {
-                Some(consumer) => crate::flatten_with(
+                Some(consumer) => crate::view::run::flatten_chained(
                     source,
                     &settings,
                     &cfg.search,
                     Destination::Discard,
+                    cfg,
+                    &Default::default(),
                     Some(consumer),
                 ),
                 None => observed(crate::view::run::flatten_observed(

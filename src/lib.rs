@@ -308,18 +308,26 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
                 }
                 None => Destination::Stdout,
             };
-            let r = if cfg.target.is_some() {
-                let consumer = lowering(&cfg.settings, cfg.target.clone());
-                match flatten_with(source, &cfg.settings, &cfg.search, dest, consumer) {
-                    (w, None) => Ok(w),
-                    (_, Some(e)) => Err(e),
-                }
-            } else {
-                let extras = view::run::Extras {
-                    source_map: args.source_map,
-                    annotate: args.annotate,
-                };
-                view::run::flatten_observed(source, &cfg.settings, &cfg.search, dest, &cfg, &extras)
+            let consumer = lowering(&cfg.settings, cfg.target.clone());
+            if consumer.is_some() && (args.source_map.is_some() || args.annotate) {
+                let k = ErrorKind::SourceMapNeedsLinuxcnc;
+                return Ok(setup_error(k, cfg.format));
+            }
+            let extras = view::run::Extras {
+                source_map: args.source_map,
+                annotate: args.annotate,
+            };
+            let r = match view::run::flatten_chained(
+                source,
+                &cfg.settings,
+                &cfg.search,
+                dest,
+                &cfg,
+                &extras,
+                consumer,
+            ) {
+                (w, None) => Ok(w),
+                (_, Some(e)) => Err(e),
             };
             match r {
                 Ok(warnings) => {

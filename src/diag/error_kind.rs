@@ -259,6 +259,8 @@ pub enum ErrorKind {
     /// Travel limits are given but the offsets from work to machine
     /// coordinates (or the position) are not known at a move.
     LimitNeedsOffsets,
+    /// `--source-map` or `--annotate` with `--target grbl`.
+    SourceMapNeedsLinuxcnc,
 }
 
 impl ErrorKind {
@@ -358,6 +360,7 @@ impl ErrorKind {
             BadMachineValue { .. } => "E1202",
             TravelLimit { .. } => "E1203",
             LimitNeedsOffsets => "E1204",
+            SourceMapNeedsLinuxcnc => "E1205",
         }
     }
 }
@@ -685,6 +688,10 @@ impl fmt::Display for ErrorKind {
             LimitNeedsOffsets => write!(
                 f,
                 "travel limits are in machine coordinates, but where this move goes on the machine is not known (the offsets from work to machine coordinates, or the position); supply them with --zero-start, --var-file or -D (e.g. -D 5221=0 for the G54 X offset) and --start-position, or turn the check off with --no-limits"
+            ),
+            SourceMapNeedsLinuxcnc => write!(
+                f,
+                "--source-map and --annotate map output lines written as the program's own lines; they work with --target linuxcnc only"
             ),
         }
     }

@@ -24,6 +24,9 @@ pub struct ViewConsumer<'a> {
     pub source_map: Option<MapSink>,
     annotate: Option<Locator>,
     buf: Vec<u8>,
+    /// The consumer that writes the output for a target controller: it gets
+    /// every line after this one has looked at it.
+    next: Option<Box<dyn LineConsumer + 'a>>,
 }
 
 impl<'a> ViewConsumer<'a> {
@@ -44,7 +47,15 @@ impl<'a> ViewConsumer<'a> {
             source_map,
             annotate: annotate.then(Locator::default),
             buf: Vec::new(),
+            next: None,
         }
+    }
+
+    /// Hands every line on to `next` (which writes the output) after
+    /// looking at it.
+    pub fn then(mut self, next: Option<Box<dyn LineConsumer + 'a>>) -> ViewConsumer<'a> {
+        self.next = next;
+        self
     }
 
     fn places(origin: &Origin<'_>) -> (Place, Vec<Place>) {
@@ -93,6 +104,9 @@ impl LineConsumer for ViewConsumer<'_> {
                 }
             }
         }
+        if let Some(n) = &mut self.next {
+            return n.line(text, origin, out);
+        }
         if self.source_map.is_some() || self.annotate.is_some() {
             let (at, calls) = Self::places(origin);
             if let Some(sm) = &mut self.source_map {
@@ -119,11 +133,14 @@ impl LineConsumer for ViewConsumer<'_> {
         Ok(())
     }
 
-    fn finish(&mut self, _out: &mut Output) -> Result<Vec<Diagnostic>, Error> {
+    fn finish(&mut self, out: &mut Output) -> Result<Vec<Diagnostic>, Error> {
         if let Some(sm) = self.source_map.as_mut() {
             sm.flush().map_err(|e| io_error("<source map>", e))?;
         }
-        Ok(Vec::new())
+        match &mut self.next {
+            Some(n) => n.finish(out),
+            None => Ok(Vec::new()),
+        }
     }
 }
 

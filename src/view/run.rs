@@ -218,9 +218,34 @@ pub fn flatten_observed(
     cfg: &crate::config::Config,
     extras: &Extras,
 ) -> Result<Vec<crate::diag::Diagnostic>, crate::diag::Error> {
-    if !cfg.check_limits && extras.source_map.is_none() && !extras.annotate {
-        return crate::flatten(source, settings, search, dest);
+    match flatten_chained(source, settings, search, dest, cfg, extras, None) {
+        (w, None) => Ok(w),
+        (_, Some(e)) => Err(e),
     }
+}
+
+/// [`flatten_observed`] in front of `next`, the consumer that writes the
+/// output for a target controller (it sees every line after the limit
+/// check). Returns every diagnostic and the error that stopped the run, as
+/// [`crate::flatten_with`]. The source map and annotations are only for
+/// output written line for line (no `next`).
+pub fn flatten_chained<'s>(
+    source: crate::program::SourceFile,
+    settings: &'s crate::eval::Settings,
+    search: &crate::program::SearchPath,
+    dest: crate::emit::Destination,
+    cfg: &crate::config::Config,
+    extras: &Extras,
+    next: Option<Box<dyn crate::eval::LineConsumer + 's>>,
+) -> (Vec<crate::diag::Diagnostic>, Option<crate::diag::Error>) {
+    if !cfg.check_limits && extras.source_map.is_none() && !extras.annotate {
+        return crate::flatten_with(source, settings, search, dest, next);
+    }
+    let extras = if next.is_some() {
+        &Extras::default()
+    } else {
+        extras
+    };
     let mut observer = if cfg.check_limits {
         Observer::limits(&cfg.machine)
     } else {
@@ -256,25 +281,24 @@ pub fn flatten_observed(
             Ok(f) => Some(super::source_map::SourceMap::new(std::io::BufWriter::new(
                 f,
             ))),
-            Err(e) => return Err(io_err(target, e)),
+            Err(e) => return (Vec::new(), Some(io_err(target, e))),
         },
         None => None,
     };
     let consumer =
-        super::consumer::ViewConsumer::new(settings, &mut observer, true, map, extras.annotate);
-    let r = match crate::flatten_with(source, settings, search, dest, Some(Box::new(consumer))) {
-        (w, None) => Ok(w),
-        (_, Some(e)) => Err(e),
-    };
+        super::consumer::ViewConsumer::new(settings, &mut observer, true, map, extras.annotate)
+            .then(next);
+    let (w, mut err) =
+        crate::flatten_with(source, settings, search, dest, Some(Box::new(consumer)));
     if let Some((target, tmp)) = &map_tmp {
-        if r.is_ok() {
+        if err.is_none() {
             if let Err(e) = std::fs::rename(tmp, target) {
                 let _ = std::fs::remove_file(tmp);
-                return Err(io_err(target, e));
+                err = Some(io_err(target, e));
             }
         } else {
             let _ = std::fs::remove_file(tmp);
         }
     }
-    r
+    (w, err)
 }

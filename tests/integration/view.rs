@@ -783,3 +783,66 @@ fn stats_of_every_fixture_match_rs274() {
         problems.join("\n  ")
     );
 }
+
+#[test]
+fn limits_hold_for_target_output_and_source_maps_need_linuxcnc() {
+    let dir = crate::tmp();
+    crate::put(
+        dir.path(),
+        "p.ngc",
+        "G21 G90 G17 F100\nG0 X10 Y10\nG1 X150\nM2\n",
+    );
+    // The limit check looks at the program's motion whatever the target.
+    let (code, out, err) = crate::run(
+        dir.path(),
+        &[
+            "--target",
+            "grbl",
+            "--zero-start",
+            "--limits",
+            "X0:100",
+            "p.ngc",
+        ],
+    );
+    assert_eq!(code, 1, "{err}");
+    assert!(out.is_empty());
+    assert!(err.contains("E1203") && err.contains("p.ngc:3:1"), "{err}");
+    let (code, out, err) = crate::run(
+        dir.path(),
+        &[
+            "--target",
+            "grbl",
+            "--zero-start",
+            "--limits",
+            "X0:200",
+            "p.ngc",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("G1 X150"), "{out}");
+    let (code, _, err) = crate::run(
+        dir.path(),
+        &[
+            "check",
+            "--target",
+            "grbl",
+            "--zero-start",
+            "--limits",
+            "X0:100",
+            "p.ngc",
+        ],
+    );
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("E1203"), "{err}");
+    // Source maps and annotations follow the program's own lines.
+    for extra in [["--annotate", ""], ["--source-map", "m.jsonl"]] {
+        let mut args = vec!["--target", "grbl", "--zero-start"];
+        args.extend(extra.iter().filter(|s| !s.is_empty()));
+        args.push("p.ngc");
+        let (code, out, err) = crate::run(dir.path(), &args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(out.is_empty());
+        assert!(err.contains("error[E1205]"), "{err}");
+    }
+    assert!(!dir.path().join("m.jsonl").exists());
+}
