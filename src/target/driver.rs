@@ -720,7 +720,10 @@ impl Lowering {
 
     /// G43/G43.2 as the target's G43.1 Z (the offset in program units).
     fn tool_length_words(&self, b: &Block, before: &Machine) -> Result<Vec<(u8, f64)>, ErrorKind> {
-        let s = self.m.scale();
+        // The G43.1 line goes before the block's own line, so its value is
+        // in the units in effect before the block (a G20/G21 on the line
+        // comes after it).
+        let s = before.scale();
         let tlo = self.m.tlo;
         let need = |axis: &str| ErrorKind::TargetNeedsValue {
             target: self.name(),
