@@ -838,6 +838,20 @@ impl Lowering {
                 Ok(None)
             }
             MotionMode::Cycle(_) => Ok(None),
+            MotionMode::Probe(_) if moves && !other_axis_use && self.p.line_limit.is_some() => {
+                self.cycles.end();
+                // A probe move that goes nowhere: GRBL-class firmware
+                // refuses it (an invalid target), LinuxCNC's standalone run
+                // leaves the probe where the last one stopped.
+                let (a, z) = (self.prog_pos(before), self.prog_pos(&self.m));
+                if a.iter().zip(z.iter()).all(|(a, z)| a.is_some() && a == z) {
+                    return Err(self.refuse(
+                        "a probe move to where the probe already is (after an earlier probe)",
+                        "the firmware refuses a probe move of zero length; where an earlier probe stopped is known only on the machine",
+                    ));
+                }
+                Ok(None)
+            }
             MotionMode::CubicSpline | MotionMode::QuadSpline
                 if !self.p.has_g(if motion == MotionMode::CubicSpline {
                     50
