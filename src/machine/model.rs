@@ -183,6 +183,32 @@ impl Machine {
         }
     }
 
+    /// A copy of the state without the tool table and the pending events
+    /// (cheap: no allocation), for comparing before and after a block.
+    pub fn snapshot(&self) -> Machine {
+        Machine {
+            modes: self.modes.clone(),
+            pos: self.pos,
+            g5x: self.g5x,
+            g92: self.g92,
+            g92_applied: self.g92_applied,
+            tlo: self.tlo,
+            home28: self.home28,
+            home30: self.home30,
+            tools: FxMap::default(),
+            tools_known: self.tools_known,
+            current_tool: self.current_tool,
+            selected_tool: self.selected_tool,
+            machine_metric: self.machine_metric,
+            zero_start: self.zero_start,
+            rotated: self.rotated,
+            cycle_r: self.cycle_r,
+            cycle_initial_z: self.cycle_initial_z,
+            ended: self.ended,
+            events: Vec::new(),
+        }
+    }
+
     /// Millimetres per program unit.
     pub fn scale(&self) -> f64 {
         match self.modes.units {

@@ -59,6 +59,8 @@ pub struct Lowering {
     seen_words: bool,
     /// P and Q of the last G5 (a G5 without I J continues from them).
     last_pq: Option<[f64; 2]>,
+    /// Warnings of the line being lowered, waiting for its site.
+    pending: Vec<WarningKind>,
 }
 
 impl Lowering {
@@ -79,6 +81,7 @@ impl Lowering {
             target_inverse: false,
             seen_words: false,
             last_pq: None,
+            pending: Vec::new(),
         }
     }
 
@@ -94,10 +97,13 @@ impl Lowering {
         }
     }
 
-    fn warn(&mut self, site: Option<Site>, kind: WarningKind) {
+    /// A warning about the current line; it gets the line's site when the
+    /// line is done (worked out only then, and only for a warning not given
+    /// before).
+    fn warn(&mut self, _site: Option<Site>, kind: WarningKind) {
         let key = (kind.code(), kind.to_string());
         if self.warned.insert(key) {
-            self.warnings.push(Diagnostic::warning(kind, site));
+            self.pending.push(kind);
         }
     }
 
@@ -241,7 +247,8 @@ impl Lowering {
         origin: &Origin<'_>,
         out: &mut Output,
     ) -> Result<Vec<Problem>, Error> {
-        let site = Some(site_of(origin, text, None));
+        // The line's site is worked out only for a warning (see `warn`).
+        let site: Option<Site> = None;
         if b.percent && !self.p.percent {
             // A program ended by `%` alone ends there: the target gets M2
             // (the opening `%` is simply dropped).
@@ -265,7 +272,7 @@ impl Lowering {
         let mut extra_lines: Vec<Vec<(u8, f64)>> = Vec::new();
         // Lines written before the line (G43.1 Z: an axis command of its own).
         let mut pre_lines: Vec<Vec<(u8, f64)>> = Vec::new();
-        let before = self.m.clone();
+        let before = self.m.snapshot();
         for (i, w) in b.words.iter().enumerate() {
             let fate = match w.kind {
                 WordKind::G(g) => self.g_fate(b, w, g, &site, &mut problems),
@@ -273,6 +280,13 @@ impl Lowering {
                 WordKind::Value => self.value_fate(b, w, &mut problems),
             };
             fates[i] = fate;
+        }
+        if !self.pending.is_empty() {
+            let at = site_of(origin, text, None);
+            for kind in std::mem::take(&mut self.pending) {
+                self.warnings
+                    .push(Diagnostic::warning(kind, Some(at.clone())));
+            }
         }
         // Words that belong to a dropped code go with it.
         self.drop_owned(b, &mut fates);
@@ -738,7 +752,7 @@ impl Lowering {
             .value(b'H')
             .map(|h| h.round() as i64)
             .or(before.current_tool);
-        if !h.is_some_and(|h| h == 0 || before.tools.contains_key(&h)) {
+        if !h.is_some_and(|h| h == 0 || self.m.tools.contains_key(&h)) {
             return Err(need("Z"));
         }
         let z = tlo[2].ok_or_else(|| need("Z"))?;

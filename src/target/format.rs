@@ -45,11 +45,12 @@ impl LineWriter {
         self.num.clear();
         if code {
             let t = (v * 10.0).round();
-            if t % 10.0 == 0.0 {
-                self.num.push_str(&format!("{}", (t / 10.0) as i64));
+            use std::fmt::Write;
+            let _ = if t % 10.0 == 0.0 {
+                write!(self.num, "{}", (t / 10.0) as i64)
             } else {
-                self.num.push_str(&format!("{:.1}", t / 10.0));
-            }
+                write!(self.num, "{:.1}", t / 10.0)
+            };
         } else {
             let d = self.decimals();
             format_number(&mut self.num, v, d, self.p.max_digits);
@@ -166,6 +167,10 @@ pub fn significant_len(line: &[u8]) -> usize {
 pub fn format_number(out: &mut String, v: f64, decimals: u8, max_digits: u8) {
     use std::fmt::Write;
     let a = v.abs();
+    if v.fract() == 0.0 && a < 1e15 {
+        let _ = write!(out, "{}", v as i64);
+        return;
+    }
     let int_digits = if a < 1.0 {
         0
     } else {
@@ -173,6 +178,27 @@ pub fn format_number(out: &mut String, v: f64, decimals: u8, max_digits: u8) {
     };
     let d = (max_digits as i32 - int_digits).clamp(0, decimals as i32) as usize;
     let start = out.len();
+    let scale = 10f64.powi(d as i32);
+    let scaled = (a * scale).round();
+    if d <= 12 && scaled < 9.0e15 {
+        // Fixed point through an integer: no float formatting.
+        let n = scaled as u64;
+        let p = 10u64.pow(d as u32);
+        let (int, mut frac) = (n / p, n % p);
+        if n != 0 && v < 0.0 {
+            out.push('-');
+        }
+        let _ = write!(out, "{int}");
+        if frac != 0 {
+            let mut digits = d;
+            while frac % 10 == 0 {
+                frac /= 10;
+                digits -= 1;
+            }
+            let _ = write!(out, ".{frac:0digits$}");
+        }
+        return;
+    }
     let _ = write!(out, "{:.*}", d, v);
     if out[start..].contains('.') {
         while out.ends_with('0') {
@@ -210,6 +236,10 @@ mod tests {
         assert_eq!(f(1e20, 4, 8), "100000000000000000000");
         assert_eq!(f(2.0, 4, 8), "2");
         assert_eq!(f(-2.5, 4, 8), "-2.5");
+        assert_eq!(f(-0.05, 4, 8), "-0.05");
+        assert_eq!(f(0.00012, 5, 8), "0.00012");
+        assert_eq!(f(-1234.56789, 4, 8), "-1234.5679");
+        assert_eq!(f(1.99999, 4, 8), "2");
     }
 
     #[test]
