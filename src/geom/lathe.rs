@@ -38,6 +38,9 @@ impl C {
     fn scale(self, f: f64) -> C {
         C::new(self.re * f, self.im * f)
     }
+    fn div_by(self, f: f64) -> C {
+        C::new(self.re / f, self.im / f)
+    }
 }
 
 impl Add for C {
@@ -69,12 +72,18 @@ impl Mul for C {
 }
 impl Div for C {
     type Output = C;
+    /// Smith's division, the way the C runtime divides complex numbers.
     fn div(self, o: C) -> C {
-        let d = o.norm();
-        C::new(
-            (self.re * o.re + self.im * o.im) / d,
-            (self.im * o.re - self.re * o.im) / d,
-        )
+        let (a, b, c, d) = (self.re, self.im, o.re, o.im);
+        if c.abs() < d.abs() {
+            let ratio = c / d;
+            let denom = c * ratio + d;
+            C::new((a * ratio + b) / denom, (b * ratio - a) / denom)
+        } else {
+            let ratio = d / c;
+            let denom = d * ratio + c;
+            C::new((b * ratio + a) / denom, (b - a * ratio) / denom)
+        }
     }
 }
 
@@ -543,7 +552,7 @@ fn offset_vec(v: C, distance: f64) -> C {
 fn intersect(p: &mut Seg, n: &mut Seg) -> R<()> {
     match (p.arc, n.arc) {
         (None, None) => {
-            let rot = (n.s - n.e).conj().scale(1.0 / (n.s - n.e).abs());
+            let rot = (n.s - n.e).conj().div_by((n.s - n.e).abs());
             let ps = (p.s - n.e) * rot;
             let pe = (p.e - n.e) * rot;
             if (ps - pe).im == 0.0 {
@@ -558,7 +567,7 @@ fn intersect(p: &mut Seg, n: &mut Seg) -> R<()> {
             if (n.s - p.e).abs() < TOL {
                 return Ok(());
             }
-            let rot = (n.s - n.e).conj().scale(1.0 / (n.s - n.e).abs());
+            let rot = (n.s - n.e).conj().div_by((n.s - n.e).abs());
             let pe = (p.e - n.e) * rot;
             let pc = (pc - n.e) * rot;
             let s = pick(n.s, pc, pe, rot, n.e);
@@ -569,7 +578,7 @@ fn intersect(p: &mut Seg, n: &mut Seg) -> R<()> {
             if (n.s - p.e).abs() < TOL {
                 return Ok(());
             }
-            let rot = (p.s - p.e).conj().scale(1.0 / (p.s - p.e).abs());
+            let rot = (p.s - p.e).conj().div_by((p.s - p.e).abs());
             let pe = (n.e - p.e) * rot;
             let pc = (nc - p.e) * rot;
             let s = pick(n.s, pc, pe, rot, p.e);
@@ -583,7 +592,7 @@ fn intersect(p: &mut Seg, n: &mut Seg) -> R<()> {
             let cos_b = (c * c + a * a - b * b) / 2.0 / a / c;
             let cos_b2 = (cos_b * cos_b).min(1.0);
             let rot = C::new(cos_b, (1.0 - cos_b2).sqrt());
-            let is = (rot * (pc - nc)).scale(1.0 / c).scale(a) + nc;
+            let is = (rot * (pc - nc)).div_by(c).scale(a) + nc;
             p.e = is;
             n.s = is;
         }

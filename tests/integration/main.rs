@@ -8,6 +8,7 @@ mod config;
 mod fixtures;
 mod generated;
 mod hostile;
+mod lathe;
 mod lowering;
 mod motion;
 mod named2007;

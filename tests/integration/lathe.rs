@@ -1,0 +1,347 @@
+//! Lathe cycles G70–G72 against rs274: random contours (lines and arcs,
+//! with and without pockets, fillets and chamfers, in all four quadrants),
+//! each cut by a random cycle with random D, I, R, E and P. The original
+//! and its flattened output must give rs274 the same canon (numbers within
+//! 2e-4: rs274 prints 4 decimals), and a program rs274 refuses must be
+//! refused by ngcflat.
+//!
+//! `NGCFLAT_LATHE_CASES=N` sets the number of programs (default 200),
+//! `NGCFLAT_LATHE_SEED=S` the first seed.
+
+use std::io::Read;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use crate::oracle;
+
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        // splitmix64
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn unit(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.unit()
+    }
+    fn chance(&mut self, p: f64) -> bool {
+        self.unit() < p
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+/// Rounded to 3 decimals, as a program would write it.
+fn r3(v: f64) -> f64 {
+    (v * 1000.0).round() / 1000.0
+}
+
+fn num(v: f64) -> String {
+    let s = format!("{:.3}", r3(v));
+    let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
+    if s == "-0" { "0".into() } else { s }
+}
+
+/// One generated program: its text and what it is (for messages).
+pub struct Case {
+    pub text: String,
+    pub what: String,
+}
+
+pub fn case(seed: u64) -> Case {
+    let mut g = Rng(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0x1234_5678);
+    // The contour in the first quadrant, cut along -Z with X growing:
+    // (z, x) points; pockets when X may go down.
+    let pockets = g.chance(0.4);
+    let n = 2 + g.below(5);
+    let mut pts = vec![(r3(g.range(-0.5, 1.0)), r3(g.range(1.0, 6.0)))];
+    for _ in 0..n {
+        let (z, x) = *pts.last().unwrap_or(&(0.0, 0.0));
+        let dz = g.range(0.5, 4.0);
+        let dx = if pockets {
+            g.range(-2.5, 3.0)
+        } else if g.chance(0.3) {
+            0.0
+        } else {
+            g.range(0.0, 3.0)
+        };
+        pts.push((r3(z - dz), r3((x + dx).max(0.5))));
+    }
+    let top = pts.iter().map(|p| p.1).fold(0.0, f64::max) + r3(g.range(1.0, 4.0));
+    let zs = pts[0].0 + r3(g.range(0.5, 3.0));
+    let code = ["G70", "G71", "G71.1", "G71.2", "G72", "G72.1", "G72.2"][g.below(7)];
+    // G72 faces: the same contour turned a quarter (Z from X, X from Z),
+    // and sometimes G70/G71 are given such a contour too.
+    let face = code.starts_with("G72") != g.chance(0.15);
+    // A quadrant: mirror X (boring) and/or Z.
+    let (mx, mz) = (g.chance(0.3), g.chance(0.3));
+    let m = |(z, x): (f64, f64)| -> (f64, f64) {
+        let (z, x) = if face { (x, -z) } else { (z, x) };
+        (if mz { -z } else { z }, if mx { -x } else { x })
+    };
+    let mut body = Vec::new();
+    let mut finishes = false;
+    for k in 1..pts.len() {
+        let (p, q) = (m(pts[k - 1]), m(pts[k]));
+        let corner = if k + 1 < pts.len() && g.chance(0.15) {
+            finishes = true;
+            if g.chance(0.5) {
+                format!(" A{}", num(g.range(0.1, 0.8)))
+            } else {
+                format!(" C{}", num(g.range(0.1, 0.8)))
+            }
+        } else {
+            String::new()
+        };
+        if g.chance(0.35) {
+            // An arc through both points: radius from half the chord up.
+            let (cz, cx) = (q.0 - p.0, q.1 - p.1);
+            let chord = (cz * cz + cx * cx).sqrt();
+            let r = chord / 2.0 * g.range(1.2, 4.0);
+            let h = (r * r - chord * chord / 4.0).max(0.0).sqrt();
+            let side = if g.chance(0.5) { 1.0 } else { -1.0 };
+            let (midz, midx) = ((p.0 + q.0) / 2.0, (p.1 + q.1) / 2.0);
+            let (nz, nx) = (-cx / chord * side, cz / chord * side);
+            let (kz, kx) = (midz + nz * h, midx + nx * h);
+            // The minor arc: G3 with the centre on the left of the travel
+            // (sometimes the major one).
+            let ccw = (side > 0.0) != g.chance(0.1);
+            let g23 = if ccw { "G3" } else { "G2" };
+            if g.chance(0.2) {
+                body.push(format!(
+                    "  {g23} X{} Z{} R{}{corner}",
+                    num(q.1),
+                    num(q.0),
+                    num(r)
+                ));
+            } else {
+                body.push(format!(
+                    "  {g23} X{} Z{} I{} K{}{corner}",
+                    num(q.1),
+                    num(q.0),
+                    num(kx - p.1),
+                    num(kz - p.0)
+                ));
+            }
+        } else {
+            body.push(format!("  G1 X{} Z{}{corner}", num(q.1), num(q.0)));
+        }
+    }
+    let first = m(pts[0]);
+    let (sz, sx) = m((zs, top));
+    let lead = if g.chance(0.5) { "G0" } else { "G1" };
+    let mut text = String::from("G18 G21 G90 F100\n");
+    text.push_str(&format!("G0 X{} Z{}\n", num(sx), num(sz)));
+    text.push_str("o100 sub\n");
+    text.push_str(&format!("  {lead} X{} Z{}\n", num(first.1), num(first.0)));
+    for l in &body {
+        text.push_str(l);
+        text.push('\n');
+    }
+    if g.chance(0.6) {
+        // Up to the top, away from the stock.
+        let lastc = *pts.last().unwrap_or(&(0.0, 0.0));
+        let (rz, rx) = m((lastc.0, top));
+        text.push_str(&format!("  G1 X{} Z{}\n", num(rx), num(rz)));
+    }
+    text.push_str("o100 endsub\n");
+    let d = if g.chance(0.2) {
+        0.0
+    } else {
+        r3(g.range(0.05, 1.0))
+    };
+    let words = if code == "G70" {
+        let e = r3(g.range(0.0, d));
+        let p = 1 + g.below(3);
+        format!("D{} E{} P{p}", num(d), num(e))
+    } else {
+        let i = r3(g.range(0.2, 2.0));
+        let r = r3(g.range(0.0, 0.8));
+        format!("D{} I{} R{}", num(d), num(i), num(r))
+    };
+    text.push_str(&format!("{code} Q100 X{} Z{} {words}\n", num(sx), num(sz)));
+    if g.chance(0.3) {
+        text.push_str(&format!("G70 Q100 X{} Z{} D0.2 P1\n", num(sx), num(sz)));
+    }
+    text.push_str("G1 X[#<_x> + 1] Z[#<_z> + 1]\nM2\n");
+    let what = format!(
+        "{code}, {} elements{}{}{}{}{}",
+        n,
+        if face { ", turned" } else { "" },
+        if pockets { ", pockets" } else { "" },
+        if finishes { ", corner finishes" } else { "" },
+        if mx { ", X mirrored" } else { "" },
+        if mz { ", Z mirrored" } else { "" }
+    );
+    Case { text, what }
+}
+
+/// rs274 on a program, given up after `limit` (it loops forever on some
+/// contours). None when it did not finish.
+fn rs274_within(program: &str, limit: Duration) -> Option<(bool, Vec<String>)> {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let prog = dir.path().join("prog.ngc");
+    std::fs::write(&prog, program).expect("write program");
+    let mut child = Command::new(oracle::RS274)
+        .current_dir(dir.path())
+        .env("HOME", dir.path())
+        .arg("-g")
+        .arg(&prog)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run rs274");
+    let mut out = child.stdout.take().expect("stdout");
+    let reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = out.read_to_string(&mut s);
+        s
+    });
+    let t0 = Instant::now();
+    let status = loop {
+        if let Some(st) = child.try_wait().expect("wait rs274") {
+            break Some(st);
+        }
+        if t0.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    let text = reader.join().unwrap_or_default();
+    let status = status?;
+    let lines = text
+        .lines()
+        .filter(|l| !l.starts_with("Oops"))
+        .map(|l| {
+            let t = l.trim_start();
+            let digits = t.bytes().take_while(u8::is_ascii_digit).count();
+            if digits > 0 && t[digits..].starts_with(" N") {
+                let rest =
+                    t[digits + 2..].trim_start_matches(|c: char| c == '.' || c.is_ascii_digit());
+                rest.trim().to_string()
+            } else {
+                l.to_string()
+            }
+        })
+        .filter(|l| !l.starts_with("COMMENT("))
+        .collect();
+    Some((status.success(), lines))
+}
+
+pub enum Verdict {
+    Same,
+    /// Refused by both; ngcflat's message.
+    BothRefuse(String),
+    Endless,
+}
+
+/// Runs one case; Err describes a difference.
+pub fn check(c: &Case) -> Result<Verdict, String> {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("prog.ngc");
+    std::fs::write(&path, &c.text).expect("write");
+    let out = Command::new(crate::bin())
+        .arg("--zero-start")
+        .arg(&path)
+        .stdin(Stdio::null())
+        .output()
+        .expect("run ngcflat");
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    if stderr.contains("E1319") || stderr.contains("E1320") {
+        // ngcflat says the reference never ends (or makes millions of
+        // moves): it must not end in time.
+        return match rs274_within(&c.text, Duration::from_secs(5)) {
+            None => Ok(Verdict::Endless),
+            Some(_) => Err(format!("ngcflat calls it endless, rs274 ends: {stderr}")),
+        };
+    }
+    let Some((ok, a)) = rs274_within(&c.text, Duration::from_secs(20)) else {
+        return Err(format!(
+            "rs274 did not finish; ngcflat: exit {:?} {stderr}",
+            out.status.code()
+        ));
+    };
+    if !ok {
+        return if out.status.success() {
+            Err(format!(
+                "rs274 refuses it, ngcflat flattens it; rs274 said: {:?}",
+                a.iter().rev().take(3).collect::<Vec<_>>()
+            ))
+        } else {
+            Ok(Verdict::BothRefuse(
+                stderr.lines().next().unwrap_or("").to_string(),
+            ))
+        };
+    }
+    if !out.status.success() {
+        return Err(format!("rs274 accepts it, ngcflat refuses: {stderr}"));
+    }
+    let flat = String::from_utf8_lossy(&out.stdout).into_owned();
+    let Some((ok_b, b)) = rs274_within(&flat, Duration::from_secs(20)) else {
+        return Err("rs274 did not finish the flattened program".into());
+    };
+    if !ok_b {
+        return Err(format!(
+            "rs274 refuses the flattened program: {:?}",
+            b.last()
+        ));
+    }
+    oracle::compare(&a, &b, 2e-4).map(|_| Verdict::Same)
+}
+
+#[test]
+fn lathe_cycles_match_rs274() {
+    if !oracle::available("lathe_cycles_match_rs274") {
+        return;
+    }
+    let cases: u64 = std::env::var("NGCFLAT_LATHE_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(200);
+    let seed: u64 = std::env::var("NGCFLAT_LATHE_SEED")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1);
+    let (mut same, mut refused, mut endless) = (0, 0, 0);
+    let mut failures = Vec::new();
+    for s in seed..seed + cases {
+        let c = case(s);
+        match check(&c) {
+            Ok(Verdict::Same) => same += 1,
+            Ok(Verdict::BothRefuse(why)) => {
+                refused += 1;
+                if std::env::var_os("NGCFLAT_LATHE_VERBOSE").is_some() {
+                    eprintln!("seed {s} ({}): refused: {why}\n{}", c.what, c.text);
+                }
+            }
+            Ok(Verdict::Endless) => endless += 1,
+            Err(e) => failures.push(format!("seed {s} ({}): {e}\n{}", c.what, c.text)),
+        }
+    }
+    eprintln!(
+        "lathe cycles: {cases} programs from seed {seed}: {same} same motion, {refused} refused by both, {endless} endless in rs274, {} differ",
+        failures.len()
+    );
+    assert!(
+        failures.is_empty(),
+        "{} of {cases} differ; first:\n{}",
+        failures.len(),
+        failures[0]
+    );
+    // The generator must mostly make programs that are cut, not refused.
+    assert!(
+        same * 2 > cases as usize,
+        "only {same} of {cases} programs were cut"
+    );
+}
