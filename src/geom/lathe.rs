@@ -832,8 +832,11 @@ impl Path {
         let mut rounds = 0u32;
         while current != distance {
             rounds += 1;
-            if segs.is_empty() || rounds > 1_000_000 {
+            if segs.is_empty() {
                 return Err(LatheError::Degenerate);
+            }
+            if rounds > 1_000_000 {
+                return Err(LatheError::Endless);
             }
             let mut step = segs
                 .iter()
@@ -844,7 +847,8 @@ impl Path {
                 step = -step;
             }
             if step == 0.0 || step.is_nan() {
-                return Err(LatheError::Degenerate);
+                // The reference adds nothing and tries again, for ever.
+                return Err(LatheError::Endless);
             }
             for s in segs.iter_mut() {
                 s.offset(step);
