@@ -287,7 +287,33 @@ impl Stats {
                 },
             })
             .collect();
+        let limits = (0..9)
+            .filter_map(|i| {
+                let a = &self.axes.axes[i];
+                if a.min.is_none() && a.max.is_none() {
+                    return None;
+                }
+                let inside = if self.machine_unknown > 0 {
+                    None
+                } else {
+                    self.machine[i].map(|r| {
+                        a.min
+                            .is_none_or(|lo| r.min >= lo - 1e-9 * lo.abs().max(1.0))
+                            && a.max
+                                .is_none_or(|hi| r.max <= hi + 1e-9 * hi.abs().max(1.0))
+                    })
+                };
+                Some(LimitReport {
+                    axis: LETTERS[i].to_string(),
+                    min: a.min,
+                    max: a.max,
+                    source: a.limit_source.clone().unwrap_or_default(),
+                    inside,
+                })
+            })
+            .collect();
         Report {
+            limits,
             program: program.to_string(),
             units: "mm",
             axes,
@@ -379,9 +405,22 @@ pub struct TimeReport {
     pub model: &'static str,
 }
 
+/// One axis's travel limits and whether the program stays inside them
+/// (`None`: machine coordinates not known, or the axis never moved).
+#[derive(Debug, Clone, Serialize)]
+pub struct LimitReport {
+    pub axis: String,
+    pub min: Option<f64>,
+    pub max: Option<f64>,
+    pub source: String,
+    pub inside: Option<bool>,
+}
+
 #[derive(Debug, Clone, Serialize)]
 pub struct Report {
     pub program: String,
+    /// Travel limits given for the machine (machine coordinates).
+    pub limits: Vec<LimitReport>,
     pub units: &'static str,
     pub axes: Vec<AxisReport>,
     /// Whether machine coordinates are known for every move.
@@ -450,6 +489,22 @@ impl Report {
                 s,
                 "  {:<4} {wmin:>12} {wmax:>12} {mmin:>12} {mmax:>12}",
                 a.axis
+            );
+        }
+        for l in &self.limits {
+            let b = |v: Option<f64>| v.map_or("-".to_string(), num);
+            let _ = writeln!(
+                s,
+                "  limit {} {}..{} from {}: {}",
+                l.axis,
+                b(l.min),
+                b(l.max),
+                l.source,
+                match l.inside {
+                    Some(true) => "inside",
+                    Some(false) => "LEFT (flattening and check stop at the first move outside)",
+                    None => "not known",
+                }
             );
         }
         let _ = writeln!(

@@ -846,3 +846,43 @@ fn limits_hold_for_target_output_and_source_maps_need_linuxcnc() {
     }
     assert!(!dir.path().join("m.jsonl").exists());
 }
+
+#[test]
+fn stats_report_the_travel_limits_instead_of_stopping() {
+    let dir = crate::tmp();
+    crate::put(
+        dir.path(),
+        "p.ngc",
+        "G21 G90 G17 F100\nG0 X10 Y45\nG2 X30 Y45 I10 J0\nM2\n",
+    );
+    let (code, out, err) = crate::run(
+        dir.path(),
+        &[
+            "stats",
+            "--json",
+            "--zero-start",
+            "--limits",
+            "X0:100,Y0:50",
+            "p.ngc",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    let j: serde_json::Value = serde_json::from_str(&out).expect("json");
+    let l = j["limits"].as_array().cloned().unwrap_or_default();
+    assert_eq!(l.len(), 2, "{out}");
+    assert_eq!(
+        (l[0]["axis"].as_str(), l[0]["inside"].as_bool()),
+        (Some("X"), Some(true))
+    );
+    // The arc's top is at Y55.
+    assert_eq!(
+        (l[1]["axis"].as_str(), l[1]["inside"].as_bool()),
+        (Some("Y"), Some(false))
+    );
+    assert_eq!(l[1]["source"], "--limits");
+    let (_, text, _) = crate::run(dir.path(), &["stats", "--limits", "Y0:50", "p.ngc"]);
+    assert!(
+        text.contains("limit Y 0.000..50.000 from --limits: not known"),
+        "{text}"
+    );
+}
