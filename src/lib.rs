@@ -172,11 +172,16 @@ fn print_targets() -> ExitCode {
 /// Writes diagnostics to stderr in the chosen format.
 pub fn report(diags: &[Diagnostic], format: MessageFormat) {
     let color = format == MessageFormat::Human && std::io::stderr().is_terminal();
-    let mut s = String::new();
+    // Written as rendered (a million warnings are not held as one text);
+    // failures ignored as in `write_stderr`.
+    use std::io::Write;
+    let mut err = std::io::BufWriter::with_capacity(1 << 16, std::io::stderr().lock());
     for d in diags {
-        s.push_str(&diag::render(d, format, color));
+        if err.write_all(diag::render(d, format, color).as_bytes()).is_err() {
+            return;
+        }
     }
-    write_stderr(&s);
+    let _ = err.flush();
 }
 
 /// Writes to stderr, ignoring failures: a closed or full stderr must not
