@@ -177,7 +177,10 @@ pub fn report(diags: &[Diagnostic], format: MessageFormat) {
     use std::io::Write;
     let mut err = std::io::BufWriter::with_capacity(1 << 16, std::io::stderr().lock());
     for d in diags {
-        if err.write_all(diag::render(d, format, color).as_bytes()).is_err() {
+        if err
+            .write_all(diag::render(d, format, color).as_bytes())
+            .is_err()
+        {
             return;
         }
     }
