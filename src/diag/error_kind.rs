@@ -223,6 +223,10 @@ pub enum ErrorKind {
     },
     /// `--target nosuch`
     UnknownTarget { name: String },
+    /// `G0 Z1` then `G38.2 Z1` with `--target grblhal`: GRBL-class
+    /// firmwares refuse a probe move to the point the tool is at
+    /// (LinuxCNC accepts it and does nothing).
+    TargetProbeInPlace { target: &'static str },
     /// A lowering that failed (its own code, E1100–E1149).
     TargetLowering {
         target: &'static str,
@@ -349,6 +353,7 @@ impl ErrorKind {
             TargetNeedsValue { .. } => "E1001",
             TargetLineTooLong { .. } => "E1002",
             UnknownTarget { .. } => "E1003",
+            TargetProbeInPlace { .. } => "E1050",
             TargetLowering { code, .. } => code,
             Internal { .. } => "E0700",
             ComputedSubLabel => "E0701",
@@ -630,6 +635,10 @@ impl fmt::Display for ErrorKind {
             UnknownTarget { name } => {
                 write!(f, "unknown target '{name}' (`ngcflat targets` lists them)")
             }
+            TargetProbeInPlace { target } => write!(
+                f,
+                "probe move to the point the tool is already at: {target} refuses it (its error 33, invalid target)"
+            ),
             TargetLowering {
                 target, message, ..
             } => write!(f, "{message} (lowering for {target})"),

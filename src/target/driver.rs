@@ -295,6 +295,16 @@ impl Lowering {
         if !problems.is_empty() {
             return Ok(problems);
         }
+        if let Some(k) = self.probe_in_place(b, &before) {
+            return Ok(vec![Problem {
+                span: b
+                    .g_codes()
+                    .find(|(g, _)| matches!(g, GCode::Motion(MotionMode::Probe(_))))
+                    .map(|(_, w)| w.span),
+                kind: k,
+            }]);
+        }
+        self.native_g5_words(b, &before, &mut extra);
         // Rewrites that need the state after the block.
         if b.tool_length
             .is_some_and(|t| matches!(t, ToolLength::Apply | ToolLength::Add))
@@ -422,6 +432,60 @@ impl Lowering {
             out.line(l).map_err(io_error)?;
         }
         Ok(Vec::new())
+    }
+
+    /// GRBL and its descendants refuse a probe move whose target is the
+    /// current position (error 33); LinuxCNC runs it as a move of length
+    /// zero. Checked where both points are known: under `--zero-start` a
+    /// probe is taken as not tripping, so a second probe to the same
+    /// target is refused too.
+    fn probe_in_place(&self, b: &Block, before: &Machine) -> Option<ErrorKind> {
+        let motion = b.motion.unwrap_or(before.modes.motion);
+        if !matches!(motion, MotionMode::Probe(_))
+            || !b.has_axis()
+            || b.non_modal.is_some_and(|n| !matches!(n, NonModal::Dwell))
+            || b.tool_length == Some(ToolLength::Dynamic)
+        {
+            return None;
+        }
+        // Where the probe ends if it does not trip (the model forgets the
+        // position after a probe unless the probe is taken as not tripping).
+        let mut m = before.clone();
+        m.zero_start = true;
+        m.apply(b);
+        let _ = m.take_events();
+        // The target's own axes must be known and unmoved; the others
+        // cannot be written for it anyway.
+        let same = crate::machine::block::AXIS_LETTERS
+            .iter()
+            .zip(before.pos.iter().zip(m.pos.iter()))
+            .filter(|(l, _)| self.p.has_axis(**l))
+            .all(|(_, (a, z))| matches!((a, z), (Some(a), Some(z)) if (a - z).abs() < 1e-9));
+        same.then_some(ErrorKind::TargetProbeInPlace {
+            target: self.name(),
+        })
+    }
+
+    /// A G5 the target runs itself: its I J are written on every block,
+    /// since the target would take a missing pair as minus the block's own
+    /// P Q, where LinuxCNC reflects the previous block's P Q.
+    fn native_g5_words(&mut self, b: &Block, before: &Machine, extra: &mut Vec<(u8, f64)>) {
+        let motion = b.motion.unwrap_or(before.modes.motion);
+        if motion != MotionMode::CubicSpline || !self.p.has_g(50) || !b.has_axis() {
+            return;
+        }
+        let (i, j) = (b.value(b'I'), b.value(b'J'));
+        match (i, j) {
+            (None, None) => {
+                let [p, q] = self.last_pq.unwrap_or([0.0, 0.0]);
+                extra.push((b'I', -p));
+                extra.push((b'J', -q));
+            }
+            (Some(_), None) => extra.push((b'J', 0.0)),
+            (None, Some(_)) => extra.push((b'I', 0.0)),
+            (Some(_), Some(_)) => {}
+        }
+        self.last_pq = Some([b.value(b'P').unwrap_or(0.0), b.value(b'Q').unwrap_or(0.0)]);
     }
 
     /// Writes a lowered block; a code the target lacks is refused.
@@ -852,20 +916,6 @@ impl Lowering {
                 Ok(None)
             }
             MotionMode::Cycle(_) => Ok(None),
-            MotionMode::Probe(_) if moves && !other_axis_use && self.p.line_limit.is_some() => {
-                self.cycles.end();
-                // A probe move that goes nowhere: GRBL-class firmware
-                // refuses it (an invalid target), LinuxCNC's standalone run
-                // leaves the probe where the last one stopped.
-                let (a, z) = (self.prog_pos(before), self.prog_pos(&self.m));
-                if a.iter().zip(z.iter()).all(|(a, z)| a.is_some() && a == z) {
-                    return Err(self.refuse(
-                        "a probe move to where the probe already is (after an earlier probe)",
-                        "the firmware refuses a probe move of zero length; where an earlier probe stopped is known only on the machine",
-                    ));
-                }
-                Ok(None)
-            }
             MotionMode::CubicSpline | MotionMode::QuadSpline
                 if !self.p.has_g(if motion == MotionMode::CubicSpline {
                     50

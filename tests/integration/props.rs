@@ -1003,6 +1003,93 @@ fn target_line() -> impl Strategy<Value = String> {
     ]
 }
 
+/// Flattens `lines` for the target `name` and checks every written line:
+/// only the profile's codes and words, within its line buffer as the
+/// firmware counts it, no byte it acts on in real time, no exponent.
+fn target_output_fits(name: &str, lines: &[String]) -> Result<(), TestCaseError> {
+    use ngcflat::machine::block::{Block, WordKind};
+    use ngcflat::target::{LineCount, TargetOptions, find, significant_len};
+    let program = format!("{}\nM2\n", lines.join("\n"));
+    let profile = find(name).expect("profile");
+    let settings = Settings {
+        zero_start: true,
+        ..Settings::default()
+    };
+    let dir = tempfile::tempdir().expect("dir");
+    let out = dir.path().join("out");
+    let src = SourceFile::new(
+        "<stdin>".into(),
+        "<stdin>".into(),
+        program.clone().into_bytes(),
+    );
+    let consumer = ngcflat::lowering(&settings, Some(TargetOptions::new(profile)));
+    let (_, err) = ngcflat::flatten_with(
+        src,
+        &settings,
+        &SearchPath::default(),
+        Destination::File(out.clone()),
+        consumer,
+    );
+    if err.is_some() {
+        return Ok(());
+    }
+    let (limit, how) = profile
+        .line_limit
+        .expect("GRBL-class targets have a line buffer");
+    let text = std::fs::read(&out).expect("output");
+    for line in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
+        let shown = String::from_utf8_lossy(line);
+        prop_assert!(
+            !line.iter().any(|&b| profile.is_realtime(b)),
+            "real-time byte in {shown}"
+        );
+        let len = match how {
+            LineCount::AllBytes => line.len(),
+            LineCount::Significant => significant_len(line),
+        };
+        prop_assert!(len < limit, "too long for {name}: {shown}");
+        let b = Block::decode(line).expect("decodes");
+        prop_assert!(
+            !b.block_delete && (profile.percent || !b.percent),
+            "{shown}"
+        );
+        for w in &b.words {
+            let ok = match w.kind {
+                WordKind::G(_) => profile.has_g((w.value * 10.0).round() as u16),
+                WordKind::M(_) => profile.has_m(w.value as u16),
+                WordKind::Value => profile.has_word(w.letter),
+            };
+            prop_assert!(
+                ok,
+                "{shown}: {} not in the {name} profile",
+                w.letter as char
+            );
+        }
+        prop_assert!(
+            !shown.contains('e') && !shown.contains('E'),
+            "exponent in {shown}"
+        );
+    }
+    Ok(())
+}
+
+/// Lines for the grblHAL and FluidNC profiles on top of [`target_line`]:
+/// cycles, splines, probes, coordinate systems and long messages.
+fn hal_line() -> impl Strategy<Value = String> {
+    prop_oneof![
+        3 => target_line(),
+        1 => Just("G0 Z5\nG98 G81 X1 Y1 Z-2 R1\nG80".to_string()),
+        1 => Just("G0 Z5\nG99 G83 X2 Y1 Z-3 R1 Q0.7\nG80".to_string()),
+        1 => Just("G0 Z5\nG85 X1 Y2 Z-1 R2\nG89 X3 P0.5\nG80".to_string()),
+        1 => Just("G17 G1 F100\nG5 I1 J1 P-1 Q1 X3 Y3\nG5 P1 Q-1 X6 Y0".to_string()),
+        1 => Just("G17 G5.1 I0 J2 X2 Y0 F100".to_string()),
+        1 => Just("G59.1 G0 X1\nG54".to_string()),
+        1 => Just("M7 M8".to_string()),
+        1 => (0usize..300).prop_map(|n| format!("(MSG, {})", "x".repeat(n))),
+        1 => Just("G0 Z5\nG38.3 Z-1 F50".to_string()),
+    ]
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
@@ -1010,36 +1097,13 @@ proptest! {
     /// line buffer and holds no byte it acts on in real time.
     #[test]
     fn grbl_output_uses_only_what_grbl_has(lines in proptest::collection::vec(target_line(), 1..12)) {
-        use ngcflat::machine::block::{Block, WordKind};
-        use ngcflat::target::{TargetOptions, find, significant_len};
-        let program = format!("{}\nM2\n", lines.join("\n"));
-        let profile = find("grbl").expect("grbl");
-        let settings = Settings { zero_start: true, ..Settings::default() };
-        let dir = tempfile::tempdir().expect("dir");
-        let out = dir.path().join("out");
-        let src = SourceFile::new("<stdin>".into(), "<stdin>".into(), program.clone().into_bytes());
-        let consumer = ngcflat::lowering(&settings, Some(TargetOptions::new(profile)));
-        let (_, err) = ngcflat::flatten_with(
-            src, &settings, &SearchPath::default(), Destination::File(out.clone()), consumer,
-        );
-        if err.is_none() {
-            let text = std::fs::read(&out).expect("output");
-            for line in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
-                let shown = String::from_utf8_lossy(line);
-                prop_assert!(!line.iter().any(|&b| profile.is_realtime(b)), "real-time byte in {shown}");
-                prop_assert!(significant_len(line) < 80, "too long: {shown}");
-                let b = Block::decode(line).expect("decodes");
-                prop_assert!(!b.block_delete && !b.percent, "{shown}");
-                for w in &b.words {
-                    let ok = match w.kind {
-                        WordKind::G(_) => profile.has_g((w.value * 10.0).round() as u16),
-                        WordKind::M(_) => profile.has_m(w.value as u16),
-                        WordKind::Value => profile.has_word(w.letter),
-                    };
-                    prop_assert!(ok, "{shown}: {} not in the profile", w.letter as char);
-                }
-                prop_assert!(!shown.contains('e') && !shown.contains('E'), "exponent in {shown}");
-            }
-        }
+        target_output_fits("grbl", &lines)?;
+    }
+
+    /// The same for grblHAL and FluidNC.
+    #[test]
+    fn grblhal_and_fluidnc_output_uses_only_what_they_have(lines in proptest::collection::vec(hal_line(), 1..12)) {
+        target_output_fits("grblhal", &lines)?;
+        target_output_fits("fluidnc", &lines)?;
     }
 }

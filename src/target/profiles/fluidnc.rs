@@ -6,15 +6,19 @@
 //! G54–G59.3, G61, G80, G90/G91, G91.1, G92/G92.1, G93/G94; M0–M2, M30,
 //! M3–M5, M6, M7/M8/M9 (M7 only when the machine has mist), M61,
 //! M62–M68; `(MSG …)` comments shown; no canned cycles, splines, G43,
-//! G90.1, G64 or G95), `FluidNC/src/Protocol.h` (`LINE_BUFFER_SIZE` 256)
-//! and the real-time characters of `FluidNC/src/RealtimeCmd.h`.
+//! G90.1, G64 or G95; M7 without a mist output is accepted and does
+//! nothing, so it is refused here; G38.x to the current position is
+//! refused), `FluidNC/src/Channel.cpp` and `Channel.h` (`lineComplete`:
+//! every byte up to the line end goes into a 255-byte buffer, `maxLine`,
+//! and bytes past 254 are dropped without an error, so longer lines are
+//! refused here) and the real-time characters of `FluidNC/src/RealtimeCmd.h`.
 
 use crate::target::profile::{Comments, LineCount, Profile, ToolChange};
 
 pub const PROFILE: Profile = Profile {
     name: "fluidnc",
     summary: "FluidNC, 3-axis configuration (flood coolant, no mist)",
-    source: "bdring/FluidNC e952f33f FluidNC/src/GCode.cpp, Protocol.h",
+    source: "bdring/FluidNC e952f33f FluidNC/src/GCode.cpp, Channel.cpp",
     passthrough: false,
     g_codes: &[
         0, 10, 20, 30, 40, 100, 170, 180, 190, 200, 210, 280, 281, 300, 301, 382, 383, 384, 385,
@@ -26,7 +30,7 @@ pub const PROFILE: Profile = Profile {
     axes: b"XYZ",
     g10_l: &[2, 20],
     coord_systems: 9,
-    line_limit: Some((256, LineCount::Significant)),
+    line_limit: Some((255, LineCount::AllBytes)),
     max_digits: 8,
     decimals_mm: 4,
     decimals_inch: 5,
