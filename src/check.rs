@@ -124,87 +124,59 @@ fn observed(
 
 /// Checks one program; returns its diagnostics.
 pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
-    let source = match crate::program::SourceFile::open_regular(path, cfg.settings.input) {
-        Ok(s) => s,
-        Err(e) => {
-            return vec![*Diagnostic::error(
+    let opened = if path.as_os_str() == "-" {
+        crate::read_source_limited(None, cfg.settings.input)
+    } else {
+        crate::program::SourceFile::open_regular(path, cfg.settings.input).map_err(|e| {
+            Diagnostic::error(
                 ErrorKind::Io {
                     path: path.to_path_buf(),
                     message: e.to_string(),
                 },
                 None,
-            )];
-        }
+            )
+        })
+    };
+    let source = match opened.and_then(|s| crate::refuse_binary(&s).map(|()| s)) {
+        Ok(s) => s,
+        Err(e) => return vec![*e],
     };
     let source = std::sync::Arc::new(source);
     let probe = FileIndex::build(source.clone());
     let mut settings = cfg.settings.clone();
     settings.warnings = true;
+    if sub_file_name(&probe).is_some() {
+        // A subroutine library: checked for what is known without a
+        // caller; its callers report the rest.
+        drop(probe);
+        return crate::library::check_library(source, &settings, &cfg.search);
+    }
+    drop(probe);
     let target = cfg.target.clone().map(|mut t| {
         t.check = true;
         t
     });
-    let result = if let Some(name) = sub_file_name(&probe) {
-        // A subroutine file: check it by calling it from a tiny program in
-        // its own folder.
-        let dir = path
-            .parent()
-            .map(Path::to_path_buf)
-            .unwrap_or_else(|| PathBuf::from("."));
-        let mut search = cfg.search.clone();
-        search.dirs.insert(0, dir.clone());
-        let nargs = 30;
-        let args: String = (0..nargs).map(|_| "[0]").collect::<Vec<_>>().join("");
-        let _ = args;
-        let text = format!("o<{name}> call\nM2\n");
-        let src = crate::program::SourceFile::new(
-            dir.join("<check>"),
-            format!("<call of {}>", path.display()),
-            text.into_bytes(),
-        );
-        match crate::lowering(&settings, target.clone()) {
+    let result = match std::sync::Arc::try_unwrap(source) {
+        Ok(source) => match crate::lowering(&settings, target) {
             Some(consumer) => crate::view::run::flatten_chained(
-                src,
+                source,
                 &settings,
-                &search,
+                &cfg.search,
                 Destination::Discard,
                 cfg,
                 &Default::default(),
                 Some(consumer),
             ),
             None => observed(crate::view::run::flatten_observed(
-                src,
+                source,
                 &settings,
-                &search,
+                &cfg.search,
                 Destination::Discard,
                 cfg,
                 &Default::default(),
             )),
-        }
-    } else {
-        drop(probe);
-        match std::sync::Arc::try_unwrap(source) {
-            Ok(source) => match crate::lowering(&settings, target.clone()) {
-                Some(consumer) => crate::view::run::flatten_chained(
-                    source,
-                    &settings,
-                    &cfg.search,
-                    Destination::Discard,
-                    cfg,
-                    &Default::default(),
-                    Some(consumer),
-                ),
-                None => observed(crate::view::run::flatten_observed(
-                    source,
-                    &settings,
-                    &cfg.search,
-                    Destination::Discard,
-                    cfg,
-                    &Default::default(),
-                )),
-            },
-            Err(_) => return Vec::new(),
-        }
+        },
+        Err(_) => return Vec::new(),
     };
     match result {
         (w, None) => w,
@@ -294,27 +266,39 @@ pub fn run(paths: &[PathBuf], exts: &[String], deny_warnings: bool, cfg: &Config
     let mut results = results.into_inner().unwrap_or_else(|e| e.into_inner());
     results.sort_by_key(|r| r.0);
     let mut all: Vec<Diagnostic> = cfg.warnings.clone();
+    let problems_empty = problems.is_empty();
     all.append(&mut problems);
     for (_, mut d) in results {
         all.append(&mut d);
     }
-    // A path given on the command line that cannot be read is a usage
-    // error (exit 2); problems met while walking folders are errors (1).
-    let io_error = paths.iter().any(|p| !p.exists());
+    if files.is_empty() && problems_empty {
+        all.push(*Diagnostic::error(
+            ErrorKind::NoPrograms {
+                paths: paths.to_vec(),
+                exts: exts.join(","),
+            },
+            None,
+        ));
+    }
+    // A file or folder that cannot be read (given directly or met in a
+    // folder, a dangling symlink included) and finding no programs at all
+    // are I/O errors: exit 2, as for flattening.
+    let io_error = all.iter().any(|d| {
+        matches!(
+            d.error_kind(),
+            Some(ErrorKind::Io { .. } | ErrorKind::NoPrograms { .. } | ErrorKind::NotText { .. })
+        )
+    });
     let errors = all.iter().filter(|d| d.level() == Level::Error).count();
     let warnings = all.iter().filter(|d| d.level() == Level::Warning).count();
-    crate::report(&all, cfg.format);
-    crate::write_stderr(&format!(
-        "{} files, {} errors, {} warnings\n",
-        files.len(),
-        errors,
-        warnings
-    ));
-    if io_error {
-        ExitCode::from(2)
+    let code = if io_error {
+        2
     } else if errors > 0 || (deny_warnings && warnings > 0) {
-        ExitCode::from(1)
+        1
     } else {
-        ExitCode::SUCCESS
-    }
+        0
+    };
+    crate::report(&all, cfg.format);
+    crate::report_summary(files.len(), errors, warnings, code, cfg.format, true);
+    ExitCode::from(code)
 }

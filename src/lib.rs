@@ -11,6 +11,7 @@ pub mod emit;
 pub mod eval;
 mod fx_hasher;
 pub mod geom;
+mod library;
 pub mod machine;
 pub mod parse;
 pub mod program;
@@ -171,7 +172,12 @@ fn print_targets() -> ExitCode {
 
 /// Writes diagnostics to stderr in the chosen format.
 pub fn report(diags: &[Diagnostic], format: MessageFormat) {
-    let color = format == MessageFormat::Human && std::io::stderr().is_terminal();
+    let color = format == MessageFormat::Human
+        && diag::use_color(
+            std::io::stderr().is_terminal(),
+            std::env::var_os("NO_COLOR").as_deref(),
+            std::env::var_os("TERM").as_deref(),
+        );
     // Written as rendered (a million warnings are not held as one text);
     // failures ignored as in `write_stderr`.
     use std::io::Write;
@@ -187,6 +193,36 @@ pub fn report(diags: &[Diagnostic], format: MessageFormat) {
     let _ = err.flush();
 }
 
+/// Writes the summary that ends a run: the JSON summary object (both
+/// commands), or for `check` the `N files, E errors, W warnings` line.
+pub fn report_summary(
+    files: usize,
+    errors: usize,
+    warnings: usize,
+    exit_code: u8,
+    format: MessageFormat,
+    check: bool,
+) {
+    write_stderr(&diag::render_summary(
+        files, errors, warnings, exit_code, format, check,
+    ));
+}
+
+/// Refuses a file that is not text (a NUL byte in its first 8 kB: an
+/// image, an archive, a compiled program), so that its bytes never reach a
+/// terminal or log in diagnostics.
+pub fn refuse_binary(source: &SourceFile) -> Result<(), Error> {
+    if source.head(8192).contains(&0) {
+        return Err(Diagnostic::error(
+            ErrorKind::NotText {
+                path: source.path.clone(),
+            },
+            None,
+        ));
+    }
+    Ok(())
+}
+
 /// Writes to stderr, ignoring failures: a closed or full stderr must not
 /// stop the run (the exit status still tells the outcome).
 pub fn write_stderr(s: &str) {
@@ -194,10 +230,10 @@ pub fn write_stderr(s: &str) {
     let _ = std::io::stderr().lock().write_all(s.as_bytes());
 }
 
-fn exit_for(e: &Diagnostic) -> ExitCode {
+fn exit_for(e: &Diagnostic) -> u8 {
     match e.error_kind() {
-        Some(ErrorKind::Io { .. }) => ExitCode::from(2),
-        _ => ExitCode::from(1),
+        Some(ErrorKind::Io { .. } | ErrorKind::NotText { .. }) => 2,
+        _ => 1,
     }
 }
 
@@ -228,9 +264,21 @@ pub fn run(cli: config::Cli) -> ExitCode {
     }
 }
 
-fn setup_error(k: ErrorKind, format: MessageFormat) -> ExitCode {
+fn setup_error(k: ErrorKind, format: MessageFormat, check: bool) -> ExitCode {
     report(&[*Diagnostic::error(k, None)], format);
+    report_summary(0, 1, 0, 2, format, check);
     ExitCode::from(2)
+}
+
+/// Reports the outcome of flattening one program and gives its exit code.
+fn finish_flatten(diags: &[Diagnostic], code: u8, format: MessageFormat) -> ExitCode {
+    report(diags, format);
+    let errors = diags
+        .iter()
+        .filter(|d| d.level() == diag::Level::Error)
+        .count();
+    report_summary(1, errors, diags.len() - errors, code, format, false);
+    ExitCode::from(code)
 }
 
 /// The CLI edge: configuration problems become `anyhow` errors with context;
@@ -259,14 +307,14 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
         Some(config::Command::Check(args)) => {
             let cfg = match args.common.to_config(env_path) {
                 Ok(c) => c,
-                Err(k) => return Ok(setup_error(k, args.common.format())),
+                Err(k) => return Ok(setup_error(k, args.common.format(), true)),
             };
             Ok(check::run(&args.paths, &args.ext, args.deny_warnings, &cfg))
         }
         Some(config::Command::Stats(args)) => {
             let cfg = match args.common.to_config(env_path) {
                 Ok(c) => c,
-                Err(k) => return Ok(setup_error(k, args.common.format())),
+                Err(k) => return Ok(setup_error(k, args.common.format(), false)),
             };
             Ok(view::run::stats_command(
                 args.file.as_deref(),
@@ -277,7 +325,7 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
         Some(config::Command::Plot(args)) => {
             let cfg = match args.common.to_config(env_path) {
                 Ok(c) => c,
-                Err(k) => return Ok(setup_error(k, args.common.format())),
+                Err(k) => return Ok(setup_error(k, args.common.format(), false)),
             };
             let view = match args.view {
                 config::ViewArg::Xy => view::plot::View::Xy,
@@ -296,21 +344,25 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
             let args = cli.flatten;
             let cfg = match args.common.to_config(env_path) {
                 Ok(c) => c,
-                Err(k) => return Ok(setup_error(k, args.common.format())),
+                Err(k) => return Ok(setup_error(k, args.common.format(), false)),
             };
-            report(&cfg.warnings, cfg.format);
-            let source = match read_source_limited(args.file.as_deref(), cfg.settings.input) {
+            // Configuration warnings come first, counted in the summary.
+            let with_config = |mut d: Vec<Diagnostic>| {
+                let mut all = cfg.warnings.clone();
+                all.append(&mut d);
+                all
+            };
+            let source = match read_source_limited(args.file.as_deref(), cfg.settings.input)
+                .and_then(|s| refuse_binary(&s).map(|()| s))
+            {
                 Ok(s) => s,
-                Err(e) => {
-                    report(&[*e], cfg.format);
-                    return Ok(ExitCode::from(2));
-                }
+                Err(e) => return Ok(finish_flatten(&with_config(vec![*e]), 2, cfg.format)),
             };
             let dest = match args.output {
                 Some(p) => {
                     if same_file(&p, args.file.as_deref()) {
                         let k = ErrorKind::OutputIsInput { output: p };
-                        return Ok(setup_error(k, cfg.format));
+                        return Ok(setup_error(k, cfg.format, false));
                     }
                     Destination::File(p)
                 }
@@ -319,7 +371,7 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
             let consumer = lowering(&cfg.settings, cfg.target.clone());
             if consumer.is_some() && (args.source_map.is_some() || args.annotate) {
                 let k = ErrorKind::SourceMapNeedsLinuxcnc;
-                return Ok(setup_error(k, cfg.format));
+                return Ok(setup_error(k, cfg.format, false));
             }
             let extras = view::run::Extras {
                 source_map: args.source_map,
@@ -338,14 +390,10 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
                 (_, Some(e)) => Err(e),
             };
             match r {
-                Ok(warnings) => {
-                    report(&warnings, cfg.format);
-                    Ok(ExitCode::SUCCESS)
-                }
+                Ok(warnings) => Ok(finish_flatten(&with_config(warnings), 0, cfg.format)),
                 Err(e) => {
                     let code = exit_for(&e);
-                    report(&[*e], cfg.format);
-                    Ok(code)
+                    Ok(finish_flatten(&with_config(vec![*e]), code, cfg.format))
                 }
             }
         }

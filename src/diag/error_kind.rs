@@ -265,6 +265,18 @@ pub enum ErrorKind {
     LimitNeedsOffsets,
     /// `--source-map` or `--annotate` with `--target grbl`.
     SourceMapNeedsLinuxcnc,
+    /// `ngcflat check emptydir`, or an `--ext` that matches nothing.
+    NoPrograms { paths: Vec<PathBuf>, exts: String },
+    /// A file with NUL bytes (an image, an archive, a compiled program).
+    NotText { path: PathBuf },
+    /// A block of a library definition that is not closed before its
+    /// `endsub`: `o1 if [#1 GT 0]` ... `o<s> endsub`.
+    UnclosedBlock {
+        label: String,
+        opened: &'static str,
+        line: u32,
+        closer: &'static str,
+    },
 }
 
 impl ErrorKind {
@@ -366,6 +378,9 @@ impl ErrorKind {
             TravelLimit { .. } => "E1203",
             LimitNeedsOffsets => "E1204",
             SourceMapNeedsLinuxcnc => "E1205",
+            NoPrograms { .. } => "E0802",
+            NotText { .. } => "E0803",
+            UnclosedBlock { .. } => "E0804",
         }
     }
 }
@@ -662,6 +677,27 @@ impl fmt::Display for ErrorKind {
             ProbeResultUnknown { index, line } => write!(
                 f,
                 "#{index} is the result of the probe at line {line}, known only on the machine; a program that uses it cannot be flattened ahead of time (--zero-start assumes the probe does not trip and reads its target, as LinuxCNC's standalone interpreter does)"
+            ),
+            NoPrograms { paths, exts } => {
+                write!(f, "no programs found in")?;
+                for p in paths {
+                    write!(f, " {}", p.display())?;
+                }
+                write!(f, " (extensions {exts}; --ext chooses others)")
+            }
+            NotText { path } => write!(
+                f,
+                "{}: not a text G-code program (it contains NUL bytes: a binary file?)",
+                path.display()
+            ),
+            UnclosedBlock {
+                label,
+                opened,
+                line,
+                closer,
+            } => write!(
+                f,
+                "'o{label} {opened}' at line {line} has no 'o{label} {closer}' before the end of its subroutine"
             ),
             BadStartPosition { text } => write!(
                 f,

@@ -9,7 +9,7 @@ mod warning_kind;
 pub use block_error::BlockError;
 pub use error_kind::ErrorKind;
 pub use lathe_error::LatheError;
-pub use render::{MessageFormat, render};
+pub use render::{MessageFormat, render, render_summary, use_color};
 pub use warning_kind::WarningKind;
 
 use std::fmt;

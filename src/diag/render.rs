@@ -81,22 +81,125 @@ pub(crate) fn shown_line(bytes: &[u8], col: u32) -> (String, String) {
     (text, lead)
 }
 
-fn json_str(out: &mut String, s: &str) {
-    out.push('"');
-    for c in s.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            '\n' => out.push_str("\\n"),
-            '\r' => out.push_str("\\r"),
-            '\t' => out.push_str("\\t"),
-            c if (c as u32) < 0x20 => {
-                let _ = write!(out, "\\u{:04x}", c as u32);
-            }
-            c => out.push(c),
+/// Position of a diagnostic in the JSON format.
+#[derive(serde::Serialize)]
+struct JsonPos {
+    line: u32,
+    column: u32,
+}
+
+/// Byte offsets in the file of a diagnostic in the JSON format.
+#[derive(serde::Serialize)]
+struct JsonSpan {
+    start: u32,
+    end: u32,
+}
+
+/// A caller in the JSON format.
+#[derive(serde::Serialize)]
+struct JsonFrame<'a> {
+    file: &'a str,
+    line: u32,
+    column: u32,
+}
+
+/// One diagnostic in the JSON format (README: "Machine-readable
+/// diagnostics").
+#[derive(serde::Serialize)]
+struct JsonDiagnostic<'a> {
+    #[serde(rename = "type")]
+    kind: &'static str,
+    severity: &'static str,
+    code: &'static str,
+    message: String,
+    file: Option<String>,
+    line: Option<u32>,
+    column: Option<u32>,
+    end: Option<JsonPos>,
+    span: Option<JsonSpan>,
+    notes: Vec<String>,
+    call_stack: Vec<JsonFrame<'a>>,
+}
+
+/// The summary object that ends the JSON output.
+#[derive(serde::Serialize)]
+struct JsonSummary {
+    #[serde(rename = "type")]
+    kind: &'static str,
+    files: usize,
+    errors: usize,
+    warnings: usize,
+    exit_code: u8,
+}
+
+fn json_line(d: &Diagnostic, here: Option<&Located>, stack: &[&Located]) -> String {
+    let io_path = match d.error_kind() {
+        Some(super::ErrorKind::Io { path, .. }) => Some(path.display().to_string()),
+        _ => None,
+    };
+    let v = JsonDiagnostic {
+        kind: "diagnostic",
+        severity: match d.level() {
+            Level::Error => "error",
+            Level::Warning => "warning",
+        },
+        code: d.code(),
+        message: d.message(),
+        file: here.map(|l| l.file.clone()).or(io_path),
+        line: here.map(|l| l.line),
+        column: here.map(|l| l.col),
+        end: here.map(|l| JsonPos {
+            line: l.end_line,
+            column: l.end_col,
+        }),
+        span: d.site.as_ref().map(|s| JsonSpan {
+            start: s.start,
+            end: s.end,
+        }),
+        notes: stack
+            .iter()
+            .map(|c| format!("called from {}:{}:{}", c.file, c.line, c.col))
+            .collect(),
+        call_stack: stack
+            .iter()
+            .map(|c| JsonFrame {
+                file: &c.file,
+                line: c.line,
+                column: c.col,
+            })
+            .collect(),
+    };
+    let mut line = serde_json::to_string(&v).unwrap_or_default();
+    line.push('\n');
+    line
+}
+
+/// The summary line that ends a run in the given format: `N files, E
+/// errors, W warnings` (check only), or a JSON object (both commands).
+pub fn render_summary(
+    files: usize,
+    errors: usize,
+    warnings: usize,
+    exit_code: u8,
+    format: MessageFormat,
+    check: bool,
+) -> String {
+    match format {
+        MessageFormat::Json => {
+            let v = JsonSummary {
+                kind: "summary",
+                files,
+                errors,
+                warnings,
+                exit_code,
+            };
+            let mut line = serde_json::to_string(&v).unwrap_or_default();
+            line.push('\n');
+            line
         }
+        _ if check => format!("{files} files, {errors} errors, {warnings} warnings\n"),
+        _ => String::new(),
     }
-    out.push('"');
 }
 
 fn github_escape(s: &str) -> String {
@@ -107,6 +210,17 @@ fn github_escape(s: &str) -> String {
 
 fn github_prop(s: &str) -> String {
     github_escape(s).replace(':', "%3A").replace(',', "%2C")
+}
+
+/// Whether human diagnostics get ANSI colours: only on a terminal, and not
+/// when `NO_COLOR` is set to anything but the empty string
+/// (<https://no-color.org>) or `TERM` is `dumb`.
+pub fn use_color(
+    is_terminal: bool,
+    no_color: Option<&std::ffi::OsStr>,
+    term: Option<&std::ffi::OsStr>,
+) -> bool {
+    is_terminal && no_color.is_none_or(|v| v.is_empty()) && term.is_none_or(|t| t != "dumb")
 }
 
 /// Renders one diagnostic in the given format. `color` adds ANSI colours to
@@ -161,34 +275,7 @@ pub fn render(d: &Diagnostic, format: MessageFormat, color: bool) -> String {
             }
         }
         MessageFormat::Json => {
-            out.push('{');
-            out.push_str("\"file\":");
-            match &here {
-                Some(l) => {
-                    json_str(&mut out, &l.file);
-                    let _ = write!(
-                        out,
-                        ",\"line\":{},\"column\":{},\"end\":{{\"line\":{},\"column\":{}}}",
-                        l.line, l.col, l.end_line, l.end_col
-                    );
-                }
-                None => out.push_str("null,\"line\":null,\"column\":null,\"end\":null"),
-            }
-            let _ = write!(
-                out,
-                ",\"level\":\"{level}\",\"code\":\"{code}\",\"message\":"
-            );
-            json_str(&mut out, &message);
-            out.push_str(",\"call_stack\":[");
-            for (i, c) in stack.iter().enumerate() {
-                if i > 0 {
-                    out.push(',');
-                }
-                out.push_str("{\"file\":");
-                json_str(&mut out, &c.file);
-                let _ = write!(out, ",\"line\":{},\"column\":{}}}", c.line, c.col);
-            }
-            out.push_str("]}\n");
+            out = json_line(d, here, &stack);
         }
         MessageFormat::Human => {
             let (lvl, bold, blue, reset) = if color {
@@ -226,4 +313,22 @@ pub fn render(d: &Diagnostic, format: MessageFormat, color: bool) -> String {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::use_color;
+    use std::ffi::OsStr;
+
+    #[test]
+    fn color_only_on_a_capable_terminal() {
+        let s = |v: &'static str| Some(OsStr::new(v));
+        assert!(use_color(true, None, s("xterm-256color")));
+        assert!(use_color(true, None, None));
+        assert!(use_color(true, s(""), s("xterm")));
+        assert!(!use_color(false, None, s("xterm")));
+        assert!(!use_color(true, s("1"), s("xterm")));
+        assert!(!use_color(true, s("0"), s("xterm")));
+        assert!(!use_color(true, None, s("dumb")));
+    }
 }

@@ -291,6 +291,15 @@ fn file_key(f: &Rc<FileIndex>) -> usize {
 }
 
 impl<'s> Interp<'s> {
+    /// Evaluates an expression that reads no parameter (the library check
+    /// of `check`): its value, or the error and its span in the line.
+    pub fn eval_constant(
+        &mut self,
+        e: &crate::parse::ast::Expr,
+    ) -> Result<f64, (ErrorKind, crate::parse::ast::Span)> {
+        self.eval(e).map_err(|f| *f)
+    }
+
     pub fn new(s: &'s Settings, loader: Loader, main: Rc<FileIndex>, sink: Sink) -> Interp<'s> {
         let mut params = Params::new(s.zero_start);
         let mut globals = FxMap::default();

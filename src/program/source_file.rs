@@ -370,6 +370,18 @@ impl SourceFile {
         }
     }
 
+    /// The first `n` bytes (fewer when the file is shorter or cannot be
+    /// read again).
+    pub fn head(&self, n: usize) -> Vec<u8> {
+        if let Some(d) = self.memory() {
+            return d[..d.len().min(n)].to_vec();
+        }
+        let mut buf = vec![0u8; n];
+        let got = self.read_at(&mut buf, 0).unwrap_or(0);
+        buf.truncate(got);
+        buf
+    }
+
     /// All bytes (read from disk for streamed files).
     pub fn bytes(&self) -> Cow<'_, [u8]> {
         match &self.text {

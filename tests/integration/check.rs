@@ -334,7 +334,7 @@ fn mixed_folder() -> tempfile::TempDir {
     put(p, "progs/bad.nc", "G0 X[1/0]\nM2\n");
     put(p, "progs/warn.tap", "G0 X#31\nM2\n");
     put(p, "progs/deep/er/UPPER.NGC", "G0 X2\nM2\n");
-    // Subroutine-only files: checked by calling them.
+    // Subroutine-only files: checked without a caller.
     put(
         p,
         "progs/lib/broken.ngc",
@@ -358,15 +358,16 @@ fn check_folder_exit_codes_and_summary() {
     // (args, exit code, summary line)
     let cases: &[(&[&str], i32, &str)] = &[
         // good, bad, warn, UPPER, broken, clean; errors: bad, broken, the loop
-        (&["progs"], 1, "6 files, 3 errors, 1 warnings"),
+        // (a problem walking the folder: exit 2)
+        (&["progs"], 2, "6 files, 3 errors, 1 warnings"),
         (
             &["--ext", "ngc", "progs"],
-            1,
+            2,
             "4 files, 2 errors, 0 warnings",
         ),
         (
             &["--ext", "nc,tap", "progs"],
-            1,
+            2,
             "2 files, 2 errors, 1 warnings",
         ),
         (
@@ -376,13 +377,13 @@ fn check_folder_exit_codes_and_summary() {
         ),
         (
             &["--ext", "txt", "progs"],
-            1,
+            2,
             "1 files, 2 errors, 0 warnings",
         ),
         (
             &["--ext", "gcode", "progs/lib"],
-            0,
-            "0 files, 0 errors, 0 warnings",
+            2,
+            "0 files, 1 errors, 0 warnings",
         ),
         (&["progs/good.ngc"], 0, "1 files, 0 errors, 0 warnings"),
         (
@@ -723,9 +724,12 @@ fn json_diag(line: &str) -> Json {
             "column",
             "end",
             "file",
-            "level",
             "line",
-            "message"
+            "message",
+            "notes",
+            "severity",
+            "span",
+            "type"
         ],
         "{line}"
     );
@@ -744,7 +748,7 @@ fn json_diag(line: &str) -> Json {
         _ => panic!("bad end: {line}"),
     }
     assert!(
-        matches!(v.get("level"), Json::Str(s) if s == "error" || s == "warning"),
+        matches!(v.get("severity"), Json::Str(s) if s == "error" || s == "warning"),
         "{line}"
     );
     assert!(
@@ -846,14 +850,17 @@ fn json_format_on_an_error_and_a_warning() {
     assert_eq!(exit, 1);
     let lines: Vec<&str> = stderr.lines().collect();
     assert_eq!(lines.len(), 3, "{stderr}");
-    assert_eq!(lines[2], "2 files, 1 errors, 1 warnings");
+    assert_eq!(
+        lines[2],
+        r#"{"type":"summary","files":2,"errors":1,"warnings":1,"exit_code":1}"#
+    );
     let e = json_diag(lines[0]);
     assert_eq!(e.get("file"), &s("err.ngc"));
     assert_eq!(e.get("line"), &n(2.0));
     assert_eq!(e.get("column"), &n(5.0));
     assert_eq!(e.get("end").get("line"), &n(2.0));
     assert_eq!(e.get("end").get("column"), &n(10.0));
-    assert_eq!(e.get("level"), &s("error"));
+    assert_eq!(e.get("severity"), &s("error"));
     assert_eq!(e.get("code"), &s("E0101"));
     assert_eq!(e.get("message"), &s("division by zero"));
     assert_eq!(e.get("call_stack"), &Json::Arr(vec![]));
@@ -861,7 +868,7 @@ fn json_format_on_an_error_and_a_warning() {
     assert_eq!(w.get("file"), &s("warn.ngc"));
     assert_eq!(w.get("line"), &n(1.0));
     assert_eq!(w.get("column"), &n(5.0));
-    assert_eq!(w.get("level"), &s("warning"));
+    assert_eq!(w.get("severity"), &s("warning"));
     assert_eq!(w.get("code"), &s("W0003"));
 }
 
@@ -1093,4 +1100,230 @@ fn plain_comments_on_o_lines_pass_deny_warnings() {
     let (exit, _, stderr) = run(d.path(), &["check", "--deny-warnings", "p.ngc"]);
     assert_eq!(exit, 0, "{stderr}");
     assert!(!stderr.contains("W0001"), "{stderr}");
+}
+
+// ------------------------------------------------ stdin, exit codes, libraries
+
+#[test]
+fn check_reads_stdin() {
+    let d = tmp();
+    let args: Vec<String> = ["check", "-"].iter().map(|s| s.to_string()).collect();
+    let good = crate::outcome(crate::ngcflat(d.path(), &args, Some(b"G0 X1\nM2\n")));
+    assert_eq!(good.0, 0, "{}", good.2);
+    assert_eq!(summary(&good.2), "1 files, 0 errors, 0 warnings");
+    let bad = crate::outcome(crate::ngcflat(d.path(), &args, Some(b"G0 X[1/0]\nM2\n")));
+    assert_eq!(bad.0, 1, "{}", bad.2);
+    assert!(bad.2.contains("<stdin>:1:"), "{}", bad.2);
+}
+
+/// A subroutine library is not run as if called with every argument 0:
+/// what depends on its callers is left to them.
+#[test]
+fn library_is_checked_without_a_caller() {
+    let d = tmp();
+    put(
+        d.path(),
+        "lib/pocket.ngc",
+        "(a library as ngcgui and users write them)\n\
+         o<pocket> sub\n\
+         #<w> = #1\n\
+         #<steps> = [#<w> / #2]\n\
+         G1 X[#<w> / #3] F#4\n\
+         o100 if [#<_td> GT 0] (plain note)\n\
+           G1 Z[-#<_td>]\n\
+         o100 else\n\
+           o101 while [#<steps> GT 0]\n\
+             #<steps> = [#<steps> - 1]\n\
+             o101 continue\n\
+           o101 endwhile\n\
+         o100 endif\n\
+         o<pocket> return [1]\n\
+         o<pocket> endsub\n\
+         M2\n",
+    );
+    let (exit, _, stderr) = run(d.path(), &["check", "--deny-warnings", "lib/pocket.ngc"]);
+    assert_eq!(exit, 0, "{stderr}");
+    assert_eq!(
+        summary(&stderr),
+        "1 files, 0 errors, 0 warnings",
+        "{stderr}"
+    );
+    // Its callers report what depends on them.
+    put(
+        d.path(),
+        "main.ngc",
+        "o<pocket> call [10] [0] [2] [100]\nM2\n",
+    );
+    let (exit, _, stderr) = run(
+        d.path(),
+        &[
+            "check",
+            "-I",
+            "lib",
+            "--message-format",
+            "short",
+            "main.ngc",
+        ],
+    );
+    assert_eq!(exit, 1, "{stderr}");
+    assert!(
+        stderr.contains("lib/pocket.ngc:4:") && stderr.contains("[E0101]"),
+        "{stderr}"
+    );
+}
+
+/// What a library gets wrong whatever its caller: lines that do not parse,
+/// blocks that do not close, labels that do not match, constant errors.
+#[test]
+fn library_structure_errors() {
+    let cases: &[(&str, &str, u32)] = &[
+        ("o<s> sub\n  o1 if [#1]\n  G0 X1\no<s> endsub\n", "E0804", 2),
+        (
+            "o<s> sub\n  o1 if [#1]\n  o1 endwhile\no<s> endsub\n",
+            "E0308",
+            3,
+        ),
+        ("o<s> sub\n  o2 endif\no<s> endsub\n", "E0307", 2),
+        (
+            "o<s> sub\n  o3 while [#1]\n  o4 break\n  o3 endwhile\no<s> endsub\n",
+            "E0307",
+            3,
+        ),
+        ("o<s> sub\n  G0 X1 Y\no<s> endsub\n", "E0005", 2),
+        ("o<s> sub\n  G0 X[2*ACOS[3]]\no<s> endsub\n", "E0103", 2),
+        ("o<s> sub\n  G0 X#1\n", "E0326", 1),
+        (
+            "o<s> sub\n  o<t> sub\n  o<t> endsub\no<s> endsub\n",
+            "E0309",
+            2,
+        ),
+        (
+            "o<s> sub\n  o5 if [1] junk\n  o5 endif\no<s> endsub\n",
+            "E0302",
+            2,
+        ),
+    ];
+    let d = tmp();
+    for (program, code, line) in cases {
+        put(d.path(), "s.ngc", program);
+        let (exit, _, stderr) = run(d.path(), &["check", "--message-format", "short", "s.ngc"]);
+        assert_eq!(exit, 1, "{program:?}\n{stderr}");
+        assert!(
+            stderr.contains(&format!("s.ngc:{line}:")) && stderr.contains(&format!("[{code}]")),
+            "{program:?}: want {code} at line {line}\n{stderr}"
+        );
+    }
+}
+
+#[test]
+fn nothing_to_check_is_exit_2() {
+    let d = tmp();
+    std::fs::create_dir(d.path().join("empty")).unwrap();
+    put(d.path(), "progs/a.ngc", "G0 X1\nM2\n");
+    for args in [
+        &["check", "empty"][..],
+        &["check", "--ext", "gcode", "progs"][..],
+        &["check", "emptyy"][..],
+    ] {
+        let (exit, _, stderr) = run(d.path(), args);
+        assert_eq!(exit, 2, "{args:?}\n{stderr}");
+        assert!(
+            stderr.contains("E0802") || stderr.contains("E0501"),
+            "{args:?}\n{stderr}"
+        );
+    }
+    let (_, _, stderr) = run(d.path(), &["check", "empty"]);
+    assert!(stderr.contains("no programs found in empty"), "{stderr}");
+}
+
+#[test]
+fn unreadable_paths_are_exit_2() {
+    let d = tmp();
+    put(d.path(), "tree/good.ngc", "G0 X1\nM2\n");
+    std::os::unix::fs::symlink("gone.ngc", d.path().join("tree/dangling.ngc")).unwrap();
+    let (exit, _, stderr) = run(d.path(), &["check", "tree"]);
+    assert_eq!(exit, 2, "{stderr}");
+    assert!(stderr.contains("dangling.ngc"), "{stderr}");
+    // A file given directly that cannot be read: as when flattening it.
+    let fifo = d.path().join("pipe.ngc");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    if made.is_ok_and(|s| s.success()) {
+        let (exit, _, stderr) = run(d.path(), &["check", "pipe.ngc"]);
+        assert_eq!(exit, 2, "{stderr}");
+    }
+    put(d.path(), "secret.ngc", "G0 X1\nM2\n");
+    let secret = d.path().join("secret.ngc");
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&secret, std::fs::Permissions::from_mode(0o000)).unwrap();
+    if std::fs::read(&secret).is_err() {
+        // (root reads it anyway)
+        let (exit, _, stderr) = run(d.path(), &["check", "secret.ngc"]);
+        assert_eq!(exit, 2, "{stderr}");
+        let (exit, _, stderr) = run(d.path(), &["secret.ngc"]);
+        assert_eq!(exit, 2, "{stderr}");
+    }
+}
+
+/// `--message-format json`: every line of stderr is one JSON object
+/// (checked with serde_json), diagnostics then one summary; nothing else.
+#[test]
+fn json_lines_parse_and_end_with_a_summary() {
+    let d = tmp();
+    put(d.path(), "progs/good.ngc", "G0 X1\nM2\n");
+    put(d.path(), "progs/bad.ngc", "G0 X[1/0]\nM2\n");
+    put(d.path(), "progs/warn.ngc", "G0 X#31\nM2\n");
+    std::os::unix::fs::symlink("gone.ngc", d.path().join("progs/dangling.ngc")).unwrap();
+    let runs: &[(&[&str], i32)] = &[
+        (
+            &["check", "--message-format", "json", "progs", "missing.ngc"],
+            2,
+        ),
+        (&["check", "--message-format", "json", "progs/good.ngc"], 0),
+        (&["--message-format", "json", "progs/bad.ngc"], 1),
+        (&["--message-format", "json", "progs/warn.ngc"], 0),
+        (&["--message-format", "json", "missing.ngc"], 2),
+    ];
+    for (args, want) in runs {
+        let (exit, _, stderr) = run(d.path(), args);
+        assert_eq!(exit, *want, "{args:?}\n{stderr}");
+        let values: Vec<serde_json::Value> = stderr
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l:?}")))
+            .collect();
+        let (last, diags) = values.split_last().expect("a summary");
+        assert_eq!(last["type"], "summary", "{stderr}");
+        assert_eq!(last["exit_code"], *want, "{stderr}");
+        let errors = diags.iter().filter(|v| v["severity"] == "error").count();
+        assert_eq!(last["errors"], errors, "{stderr}");
+        for v in diags {
+            assert_eq!(v["type"], "diagnostic", "{v}");
+            assert!(v["code"].is_string() && v["message"].is_string(), "{v}");
+            assert!(v["notes"].is_array(), "{v}");
+            if v["code"] == "E0501" {
+                // I/O errors name their file.
+                assert!(v["file"].is_string(), "{v}");
+            }
+        }
+    }
+    let (_, _, stderr) = run(
+        d.path(),
+        &["check", "--message-format", "json", "progs", "missing.ngc"],
+    );
+    let files: Vec<String> = stderr
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .filter_map(|v| v["file"].as_str().map(str::to_string))
+        .collect();
+    assert!(
+        files.iter().any(|f| f.ends_with("dangling.ngc")),
+        "{stderr}"
+    );
+    assert!(files.iter().any(|f| f == "missing.ngc"), "{stderr}");
+    assert!(files.iter().any(|f| f == "progs/bad.ngc"), "{stderr}");
+    // A diagnostic with a place has its line, column, end and byte span.
+    let (_, _, stderr) = run(d.path(), &["--message-format", "json", "progs/bad.ngc"]);
+    let v: serde_json::Value = serde_json::from_str(stderr.lines().next().unwrap()).unwrap();
+    assert_eq!(v["line"], 1);
+    assert_eq!(v["span"]["start"], 4);
+    assert_eq!(v["end"]["line"], 1);
 }

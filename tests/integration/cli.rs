@@ -318,3 +318,66 @@ fn grbl_output_holds_no_real_time_byte() {
     assert_eq!(out.status.code(), Some(0));
     assert_eq!(String::from_utf8_lossy(&out.stdout), "G21\nG0 X1\nM2\n");
 }
+
+/// A binary file is refused as not text, and none of its bytes reach the
+/// terminal or log.
+#[test]
+fn binary_file_is_not_a_program() {
+    let d = tmp();
+    let mut data = b"\x7fELF\x02\x01\x01\x00\x00\x00\x1b[31m".to_vec();
+    data.extend(std::iter::repeat_n(0u8, 64));
+    data.extend(b"G0 X1\nM2\n");
+    std::fs::write(d.path().join("a.out"), &data).unwrap();
+    std::fs::write(d.path().join("b.ngc"), &data).unwrap();
+    for args in [&["a.out"][..], &["check", "b.ngc"][..]] {
+        let args: Vec<String> = args.iter().map(|s| s.to_string()).collect();
+        let out = ngcflat(d.path(), &args, None);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(out.stdout.is_empty());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("E0803") && err.contains("not a text"), "{err}");
+        assert!(
+            !out.stderr.iter().any(|&b| b == 0 || b == 0x1b || b == 0x7f),
+            "{err:?}"
+        );
+    }
+    // Through stdin too.
+    let out = ngcflat(d.path(), &[], Some(&data));
+    assert_eq!(out.status.code(), Some(2));
+}
+
+/// Colours only on a terminal, and not with NO_COLOR or TERM=dumb (run
+/// through a pseudo-terminal with `script`).
+#[test]
+fn no_color_and_dumb_terminal() {
+    let d = tmp();
+    std::fs::write(d.path().join("bad.ngc"), "G0 X[1/0]\nM2\n").unwrap();
+    let probe = Command::new("script").arg("--version").output();
+    if !probe.is_ok_and(|o| o.status.success()) {
+        eprintln!("SKIPPED: no `script` command for a pseudo-terminal");
+        return;
+    }
+    let on_tty = |env: &[(&str, &str)]| {
+        let mut cmd = Command::new("script");
+        cmd.current_dir(d.path())
+            .args(["-qec"])
+            .arg(format!("{} bad.ngc", bin().display()))
+            .arg("/dev/null")
+            .env_remove("NO_COLOR")
+            .env("TERM", "xterm")
+            .stdin(Stdio::null());
+        for (k, v) in env {
+            cmd.env(k, v);
+        }
+        let out = cmd.output().expect("script");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let plain = on_tty(&[]);
+    assert!(plain.contains("E0101"), "{plain}");
+    assert!(plain.contains('\x1b'), "colours on a terminal: {plain:?}");
+    for env in [&[("NO_COLOR", "1")][..], &[("TERM", "dumb")][..]] {
+        let out = on_tty(env);
+        assert!(out.contains("E0101"), "{env:?}: {out}");
+        assert!(!out.contains('\x1b'), "{env:?}: {out:?}");
+    }
+}

@@ -840,7 +840,10 @@ fn setup_errors_follow_message_format() {
     // (format, expected start of stderr)
     let cases: &[(&str, &str)] = &[
         ("human", "error[E0505]: -D 'bad' is not PARAM=VALUE"),
-        ("json", "{\"file\":null,"),
+        (
+            "json",
+            "{\"type\":\"diagnostic\",\"severity\":\"error\",\"code\":\"E0505\"",
+        ),
         ("short", "ngcflat: error: -D 'bad' is not PARAM=VALUE"),
         ("github", "::error title=E0505::"),
     ];
