@@ -50,6 +50,32 @@ pub enum Command {
     Plot(PlotArgs),
     /// List the target controllers with their limits.
     Targets,
+    /// Print a shell completion script to stdout, e.g.
+    /// `ngcflat completions bash > ~/.local/share/bash-completion/completions/ngcflat`.
+    Completions {
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff) to stdout, e.g.
+    /// `ngcflat man > ~/.local/share/man/man1/ngcflat.1`.
+    Man,
+}
+
+/// Writes the completion script or manual page a command asks for; false
+/// for the commands that do the real work.
+pub fn write_generated(cmd: &Command, out: &mut dyn std::io::Write) -> std::io::Result<bool> {
+    use clap::CommandFactory;
+    match cmd {
+        Command::Completions { shell } => {
+            clap_complete::generate(*shell, &mut Cli::command(), "ngcflat", out);
+            Ok(true)
+        }
+        Command::Man => {
+            clap_mangen::Man::new(Cli::command()).render(out)?;
+            Ok(true)
+        }
+        Command::Check(_) | Command::Stats(_) | Command::Plot(_) | Command::Targets => Ok(false),
+    }
 }
 
 #[derive(Args, Debug)]

@@ -290,7 +290,7 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
         Some(config::Command::Stats(args)) => &args.common,
         Some(config::Command::Plot(args)) => &args.common,
         Some(config::Command::Targets) => return Ok(print_targets()),
-        None => &cli.flatten.common,
+        _ => &cli.flatten.common,
     };
     parse::named2007::enable(common.named_params_2007);
     let list = |name: Option<String>| name.is_some_and(|n| n.eq_ignore_ascii_case("list"));
@@ -304,6 +304,17 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
     }
     match cli.command {
         Some(config::Command::Targets) => Ok(print_targets()),
+        Some(cmd @ (config::Command::Completions { .. } | config::Command::Man)) => {
+            let mut out = std::io::stdout().lock();
+            match config::write_generated(&cmd, &mut out) {
+                Ok(_) => Ok(ExitCode::SUCCESS),
+                Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(ExitCode::SUCCESS),
+                Err(e) => {
+                    write_stderr(&format!("ngcflat: writing to stdout: {e}\n"));
+                    Ok(ExitCode::from(2))
+                }
+            }
+        }
         Some(config::Command::Check(args)) => {
             let cfg = match args.common.to_config(env_path) {
                 Ok(c) => c,

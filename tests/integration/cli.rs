@@ -381,3 +381,35 @@ fn no_color_and_dumb_terminal() {
         assert!(!out.contains('\x1b'), "{env:?}: {out:?}");
     }
 }
+
+/// Shell completions and the manual page come from the option definitions.
+#[test]
+fn completions_and_man_page() {
+    let d = tmp();
+    let cases: &[(&[&str], &str)] = &[
+        (&["completions", "bash"], "_ngcflat()"),
+        (&["completions", "zsh"], "#compdef ngcflat"),
+        (&["completions", "fish"], "complete -c ngcflat"),
+        (&["man"], ".TH ngcflat"),
+    ];
+    for (args, marker) in cases {
+        let (code, out, err) = crate::run(d.path(), args);
+        assert_eq!(code, 0, "{args:?}: {err}");
+        assert!(out.contains(marker), "{args:?}: {out}");
+        // Every option is there (roff escapes the hyphens).
+        let out = out.replace("\\-", "-");
+        assert!(out.contains("start-position"), "{args:?}");
+        assert!(out.contains("message-format"), "{args:?}");
+    }
+    // The bash script is valid shell.
+    let (_, script, _) = crate::run(d.path(), &["completions", "bash"]);
+    std::fs::write(d.path().join("c.bash"), &script).unwrap();
+    let ok = Command::new("bash")
+        .args(["-n", "c.bash"])
+        .current_dir(d.path())
+        .status()
+        .expect("bash");
+    assert!(ok.success());
+    let (code, _, err) = crate::run(d.path(), &["completions", "cmd.exe"]);
+    assert_eq!(code, 2, "{err}");
+}
