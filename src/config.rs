@@ -268,6 +268,12 @@ pub struct CommonArgs {
     /// like axis words.
     #[arg(long, value_name = "X0,Y0,Z10", value_delimiter = ',')]
     pub start_position: Vec<String>,
+    /// User M-codes the machine has (M100-M199, external programs on
+    /// LinuxCNC), written to the output as they are: `--user-m 100,101-105`.
+    /// With --ini, the executable files M100..M199 in the INI's
+    /// [DISPLAY]PROGRAM_PREFIX and [RS274NGC]USER_M_PATH folders count too.
+    #[arg(long, value_name = "M", value_delimiter = ',')]
+    pub user_m: Vec<String>,
     /// Do not search the program's own folder for subroutine files.
     #[arg(long)]
     pub no_program_dir: bool,
@@ -463,6 +469,64 @@ impl Cli {
     pub fn from_env() -> Cli {
         Cli::parse_from(normalize_args(std::env::args_os()))
     }
+}
+
+/// Parses a `--user-m` value: `100`, `M100` or a range `101-105`, within
+/// M100-M199. Returns the bits (bit n: M(100+n)).
+pub fn parse_user_m(text: &str) -> Result<u128, ErrorKind> {
+    let bad = || ErrorKind::BadUserM {
+        text: text.to_string(),
+    };
+    let num = |s: &str| -> Result<u32, ErrorKind> {
+        let s = s.trim();
+        let s = s.strip_prefix(['M', 'm']).unwrap_or(s);
+        s.parse::<u32>()
+            .ok()
+            .filter(|n| (100..=199).contains(n))
+            .ok_or_else(bad)
+    };
+    let (a, b) = match text.split_once('-') {
+        Some((a, b)) => (num(a)?, num(b)?),
+        None => {
+            let n = num(text)?;
+            (n, n)
+        }
+    };
+    if a > b {
+        return Err(bad());
+    }
+    Ok((a..=b).fold(0u128, |bits, n| bits | 1u128 << (n - 100)))
+}
+
+/// The user M-codes LinuxCNC finds: an executable file `M1nn` (capital M)
+/// in the first folder that has one, of PROGRAM_PREFIX (default `nc_files`)
+/// then the USER_M_PATH folders (at most ten folders in all).
+fn user_m_files(ini: &Ini, base: &Path) -> u128 {
+    use std::os::unix::fs::PermissionsExt;
+    let mut dirs = vec![resolve_in(
+        base,
+        ini.get("DISPLAY", "PROGRAM_PREFIX").unwrap_or("nc_files"),
+    )];
+    if let Some(p) = ini.get("RS274NGC", "USER_M_PATH") {
+        dirs.extend(
+            p.split(':')
+                .map(str::trim)
+                .filter(|s| !s.is_empty())
+                .map(|s| resolve_in(base, s)),
+        );
+    }
+    dirs.truncate(10);
+    let mut bits = 0u128;
+    for n in 0..100u32 {
+        let name = format!("M{}", 100 + n);
+        if dirs.iter().any(|d| {
+            std::fs::metadata(d.join(&name))
+                .is_ok_and(|m| m.is_file() && m.permissions().mode() & 0o100 != 0)
+        }) {
+            bits |= 1u128 << n;
+        }
+    }
+    bits
 }
 
 /// Reads a LinuxCNC .var file: `number value` lines in ascending order.
@@ -681,6 +745,7 @@ impl CommonArgs {
                     .any(|ch| matches!(ch.to_ascii_uppercase(), 'U' | 'V' | 'W'))
             });
             machine.add_ini(&ini, settings.machine_metric)?;
+            settings.user_m |= user_m_files(&ini, &base);
             settings.ini = Some(ini);
         }
         settings.oword_warn_only |= self.oword_warn_only;
@@ -701,6 +766,9 @@ impl CommonArgs {
         }
         for d in &self.define {
             settings.defines.push(parse_define(d)?);
+        }
+        for m in &self.user_m {
+            settings.user_m |= parse_user_m(m)?;
         }
         for word in self
             .start_position

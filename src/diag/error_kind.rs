@@ -269,6 +269,10 @@ pub enum ErrorKind {
     NoPrograms { paths: Vec<PathBuf>, exts: String },
     /// A file with NUL bytes (an image, an archive, a compiled program).
     NotText { path: PathBuf },
+    /// A `--user-m` value that is not M100-M199 or a range of them.
+    BadUserM { text: String },
+    /// `M100`-`M199` that neither --user-m nor the INI's folders declare.
+    UndeclaredUserM { m: i64 },
     /// A block of a library definition that is not closed before its
     /// `endsub`: `o1 if [#1 GT 0]` ... `o<s> endsub`.
     UnclosedBlock {
@@ -381,6 +385,8 @@ impl ErrorKind {
             NoPrograms { .. } => "E0802",
             NotText { .. } => "E0803",
             UnclosedBlock { .. } => "E0804",
+            UndeclaredUserM { .. } => "E0805",
+            BadUserM { .. } => "E0806",
         }
     }
 }
@@ -689,6 +695,14 @@ impl fmt::Display for ErrorKind {
                 f,
                 "{}: not a text G-code program (it contains NUL bytes: a binary file?)",
                 path.display()
+            ),
+            BadUserM { text } => write!(
+                f,
+                "--user-m '{text}' is not a user M-code M100-M199 or a range of them (e.g. 100,101-105)"
+            ),
+            UndeclaredUserM { m } => write!(
+                f,
+                "M{m} is a user M-code (an external program on the LinuxCNC machine) that is not declared: give --user-m {m}, or --ini with an [RS274NGC]USER_M_PATH or [DISPLAY]PROGRAM_PREFIX folder holding an executable file M{m}"
             ),
             UnclosedBlock {
                 label,

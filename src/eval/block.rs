@@ -133,7 +133,13 @@ impl Interp<'_> {
         }
         // The reference checks the block before acting on it.
         if !words.is_empty() {
-            match super::validate::check_block(words, &self.modal, &self.nurbs, &self.cycle) {
+            match super::validate::check_block(
+                words,
+                &self.modal,
+                &self.nurbs,
+                &self.cycle,
+                self.s.user_m,
+            ) {
                 Err((k, at)) => {
                     let span = at
                         .and_then(|i| word_spans.get(i).copied())
@@ -368,7 +374,13 @@ impl Interp<'_> {
             // Checked and applied: a plain move.
             return self.write_line(file, start, raw, repl);
         }
-        match super::validate::check_block(words, &self.modal, &self.nurbs, &self.cycle) {
+        match super::validate::check_block(
+            words,
+            &self.modal,
+            &self.nurbs,
+            &self.cycle,
+            self.s.user_m,
+        ) {
             Err((k, at)) => {
                 let span = match at.and_then(|i| items.get(i)) {
                     Some(Item::Word(w)) => w.span,
@@ -493,7 +505,13 @@ impl Interp<'_> {
             words.push((w.letter, w.value));
         }
         let r = (|| {
-            match super::validate::check_block(&words, &self.modal, &self.nurbs, &self.cycle) {
+            match super::validate::check_block(
+                &words,
+                &self.modal,
+                &self.nurbs,
+                &self.cycle,
+                self.s.user_m,
+            ) {
                 Err((k, at)) => {
                     let span = at
                         .and_then(|i| fw.get(i))

@@ -519,9 +519,13 @@ impl Interp<'_> {
                 words.push((b'k', c.re - cz));
             }
         }
-        if let Err((k, _)) =
-            super::validate::check_block(&words, &self.modal, &self.nurbs, &self.cycle)
-        {
+        if let Err((k, _)) = super::validate::check_block(
+            &words,
+            &self.modal,
+            &self.nurbs,
+            &self.cycle,
+            self.s.user_m,
+        ) {
             return Err(self.error(k, file, start, start + len));
         }
         let mut text = String::with_capacity(64);

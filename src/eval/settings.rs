@@ -76,6 +76,10 @@ pub struct Settings {
     /// Output bytes allowed beyond the program's own size
     /// (`--max-output-bytes`).
     pub max_output_bytes: u64,
+    /// User M-codes M100-M199 the machine has (bit n: M(100+n)), declared
+    /// with --user-m or found as executable files M1nn in the INI's
+    /// PROGRAM_PREFIX and USER_M_PATH folders; they are written as they are.
+    pub user_m: u128,
 }
 
 impl Default for Settings {
@@ -106,6 +110,7 @@ impl Default for Settings {
             tool_table: Vec::new(),
             input: crate::program::InputLimits::default(),
             max_output_bytes: 4 << 30,
+            user_m: 0,
         }
     }
 }

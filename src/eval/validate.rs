@@ -80,12 +80,17 @@ pub fn check_block(
     modal: &Modal,
     points: &Nurbs,
     cycle: &Cycle,
+    user_m: u128,
 ) -> Result<bool, (ErrorKind, Option<usize>)> {
     if simple_block_ok(words, modal) {
         return Ok(false);
     }
-    full_check(words, modal, points, cycle)
+    full_check(words, modal, points, cycle, user_m)
 }
+
+/// Modal group of the user M-codes M100-M199 (one group: two on a line are
+/// refused, as by the reference).
+const USER_M_GROUP: u8 = 11;
 
 const fn bit(c: u8) -> u32 {
     1 << (c - b'a')
@@ -220,6 +225,11 @@ impl<'a> Decoded<'a> {
         self.ms.iter().any(|(m, _)| codes.contains(m))
     }
 
+    /// A user M-code (M100-M199) is on the line: it takes P and Q.
+    fn user_m(&self) -> bool {
+        self.ms.iter().any(|(m, _)| (100..=199).contains(m))
+    }
+
     fn value(&self, c: u8) -> Option<f64> {
         self.has_at(c).map(|i| self.words[i].1)
     }
@@ -236,6 +246,7 @@ fn full_check(
     modal: &Modal,
     points: &Nurbs,
     cycle: &Cycle,
+    user_m: u128,
 ) -> Result<bool, (ErrorKind, Option<usize>)> {
     let mut gseen: [Option<usize>; 16] = [None; 16];
     let mut mseen: [Option<usize>; 16] = [None; 16];
@@ -297,8 +308,13 @@ fn full_check(
                 if m > 199 {
                     return bad(BlockError::MCodeOver199 { m }, Some(i));
                 }
-                let Some(grp) = m_group(m) else {
-                    return bad(BlockError::UnknownMCode { m }, Some(i));
+                let grp = match m_group(m) {
+                    Some(g) => g,
+                    None if m >= 100 && user_m & (1u128 << (m - 100)) != 0 => USER_M_GROUP,
+                    None if m >= 100 => {
+                        return Err((ErrorKind::UndeclaredUserM { m }, Some(i)));
+                    }
+                    None => return bad(BlockError::UnknownMCode { m }, Some(i)),
                 };
                 if mseen[grp as usize].is_some() {
                     return bad(BlockError::SameGroupM, Some(i));
@@ -685,7 +701,8 @@ fn check_unused_words(d: &Decoded<'_>) -> Check {
         b'p',
         d.g_on(&[20, 30, 40, 100, 640, 50, 52, 760, 820, 860, 880, 890])
             || matches!(d.motion, 20 | 30 | 52 | 820 | 860 | 880 | 890 | 700)
-            || d.m_on(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98]),
+            || d.m_on(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98])
+            || d.user_m(),
         BlockError::WordUnused { letter: 'p' },
     )?;
     uses(
@@ -693,7 +710,8 @@ fn check_unused_words(d: &Decoded<'_>) -> Check {
         d.g_on(&[50, 100, 640, 730, 760, 830])
             || matches!(d.motion, 730 | 830)
             || lathe
-            || d.m_on(&[19, 66, 67, 68, 61]),
+            || d.m_on(&[19, 66, 67, 68, 61])
+            || d.user_m(),
         BlockError::WordUnused { letter: 'q' },
     )?;
     uses(

@@ -413,3 +413,60 @@ fn completions_and_man_page() {
     let (code, _, err) = crate::run(d.path(), &["completions", "cmd.exe"]);
     assert_eq!(code, 2, "{err}");
 }
+
+/// User M-codes M100-M199: refused with the way to declare them; declared
+/// with --user-m or found as LinuxCNC finds them (an executable file M1nn
+/// in the INI's PROGRAM_PREFIX or USER_M_PATH folders), written as they are
+/// with P and Q evaluated.
+#[test]
+fn user_m_codes() {
+    use std::os::unix::fs::PermissionsExt;
+    let d = tmp();
+    let p = d.path();
+    std::fs::write(p.join("p.ngc"), "#1=0.5\nM101 P[#1*2] Q#1\nG0 X1\nM2\n").unwrap();
+    let exe = |rel: &str, mode: u32| {
+        let f = p.join(rel);
+        std::fs::create_dir_all(f.parent().unwrap()).unwrap();
+        std::fs::write(&f, "#!/bin/sh\n").unwrap();
+        std::fs::set_permissions(&f, std::fs::Permissions::from_mode(mode)).unwrap();
+    };
+    // Undeclared: the error names both ways to declare it.
+    let (code, out, err) = crate::run(p, &["p.ngc"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(out.is_empty());
+    assert!(
+        err.contains("E0805") && err.contains("--user-m 101") && err.contains("USER_M_PATH"),
+        "{err}"
+    );
+    for args in [
+        &["--user-m", "101", "p.ngc"][..],
+        &["--user-m", "M100-M105,150", "p.ngc"][..],
+    ] {
+        let (code, out, err) = crate::run(p, args);
+        assert_eq!(code, 0, "{args:?}: {err}");
+        assert_eq!(out, "M101 P1 Q0.5\nG0 X1\nM2\n", "{args:?}");
+    }
+    let (code, _, err) = crate::run(p, &["--user-m", "99", "p.ngc"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("E0806"), "{err}");
+    // Found through the INI: USER_M_PATH relative to the INI's folder.
+    std::fs::create_dir_all(p.join("cfg")).unwrap();
+    std::fs::write(
+        p.join("cfg/m.ini"),
+        "[RS274NGC]\nUSER_M_PATH = mcodes:other\n",
+    )
+    .unwrap();
+    let ini_run = || crate::run(p, &["--ini", "cfg/m.ini", "p.ngc"]);
+    // Not executable, or not a capital M: not a user M-code.
+    exe("cfg/mcodes/M101", 0o644);
+    exe("cfg/mcodes/m101", 0o755);
+    assert_eq!(ini_run().0, 1);
+    exe("cfg/other/M101", 0o755);
+    let (code, out, err) = ini_run();
+    assert_eq!(code, 0, "{err}");
+    assert!(out.starts_with("M101 P1 Q0.5\n"), "{out}");
+    // Two user M-codes on a line are one modal group, as in LinuxCNC.
+    std::fs::write(p.join("two.ngc"), "M101 M102\nM2\n").unwrap();
+    let (code, _, err) = crate::run(p, &["--user-m", "101,102", "two.ngc"]);
+    assert_eq!(code, 1, "{err}");
+}
