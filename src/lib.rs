@@ -208,6 +208,20 @@ pub fn report_summary(
     ));
 }
 
+/// Progress is shown only when stderr is a terminal that is not `dumb`
+/// (never in pipes, files or CI logs), after one second of work.
+fn progress_delay() -> Option<std::time::Duration> {
+    let term_ok = std::env::var_os("TERM").is_none_or(|t| t != "dumb");
+    if !(std::io::stderr().is_terminal() && term_ok) {
+        return None;
+    }
+    let ms = std::env::var("NGCFLAT_TEST_PROGRESS_MS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1000);
+    Some(std::time::Duration::from_millis(ms))
+}
+
 /// Refuses a file that is not text (a NUL byte in its first 8 kB: an
 /// image, an archive, a compiled program), so that its bytes never reach a
 /// terminal or log in diagnostics.
@@ -353,7 +367,7 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
         }
         None => {
             let args = cli.flatten;
-            let cfg = match args.common.to_config(env_path) {
+            let mut cfg = match args.common.to_config(env_path) {
                 Ok(c) => c,
                 Err(k) => return Ok(setup_error(k, args.common.format(), false)),
             };
@@ -369,6 +383,7 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
                 Ok(s) => s,
                 Err(e) => return Ok(finish_flatten(&with_config(vec![*e]), 2, cfg.format)),
             };
+            cfg.settings.progress = progress_delay();
             let dest = match args.output {
                 Some(p) => {
                     if same_file(&p, args.file.as_deref()) {

@@ -17,6 +17,7 @@ mod modal;
 mod named;
 mod nurbs;
 pub mod params;
+mod progress;
 mod restore;
 mod scan_ahead;
 mod settings;
@@ -168,6 +169,10 @@ pub struct Interp<'s> {
     /// line count, so that the guard counts generated lines, not lines
     /// copied from the input.
     line_budget: u64,
+    /// Output line count at which `count_line` looks further: the output
+    /// limit, or earlier, the next progress update.
+    line_check: u64,
+    progress: Option<progress::Progress>,
     steps: u64,
     pub warnings: Vec<Diagnostic>,
     subs: FxMap<Name, SubRec>,
@@ -353,6 +358,12 @@ impl<'s> Interp<'s> {
             output: Output::new(sink, s.precision, s.format_thread_after),
             out_lines: 0,
             line_budget,
+            line_check: if s.progress.is_some() {
+                line_budget.min(progress::EVERY)
+            } else {
+                line_budget
+            },
+            progress: s.progress.map(progress::Progress::new),
             steps: 0,
             warnings: Vec::new(),
             subs: FxMap::default(),
@@ -475,6 +486,9 @@ impl<'s> Interp<'s> {
     /// any. The output is released only without an error.
     pub fn run_all(mut self) -> (Vec<Diagnostic>, Option<Error>) {
         let r = self.run_steps();
+        if let Some(p) = &self.progress {
+            p.clear();
+        }
         if r.is_ok() {
             self.finish_warnings();
         }
@@ -852,8 +866,22 @@ impl<'s> Interp<'s> {
     #[inline]
     fn count_line(&mut self) -> Result<(), Error> {
         self.out_lines += 1;
+        if self.out_lines > self.line_check {
+            return self.line_checkpoint();
+        }
+        Ok(())
+    }
+
+    /// The output limit, or a progress update, is due.
+    #[cold]
+    fn line_checkpoint(&mut self) -> Result<(), Error> {
         if self.out_lines > self.line_budget {
             return Err(self.output_limit());
+        }
+        if let Some(p) = &mut self.progress {
+            let name = self.cur.file.file.display_name();
+            p.tick(self.out_lines, self.current_line_idx + 1, &name);
+            self.line_check = self.line_budget.min(self.out_lines + progress::EVERY);
         }
         Ok(())
     }

@@ -80,6 +80,8 @@ pub struct Settings {
     /// with --user-m or found as executable files M1nn in the INI's
     /// PROGRAM_PREFIX and USER_M_PATH folders; they are written as they are.
     pub user_m: u128,
+    /// Show progress on stderr (a terminal) after this delay.
+    pub progress: Option<std::time::Duration>,
 }
 
 impl Default for Settings {
@@ -111,6 +113,7 @@ impl Default for Settings {
             input: crate::program::InputLimits::default(),
             max_output_bytes: 4 << 30,
             user_m: 0,
+            progress: None,
         }
     }
 }

@@ -348,6 +348,9 @@ impl Interp<'_> {
         }
         self.flush_input(file, base, &buf[run.batch_start..run.i], run.batch_start)?;
         self.out_lines += run.emitted;
+        if self.out_lines > self.line_check {
+            self.line_checkpoint()?;
+        }
         let lines = run.lines;
         if lines > 0 {
             self.current_line_start = base + run.last_start as u32;

@@ -470,3 +470,53 @@ fn user_m_codes() {
     let (code, _, err) = crate::run(p, &["--user-m", "101,102", "two.ngc"]);
     assert_eq!(code, 1, "{err}");
 }
+
+/// Progress on a terminal for long runs, cleared at the end; never when
+/// stderr is not a terminal or is a dumb one.
+#[test]
+fn progress_only_on_a_terminal() {
+    let d = tmp();
+    let prog = "#1=0\no1 while [#1 LT 20000]\nG1 X#1 F100\n#1=[#1+1]\no1 endwhile\nM2\n";
+    std::fs::write(d.path().join("long.ngc"), prog).unwrap();
+    // Piped stderr: nothing but the output, even with no delay.
+    let mut cmd = Command::new(bin());
+    cmd.current_dir(d.path())
+        .arg("long.ngc")
+        .env("NGCFLAT_TEST_PROGRESS_MS", "0")
+        .env("TERM", "xterm");
+    let out = cmd.output().expect("run");
+    assert_eq!(out.status.code(), Some(0));
+    assert!(
+        out.stderr.is_empty(),
+        "{:?}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    if !Command::new("script")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success())
+    {
+        eprintln!("SKIPPED: no `script` command for a pseudo-terminal");
+        return;
+    }
+    let on_tty = |term: &str| {
+        let out = Command::new("script")
+            .current_dir(d.path())
+            .args(["-qec"])
+            .arg(format!("{} long.ngc > out.nc", bin().display()))
+            .arg("/dev/null")
+            .env("NGCFLAT_TEST_PROGRESS_MS", "0")
+            .env("TERM", term)
+            .stdin(Stdio::null())
+            .output()
+            .expect("script");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let shown = on_tty("xterm");
+    assert!(shown.contains("lines written, at line"), "{shown:?}");
+    assert!(shown.ends_with("\r\x1b[K"), "cleared at the end: {shown:?}");
+    let out = std::fs::read_to_string(d.path().join("out.nc")).unwrap();
+    assert_eq!(out.lines().count(), 20001, "the output is unchanged");
+    let dumb = on_tty("dumb");
+    assert!(!dumb.contains("lines written"), "{dumb:?}");
+}
