@@ -36,6 +36,8 @@ pub struct Cli {
     pub flatten: FlattenArgs,
 }
 
+// Parsed once per run: the size of the largest variant does not matter.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Check programs without writing output: every file is fully evaluated
