@@ -222,11 +222,12 @@ fn progress_delay() -> Option<std::time::Duration> {
     Some(std::time::Duration::from_millis(ms))
 }
 
-/// Refuses a file that is not text (a NUL byte in its first 8 kB: an
-/// image, an archive, a compiled program), so that its bytes never reach a
-/// terminal or log in diagnostics.
+/// Refuses a file that is not text (four or more NUL bytes in its first
+/// 8 kB: an image, an archive, a compiled program), so that its bytes never
+/// reach a terminal or log in diagnostics. A stray NUL in a comment of a
+/// text program does not count; such bytes are shown escaped.
 pub fn refuse_binary(source: &SourceFile) -> Result<(), Error> {
-    if source.head(8192).contains(&0) {
+    if source.head(8192).iter().filter(|&&b| b == 0).count() >= 4 {
         return Err(Diagnostic::error(
             ErrorKind::NotText {
                 path: source.path.clone(),

@@ -97,8 +97,8 @@ struct JsonSpan {
 
 /// A caller in the JSON format.
 #[derive(serde::Serialize)]
-struct JsonFrame<'a> {
-    file: &'a str,
+struct JsonFrame {
+    file: String,
     line: u32,
     column: u32,
 }
@@ -106,7 +106,7 @@ struct JsonFrame<'a> {
 /// One diagnostic in the JSON format (README: "Machine-readable
 /// diagnostics").
 #[derive(serde::Serialize)]
-struct JsonDiagnostic<'a> {
+struct JsonDiagnostic {
     #[serde(rename = "type")]
     kind: &'static str,
     severity: &'static str,
@@ -118,7 +118,7 @@ struct JsonDiagnostic<'a> {
     end: Option<JsonPos>,
     span: Option<JsonSpan>,
     notes: Vec<String>,
-    call_stack: Vec<JsonFrame<'a>>,
+    call_stack: Vec<JsonFrame>,
 }
 
 /// The summary object that ends the JSON output.
@@ -144,8 +144,13 @@ fn json_line(d: &Diagnostic, here: Option<&Located>, stack: &[&Located]) -> Stri
             Level::Warning => "warning",
         },
         code: d.code(),
-        message: d.message(),
-        file: here.map(|l| l.file.clone()).or(io_path),
+        // Control characters escaped as in the other formats, so that a
+        // consumer printing the decoded text cannot act on a terminal.
+        message: shown(&d.message()).into_owned(),
+        file: here
+            .map(|l| l.file.clone())
+            .or(io_path)
+            .map(|f| shown(&f).into_owned()),
         line: here.map(|l| l.line),
         column: here.map(|l| l.col),
         end: here.map(|l| JsonPos {
@@ -158,12 +163,12 @@ fn json_line(d: &Diagnostic, here: Option<&Located>, stack: &[&Located]) -> Stri
         }),
         notes: stack
             .iter()
-            .map(|c| format!("called from {}:{}:{}", c.file, c.line, c.col))
+            .map(|c| format!("called from {}:{}:{}", shown(&c.file), c.line, c.col))
             .collect(),
         call_stack: stack
             .iter()
             .map(|c| JsonFrame {
-                file: &c.file,
+                file: shown(&c.file).into_owned(),
                 line: c.line,
                 column: c.col,
             })
