@@ -2,6 +2,14 @@
 //! the file index (parameter names, labels, line cache). Inputs come from the program being
 //! flattened, not from an adversary who gains anything by collisions; the
 //! step limit bounds any pathological case.
+//!
+//! The `rustc-hash` crate (2.1: the same multiply-rotate step plus a final
+//! rotation that spreads pointer keys better) was measured in its place
+//! with callgrind on release builds and costs slightly more everywhere:
+//! the loop benchmark (100 k moves) 482.18 M -> 482.97 M instructions
+//! (+0.16 %), the recursion benchmark (436 905 calls) 1 796.6 M ->
+//! 1 797.6 M (+0.06 %), a loop over 2 000 interned names 130.89 M ->
+//! 131.01 M (+0.09 %). So this hasher stays.
 
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
