@@ -807,6 +807,12 @@ impl CommonArgs {
             FormatArg::Github => MessageFormat::Github,
         };
         let target = self.target_options()?;
+        if target.is_some() {
+            // A target other than linuxcnc has no user M-codes: they pass the
+            // block checks so that the target refuses them with its reason
+            // (rather than E0805 suggesting --user-m, which cannot help).
+            settings.user_m = (1u128 << 100) - 1;
+        }
         Ok(Config {
             settings,
             search,

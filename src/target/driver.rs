@@ -693,6 +693,16 @@ impl Lowering {
                 extra_lines.push(vec![(b'M', 0.0)]);
                 Fate::Drop
             }
+            MCode::User(_) => {
+                problems.push(Problem {
+                    span: Some(w.span),
+                    kind: self.refuse(
+                        format!("M{n}"),
+                        "user M-codes (M100-M199) run external programs on a LinuxCNC machine; this controller has none",
+                    ),
+                });
+                Fate::Drop
+            }
             MCode::Mist => {
                 problems.push(Problem {
                     span: Some(w.span),

@@ -520,3 +520,33 @@ fn progress_only_on_a_terminal() {
     let dumb = on_tty("dumb");
     assert!(!dumb.contains("lines written"), "{dumb:?}");
 }
+
+/// On a target other than linuxcnc, user M-codes are refused with the
+/// reason, declared or not (no advice to declare them).
+#[test]
+fn user_m_codes_on_other_targets() {
+    let d = tmp();
+    std::fs::write(d.path().join("p.ngc"), "M101 P1\nG0 X1\nM2\n").unwrap();
+    for args in [
+        &["--target", "grbl", "p.ngc"][..],
+        &["--target", "grbl", "--user-m", "101", "p.ngc"][..],
+    ] {
+        let (code, out, err) = crate::run(d.path(), args);
+        assert_eq!(code, 1, "{args:?}: {err}");
+        assert!(out.is_empty());
+        assert!(
+            err.contains("M101 cannot run on grbl") && err.contains("user M-codes"),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("--user-m"), "{args:?}: {err}");
+    }
+    let (code, out, err) = crate::run(
+        d.path(),
+        &["--target", "linuxcnc", "--user-m", "101", "p.ngc"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(out, "M101 P1\nG0 X1\nM2\n");
+    let (code, _, err) = crate::run(d.path(), &["--target", "linuxcnc", "p.ngc"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("E0805"), "{err}");
+}
