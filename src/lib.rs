@@ -254,7 +254,7 @@ fn exit_for(e: &Diagnostic) -> u8 {
 
 /// Whether `-o output` names the input program (the same file by device
 /// and inode, through any links; `None` or `-` is standard input).
-fn same_file(output: &Path, input: Option<&Path>) -> bool {
+pub(crate) fn same_file(output: &Path, input: Option<&Path>) -> bool {
     use std::os::unix::fs::MetadataExt;
     let input = match input {
         Some(p) if p.as_os_str() != "-" => p,

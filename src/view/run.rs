@@ -165,6 +165,18 @@ pub fn plot_command(
     view: View,
     cfg: &crate::config::Config,
 ) -> std::process::ExitCode {
+    if crate::same_file(output, file) {
+        crate::report(
+            &[*crate::diag::Diagnostic::error(
+                ErrorKind::OutputIsInput {
+                    output: output.to_path_buf(),
+                },
+                None,
+            )],
+            cfg.format,
+        );
+        return std::process::ExitCode::from(2);
+    }
     let obs = match run_for_view(file, cfg, Observer::stats(&cfg.machine, Some(view))) {
         Ok(o) => o,
         Err(code) => return code,

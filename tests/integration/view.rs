@@ -652,6 +652,16 @@ fn html_page_is_self_contained() {
         assert!(!html.contains(bad), "{bad} in the page");
     }
     assert_eq!(html.matches("http").count(), 1, "only the SVG namespace");
+    // The picture never replaces the program.
+    let (code, _, err) = crate::run(
+        dir.path(),
+        &["plot", "--zero-start", "-o", "p.ngc", "p.ngc"],
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("E0702"), "{err}");
+    assert!(
+        std::fs::read_to_string(dir.path().join("p.ngc")).is_ok_and(|t| t.starts_with("(a <test>"))
+    );
     // An unwritable output is an I/O error (exit 2) and writes nothing.
     let (code, _, err) = crate::run(
         dir.path(),
