@@ -414,6 +414,47 @@ fn comp_code(e: crate::geom::comp::CompError) -> &'static str {
     }
 }
 
+fn sub_not_found(f: &mut fmt::Formatter<'_>, name: &str, searched: &[PathBuf]) -> fmt::Result {
+    write!(
+        f,
+        "subroutine o<{name}> is not defined and no file {name}.ngc was found"
+    )?;
+    if searched.is_empty() {
+        write!(f, " (no search folders configured)")
+    } else {
+        write!(f, " in: ")?;
+        for (i, d) in searched.iter().enumerate() {
+            if i > 0 {
+                write!(f, ", ")?;
+            }
+            write!(f, "{}", d.display())?;
+        }
+        Ok(())
+    }
+}
+
+/// A runaway guard's message: what passed the bound, the innermost loop,
+/// and the option that raises it.
+fn runaway(
+    f: &mut fmt::Formatter<'_>,
+    what: fmt::Arguments<'_>,
+    label: &Option<String>,
+    line: &Option<u32>,
+    option: &str,
+) -> fmt::Result {
+    f.write_fmt(what)?;
+    limit_site(f, label, line)?;
+    write!(f, " (raise with {option})")
+}
+
+fn no_programs(f: &mut fmt::Formatter<'_>, paths: &[PathBuf], exts: &str) -> fmt::Result {
+    write!(f, "no programs found in")?;
+    for p in paths {
+        write!(f, " {}", p.display())?;
+    }
+    write!(f, " (extensions {exts}; --ext chooses others)")
+}
+
 fn limit_site(
     f: &mut fmt::Formatter<'_>,
     label: &Option<String>,
@@ -428,8 +469,23 @@ fn limit_site(
 
 impl fmt::Display for ErrorKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        // Each group of variants has its own function; every variant is in
+        // exactly one of them.
+        self.fmt_syntax(f)
+            .or_else(|| self.fmt_value(f))
+            .or_else(|| self.fmt_oword(f))
+            .or_else(|| self.fmt_machine(f))
+            .or_else(|| self.fmt_limits(f))
+            .or_else(|| self.fmt_setup(f))
+            .unwrap_or_else(|| write!(f, "{self:?}"))
+    }
+}
+
+impl ErrorKind {
+    /// Lexing and line syntax.
+    fn fmt_syntax(&self, f: &mut fmt::Formatter<'_>) -> Option<fmt::Result> {
         use ErrorKind::*;
-        match self {
+        Some(match self {
             CommandTooLong => write!(f, "line is longer than 252 characters"),
             NestedComment => write!(f, "comment opened inside a comment"),
             UnclosedComment => write!(f, "comment is not closed before the end of the line"),
@@ -454,6 +510,29 @@ impl fmt::Display for ErrorKind {
             ),
             TooManyMWords => write!(f, "more than four M words on the line"),
             MisplacedLineNumber => write!(f, "an N line number may only start the line"),
+            UnterminatedName => write!(f, "named parameter is not terminated by '>'"),
+            NotText { path } => write!(
+                f,
+                "{}: not a text G-code program (it contains NUL bytes: a binary file?)",
+                path.display()
+            ),
+            UnclosedBlock {
+                label,
+                opened,
+                line,
+                closer,
+            } => write!(
+                f,
+                "'o{label} {opened}' at line {line} has no 'o{label} {closer}' before the end of its subroutine"
+            ),
+            _ => return None,
+        })
+    }
+
+    /// Expressions, parameters and values only the machine knows.
+    fn fmt_value(&self, f: &mut fmt::Formatter<'_>) -> Option<fmt::Result> {
+        use ErrorKind::*;
+        Some(match self {
             DivideByZero => write!(f, "division by zero"),
             NegativePower => write!(f, "negative number raised to a non-integer power"),
             AcosRange => write!(f, "argument of ACOS is outside -1..1"),
@@ -472,13 +551,27 @@ impl fmt::Display for ErrorKind {
                     "{what} is only known on the running machine ({why}); supply it with {hint}"
                 )
             }
-            UnterminatedName => write!(f, "named parameter is not terminated by '>'"),
             UnknownPosition { axis, why } => write!(
                 f,
                 "the {} position is not known here ({why}); fix it with an absolute move first, or give --start-position X0,Y0,Z0 (mm)",
                 axis.to_ascii_uppercase()
             ),
             ToolNotInTable { tool } => write!(f, "tool {tool} is not in the tool table"),
+            Unprintable { value } => {
+                write!(f, "value {value} cannot be written as a G-code number")
+            }
+            ProbeResultUnknown { index, line } => write!(
+                f,
+                "#{index} is the result of the probe at line {line}, known only on the machine; a program that uses it cannot be flattened ahead of time (--zero-start assumes the probe does not trip and reads its target, as LinuxCNC's standalone interpreter does)"
+            ),
+            _ => return None,
+        })
+    }
+
+    /// O-words, subroutines, program structure and state saved by M70/M73.
+    fn fmt_oword(&self, f: &mut fmt::Formatter<'_>) -> Option<fmt::Result> {
+        use ErrorKind::*;
+        Some(match self {
             UnknownOCommand { word } => write!(f, "unknown O-word command '{word}'"),
             UnexpectedAfterOWord => write!(f, "only a comment may follow an O-word command"),
             MissingBracket { keyword } => write!(f, "'[' expected after '{keyword}'"),
@@ -524,24 +617,7 @@ impl fmt::Display for ErrorKind {
             }
             TooManyArgs => write!(f, "more than 30 subroutine arguments"),
             TooDeep { limit } => write!(f, "subroutine calls nested more than {limit} deep"),
-            SubNotFound { name, searched } => {
-                write!(
-                    f,
-                    "subroutine o<{name}> is not defined and no file {name}.ngc was found"
-                )?;
-                if searched.is_empty() {
-                    write!(f, " (no search folders configured)")
-                } else {
-                    write!(f, " in: ")?;
-                    for (i, d) in searched.iter().enumerate() {
-                        if i > 0 {
-                            write!(f, ", ")?;
-                        }
-                        write!(f, "{}", d.display())?;
-                    }
-                    Ok(())
-                }
-            }
+            SubNotFound { name, searched } => sub_not_found(f, name, searched),
             SubNotInFile { name, file } => {
                 write!(f, "file {} does not define o<{name}> sub", file.display())
             }
@@ -572,6 +648,26 @@ impl fmt::Display for ErrorKind {
             FanucDisabled { what } => write!(f, "{what} used but DISABLE_FANUC_STYLE_SUB is set"),
             UnterminatedSub { name } => write!(f, "subroutine o<{name}> has no endsub"),
             Abort { message } => write!(f, "program aborted: {message}"),
+            NoSavedContext => write!(
+                f,
+                "M72 without a state saved by M70 or M73 at this call level"
+            ),
+            UnsafeSubName { name } => write!(
+                f,
+                "subroutine name '{name}' could leave the search path; use plain names (letters, digits, '_', '-')"
+            ),
+            ComputedSubLabel => write!(
+                f,
+                "a subroutine definition needs a fixed label (o<name> sub or o100 sub), not a computed one"
+            ),
+            _ => return None,
+        })
+    }
+
+    /// Blocks the machine model refuses: modal checks, cutter compensation, lathe cycles.
+    fn fmt_machine(&self, f: &mut fmt::Formatter<'_>) -> Option<fmt::Result> {
+        use ErrorKind::*;
+        Some(match self {
             Block(e) => write!(f, "{e}"),
             CutterComp { error } => write!(f, "{error}"),
             CompForbids { action } => {
@@ -595,37 +691,71 @@ impl fmt::Display for ErrorKind {
             CompNoDiameter { g } => write!(f, "{g} without a D word (the tool diameter)"),
             CompLatheTool { what } => write!(f, "{what}, but the plane is not G18"),
             Lathe(e) => write!(f, "{e}"),
-            NoSavedContext => write!(
-                f,
-                "M72 without a state saved by M70 or M73 at this call level"
-            ),
+            _ => return None,
+        })
+    }
+
+    /// Runaway guards and travel limits.
+    fn fmt_limits(&self, f: &mut fmt::Formatter<'_>) -> Option<fmt::Result> {
+        use ErrorKind::*;
+        Some(match self {
             OutputLineTooLong { len } => {
                 write!(
                     f,
                     "output line would be {len} characters; the limit is 252 (try --precision)"
                 )
             }
-            StepLimit { limit, label, line } => {
+            StepLimit { limit, label, line } => runaway(
+                f,
+                format_args!("more than {limit} O-word lines executed; runaway loop or recursion?"),
+                label,
+                line,
+                "--max-steps",
+            ),
+            OutputLimit { limit, label, line } => runaway(
+                f,
+                format_args!("more than {limit} output lines"),
+                label,
+                line,
+                "--max-output-lines",
+            ),
+            OutputBytesLimit { limit } => write!(
+                f,
+                "the output grew past {limit} bytes (the program's size plus --max-output-bytes); runaway loop? (raise with --max-output-bytes)"
+            ),
+            TravelLimit {
+                axis,
+                value,
+                bound,
+                above,
+                source,
+            } => {
+                let unit = if matches!(axis, 'A' | 'B' | 'C') {
+                    "deg"
+                } else {
+                    "mm"
+                };
                 write!(
                     f,
-                    "more than {limit} O-word lines executed; runaway loop or recursion?"
-                )?;
-                limit_site(f, label, line)?;
-                write!(f, " (raise with --max-steps)")
+                    "this move takes {axis} to {} {unit} (machine coordinates), {} the travel limit {} {unit} from {source}",
+                    crate::emit::number_string(*value, Some(4)),
+                    if *above { "above" } else { "below" },
+                    crate::emit::number_string(*bound, Some(4)),
+                )
             }
-            OutputLimit { limit, label, line } => {
-                write!(f, "more than {limit} output lines")?;
-                limit_site(f, label, line)?;
-                write!(f, " (raise with --max-output-lines)")
-            }
-            Unprintable { value } => {
-                write!(f, "value {value} cannot be written as a G-code number")
-            }
-            Io { path, message } => write!(f, "{}: {message}", path.display()),
-            UnsafeSubName { name } => write!(
+            LimitNeedsOffsets => write!(
                 f,
-                "subroutine name '{name}' could leave the search path; use plain names (letters, digits, '_', '-')"
+                "travel limits are in machine coordinates, but where this move goes on the machine is not known (the offsets from work to machine coordinates, or the position); supply them with --zero-start, --var-file or -D (e.g. -D 5221=0 for the G54 X offset) and --start-position, or turn the check off with --no-limits"
             ),
+            _ => return None,
+        })
+    }
+
+    /// Settings, files, targets and what is outside the program.
+    fn fmt_setup(&self, f: &mut fmt::Formatter<'_>) -> Option<fmt::Result> {
+        use ErrorKind::*;
+        Some(match self {
+            Io { path, message } => write!(f, "{}: {message}", path.display()),
             VarFileOrder { index } => {
                 write!(f, "parameter file is not in ascending order at #{index}")
             }
@@ -667,35 +797,12 @@ impl fmt::Display for ErrorKind {
                 f,
                 "internal error: {what}; please report it with the program"
             ),
-            OutputBytesLimit { limit } => write!(
-                f,
-                "the output grew past {limit} bytes (the program's size plus --max-output-bytes); runaway loop? (raise with --max-output-bytes)"
-            ),
             OutputIsInput { output } => write!(
                 f,
                 "the output {} is the program being flattened; choose another output file",
                 output.display()
             ),
-            ComputedSubLabel => write!(
-                f,
-                "a subroutine definition needs a fixed label (o<name> sub or o100 sub), not a computed one"
-            ),
-            ProbeResultUnknown { index, line } => write!(
-                f,
-                "#{index} is the result of the probe at line {line}, known only on the machine; a program that uses it cannot be flattened ahead of time (--zero-start assumes the probe does not trip and reads its target, as LinuxCNC's standalone interpreter does)"
-            ),
-            NoPrograms { paths, exts } => {
-                write!(f, "no programs found in")?;
-                for p in paths {
-                    write!(f, " {}", p.display())?;
-                }
-                write!(f, " (extensions {exts}; --ext chooses others)")
-            }
-            NotText { path } => write!(
-                f,
-                "{}: not a text G-code program (it contains NUL bytes: a binary file?)",
-                path.display()
-            ),
+            NoPrograms { paths, exts } => no_programs(f, paths, exts),
             BadUserM { text } => write!(
                 f,
                 "--user-m '{text}' is not a user M-code M100-M199 or a range of them (e.g. 100,101-105)"
@@ -703,15 +810,6 @@ impl fmt::Display for ErrorKind {
             UndeclaredUserM { m } => write!(
                 f,
                 "M{m} is a user M-code (an external program on the LinuxCNC machine) that is not declared: give --user-m {m}, or --ini with an [RS274NGC]USER_M_PATH or [DISPLAY]PROGRAM_PREFIX folder holding an executable file M{m}"
-            ),
-            UnclosedBlock {
-                label,
-                opened,
-                line,
-                closer,
-            } => write!(
-                f,
-                "'o{label} {opened}' at line {line} has no 'o{label} {closer}' before the end of its subroutine"
             ),
             BadStartPosition { text } => write!(
                 f,
@@ -724,34 +822,11 @@ impl fmt::Display for ErrorKind {
             BadMachineValue { source, text } => {
                 write!(f, "{source} value '{text}' is not a number")
             }
-            TravelLimit {
-                axis,
-                value,
-                bound,
-                above,
-                source,
-            } => {
-                let unit = if matches!(axis, 'A' | 'B' | 'C') {
-                    "deg"
-                } else {
-                    "mm"
-                };
-                write!(
-                    f,
-                    "this move takes {axis} to {} {unit} (machine coordinates), {} the travel limit {} {unit} from {source}",
-                    crate::emit::number_string(*value, Some(4)),
-                    if *above { "above" } else { "below" },
-                    crate::emit::number_string(*bound, Some(4)),
-                )
-            }
-            LimitNeedsOffsets => write!(
-                f,
-                "travel limits are in machine coordinates, but where this move goes on the machine is not known (the offsets from work to machine coordinates, or the position); supply them with --zero-start, --var-file or -D (e.g. -D 5221=0 for the G54 X offset) and --start-position, or turn the check off with --no-limits"
-            ),
             SourceMapNeedsLinuxcnc => write!(
                 f,
                 "--source-map and --annotate map output lines written as the program's own lines; they work with --target linuxcnc only"
             ),
-        }
+            _ => return None,
+        })
     }
 }

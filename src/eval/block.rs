@@ -7,7 +7,7 @@ use std::rc::Rc;
 use crate::diag::{ErrorKind, WarningKind};
 use crate::emit::{Edit, max_edited_len, write_edited};
 use crate::parse::MAX_LINE;
-use crate::parse::ast::{Assign, CommentKind, ExprKind, Item, ParamRef, Span, Word};
+use crate::parse::ast::{Assign, Comment, CommentKind, ExprKind, Item, ParamRef, Span, Word};
 use crate::program::FileIndex;
 
 use super::message::{is_stable, stabilize};
@@ -157,45 +157,7 @@ impl Interp<'_> {
         self.apply_assigns(num_set, named_set);
         // 3. The active comment, after the assignments.
         if let Some(c) = active {
-            match c.kind {
-                CommentKind::Debug | CommentKind::Print | CommentKind::Log | CommentKind::Abort => {
-                    let body =
-                        String::from_utf8_lossy(&raw[c.body.start as usize..c.body.end as usize])
-                            .into_owned();
-                    let text = self
-                        .substitute(&body, c.body.start)
-                        .map_err(|f| self.fault_in_line(*f, file, start))?;
-                    if c.kind == CommentKind::Abort {
-                        return Err(self.error_in_line(
-                            ErrorKind::Abort { message: text },
-                            file,
-                            start,
-                            c.span,
-                        ));
-                    }
-                    if !self.s.strip_comments {
-                        if c.kind == CommentKind::Debug && self.params.values[5599] <= 0.0 {
-                            repl.push((c.span, Edit::Remove));
-                        } else if c.kind == CommentKind::Debug {
-                            // As (msg,...) the text is shown exactly as
-                            // substituted and never read for parameters again.
-                            repl.push((c.span, Edit::Text(format!("(MSG,{text})"))));
-                        } else {
-                            let text = stabilize(&text);
-                            if !is_stable(&text) {
-                                self.warn(
-                                    WarningKind::MessageNotStable,
-                                    file,
-                                    start + c.span.start,
-                                    start + c.span.end,
-                                );
-                            }
-                            repl.push((c.body, Edit::Text(text)));
-                        }
-                    }
-                }
-                _ => {}
-            }
+            self.active_comment(file, start, raw, c, repl)?;
         }
         // 4. Program flow words.
         let m99 = words.iter().any(|&(l, v)| l == b'm' && v == 99.0);
@@ -204,17 +166,7 @@ impl Interp<'_> {
         }
         if m99 {
             // M99 in the main program ends it like M2 in the reference.
-            let mut k = 0;
-            for item in items {
-                if let Item::Word(w) = item {
-                    if words[k] == (b'm', 99.0) {
-                        repl.retain(|(s, _)| *s != w.value.span);
-                        repl.push((w.span, Edit::Text("M2".into())));
-                        break;
-                    }
-                    k += 1;
-                }
-            }
+            m99_as_m2(items, words, repl);
         }
         // 5. Write the line.
         repl.sort_by_key(|(s, _)| s.start);
@@ -241,6 +193,58 @@ impl Interp<'_> {
         }
         if ends {
             self.end_program()?;
+        }
+        Ok(())
+    }
+
+    /// A `(debug,…)`, `(print,…)`, `(log,…)` or `(abort,…)` comment, after
+    /// the line's assignments: its text with the parameters substituted.
+    fn active_comment(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        raw: &[u8],
+        c: &Comment,
+        repl: &mut Vec<(Span, Edit)>,
+    ) -> Result<(), crate::diag::Error> {
+        match c.kind {
+            CommentKind::Debug | CommentKind::Print | CommentKind::Log | CommentKind::Abort => {
+                let body =
+                    String::from_utf8_lossy(&raw[c.body.start as usize..c.body.end as usize])
+                        .into_owned();
+                let text = self
+                    .substitute(&body, c.body.start)
+                    .map_err(|f| self.fault_in_line(*f, file, start))?;
+                if c.kind == CommentKind::Abort {
+                    return Err(self.error_in_line(
+                        ErrorKind::Abort { message: text },
+                        file,
+                        start,
+                        c.span,
+                    ));
+                }
+                if !self.s.strip_comments {
+                    if c.kind == CommentKind::Debug && self.params.values[5599] <= 0.0 {
+                        repl.push((c.span, Edit::Remove));
+                    } else if c.kind == CommentKind::Debug {
+                        // As (msg,...) the text is shown exactly as
+                        // substituted and never read for parameters again.
+                        repl.push((c.span, Edit::Text(format!("(MSG,{text})"))));
+                    } else {
+                        let text = stabilize(&text);
+                        if !is_stable(&text) {
+                            self.warn(
+                                WarningKind::MessageNotStable,
+                                file,
+                                start + c.span.start,
+                                start + c.span.end,
+                            );
+                        }
+                        repl.push((c.body, Edit::Text(text)));
+                    }
+                }
+            }
+            _ => {}
         }
         Ok(())
     }
@@ -534,5 +538,20 @@ impl Interp<'_> {
         })();
         self.words_buf = words;
         Some(r)
+    }
+}
+
+/// Rewrites the line's `M99` (ending the main program) as `M2`.
+fn m99_as_m2(items: &[Item], words: &[(u8, f64)], repl: &mut Vec<(Span, Edit)>) {
+    let mut k = 0;
+    for item in items {
+        if let Item::Word(w) = item {
+            if words[k] == (b'm', 99.0) {
+                repl.retain(|(s, _)| *s != w.value.span);
+                repl.push((w.span, Edit::Text("M2".into())));
+                break;
+            }
+            k += 1;
+        }
     }
 }

@@ -399,52 +399,8 @@ impl Interp<'_> {
             }
         };
         match o.kind {
-            OKind::If => {
-                let c = self.o_eval(file, oidx, Self::expr_of(o, "condition")?)?;
-                // Each pass after the first finds its own record.
-                let line = file.olines[oidx as usize].line_idx;
-                let recorded = matches!(self.frame().labels.get(key),
-                    Some(r) if r.kind == OKind::If && r.line == line);
-                if !recorded && let Err(e) = self.record(file, oidx, key, OKind::If) {
-                    return self.soft(e, file);
-                }
-                if c != 0.0 {
-                    self.executed_if = true;
-                    Ok(())
-                } else {
-                    self.executed_if = false;
-                    self.skip_if(file, oidx, key)
-                }
-            }
-            OKind::ElseIf | OKind::Else => {
-                if let Err(e) = self.expect(file, oidx, key, &[OKind::If], "if") {
-                    return self.soft(e, file);
-                }
-                if o.kind == OKind::ElseIf {
-                    self.probe_condition(file, oidx);
-                }
-                // A branch was taken: go to the endif.
-                let mut at = oidx;
-                loop {
-                    let t = self.seek(file, at, key, Seek::Control, &[])?;
-                    match file.kind_of(t) {
-                        Some(OKind::EndIf) => {
-                            self.executed_if = true;
-                            self.goto(file, t, true);
-                            return Ok(());
-                        }
-                        Some(OKind::ElseIf) => {
-                            self.probe_condition(file, t);
-                            at = t;
-                        }
-                        Some(OKind::Else) => at = t,
-                        _ => {
-                            self.stray(file, t, key)?;
-                            at = t;
-                        }
-                    }
-                }
-            }
+            OKind::If => self.exec_if(file, oidx, o, key),
+            OKind::ElseIf | OKind::Else => self.exec_else(file, oidx, o, key),
             OKind::EndIf => {
                 if let Err(e) = self.expect(file, oidx, key, &[OKind::If], "if") {
                     return self.soft(e, file);
@@ -452,194 +408,308 @@ impl Interp<'_> {
                 self.executed_if = true;
                 Ok(())
             }
-            OKind::Do => {
-                // The reference records a do label only on first sight.
-                match self.frame().labels.get(key).copied() {
-                    Some(rec) if rec.oidx != oidx => {
-                        let (a, b) = self.osite(file, oidx);
-                        let first_line = rec.line + 1;
-                        self.warn(WarningKind::LabelReused { first_line }, file, a, b);
-                    }
-                    _ => self.record(file, oidx, key, OKind::Do)?,
-                }
-                Ok(())
-            }
-            OKind::While => {
-                let line = file.olines[oidx as usize].line_idx;
-                // One look at the label: the end of a do loop, this loop
-                // already recorded (each pass after the first), or new.
-                let (do_rec, recorded) = match self.frame().labels.get(key) {
-                    Some(r) if r.kind == OKind::Do => (Some(*r), false),
-                    Some(r) => (None, r.kind == OKind::While && r.line == line),
-                    None => (None, false),
-                };
-                let c = self.o_eval(file, oidx, Self::expr_of(o, "condition")?)?;
-                if let Some(rec) = do_rec {
-                    if c != 0.0 {
-                        if let Some(first_line) = self.ref_stale_break.take() {
-                            let (a, b) = self.osite(file, oidx);
-                            self.warn(WarningKind::QuirkStaleBreak { first_line }, file, a, b);
-                        }
-                        self.note_loop(file, rec.oidx, key);
-                        self.goto(file, rec.oidx, true);
-                    } else {
-                        self.ref_stale_break = None;
-                    }
-                    return Ok(());
-                }
-                if !recorded && let Err(e) = self.record(file, oidx, key, OKind::While) {
-                    return self.soft(e, file);
-                }
-                if c != 0.0 {
-                    return Ok(());
-                }
-                self.loop_exit(file, oidx, key, OKind::EndWhile)
-            }
-            OKind::EndWhile => {
-                let rec = match self.expect(file, oidx, key, &[OKind::While], "while") {
-                    Ok(r) => r,
-                    Err(e) => return self.soft(e, file),
-                };
-                self.note_loop(file, rec.oidx, key);
-                self.goto(file, rec.oidx, false);
-                Ok(())
-            }
-            OKind::Repeat => {
-                if let Err(e) = self.record(file, oidx, key, OKind::Repeat) {
-                    return self.soft(e, file);
-                }
-                let count = self.frame().labels.get(key).map(|r| r.repeat).unwrap_or(-1);
-                let mut count = count;
-                // Reached from its endrepeat, the loop goes on; reached any
-                // other way it starts afresh (the reference would continue a
-                // count left over by a jump out of the loop).
-                let again = self.repeat_again.take() == Some(oidx);
-                if !again && count != -1 {
-                    let (a, b) = self.osite(file, oidx);
-                    self.warn(WarningKind::QuirkRepeatCount, file, a, b);
-                    count = -1;
-                }
-                if count == -1 {
-                    let n = self.o_eval(file, oidx, Self::expr_of(o, "count")?)?;
-                    count = round_half_even_int(n);
-                }
-                if count > 0 {
-                    if let Some(r) = self.frame().labels.get_mut(key) {
-                        r.repeat = count - 1;
-                    }
-                    Ok(())
-                } else {
-                    if let Some(r) = self.frame().labels.get_mut(key) {
-                        r.repeat = -1;
-                    }
-                    self.loop_exit(file, oidx, key, OKind::EndRepeat)
-                }
-            }
-            OKind::EndRepeat => {
-                let rec = match self.expect(file, oidx, key, &[OKind::Repeat], "repeat") {
-                    Ok(r) => r,
-                    Err(e) => return self.soft(e, file),
-                };
-                self.note_loop(file, rec.oidx, key);
-                self.repeat_again = Some(rec.oidx);
-                self.goto(file, rec.oidx, false);
-                Ok(())
-            }
-            OKind::Break | OKind::Continue => {
-                let expected = "while/do";
-                let rec = match self.expect(file, oidx, key, &[OKind::While, OKind::Do], expected) {
-                    Ok(r) => r,
-                    Err(e) => return self.soft(e, file),
-                };
-                // The end of the loop (a line of another kind with the same
-                // label is skipped under warn-only O-words).
-                let mut at = oidx;
-                let (t, tkind) = loop {
-                    let t = self.seek_loop_end(file, at, key)?;
-                    let tkind = file.kind_of(t);
-                    match (rec.kind, tkind) {
-                        (OKind::While, Some(OKind::EndWhile)) | (OKind::Do, Some(OKind::While)) => {
-                            break (t, tkind);
-                        }
-                        _ => {
-                            self.stray(file, t, key)?;
-                            at = t;
-                        }
-                    }
-                };
-                match (rec.kind, tkind, o.kind) {
-                    (OKind::While, Some(OKind::EndWhile), OKind::Break) => {
-                        if let Some(first_line) = self.ref_stale_continue.take() {
-                            let (a, b) = self.osite(file, t);
-                            self.warn(WarningKind::QuirkStaleContinue { first_line }, file, a, b);
-                        }
-                        self.ref_stale_break = Some(file.olines[oidx as usize].line_idx + 1);
-                        self.goto(file, t, true);
-                        Ok(())
-                    }
-                    (OKind::While, Some(OKind::EndWhile), _) => {
-                        self.note_loop(file, rec.oidx, key);
-                        self.goto(file, rec.oidx, false);
-                        Ok(())
-                    }
-                    (OKind::Do, Some(OKind::While), OKind::Break) => {
-                        self.probe_condition(file, t);
-                        self.goto(file, t, true);
-                        Ok(())
-                    }
-                    (OKind::Do, Some(OKind::While), _) => {
-                        self.ref_stale_continue = Some(file.olines[oidx as usize].line_idx + 1);
-                        let e = self.condition_of(file, t)?;
-                        let c = self.o_eval(file, t, &e)?;
-                        if c != 0.0 {
-                            self.note_loop(file, rec.oidx, key);
-                            self.goto(file, rec.oidx, true);
-                        } else {
-                            self.goto(file, t, true);
-                        }
-                        Ok(())
-                    }
-                    _ => unreachable!("loop end checked above"),
-                }
-            }
+            OKind::Do => self.exec_do(file, oidx, key),
+            OKind::While => self.exec_while(file, oidx, o, key),
+            OKind::EndWhile => self.exec_endwhile(file, oidx, key),
+            OKind::Repeat => self.exec_repeat(file, oidx, o, key),
+            OKind::EndRepeat => self.exec_endrepeat(file, oidx, key),
+            OKind::Break | OKind::Continue => self.exec_break_continue(file, oidx, o, key),
             OKind::Sub => self.reach_sub(file, oidx, key),
-            OKind::EndSub | OKind::Return => {
-                if self.level() == 0 {
-                    let e = self.oerr(ErrorKind::NotInSub, file, oidx);
-                    return self.soft(e, file);
-                }
-                if self.frame().kind == FrameKind::M98 {
-                    return Err(self.oerr(ErrorKind::EndsubInFanuc, file, oidx));
-                }
-                let v = match &o.expr {
-                    Some(e) => Some(self.o_eval(file, oidx, e)?),
-                    None => None,
-                };
-                self.return_from_call(file, oidx, v)
-            }
+            OKind::EndSub | OKind::Return => self.exec_return(file, oidx, o),
             OKind::Call => self.call(file, oidx, key),
-            OKind::Bare => {
-                if self.s.fanuc_disabled {
-                    return Err(self.oerr(
-                        ErrorKind::FanucDisabled {
-                            what: "a bare O-word",
-                        },
-                        file,
-                        oidx,
-                    ));
+            OKind::Bare => self.exec_bare(file, oidx, key),
+        }
+    }
+
+    /// `if`: evaluates the condition; when false, goes to the branch taken.
+    // One call site, on the hot path: kept inline as before the split.
+    #[inline(always)]
+    fn exec_if(
+        &mut self,
+        file: &Rc<FileIndex>,
+        oidx: u32,
+        o: &OLine,
+        key: &Name,
+    ) -> Result<(), Error> {
+        let c = self.o_eval(file, oidx, Self::expr_of(o, "condition")?)?;
+        // Each pass after the first finds its own record.
+        let line = file.olines[oidx as usize].line_idx;
+        let recorded = matches!(self.frame().labels.get(key),
+            Some(r) if r.kind == OKind::If && r.line == line);
+        if !recorded && let Err(e) = self.record(file, oidx, key, OKind::If) {
+            return self.soft(e, file);
+        }
+        if c != 0.0 {
+            self.executed_if = true;
+            Ok(())
+        } else {
+            self.executed_if = false;
+            self.skip_if(file, oidx, key)
+        }
+    }
+
+    /// `elseif`/`else` reached in normal flow: a branch was taken, so goes to the `endif`.
+    fn exec_else(
+        &mut self,
+        file: &Rc<FileIndex>,
+        oidx: u32,
+        o: &OLine,
+        key: &Name,
+    ) -> Result<(), Error> {
+        if let Err(e) = self.expect(file, oidx, key, &[OKind::If], "if") {
+            return self.soft(e, file);
+        }
+        if o.kind == OKind::ElseIf {
+            self.probe_condition(file, oidx);
+        }
+        // A branch was taken: go to the endif.
+        let mut at = oidx;
+        loop {
+            let t = self.seek(file, at, key, Seek::Control, &[])?;
+            match file.kind_of(t) {
+                Some(OKind::EndIf) => {
+                    self.executed_if = true;
+                    self.goto(file, t, true);
+                    return Ok(());
                 }
-                if self.level() > 0 {
-                    return Err(self.oerr(
-                        ErrorKind::FanucNeedsM98 {
-                            name: key.to_string(),
-                        },
-                        file,
-                        oidx,
-                    ));
+                Some(OKind::ElseIf) => {
+                    self.probe_condition(file, t);
+                    at = t;
                 }
-                Ok(())
+                Some(OKind::Else) => at = t,
+                _ => {
+                    self.stray(file, t, key)?;
+                    at = t;
+                }
             }
         }
+    }
+
+    /// `do`: records the loop start.
+    fn exec_do(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) -> Result<(), Error> {
+        // The reference records a do label only on first sight.
+        match self.frame().labels.get(key).copied() {
+            Some(rec) if rec.oidx != oidx => {
+                let (a, b) = self.osite(file, oidx);
+                let first_line = rec.line + 1;
+                self.warn(WarningKind::LabelReused { first_line }, file, a, b);
+            }
+            _ => self.record(file, oidx, key, OKind::Do)?,
+        }
+        Ok(())
+    }
+
+    /// `while`: the end of a `do` loop, or the start of a `while` loop.
+    // One call site, on the hot path: kept inline as before the split.
+    #[inline(always)]
+    fn exec_while(
+        &mut self,
+        file: &Rc<FileIndex>,
+        oidx: u32,
+        o: &OLine,
+        key: &Name,
+    ) -> Result<(), Error> {
+        let line = file.olines[oidx as usize].line_idx;
+        // One look at the label: the end of a do loop, this loop
+        // already recorded (each pass after the first), or new.
+        let (do_rec, recorded) = match self.frame().labels.get(key) {
+            Some(r) if r.kind == OKind::Do => (Some(*r), false),
+            Some(r) => (None, r.kind == OKind::While && r.line == line),
+            None => (None, false),
+        };
+        let c = self.o_eval(file, oidx, Self::expr_of(o, "condition")?)?;
+        if let Some(rec) = do_rec {
+            if c != 0.0 {
+                if let Some(first_line) = self.ref_stale_break.take() {
+                    let (a, b) = self.osite(file, oidx);
+                    self.warn(WarningKind::QuirkStaleBreak { first_line }, file, a, b);
+                }
+                self.note_loop(file, rec.oidx, key);
+                self.goto(file, rec.oidx, true);
+            } else {
+                self.ref_stale_break = None;
+            }
+            return Ok(());
+        }
+        if !recorded && let Err(e) = self.record(file, oidx, key, OKind::While) {
+            return self.soft(e, file);
+        }
+        if c != 0.0 {
+            return Ok(());
+        }
+        self.loop_exit(file, oidx, key, OKind::EndWhile)
+    }
+
+    /// `endwhile`: back to the `while`.
+    // One call site, on the hot path: kept inline as before the split.
+    #[inline(always)]
+    fn exec_endwhile(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) -> Result<(), Error> {
+        let rec = match self.expect(file, oidx, key, &[OKind::While], "while") {
+            Ok(r) => r,
+            Err(e) => return self.soft(e, file),
+        };
+        self.note_loop(file, rec.oidx, key);
+        self.goto(file, rec.oidx, false);
+        Ok(())
+    }
+
+    /// `repeat`: starts or continues the count.
+    // One call site, on the hot path: kept inline as before the split.
+    #[inline(always)]
+    fn exec_repeat(
+        &mut self,
+        file: &Rc<FileIndex>,
+        oidx: u32,
+        o: &OLine,
+        key: &Name,
+    ) -> Result<(), Error> {
+        if let Err(e) = self.record(file, oidx, key, OKind::Repeat) {
+            return self.soft(e, file);
+        }
+        let count = self.frame().labels.get(key).map(|r| r.repeat).unwrap_or(-1);
+        let mut count = count;
+        // Reached from its endrepeat, the loop goes on; reached any
+        // other way it starts afresh (the reference would continue a
+        // count left over by a jump out of the loop).
+        let again = self.repeat_again.take() == Some(oidx);
+        if !again && count != -1 {
+            let (a, b) = self.osite(file, oidx);
+            self.warn(WarningKind::QuirkRepeatCount, file, a, b);
+            count = -1;
+        }
+        if count == -1 {
+            let n = self.o_eval(file, oidx, Self::expr_of(o, "count")?)?;
+            count = round_half_even_int(n);
+        }
+        if count > 0 {
+            if let Some(r) = self.frame().labels.get_mut(key) {
+                r.repeat = count - 1;
+            }
+            Ok(())
+        } else {
+            if let Some(r) = self.frame().labels.get_mut(key) {
+                r.repeat = -1;
+            }
+            self.loop_exit(file, oidx, key, OKind::EndRepeat)
+        }
+    }
+
+    /// `endrepeat`: back to the `repeat`.
+    // One call site, on the hot path: kept inline as before the split.
+    #[inline(always)]
+    fn exec_endrepeat(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) -> Result<(), Error> {
+        let rec = match self.expect(file, oidx, key, &[OKind::Repeat], "repeat") {
+            Ok(r) => r,
+            Err(e) => return self.soft(e, file),
+        };
+        self.note_loop(file, rec.oidx, key);
+        self.repeat_again = Some(rec.oidx);
+        self.goto(file, rec.oidx, false);
+        Ok(())
+    }
+
+    /// `break`/`continue`: finds the end of the loop and leaves or repeats it.
+    fn exec_break_continue(
+        &mut self,
+        file: &Rc<FileIndex>,
+        oidx: u32,
+        o: &OLine,
+        key: &Name,
+    ) -> Result<(), Error> {
+        let expected = "while/do";
+        let rec = match self.expect(file, oidx, key, &[OKind::While, OKind::Do], expected) {
+            Ok(r) => r,
+            Err(e) => return self.soft(e, file),
+        };
+        // The end of the loop (a line of another kind with the same
+        // label is skipped under warn-only O-words).
+        let mut at = oidx;
+        let (t, tkind) = loop {
+            let t = self.seek_loop_end(file, at, key)?;
+            let tkind = file.kind_of(t);
+            match (rec.kind, tkind) {
+                (OKind::While, Some(OKind::EndWhile)) | (OKind::Do, Some(OKind::While)) => {
+                    break (t, tkind);
+                }
+                _ => {
+                    self.stray(file, t, key)?;
+                    at = t;
+                }
+            }
+        };
+        match (rec.kind, tkind, o.kind) {
+            (OKind::While, Some(OKind::EndWhile), OKind::Break) => {
+                if let Some(first_line) = self.ref_stale_continue.take() {
+                    let (a, b) = self.osite(file, t);
+                    self.warn(WarningKind::QuirkStaleContinue { first_line }, file, a, b);
+                }
+                self.ref_stale_break = Some(file.olines[oidx as usize].line_idx + 1);
+                self.goto(file, t, true);
+                Ok(())
+            }
+            (OKind::While, Some(OKind::EndWhile), _) => {
+                self.note_loop(file, rec.oidx, key);
+                self.goto(file, rec.oidx, false);
+                Ok(())
+            }
+            (OKind::Do, Some(OKind::While), OKind::Break) => {
+                self.probe_condition(file, t);
+                self.goto(file, t, true);
+                Ok(())
+            }
+            (OKind::Do, Some(OKind::While), _) => {
+                self.ref_stale_continue = Some(file.olines[oidx as usize].line_idx + 1);
+                let e = self.condition_of(file, t)?;
+                let c = self.o_eval(file, t, &e)?;
+                if c != 0.0 {
+                    self.note_loop(file, rec.oidx, key);
+                    self.goto(file, rec.oidx, true);
+                } else {
+                    self.goto(file, t, true);
+                }
+                Ok(())
+            }
+            _ => unreachable!("loop end checked above"),
+        }
+    }
+
+    /// `endsub`/`return`: leaves the subroutine with its value, if any.
+    fn exec_return(&mut self, file: &Rc<FileIndex>, oidx: u32, o: &OLine) -> Result<(), Error> {
+        if self.level() == 0 {
+            let e = self.oerr(ErrorKind::NotInSub, file, oidx);
+            return self.soft(e, file);
+        }
+        if self.frame().kind == FrameKind::M98 {
+            return Err(self.oerr(ErrorKind::EndsubInFanuc, file, oidx));
+        }
+        let v = match &o.expr {
+            Some(e) => Some(self.o_eval(file, oidx, e)?),
+            None => None,
+        };
+        self.return_from_call(file, oidx, v)
+    }
+
+    /// A bare O-word (M98 subprogram start) reached in normal flow.
+    fn exec_bare(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) -> Result<(), Error> {
+        if self.s.fanuc_disabled {
+            return Err(self.oerr(
+                ErrorKind::FanucDisabled {
+                    what: "a bare O-word",
+                },
+                file,
+                oidx,
+            ));
+        }
+        if self.level() > 0 {
+            return Err(self.oerr(
+                ErrorKind::FanucNeedsM98 {
+                    name: key.to_string(),
+                },
+                file,
+                oidx,
+            ));
+        }
+        Ok(())
     }
 
     /// Under warn-only O-words (`OWORD_WARNONLY`), one of LinuxCNC's O-word

@@ -157,8 +157,8 @@ impl Interp<'_> {
     /// the program.
     pub(super) fn apply_words(
         &mut self,
-        _file: &Rc<FileIndex>,
-        _start: u32,
+        file: &Rc<FileIndex>,
+        start: u32,
         words: &Words,
         m99: bool,
     ) -> Result<bool, Error> {
@@ -166,24 +166,73 @@ impl Interp<'_> {
             return Ok(false);
         }
         let motion_before = self.modal.motion;
-        let mut gbuf = [0i32; 16];
-        let mut gn = 0;
-        let mut ends = m99;
-        let mut abuf = [(0usize, 0f64); 9];
-        let mut an = 0;
-        let mut p_word = None;
-        let mut h_word = None;
-        let mut q_word = None;
-        let mut dynamic_tlo = false;
-        let mut l_word = None;
-        let mut r_word = None;
-        let mut tool_changed = false;
+        // Filled in place: returning it would copy it.
+        let mut w = LineWords::new(m99);
+        self.read_words(file, start, words, &mut w)?;
+        self.apply_m_p_words(words, &mut w);
+        // RETAIN_G43: a tool change while G43 is in effect applies the new
+        // tool's offset, and unloading the tool (T0) cancels G43, before the
+        // line's own G43/G49. The output says so in a line of its own.
+        if w.tool_changed && self.s.retain_g43 && self.modal.tool_offset {
+            let on = self.current_tool != Some(0.0);
+            self.tool_offset_words(on);
+            if !w.gs().iter().any(|g| matches!(g, 430 | 431 | 432 | 490)) {
+                self.retain_line = Some(on);
+            }
+        }
+        let (special, dynamic_tlo) = self.apply_g_modes(&w);
+        let _ = self.line_no();
+        if self.comp.is_some() || self.modal.ccomp != 400 {
+            for &g in w.gs() {
+                let r = match g {
+                    400 => self.comp_off(),
+                    410 | 411 | 420 | 421 => self.comp_on(g, words, file, start),
+                    _ => Ok(()),
+                };
+                if let Err(k) = r {
+                    return Err(self.error(k, file, start, start));
+                }
+            }
+        }
+        match special {
+            Some(g) => self.apply_non_modal(file, start, g, words, &w)?,
+            None => self.apply_motion(file, start, words, &w, motion_before, dynamic_tlo)?,
+        }
+        if let Some(on) = self.retain_line.take() {
+            self.emit_raw(if on { b"G43" } else { b"G49" })?;
+        }
+        if self.comp.is_some() {
+            let stop = w.ends
+                || words
+                    .iter()
+                    .any(|&(l, v)| l == b'm' && matches!(v, 0.0 | 1.0 | 60.0));
+            if stop && let Err(k) = self.comp_stop(w.ends) {
+                return Err(self.error(k, file, start, start));
+            }
+        }
+        if w.ends {
+            self.modal.reset_at_end();
+        }
+        Ok(w.ends)
+    }
+
+    /// First pass over the line's words: F, S, T and M words act in order;
+    /// G codes, axis words and the P, H, Q, L, R values are gathered.
+    // One call site, on the hot path: kept inline as before the split.
+    #[inline(always)]
+    fn read_words(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        words: &Words,
+        w: &mut LineWords,
+    ) -> Result<(), Error> {
         for &(l, v) in words {
             match l {
                 b'g' => {
-                    if gn < gbuf.len() {
-                        gbuf[gn] = (v * 10.0).round() as i32;
-                        gn += 1;
+                    if w.gn < w.g.len() {
+                        w.g[w.gn] = (v * 10.0).round() as i32;
+                        w.gn += 1;
                     }
                 }
                 b'f' => self.modal.feed = v,
@@ -193,72 +242,81 @@ impl Interp<'_> {
                     let t = v.round() as i64;
                     if !self.s.tool_table.is_empty() && t != 0 && !self.tools.contains_key(&t) {
                         let k = ErrorKind::ToolNotInTable { tool: t };
-                        return Err(self.error(k, _file, _start, _start));
+                        return Err(self.error(k, file, start, start));
                     }
                     self.selected_tool = Some(v);
                     if let Some(p) = &mut self.pockets {
                         p.1 = v;
                     }
                 }
-                b'p' => p_word = Some(v),
-                b'h' => h_word = Some(v),
-                b'q' => q_word = Some(v),
-                b'l' => l_word = Some(v),
-                b'r' => r_word = Some(v),
-                b'm' => {
-                    let m = (v * 10.0).round() as i32;
-                    match m {
-                        20 | 300 => ends = true,
-                        30 => self.modal.spindle = 3,
-                        40 => self.modal.spindle = 4,
-                        50 => self.modal.spindle = 0,
-                        60 => {
-                            self.current_tool = self.selected_tool;
-                            if let Some(p) = &mut self.pockets {
-                                p.0 = p.1;
-                            }
-                            self.m61 = None;
-                            self.tool_change_sync();
-                            tool_changed = true;
-                        }
-                        70 => self.modal.mist = true,
-                        80 => self.modal.flood = true,
-                        90 => {
-                            self.modal.mist = false;
-                            self.modal.flood = false;
-                        }
-                        480 => {
-                            self.modal.speed_override = true;
-                            self.modal.feed_override = true;
-                        }
-                        490 => {
-                            self.modal.speed_override = false;
-                            self.modal.feed_override = false;
-                        }
-                        500 => self.modal.feed_override = p_word.is_none_or(|p| p != 0.0),
-                        510 => self.modal.speed_override = p_word.is_none_or(|p| p != 0.0),
-                        520 => self.modal.adaptive_feed = p_word.is_none_or(|p| p != 0.0),
-                        530 => self.modal.feed_hold = p_word.is_none_or(|p| p != 0.0),
-                        _ => {}
-                    }
-                }
+                b'p' => w.p = Some(v),
+                b'h' => w.h = Some(v),
+                b'q' => w.q = Some(v),
+                b'l' => w.l = Some(v),
+                b'r' => w.r = Some(v),
+                b'm' => self.apply_m((v * 10.0).round() as i32, w),
                 _ => {
                     if let Some(a) = axis_index(l)
-                        && an < abuf.len()
+                        && w.an < w.axes.len()
                     {
-                        abuf[an] = (a, v);
-                        an += 1;
+                        w.axes[w.an] = (a, v);
+                        w.an += 1;
                     }
                 }
             }
         }
-        let gs = &gbuf[..gn];
-        let axis_words = &abuf[..an];
-        // P words after M50.. on the same line: apply in a second pass.
+        Ok(())
+    }
+
+    /// One M code (× 10) in the first pass: spindle, tool change, coolant,
+    /// overrides; M2/M30 end the program.
+    // One call site, on the hot path: kept inline as before the split.
+    #[inline(always)]
+    fn apply_m(&mut self, m: i32, w: &mut LineWords) {
+        match m {
+            20 | 300 => w.ends = true,
+            30 => self.modal.spindle = 3,
+            40 => self.modal.spindle = 4,
+            50 => self.modal.spindle = 0,
+            60 => {
+                self.current_tool = self.selected_tool;
+                if let Some(p) = &mut self.pockets {
+                    p.0 = p.1;
+                }
+                self.m61 = None;
+                self.tool_change_sync();
+                w.tool_changed = true;
+            }
+            70 => self.modal.mist = true,
+            80 => self.modal.flood = true,
+            90 => {
+                self.modal.mist = false;
+                self.modal.flood = false;
+            }
+            480 => {
+                self.modal.speed_override = true;
+                self.modal.feed_override = true;
+            }
+            490 => {
+                self.modal.speed_override = false;
+                self.modal.feed_override = false;
+            }
+            500 => self.modal.feed_override = w.p.is_none_or(|p| p != 0.0),
+            510 => self.modal.speed_override = w.p.is_none_or(|p| p != 0.0),
+            520 => self.modal.adaptive_feed = w.p.is_none_or(|p| p != 0.0),
+            530 => self.modal.feed_hold = w.p.is_none_or(|p| p != 0.0),
+            _ => {}
+        }
+    }
+
+    /// P words after M50.. on the same line (and M61's Q): a second pass.
+    // One call site, on the hot path: kept inline as before the split.
+    #[inline(always)]
+    fn apply_m_p_words(&mut self, words: &Words, w: &mut LineWords) {
         for &(l, v) in words {
             if l == b'm' {
                 let m = (v * 10.0).round() as i32;
-                let on = p_word.is_none_or(|p| p != 0.0);
+                let on = w.p.is_none_or(|p| p != 0.0);
                 match m {
                     500 => self.modal.feed_override = on,
                     510 => self.modal.speed_override = on,
@@ -269,32 +327,32 @@ impl Interp<'_> {
                         if self.m61.is_none() {
                             self.m61 = Some((self.line_no(), self.current_tool));
                         }
-                        self.current_tool = q_word;
-                        if let (Some(p), Some(q)) = (&mut self.pockets, q_word) {
+                        self.current_tool = w.q;
+                        if let (Some(p), Some(q)) = (&mut self.pockets, w.q) {
                             p.0 = q;
                         }
                         self.tool_change_sync();
-                        tool_changed = true;
+                        w.tool_changed = true;
                     }
                     _ => {}
                 }
             }
         }
-        // RETAIN_G43: a tool change while G43 is in effect applies the new
-        // tool's offset, and unloading the tool (T0) cancels G43, before the
-        // line's own G43/G49. The output says so in a line of its own.
-        if tool_changed && self.s.retain_g43 && self.modal.tool_offset {
-            let on = self.current_tool != Some(0.0);
-            self.tool_offset_words(on);
-            if !gs.iter().any(|g| matches!(g, 430 | 431 | 432 | 490)) {
-                self.retain_line = Some(on);
-            }
-        }
+    }
+
+    /// The line's modal G codes, group by group. Returns the non-modal code
+    /// (G10, G28, G30, G53, G92.x, G52) if any, and whether G43.1 set a
+    /// tool length offset from axis words.
+    // One call site, on the hot path: kept inline as before the split.
+    #[inline(always)]
+    fn apply_g_modes(&mut self, w: &LineWords) -> (Option<i32>, bool) {
         let mut special = None;
-        let other_motion = gs
+        let mut dynamic_tlo = false;
+        let other_motion = w
+            .gs()
             .iter()
             .any(|&g| g != 800 && super::validate::is_motion(g));
-        for &g in gs {
+        for &g in w.gs() {
             if g == 800 && other_motion {
                 continue;
             }
@@ -312,11 +370,11 @@ impl Interp<'_> {
                 400 => self.modal.ccomp = 400,
                 410 | 411 => self.modal.ccomp = 410,
                 420 | 421 => self.modal.ccomp = 420,
-                430 | 432 => self.g43(g, h_word),
+                430 | 432 => self.g43(g, w.h),
                 431 => {
                     self.modal.tool_offset = true;
                     let mut new = [0.0; 9];
-                    for &(a, v) in axis_words {
+                    for &(a, v) in w.axis_words() {
                         new[a] = v / self.to_prog(a);
                     }
                     self.set_tlo(Some(new), "G43.1");
@@ -347,23 +405,23 @@ impl Interp<'_> {
                 _ => {}
             }
         }
-        let _ = self.line_no();
-        if self.comp.is_some() || self.modal.ccomp != 400 {
-            for &g in gs {
-                let r = match g {
-                    400 => self.comp_off(),
-                    410 | 411 | 420 | 421 => self.comp_on(g, words, _file, _start),
-                    _ => Ok(()),
-                };
-                if let Err(k) = r {
-                    return Err(self.error(k, _file, _start, _start));
-                }
-            }
-        }
+        (special, dynamic_tlo)
+    }
+
+    /// A non-modal code that sets offsets, tool data or the position: G92,
+    /// G92.1-G92.3, G52, G10, G28/G30 and their .1, G53.
+    fn apply_non_modal(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        special: i32,
+        words: &Words,
+        w: &LineWords,
+    ) -> Result<(), Error> {
         match special {
-            Some(920) => {
+            920 => {
                 self.keep_active_g92();
-                for &(a, v) in axis_words {
+                for &(a, v) in w.axis_words() {
                     // The position becomes the given value; the offset is
                     // known only if the machine position was.
                     let m = self.machine_pos(a);
@@ -374,20 +432,20 @@ impl Interp<'_> {
                 }
                 self.params.assign(5210, 1.0);
             }
-            Some(921) | Some(922) => {
+            921 | 922 => {
                 self.g92_switch(false);
                 // G92.1 also clears the parameters (no longer applied).
-                if special == Some(921) {
+                if special == 921 {
                     for a in 0..9 {
                         self.params.assign(5211 + a, 0.0);
                     }
                 }
             }
-            Some(520) => {
+            520 => {
                 // G52: a local offset kept in the G92 parameters.
                 let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
                 self.keep_active_g92();
-                for &(a, v) in axis_words {
+                for &(a, v) in w.axis_words() {
                     self.set_param_prog(5211 + a, a, Some(v));
                 }
                 self.params.assign(5210, 1.0);
@@ -397,17 +455,17 @@ impl Interp<'_> {
                     }
                 }
             }
-            Some(923) => self.g92_switch(true),
-            Some(100) => match l_word.map(|v| v.round() as i32) {
-                Some(l @ (1 | 10 | 11)) => self.g10_tool(l, p_word, r_word, words, axis_words),
-                _ => self.g10(l_word, p_word, r_word, axis_words),
+            923 => self.g92_switch(true),
+            100 => match w.l.map(|v| v.round() as i32) {
+                Some(l @ (1 | 10 | 11)) => self.g10_tool(l, w.p, w.r, words, w.axis_words()),
+                _ => self.g10(w.l, w.p, w.r, w.axis_words()),
             },
-            Some(280) | Some(300) => {
-                let base = if special == Some(280) { 5161 } else { 5181 };
-                let axes: Vec<usize> = if axis_words.is_empty() {
+            280 | 300 => {
+                let base = if special == 280 { 5161 } else { 5181 };
+                let axes: Vec<usize> = if w.axis_words().is_empty() {
                     (0..9).collect()
                 } else {
-                    axis_words.iter().map(|a| a.0).collect()
+                    w.axis_words().iter().map(|a| a.0).collect()
                 };
                 for a in axes {
                     let home = self.param_prog(base + a, a);
@@ -415,76 +473,76 @@ impl Interp<'_> {
                     self.set_from_machine_tip(a, home, what);
                 }
             }
-            Some(281) | Some(301) => {
-                let base = if special == Some(281) { 5161 } else { 5181 };
+            281 | 301 => {
+                let base = if special == 281 { 5161 } else { 5181 };
                 for a in 0..9 {
                     let m = self.machine_pos(a);
                     self.set_param_prog(base + a, a, m);
                 }
             }
-            Some(530) => {
+            530 => {
                 if self.comp_offsetting() {
                     let k = ErrorKind::CompForbids { action: "use G53" };
-                    return Err(self.error(k, _file, _start, _start));
+                    return Err(self.error(k, file, start, start));
                 }
                 if self.modal.ccomp != 400 {
                     self.forget(&[0, 1, 2], "cutter radius compensation");
                 }
-                for &(a, v) in axis_words {
+                for &(a, v) in w.axis_words() {
                     self.set_from_machine_tip(a, Some(v), "a G53 machine-coordinate move");
                 }
             }
-            Some(_) => {}
-            None if gs.contains(&53) => {
-                // G5.3 ends the block; axis words on its line start another
-                // one (the reference runs them as G5.2).
-                self.nurbs_end();
-                if !axis_words.is_empty() {
-                    self.nurbs_point(NO_MOTION, axis_words, l_word);
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// The line's motion (no non-modal code): NURBS points, or a move to
+    /// the axis words.
+    // One call site, on the hot path: kept inline as before the split.
+    #[inline(always)]
+    fn apply_motion(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        words: &Words,
+        w: &LineWords,
+        motion_before: i32,
+        dynamic_tlo: bool,
+    ) -> Result<(), Error> {
+        let axis_words = w.axis_words();
+        if w.gs().contains(&53) {
+            // G5.3 ends the block; axis words on its line start another
+            // one (the reference runs them as G5.2).
+            self.nurbs_end();
+            if !axis_words.is_empty() {
+                self.nurbs_point(NO_MOTION, axis_words, w.l);
+            }
+        } else if w.gs().contains(&NURBS) || (motion_before == NURBS && !axis_words.is_empty()) {
+            self.nurbs_point(motion_before, axis_words, w.l);
+        } else {
+            // G43.1's axis words are a move too when the line has a
+            // motion code.
+            let explicit_motion = w
+                .gs()
+                .iter()
+                .any(|&g| g != 800 && super::validate::is_motion(g));
+            if !axis_words.is_empty() && (!dynamic_tlo || explicit_motion) {
+                if let Err(k) = self.check_motion(words, axis_words) {
+                    return Err(self.error(k, file, start, start));
+                }
+                if super::cycle::is_cycle(self.modal.motion) {
+                    self.note_cycle(words);
+                }
+                self.move_to(axis_words);
+                if (self.comp.is_some() || self.modal.ccomp != 400)
+                    && let Err(k) = self.comp_move(words, self.modal.motion)
+                {
+                    return Err(self.error(k, file, start, start));
                 }
             }
-            None if gs.contains(&NURBS) || (motion_before == NURBS && !axis_words.is_empty()) => {
-                self.nurbs_point(motion_before, axis_words, l_word);
-            }
-            None => {
-                // G43.1's axis words are a move too when the line has a
-                // motion code.
-                let explicit_motion = gs
-                    .iter()
-                    .any(|&g| g != 800 && super::validate::is_motion(g));
-                if !axis_words.is_empty() && (!dynamic_tlo || explicit_motion) {
-                    if let Err(k) = self.check_motion(words, axis_words) {
-                        let (a, b) = (_start, _start);
-                        return Err(self.error(k, _file, a, b));
-                    }
-                    if super::cycle::is_cycle(self.modal.motion) {
-                        self.note_cycle(words);
-                    }
-                    self.move_to(axis_words);
-                    if (self.comp.is_some() || self.modal.ccomp != 400)
-                        && let Err(k) = self.comp_move(words, self.modal.motion)
-                    {
-                        return Err(self.error(k, _file, _start, _start));
-                    }
-                }
-            }
         }
-        if let Some(on) = self.retain_line.take() {
-            self.emit_raw(if on { b"G43" } else { b"G49" })?;
-        }
-        if self.comp.is_some() {
-            let stop = ends
-                || words
-                    .iter()
-                    .any(|&(l, v)| l == b'm' && matches!(v, 0.0 | 1.0 | 60.0));
-            if stop && let Err(k) = self.comp_stop(ends) {
-                return Err(self.error(k, _file, _start, _start));
-            }
-        }
-        if ends {
-            self.modal.reset_at_end();
-        }
-        Ok(ends)
+        Ok(())
     }
 
     /// The common line (G0/G1, axis, F and S words, each at most once) in
@@ -846,5 +904,52 @@ impl Interp<'_> {
                 }
             }
         }
+    }
+}
+
+/// A line's words as `apply_words` gathers them in its first pass.
+struct LineWords {
+    /// G codes × 10, in order.
+    g: [i32; 16],
+    gn: usize,
+    /// Axis words: (axis index, value).
+    axes: [(usize, f64); 9],
+    an: usize,
+    p: Option<f64>,
+    h: Option<f64>,
+    q: Option<f64>,
+    l: Option<f64>,
+    r: Option<f64>,
+    /// The line ends the program (M2, M30, or M99 ending the main program).
+    ends: bool,
+    tool_changed: bool,
+}
+
+impl LineWords {
+    #[inline]
+    fn new(ends: bool) -> LineWords {
+        LineWords {
+            g: [0; 16],
+            gn: 0,
+            axes: [(0, 0.0); 9],
+            an: 0,
+            p: None,
+            h: None,
+            q: None,
+            l: None,
+            r: None,
+            ends,
+            tool_changed: false,
+        }
+    }
+
+    #[inline]
+    fn gs(&self) -> &[i32] {
+        &self.g[..self.gn]
+    }
+
+    #[inline]
+    fn axis_words(&self) -> &[(usize, f64)] {
+        &self.axes[..self.an]
     }
 }

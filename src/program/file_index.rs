@@ -13,7 +13,7 @@ use crate::parse::ast::{Label, Line, LineKind, OKind, OLine};
 use crate::parse::{LineError, LineParser, Name};
 
 use super::SourceFile;
-use super::marked_lines::is_mark;
+use super::marked_lines::{Marked, is_mark};
 
 /// One O-line (or M98 line) of a file.
 #[derive(Debug)]
@@ -101,187 +101,235 @@ pub fn control_key(scope: &str, label: &str) -> Name {
 
 pub use super::source_file::next_line;
 
+/// What one pass over the file's marked lines finds.
+#[derive(Default)]
+struct Scan {
+    olines: Vec<OInfo>,
+    skip_errors: Vec<(u32, u32, LineError)>,
+    percent_lines: Vec<u32>,
+    m99_lines: Vec<u32>,
+    first_nonblank: Option<u32>,
+    first_nonblank_next: u32,
+    percent_start: bool,
+}
+
+impl Scan {
+    /// Records one marked line (`raw`, without its terminator).
+    fn line(&mut self, parser: &mut LineParser, m: Marked, raw: &[u8]) {
+        let (idx, pos, terminated) = (m.idx, m.start as u32, m.terminated);
+        let next = (m.end + terminated as u64) as u32;
+        if starts_with_m99(raw) {
+            self.m99_lines.push(idx);
+        }
+        if quick_is_candidate(raw) {
+            match parser.parse(raw, terminated) {
+                Ok(line) => match &line.kind {
+                    LineKind::Blank | LineKind::Items(_) => {}
+                    LineKind::Percent => {
+                        if self.first_nonblank.is_none() {
+                            self.percent_start = true;
+                        }
+                        self.percent_lines.push(idx);
+                    }
+                    LineKind::O(_) | LineKind::M98(_) => {
+                        self.olines.push(OInfo {
+                            line_idx: idx,
+                            start: pos,
+                            next,
+                            line: Rc::new(line),
+                            scope: Name::new(""),
+                            key: None,
+                        });
+                    }
+                },
+                Err(e) => {
+                    if e.when_skipped {
+                        self.skip_errors.push((idx, pos, e));
+                    }
+                }
+            }
+        } else if overlong(raw, terminated)
+            && let Err(e) = parser.parse(raw, terminated)
+        {
+            self.skip_errors.push((idx, pos, e));
+        }
+        if self.first_nonblank.is_none() && raw.iter().any(|b| !b.is_ascii_whitespace()) {
+            self.first_nonblank = Some(idx);
+            self.first_nonblank_next = next;
+        }
+    }
+}
+
+/// Gives each O-line its scope and key; returns the occurrences of each
+/// static key and the O-lines with computed labels.
+fn assign_scopes(olines: &mut [OInfo]) -> (FxMap<Name, Vec<u32>>, Vec<u32>) {
+    let mut current_def: Option<Name> = None;
+    let mut occ: FxMap<Name, Vec<u32>> = FxMap::default();
+    let mut dynamic = Vec::new();
+    for (i, info) in olines.iter_mut().enumerate() {
+        let Some(o) = (match &info.line.kind {
+            LineKind::O(o) => Some(o),
+            _ => None,
+        }) else {
+            continue;
+        };
+        let label = match &o.label {
+            Label::Static(s) => Some(s.clone()),
+            Label::Dynamic(_) => None,
+        };
+        if o.kind == OKind::Sub {
+            if current_def.is_none() {
+                current_def = label.clone();
+            }
+        } else if o.kind == OKind::EndSub && current_def.is_some() && current_def == label {
+            info.scope = current_def.clone().unwrap_or_else(|| Name::new(""));
+            current_def = None;
+        }
+        if let Some(d) = &current_def
+            && (o.kind != OKind::Sub || label.as_ref() != Some(d))
+        {
+            info.scope = d.clone();
+        }
+        match label {
+            Some(l) => {
+                let key = if o.kind.is_control() {
+                    control_key(&info.scope, &l)
+                } else {
+                    l
+                };
+                occ.entry(key.clone()).or_default().push(i as u32);
+                info.key = Some(key);
+            }
+            None => dynamic.push(i as u32),
+        }
+    }
+    (occ, dynamic)
+}
+
+/// Sub definitions: each is matched through its own label's occurrences,
+/// so the work is linear in the number of O-lines. Each definition's line
+/// range is pushed onto `keep`.
+fn sub_defs(
+    olines: &[OInfo],
+    occ: &FxMap<Name, Vec<u32>>,
+    line_count: u32,
+    keep: &mut Vec<(u32, u32)>,
+) -> FxMap<u32, SubDefInfo> {
+    let mut defs = FxMap::default();
+    let sub_lines: Vec<u32> = olines
+        .iter()
+        .enumerate()
+        .filter(|(_, o)| matches!(o.kind(), Some(OKind::Sub | OKind::Bare)))
+        .map(|(j, _)| j as u32)
+        .collect();
+    for (i, info) in olines.iter().enumerate() {
+        let (Some(OKind::Sub), Some(key)) = (info.kind(), &info.key) else {
+            continue;
+        };
+        let mut def = SubDefInfo {
+            end: None,
+            nested: None,
+            valued: Vec::new(),
+        };
+        if let Some(list) = occ.get(key) {
+            let p = list.partition_point(|&j| j as usize <= i);
+            for &j in &list[p..] {
+                match olines[j as usize].kind() {
+                    Some(OKind::EndSub) => {
+                        def.valued.push(j);
+                        def.end = Some(j);
+                        break;
+                    }
+                    Some(OKind::Return) => def.valued.push(j),
+                    Some(OKind::Sub | OKind::Bare) => break,
+                    _ => {}
+                }
+            }
+        }
+        let q = sub_lines.partition_point(|&j| j as usize <= i);
+        if let Some(&j) = sub_lines.get(q)
+            && def.end.is_none_or(|e| j < e)
+        {
+            let name = olines[j as usize]
+                .key
+                .clone()
+                .unwrap_or_else(|| Name::new("?"));
+            def.nested = Some((j, name));
+        }
+        if let Some(e) = def.end {
+            keep.push((info.line_idx, olines[e as usize].line_idx));
+        } else {
+            keep.push((info.line_idx, line_count));
+        }
+        defs.insert(i as u32, def);
+    }
+    defs
+}
+
+/// Loop bodies: one backward pass per label finds each opener's closer;
+/// each body's line range is pushed onto `keep`.
+fn loop_bodies(olines: &[OInfo], occ: &FxMap<Name, Vec<u32>>, keep: &mut Vec<(u32, u32)>) {
+    for list in occ.values() {
+        let (mut next_endwhile, mut next_while, mut next_endrepeat) = (None, None, None);
+        for &j in list.iter().rev() {
+            let info = &olines[j as usize];
+            let closer = match info.kind() {
+                Some(OKind::While) => next_endwhile,
+                Some(OKind::Do) => next_while,
+                Some(OKind::Repeat) => next_endrepeat,
+                _ => None,
+            };
+            if let Some(c) = closer {
+                let c: u32 = c;
+                keep.push((info.line_idx, olines[c as usize].line_idx));
+            }
+            match info.kind() {
+                Some(OKind::EndWhile) => next_endwhile = Some(j),
+                Some(OKind::While) => next_while = Some(j),
+                Some(OKind::EndRepeat) => next_endrepeat = Some(j),
+                _ => {}
+            }
+        }
+    }
+}
+
+/// Sorts line ranges and merges overlapping or adjacent ones.
+fn merge_ranges(mut keep: Vec<(u32, u32)>) -> Vec<(u32, u32)> {
+    keep.sort_unstable();
+    let mut merged: Vec<(u32, u32)> = Vec::new();
+    for (a, b) in keep {
+        match merged.last_mut() {
+            Some(last) if a <= last.1 + 1 => last.1 = last.1.max(b),
+            _ => merged.push((a, b)),
+        }
+    }
+    merged
+}
+
 impl FileIndex {
     pub fn build(file: Arc<SourceFile>) -> FileIndex {
         let mut parser = LineParser::default();
-        let mut olines = Vec::new();
-        let mut skip_errors = Vec::new();
-        let mut percent_lines = Vec::new();
-        let mut m99_lines = Vec::new();
-        let mut first_nonblank = None;
-        let mut first_nonblank_next = 0u32;
-        let mut percent_start = false;
-        let mut current_def: Option<Name> = None;
+        let mut scan = Scan::default();
         let scanned = file.scan_marked_lines(crate::parse::MAX_LINE + 1, &matters, |m, raw| {
-            let (idx, pos, terminated) = (m.idx, m.start as u32, m.terminated);
-            let next = (m.end + terminated as u64) as u32;
-            if starts_with_m99(raw) {
-                m99_lines.push(idx);
-            }
-            if quick_is_candidate(raw) {
-                match parser.parse(raw, terminated) {
-                    Ok(line) => match &line.kind {
-                        LineKind::Blank => {}
-                        LineKind::Percent => {
-                            if first_nonblank.is_none() {
-                                percent_start = true;
-                            }
-                            percent_lines.push(idx);
-                        }
-                        LineKind::O(_) | LineKind::M98(_) => {
-                            olines.push(OInfo {
-                                line_idx: idx,
-                                start: pos,
-                                next,
-                                line: Rc::new(line),
-                                scope: Name::new(""),
-                                key: None,
-                            });
-                        }
-                        LineKind::Items(_) => {}
-                    },
-                    Err(e) => {
-                        if e.when_skipped {
-                            skip_errors.push((idx, pos, e));
-                        }
-                    }
-                }
-            } else if overlong(raw, terminated)
-                && let Err(e) = parser.parse(raw, terminated)
-            {
-                skip_errors.push((idx, pos, e));
-            }
-            if first_nonblank.is_none() && raw.iter().any(|b| !b.is_ascii_whitespace()) {
-                first_nonblank = Some(idx);
-                first_nonblank_next = next;
-            }
+            scan.line(&mut parser, m, raw)
         });
         let (line_count, read_error) = match scanned {
             Ok(n) => (n, None),
             Err(e) => (0, Some(e.to_string())),
         };
-        // Scopes and keys.
-        let mut occ: FxMap<Name, Vec<u32>> = FxMap::default();
-        let mut dynamic = Vec::new();
-        for (i, info) in olines.iter_mut().enumerate() {
-            let Some(o) = (match &info.line.kind {
-                LineKind::O(o) => Some(o),
-                _ => None,
-            }) else {
-                continue;
-            };
-            let label = match &o.label {
-                Label::Static(s) => Some(s.clone()),
-                Label::Dynamic(_) => None,
-            };
-            if o.kind == OKind::Sub {
-                if current_def.is_none() {
-                    current_def = label.clone();
-                }
-            } else if o.kind == OKind::EndSub && current_def.is_some() && current_def == label {
-                info.scope = current_def.clone().unwrap_or_else(|| Name::new(""));
-                current_def = None;
-            }
-            if let Some(d) = &current_def
-                && (o.kind != OKind::Sub || label.as_ref() != Some(d))
-            {
-                info.scope = d.clone();
-            }
-            match label {
-                Some(l) => {
-                    let key = if o.kind.is_control() {
-                        control_key(&info.scope, &l)
-                    } else {
-                        l
-                    };
-                    occ.entry(key.clone()).or_default().push(i as u32);
-                    info.key = Some(key);
-                }
-                None => dynamic.push(i as u32),
-            }
-        }
-        // Sub definitions: each is matched through its own label's
-        // occurrences, so the work is linear in the number of O-lines.
-        let mut defs = FxMap::default();
+        let Scan {
+            mut olines,
+            skip_errors,
+            percent_lines,
+            m99_lines,
+            first_nonblank,
+            first_nonblank_next,
+            percent_start,
+        } = scan;
+        let (occ, dynamic) = assign_scopes(&mut olines);
         let mut keep = Vec::new();
-        let sub_lines: Vec<u32> = olines
-            .iter()
-            .enumerate()
-            .filter(|(_, o)| matches!(o.kind(), Some(OKind::Sub | OKind::Bare)))
-            .map(|(j, _)| j as u32)
-            .collect();
-        for (i, info) in olines.iter().enumerate() {
-            let (Some(OKind::Sub), Some(key)) = (info.kind(), &info.key) else {
-                continue;
-            };
-            let mut def = SubDefInfo {
-                end: None,
-                nested: None,
-                valued: Vec::new(),
-            };
-            if let Some(list) = occ.get(key) {
-                let p = list.partition_point(|&j| j as usize <= i);
-                for &j in &list[p..] {
-                    match olines[j as usize].kind() {
-                        Some(OKind::EndSub) => {
-                            def.valued.push(j);
-                            def.end = Some(j);
-                            break;
-                        }
-                        Some(OKind::Return) => def.valued.push(j),
-                        Some(OKind::Sub | OKind::Bare) => break,
-                        _ => {}
-                    }
-                }
-            }
-            let q = sub_lines.partition_point(|&j| j as usize <= i);
-            if let Some(&j) = sub_lines.get(q)
-                && def.end.is_none_or(|e| j < e)
-            {
-                let name = olines[j as usize]
-                    .key
-                    .clone()
-                    .unwrap_or_else(|| Name::new("?"));
-                def.nested = Some((j, name));
-            }
-            if let Some(e) = def.end {
-                keep.push((info.line_idx, olines[e as usize].line_idx));
-            } else {
-                keep.push((info.line_idx, line_count));
-            }
-            defs.insert(i as u32, def);
-        }
-        // Loop bodies: one backward pass per label finds each opener's closer.
-        for list in occ.values() {
-            let (mut next_endwhile, mut next_while, mut next_endrepeat) = (None, None, None);
-            for &j in list.iter().rev() {
-                let info = &olines[j as usize];
-                let closer = match info.kind() {
-                    Some(OKind::While) => next_endwhile,
-                    Some(OKind::Do) => next_while,
-                    Some(OKind::Repeat) => next_endrepeat,
-                    _ => None,
-                };
-                if let Some(c) = closer {
-                    let c: u32 = c;
-                    keep.push((info.line_idx, olines[c as usize].line_idx));
-                }
-                match info.kind() {
-                    Some(OKind::EndWhile) => next_endwhile = Some(j),
-                    Some(OKind::While) => next_while = Some(j),
-                    Some(OKind::EndRepeat) => next_endrepeat = Some(j),
-                    _ => {}
-                }
-            }
-        }
-        keep.sort_unstable();
-        let mut merged: Vec<(u32, u32)> = Vec::new();
-        for (a, b) in keep {
-            match merged.last_mut() {
-                Some(last) if a <= last.1 + 1 => last.1 = last.1.max(b),
-                _ => merged.push((a, b)),
-            }
-        }
+        let defs = sub_defs(&olines, &occ, line_count, &mut keep);
+        loop_bodies(&olines, &occ, &mut keep);
         FileIndex {
             file,
             read_error,
@@ -294,7 +342,7 @@ impl FileIndex {
             percent_lines,
             m99_lines,
             defs,
-            keep: merged,
+            keep: merge_ranges(keep),
             percent_start,
             first_nonblank,
             line_count,
