@@ -121,23 +121,7 @@ impl Interp<'_> {
             x += word(b'x').unwrap_or(0.0);
             z += word(b'z').unwrap_or(0.0);
         }
-        let cycle = if code == 700 {
-            Cycle::Finish {
-                d: word(b'd').unwrap_or(0.0),
-                e: word(b'e').unwrap_or(0.0),
-                passes: word(b'p').unwrap_or(1.0),
-            }
-        } else {
-            Cycle::Rough {
-                face: code >= 720,
-                mode: (code % 10) as u8,
-                u: word(b'u').unwrap_or(0.0),
-                w: word(b'w').unwrap_or(0.0),
-                d: word(b'd').unwrap_or(0.0),
-                i: word(b'i').unwrap_or(1.0),
-                r: word(b'r').unwrap_or(0.5),
-            }
-        };
+        let cycle = lathe_cycle(code, word);
         // The rapid to the start is made with the words taken as absolute.
         let rapid = C::new(word(b'z').unwrap_or(cz), word(b'x').unwrap_or(cx));
         self.lathe_move(file, start, len, Move::Rapid(rapid))?;
@@ -147,7 +131,35 @@ impl Interp<'_> {
         }
         let label = Name::new(&(q as i64).to_string());
         let target = self.contour_sub(file, start, len, &label)?;
-        // Enter the subroutine as a call without arguments.
+        let level = self.enter_contour(file, start, len, label, &target)?;
+        let begin = C::new(z, x);
+        self.lathe = Some(Box::new(LatheRun {
+            level,
+            file: file.clone(),
+            start,
+            line: self.current_line_idx,
+            cycle,
+            begin,
+            contour: Contour::new(begin),
+            point: begin,
+            motion: self.modal.motion,
+            absolute: self.modal.absolute,
+            ijk_absolute: self.modal.ijk_absolute,
+            at: (self.pos.axes[0].clone(), self.pos.axes[2].clone()),
+        }));
+        Ok(())
+    }
+
+    /// Enters the contour subroutine as a call without arguments; returns
+    /// the frame level the cycle runs at.
+    fn enter_contour(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        len: u32,
+        label: Name,
+        target: &SubRec,
+    ) -> Result<usize, Error> {
         let ret = self.cur.clone();
         let level = self.frames.len();
         let mut f = match self.frame_pool.pop() {
@@ -183,22 +195,7 @@ impl Interp<'_> {
         self.called.insert(label.clone());
         self.last_called = Some(label);
         self.goto(&target.file, target.oidx, true);
-        let begin = C::new(z, x);
-        self.lathe = Some(Box::new(LatheRun {
-            level,
-            file: file.clone(),
-            start,
-            line: self.current_line_idx,
-            cycle,
-            begin,
-            contour: Contour::new(begin),
-            point: begin,
-            motion: self.modal.motion,
-            absolute: self.modal.absolute,
-            ijk_absolute: self.modal.ijk_absolute,
-            at: (self.pos.axes[0].clone(), self.pos.axes[2].clone()),
-        }));
-        Ok(())
+        Ok(level)
     }
 
     /// The contour subroutine: one already defined, one in a file of the
@@ -347,29 +344,7 @@ impl Interp<'_> {
             return Ok(());
         };
         let (absolute, ijk_absolute, point) = (run.absolute, run.ijk_absolute, run.point);
-        let mut end = if absolute { point } else { C::new(0.0, 0.0) };
-        if let Some(u) = word(b'u') {
-            if !absolute {
-                return Err(bad(self, LatheError::UIncremental));
-            }
-            if word(b'x').is_some() {
-                return Err(bad(self, LatheError::UAndX));
-            }
-            end.im += if diameter { u / 2.0 } else { u };
-        } else if let Some(x) = word(b'x') {
-            end.im = x;
-        }
-        if let Some(w) = word(b'w') {
-            if !absolute {
-                return Err(bad(self, LatheError::WIncremental));
-            }
-            if word(b'z').is_some() {
-                return Err(bad(self, LatheError::WAndZ));
-            }
-            end.re += w;
-        } else if let Some(z) = word(b'z') {
-            end.re = z;
-        }
+        let mut end = contour_end(&word, point, absolute, diameter).map_err(|k| bad(self, k))?;
         let (iw, kw) = (word(b'i'), word(b'k'));
         let mut center = C::new(kw.unwrap_or(0.0), iw.unwrap_or(0.0));
         if !absolute {
@@ -391,20 +366,10 @@ impl Interp<'_> {
                         if iw.is_some() || kw.is_some() {
                             return Err(bad(self, LatheError::ArcRAndIk));
                         }
-                        let chord = end - point;
-                        let n = chord.re * chord.re + chord.im * chord.im;
-                        let f = ((r * r - n / 4.0) / n).sqrt();
-                        if !f.is_finite() {
+                        let Some(c) = center_from_radius(point, end, r, motion == 30) else {
                             return Err(bad(self, LatheError::ArcRadiusTooSmall));
-                        }
-                        let mid = C::new((point.re + end.re) / 2.0, (point.im + end.im) / 2.0);
-                        // i * f * chord
-                        let d = C::new(-f * chord.im, f * chord.re);
-                        center = if motion == 30 {
-                            C::new(mid.re + d.re, mid.im + d.im)
-                        } else {
-                            C::new(mid.re - d.re, mid.im - d.im)
                         };
+                        center = c;
                     } else {
                         if iw.is_none() && kw.is_none() {
                             return Err(bad(self, LatheError::ArcNoIk));
@@ -551,4 +516,80 @@ fn line_len(file: &Rc<FileIndex>, start: u32) -> u32 {
         }
         None => 0,
     }
+}
+
+/// The cycle a G70 (`code` 700) or G71/G72 (710..722) block asks for, from
+/// its words.
+fn lathe_cycle(code: i32, word: impl Fn(u8) -> Option<f64>) -> Cycle {
+    if code == 700 {
+        Cycle::Finish {
+            d: word(b'd').unwrap_or(0.0),
+            e: word(b'e').unwrap_or(0.0),
+            passes: word(b'p').unwrap_or(1.0),
+        }
+    } else {
+        Cycle::Rough {
+            face: code >= 720,
+            mode: (code % 10) as u8,
+            u: word(b'u').unwrap_or(0.0),
+            w: word(b'w').unwrap_or(0.0),
+            d: word(b'd').unwrap_or(0.0),
+            i: word(b'i').unwrap_or(1.0),
+            r: word(b'r').unwrap_or(0.5),
+        }
+    }
+}
+
+/// The end of a contour move before the incremental offset is added: U/W
+/// (absolute mode only) add to the current point, X/Z replace it (from
+/// zero in incremental mode).
+fn contour_end(
+    word: &impl Fn(u8) -> Option<f64>,
+    point: C,
+    absolute: bool,
+    diameter: bool,
+) -> Result<C, LatheError> {
+    let mut end = if absolute { point } else { C::new(0.0, 0.0) };
+    if let Some(u) = word(b'u') {
+        if !absolute {
+            return Err(LatheError::UIncremental);
+        }
+        if word(b'x').is_some() {
+            return Err(LatheError::UAndX);
+        }
+        end.im += if diameter { u / 2.0 } else { u };
+    } else if let Some(x) = word(b'x') {
+        end.im = x;
+    }
+    if let Some(w) = word(b'w') {
+        if !absolute {
+            return Err(LatheError::WIncremental);
+        }
+        if word(b'z').is_some() {
+            return Err(LatheError::WAndZ);
+        }
+        end.re += w;
+    } else if let Some(z) = word(b'z') {
+        end.re = z;
+    }
+    Ok(end)
+}
+
+/// The centre of the arc of radius `r` from `point` to `end` (counter-
+/// clockwise: `ccw`); `None` when the radius is too small for the chord.
+fn center_from_radius(point: C, end: C, r: f64, ccw: bool) -> Option<C> {
+    let chord = end - point;
+    let n = chord.re * chord.re + chord.im * chord.im;
+    let f = ((r * r - n / 4.0) / n).sqrt();
+    if !f.is_finite() {
+        return None;
+    }
+    let mid = C::new((point.re + end.re) / 2.0, (point.im + end.im) / 2.0);
+    // i * f * chord
+    let d = C::new(-f * chord.im, f * chord.re);
+    Some(if ccw {
+        C::new(mid.re + d.re, mid.im + d.im)
+    } else {
+        C::new(mid.re - d.re, mid.im - d.im)
+    })
 }

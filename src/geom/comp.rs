@@ -943,30 +943,12 @@ impl<T: Clone> Comp<T> {
                     turn: qturn,
                     ..
                 }) => {
-                    let oldrad = hypot(qc[1] - qe[1], qc[0] - qe[0]);
                     let newrad = if inside {
                         arc_radius - r
                     } else {
                         arc_radius + r
                     };
-                    let arc_cc = hypot(qc[1] - center[1], qc[0] - center[0]);
-                    if oldrad == 0.0 || arc_cc == 0.0 {
-                        return Err(CompError::ArcArcSameCenter);
-                    }
-                    let a = (oldrad * oldrad + arc_cc * arc_cc - newrad * newrad)
-                        / (2.0 * oldrad * arc_cc);
-                    if !(-1.0..=1.0).contains(&a) {
-                        return Err(CompError::ArcArcGouge);
-                    }
-                    let pullback = a.acos();
-                    let cc_dir = (center[1] - qc[1]).atan2(center[0] - qc[0]);
-                    let plus = tool_inside(side, qturn) == (turn > 0);
-                    let dir = if plus {
-                        cc_dir + pullback
-                    } else {
-                        cc_dir - pullback
-                    };
-                    let m = [qc[0] + oldrad * dir.cos(), qc[1] + oldrad * dir.sin()];
+                    let m = arc_arc_meet(side, (qe, qc, qturn), center, turn, newrad)?;
                     self.move_end_and_release(m, out)?;
                 }
                 _ => {
@@ -1091,6 +1073,36 @@ impl<T: Clone> Comp<T> {
             }
         }
     }
+}
+
+/// Where the offset path of a held arc (end `qe`, centre `qc`, turn
+/// `qturn`) meets the offset circle of radius `newrad` around `center` of
+/// the next arc (turn `turn`), at a concave corner between the two arcs.
+fn arc_arc_meet(
+    side: Side,
+    (qe, qc, qturn): ([f64; 2], [f64; 2], i32),
+    center: [f64; 2],
+    turn: i32,
+    newrad: f64,
+) -> Result<[f64; 2], CompError> {
+    let oldrad = hypot(qc[1] - qe[1], qc[0] - qe[0]);
+    let arc_cc = hypot(qc[1] - center[1], qc[0] - center[0]);
+    if oldrad == 0.0 || arc_cc == 0.0 {
+        return Err(CompError::ArcArcSameCenter);
+    }
+    let a = (oldrad * oldrad + arc_cc * arc_cc - newrad * newrad) / (2.0 * oldrad * arc_cc);
+    if !(-1.0..=1.0).contains(&a) {
+        return Err(CompError::ArcArcGouge);
+    }
+    let pullback = a.acos();
+    let cc_dir = (center[1] - qc[1]).atan2(center[0] - qc[0]);
+    let plus = tool_inside(side, qturn) == (turn > 0);
+    let dir = if plus {
+        cc_dir + pullback
+    } else {
+        cc_dir - pullback
+    };
+    Ok([qc[0] + oldrad * dir.cos(), qc[1] + oldrad * dir.sin()])
 }
 
 #[cfg(test)]

@@ -303,32 +303,13 @@ impl Lowerer<'_> {
         let cp = it.next().expect("o_cmd");
         let cmd_span = self.tight_span(&cp);
         let rule = cp.as_rule();
-        let kind = match rule {
-            Rule::o_sub => OKind::Sub,
-            Rule::o_endsub => OKind::EndSub,
-            Rule::o_call => OKind::Call,
-            Rule::o_do => OKind::Do,
-            Rule::o_while => OKind::While,
-            Rule::o_repeat => OKind::Repeat,
-            Rule::o_if => OKind::If,
-            Rule::o_elseif => OKind::ElseIf,
-            Rule::o_else => OKind::Else,
-            Rule::o_endif => OKind::EndIf,
-            Rule::o_break => OKind::Break,
-            Rule::o_continue => OKind::Continue,
-            Rule::o_endwhile => OKind::EndWhile,
-            Rule::o_endrepeat => OKind::EndRepeat,
-            Rule::o_return => OKind::Return,
-            Rule::o_bare => OKind::Bare,
-            Rule::o_unknown => {
-                return Err((
-                    ErrorKind::UnknownOCommand {
-                        word: cp.as_str().to_string(),
-                    },
-                    cmd_span,
-                ));
-            }
-            r => unreachable!("{r:?} in lower_o_line"),
+        let Some(kind) = o_kind(rule) else {
+            return Err((
+                ErrorKind::UnknownOCommand {
+                    word: cp.as_str().to_string(),
+                },
+                cmd_span,
+            ));
         };
         let mut expr = None;
         let mut args = Vec::new();
@@ -485,4 +466,28 @@ pub fn integer_value(v: f64) -> Result<i64, ErrorKind> {
     } else {
         Ok(f as i64)
     }
+}
+
+/// The O-word command a grammar rule stands for (`None`: an unknown one).
+fn o_kind(rule: Rule) -> Option<OKind> {
+    Some(match rule {
+        Rule::o_sub => OKind::Sub,
+        Rule::o_endsub => OKind::EndSub,
+        Rule::o_call => OKind::Call,
+        Rule::o_do => OKind::Do,
+        Rule::o_while => OKind::While,
+        Rule::o_repeat => OKind::Repeat,
+        Rule::o_if => OKind::If,
+        Rule::o_elseif => OKind::ElseIf,
+        Rule::o_else => OKind::Else,
+        Rule::o_endif => OKind::EndIf,
+        Rule::o_break => OKind::Break,
+        Rule::o_continue => OKind::Continue,
+        Rule::o_endwhile => OKind::EndWhile,
+        Rule::o_endrepeat => OKind::EndRepeat,
+        Rule::o_return => OKind::Return,
+        Rule::o_bare => OKind::Bare,
+        Rule::o_unknown => return None,
+        r => unreachable!("{r:?} in lower_o_line"),
+    })
 }

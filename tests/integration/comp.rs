@@ -197,6 +197,193 @@ impl Gen {
         ));
         self.pos = p;
     }
+
+    /// The tool: in the table (and loaded) or as G41.1/G42.1's D word, its
+    /// side, radius and orientation, and the words that turn compensation on.
+    fn tool(&mut self, xz: bool, mm: bool, scale: f64) -> ToolSetup {
+        let g = self;
+        let rel = match g.rng.below(4) {
+            0 => g.rng.range(0.01, 0.05),
+            1 => g.rng.range(0.05, 0.2),
+            2 => g.rng.range(0.2, 0.5),
+            _ => g.rng.range(0.4, 0.9),
+        };
+        let tool_r_prog = rel * scale;
+        let mut tools = String::new();
+        let orientation = if xz && g.rng.chance(0.6) {
+            g.rng.below(10) as i32
+        } else {
+            0
+        };
+        let negative = g.rng.chance(0.08);
+        let side = if g.rng.chance(0.5) {
+            Side::Left
+        } else {
+            Side::Right
+        };
+        let gside = if side == Side::Left { "G41" } else { "G42" };
+        let use_d = g.rng.chance(0.3);
+        let radius;
+        let on_line;
+        if use_d {
+            let (d, dv) = num(
+                if negative {
+                    -2.0 * tool_r_prog
+                } else {
+                    2.0 * tool_r_prog
+                },
+                4,
+            );
+            radius = dv / 2.0;
+            let lw = if xz && orientation != 0 {
+                format!(" L{orientation}")
+            } else {
+                String::new()
+            };
+            on_line = format!("{gside}.1 D{d}{lw}");
+        } else {
+            let inch = tool_r_prog * 2.0 / if mm { 25.4 } else { 1.0 };
+            let (d, dv) = num(if negative { -inch } else { inch }, 4);
+            tools.push_str(&format!("T1 P1 D{d} Q{orientation}\n"));
+            // As the reference converts it: through millimetres.
+            let mm_len = dv / 0.03937007874016;
+            radius = if mm { mm_len } else { mm_len / 25.4 } / 2.0;
+            g.line("T1 M6".to_string());
+            on_line = if g.rng.chance(0.5) {
+                format!("{gside} D1")
+            } else {
+                gside.to_string()
+            };
+        }
+        let orientation = if use_d && !(xz && orientation != 0) {
+            0
+        } else {
+            orientation
+        };
+        ToolSetup {
+            tools,
+            side,
+            radius,
+            on_line,
+            orientation,
+        }
+    }
+
+    /// Contour: vertices around a centre, some pulled in (inside corners);
+    /// a closed one comes back to its first vertex (and maybe its second).
+    fn contour(&mut self, scale: f64) -> Vec<[f64; 2]> {
+        let g = self;
+        let n = 2 + g.rng.below(7);
+        let closed = g.rng.chance(0.6);
+        let center = [
+            g.rng.range(-1.0, 1.0) * scale,
+            g.rng.range(-1.0, 1.0) * scale,
+        ];
+        let size = g.rng.range(0.3, 2.0) * scale;
+        let dir = if g.rng.chance(0.5) { 1.0 } else { -1.0 };
+        let mut verts = Vec::new();
+        let mut ang = g.rng.range(0.0, std::f64::consts::TAU);
+        for _ in 0..n {
+            let r = size
+                * if g.rng.chance(0.3) {
+                    g.rng.range(0.2, 0.6)
+                } else {
+                    g.rng.range(0.8, 1.2)
+                };
+            verts.push([center[0] + r * ang.cos(), center[1] + r * ang.sin()]);
+            ang += dir * std::f64::consts::TAU / n as f64 * g.rng.range(0.5, 1.3);
+        }
+        if closed {
+            let v0 = verts[0];
+            verts.push(v0);
+            if g.rng.chance(0.3) {
+                let v1 = verts[1];
+                verts.push(v1);
+            }
+        }
+        verts
+    }
+
+    /// The moves along the contour after the entry: lines and arcs, now
+    /// and then a move off the plane or an optional stop.
+    fn contour_moves(&mut self, verts: &[[f64; 2]], scale: f64) {
+        let g = self;
+        for v in verts {
+            let to = [v[0], v[1], g.pos[2]];
+            let roll = g.rng.unit();
+            if roll < 0.06 {
+                // A move off the plane.
+                let dz = g.rng.range(-0.2, 0.2) * scale;
+                let gm = if g.rng.chance(0.5) { "G0" } else { "G1" };
+                let p = [g.pos[0], g.pos[1], g.pos[2] + dz];
+                g.straight(gm, p, true);
+            } else if roll < 0.08 {
+                let l = g.line("M1".to_string());
+                g.steps.push((l, Step::Stop { end: false }));
+            }
+            if g.rng.chance(0.45) {
+                let k = match g.rng.below(4) {
+                    0 => g.rng.range(-0.3, 0.3),
+                    1 => g.rng.range(-3.0, 3.0),
+                    _ => g.rng.range(-1.2, 1.2),
+                };
+                let ccw = g.rng.chance(0.5);
+                g.arc(to, k, ccw, "");
+            } else {
+                let gm = if g.rng.chance(0.1) { "G0" } else { "G1" };
+                g.straight(gm, to, true);
+            }
+        }
+    }
+
+    /// Leaves the contour: M2 with compensation on, G40 alone then a move,
+    /// or G40 on a move's line.
+    fn leave(&mut self, scale: f64) {
+        let g = self;
+        match g.rng.below(5) {
+            0 => {
+                // M2 with compensation still on.
+            }
+            1 => {
+                let l = g.line("G40".to_string());
+                g.steps.push((l, Step::Off));
+                if g.rng.chance(0.2) {
+                    let to = [g.pos[0] + scale, g.pos[1] + scale, g.pos[2]];
+                    g.arc(to, 0.5, true, "");
+                } else {
+                    let to = [g.pos[0] + scale, g.pos[1], g.pos[2] + scale];
+                    g.straight("G0", to, false);
+                }
+            }
+            _ => {
+                let to = [
+                    g.pos[0] + g.rng.range(-1.0, 1.0) * scale,
+                    g.pos[1] + g.rng.range(-1.0, 1.0) * scale,
+                    g.pos[2],
+                ];
+                let (w, p) = g.axes(to);
+                let l = g.line(format!("G40 G1 {w}"));
+                g.steps.push((l, Step::Off));
+                g.steps.push((
+                    l,
+                    Step::Plain {
+                        rapid: false,
+                        end: p,
+                    },
+                ));
+                g.pos = p;
+            }
+        }
+    }
+}
+
+/// What `Gen::tool` chose.
+struct ToolSetup {
+    tools: String,
+    side: Side,
+    radius: f64,
+    on_line: String,
+    orientation: i32,
 }
 
 fn generate(seed: u64) -> Case {
@@ -216,64 +403,13 @@ fn generate(seed: u64) -> Case {
     let plane = if xz { "G18" } else { "G17" };
     g.line(format!("{units} {plane} G90 G94 F100"));
     // Tool: diameter in inches in the table.
-    let rel = match g.rng.below(4) {
-        0 => g.rng.range(0.01, 0.05),
-        1 => g.rng.range(0.05, 0.2),
-        2 => g.rng.range(0.2, 0.5),
-        _ => g.rng.range(0.4, 0.9),
-    };
-    let tool_r_prog = rel * scale;
-    let mut tools = String::new();
-    let orientation = if xz && g.rng.chance(0.6) {
-        g.rng.below(10) as i32
-    } else {
-        0
-    };
-    let negative = g.rng.chance(0.08);
-    let side = if g.rng.chance(0.5) {
-        Side::Left
-    } else {
-        Side::Right
-    };
-    let gside = if side == Side::Left { "G41" } else { "G42" };
-    let use_d = g.rng.chance(0.3);
-    let radius;
-    let on_line;
-    if use_d {
-        let (d, dv) = num(
-            if negative {
-                -2.0 * tool_r_prog
-            } else {
-                2.0 * tool_r_prog
-            },
-            4,
-        );
-        radius = dv / 2.0;
-        let lw = if xz && orientation != 0 {
-            format!(" L{orientation}")
-        } else {
-            String::new()
-        };
-        on_line = format!("{gside}.1 D{d}{lw}");
-    } else {
-        let inch = tool_r_prog * 2.0 / if mm { 25.4 } else { 1.0 };
-        let (d, dv) = num(if negative { -inch } else { inch }, 4);
-        tools.push_str(&format!("T1 P1 D{d} Q{orientation}\n"));
-        // As the reference converts it: through millimetres.
-        let mm_len = dv / 0.03937007874016;
-        radius = if mm { mm_len } else { mm_len / 25.4 } / 2.0;
-        g.line("T1 M6".to_string());
-        on_line = if g.rng.chance(0.5) {
-            format!("{gside} D1")
-        } else {
-            gside.to_string()
-        };
-    }
-    let orientation = if use_d && !(xz && orientation != 0) {
-        0
-    } else {
-        orientation
-    };
+    let ToolSetup {
+        tools,
+        side,
+        radius,
+        on_line,
+        orientation,
+    } = g.tool(xz, mm, scale);
     // Start position.
     let start = [
         g.rng.range(-2.0, 2.0) * scale,
@@ -282,34 +418,7 @@ fn generate(seed: u64) -> Case {
     ];
     g.straight("G0", start, false);
     // Contour: vertices around a centre, some pulled in (inside corners).
-    let n = 2 + g.rng.below(7);
-    let closed = g.rng.chance(0.6);
-    let center = [
-        g.rng.range(-1.0, 1.0) * scale,
-        g.rng.range(-1.0, 1.0) * scale,
-    ];
-    let size = g.rng.range(0.3, 2.0) * scale;
-    let dir = if g.rng.chance(0.5) { 1.0 } else { -1.0 };
-    let mut verts = Vec::new();
-    let mut ang = g.rng.range(0.0, std::f64::consts::TAU);
-    for _ in 0..n {
-        let r = size
-            * if g.rng.chance(0.3) {
-                g.rng.range(0.2, 0.6)
-            } else {
-                g.rng.range(0.8, 1.2)
-            };
-        verts.push([center[0] + r * ang.cos(), center[1] + r * ang.sin()]);
-        ang += dir * std::f64::consts::TAU / n as f64 * g.rng.range(0.5, 1.3);
-    }
-    if closed {
-        let v0 = verts[0];
-        verts.push(v0);
-        if g.rng.chance(0.3) {
-            let v1 = verts[1];
-            verts.push(v1);
-        }
-    }
+    let mut verts = g.contour(scale);
     let z = start[2];
     // Compensation on: alone, or on the entry move's line.
     let together = g.rng.chance(0.4);
@@ -371,67 +480,9 @@ fn generate(seed: u64) -> Case {
     } else {
         g.straight(if entry_rapid { "G0" } else { "G1" }, to, true);
     }
-    for v in verts.iter().skip(1) {
-        let to = [v[0], v[1], g.pos[2]];
-        let roll = g.rng.unit();
-        if roll < 0.06 {
-            // A move off the plane.
-            let dz = g.rng.range(-0.2, 0.2) * scale;
-            let gm = if g.rng.chance(0.5) { "G0" } else { "G1" };
-            let p = [g.pos[0], g.pos[1], g.pos[2] + dz];
-            g.straight(gm, p, true);
-        } else if roll < 0.08 {
-            let l = g.line("M1".to_string());
-            g.steps.push((l, Step::Stop { end: false }));
-        }
-        if g.rng.chance(0.45) {
-            let k = match g.rng.below(4) {
-                0 => g.rng.range(-0.3, 0.3),
-                1 => g.rng.range(-3.0, 3.0),
-                _ => g.rng.range(-1.2, 1.2),
-            };
-            let ccw = g.rng.chance(0.5);
-            g.arc(to, k, ccw, "");
-        } else {
-            let gm = if g.rng.chance(0.1) { "G0" } else { "G1" };
-            g.straight(gm, to, true);
-        }
-    }
+    g.contour_moves(&verts[1..], scale);
     // Leave.
-    match g.rng.below(5) {
-        0 => {
-            // M2 with compensation still on.
-        }
-        1 => {
-            let l = g.line("G40".to_string());
-            g.steps.push((l, Step::Off));
-            if g.rng.chance(0.2) {
-                let to = [g.pos[0] + scale, g.pos[1] + scale, g.pos[2]];
-                g.arc(to, 0.5, true, "");
-            } else {
-                let to = [g.pos[0] + scale, g.pos[1], g.pos[2] + scale];
-                g.straight("G0", to, false);
-            }
-        }
-        _ => {
-            let to = [
-                g.pos[0] + g.rng.range(-1.0, 1.0) * scale,
-                g.pos[1] + g.rng.range(-1.0, 1.0) * scale,
-                g.pos[2],
-            ];
-            let (w, p) = g.axes(to);
-            let l = g.line(format!("G40 G1 {w}"));
-            g.steps.push((l, Step::Off));
-            g.steps.push((
-                l,
-                Step::Plain {
-                    rapid: false,
-                    end: p,
-                },
-            ));
-            g.pos = p;
-        }
-    }
+    g.leave(scale);
     let l = g.line("M2".to_string());
     g.steps.push((l, Step::Stop { end: true }));
     Case {

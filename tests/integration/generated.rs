@@ -1519,31 +1519,9 @@ fn generate(seed: u64) -> Program {
     }
 }
 
-fn generate_once(seed: u64) -> (Program, f64) {
-    let mut rng = Rng::new(seed);
-    let mut kinds = Vec::new();
-    for (k, max) in [
-        (SubKind::Pre, 2),
-        (SubKind::Fanuc, 2),
-        (SubKind::Post, 2),
-        (SubKind::File, 3),
-    ] {
-        for _ in 0..rng.range(0, max) {
-            kinds.push(k);
-        }
-    }
+/// Gives each subroutine its name and the name its calls use.
+fn name_subs(g: &mut Gen, kinds: &[SubKind]) {
     let n = kinds.len();
-    let mut g = Gen {
-        rng,
-        subs: vec![None; n],
-        kinds: kinds.clone(),
-        levels: vec![0; n],
-        cost: vec![0.0; n],
-        rec: vec![0; n],
-        nargs: vec![0; n],
-        msg: 0,
-    };
-    // names first (calls need them)
     let mut file_num = 90;
     for (i, kind) in kinds.iter().enumerate().take(n) {
         let (name, call_name) = match kind {
@@ -1582,114 +1560,149 @@ fn generate_once(seed: u64) -> (Program, f64) {
             file_post: Vec::new(),
         });
     }
-    // bodies, callees first
-    for i in (0..n).rev() {
-        let k = kinds[i];
-        let allowed = |j: usize| -> bool {
-            j > i
-                && match k {
-                    SubKind::Pre => true,
-                    SubKind::Fanuc => kinds[j] != SubKind::Pre,
-                    SubKind::Post => matches!(kinds[j], SubKind::Post | SubKind::File),
-                    SubKind::File => kinds[j] == SubKind::File,
-                }
-        };
-        let mut callees: Vec<usize> = (0..n)
-            .filter(|&j| allowed(j) && kinds[j] != SubKind::Fanuc && g.levels[j] <= 6)
-            .collect();
-        let fanuc: Vec<usize> = (0..n)
-            .filter(|&j| allowed(j) && kinds[j] == SubKind::Fanuc && g.levels[j] <= 6)
-            .collect();
-        // fanuc targets chosen by expression must be contiguous: they are.
-        callees.retain(|_| g.rng.chance(0.8));
-        let maxc = callees
-            .iter()
-            .chain(fanuc.iter())
-            .map(|&j| g.levels[j])
-            .max()
-            .unwrap_or(0);
-        let rec = if k != SubKind::Fanuc && g.rng.chance(0.35) {
-            g.rng.range(1, (8 - maxc).min(5))
-        } else {
-            0
-        };
-        g.rec[i] = rec;
-        g.levels[i] = 1 + rec + maxc;
-        g.nargs[i] = if g.rng.chance(0.15) {
-            g.rng.range(10, 30)
-        } else {
-            g.rng.range(0, 5)
-        };
-        let numbered: Vec<u32> = (1..=10).chain(31..=38).collect();
-        let mut c = Ctx {
-            numbered: numbered.clone(),
-            writable: numbered,
-            named: vec![
-                "a".into(),
-                "b".into(),
-                "cc".into(),
-                "_g1".into(),
-                "_g2".into(),
-            ],
-            loops: Vec::new(),
-            in_repeat: false,
-            depth: 0,
-            next_label: 0,
-            callees: callees.clone(),
-            fanuc,
-            me: Some((i, k)),
-            counter: 0,
-        };
-        let mut body = Vec::new();
-        let mut init = vec!["a", "b", "cc"];
-        if rec > 0 {
-            init.push("depth");
-        }
-        let mut init_line = g.init_line(&c, &init);
-        if rec > 0
-            && let Stmt::Line(items) = &mut init_line
-        {
-            items.pop();
-            items.push("#<depth>=#1".into());
-        }
-        body.push(init_line);
-        let nstmt = g.rng.range(1, 5);
-        body.extend(g.block(&mut c, nstmt));
-        if rec > 0 {
-            // self-recursion, never inside a repeat body
-            let lbl = g.label(&mut c);
-            let call = g.call(&mut c, i, Some("#<depth> - 1".into()));
-            let pos = g.rng.range(1, body.len());
-            body.insert(
-                pos,
-                Stmt::If {
-                    label: lbl,
-                    arms: vec![("#<depth> GT 0".into(), call)],
-                    els: None,
-                },
-            );
-        }
-        let end_value = if k != SubKind::Fanuc && g.rng.chance(0.4) {
-            Some(g.stored(&c).s).filter(|v| v.len() < 200)
-        } else {
-            None
-        };
-        {
-            let s = g.subs[i].as_mut().unwrap();
-            s.body = body;
-            s.end_value = end_value;
-            if k == SubKind::File {
-                s.file_pre = vec![
-                    "(file header, never executed)".into(),
-                    "(debug, must not print)".into(),
-                ];
-                if g.rng.chance(0.5) {
-                    s.file_post = vec!["M2".into()];
-                }
+}
+
+/// Writes the body of subroutine `i` (its callees, the later ones, are
+/// written already) and works out its cost.
+fn sub_body(g: &mut Gen, kinds: &[SubKind], i: usize) {
+    let n = kinds.len();
+    let k = kinds[i];
+    let allowed = |j: usize| -> bool {
+        j > i
+            && match k {
+                SubKind::Pre => true,
+                SubKind::Fanuc => kinds[j] != SubKind::Pre,
+                SubKind::Post => matches!(kinds[j], SubKind::Post | SubKind::File),
+                SubKind::File => kinds[j] == SubKind::File,
+            }
+    };
+    let mut callees: Vec<usize> = (0..n)
+        .filter(|&j| allowed(j) && kinds[j] != SubKind::Fanuc && g.levels[j] <= 6)
+        .collect();
+    let fanuc: Vec<usize> = (0..n)
+        .filter(|&j| allowed(j) && kinds[j] == SubKind::Fanuc && g.levels[j] <= 6)
+        .collect();
+    // fanuc targets chosen by expression must be contiguous: they are.
+    callees.retain(|_| g.rng.chance(0.8));
+    let maxc = callees
+        .iter()
+        .chain(fanuc.iter())
+        .map(|&j| g.levels[j])
+        .max()
+        .unwrap_or(0);
+    let rec = if k != SubKind::Fanuc && g.rng.chance(0.35) {
+        g.rng.range(1, (8 - maxc).min(5))
+    } else {
+        0
+    };
+    g.rec[i] = rec;
+    g.levels[i] = 1 + rec + maxc;
+    g.nargs[i] = if g.rng.chance(0.15) {
+        g.rng.range(10, 30)
+    } else {
+        g.rng.range(0, 5)
+    };
+    let numbered: Vec<u32> = (1..=10).chain(31..=38).collect();
+    let mut c = Ctx {
+        numbered: numbered.clone(),
+        writable: numbered,
+        named: vec![
+            "a".into(),
+            "b".into(),
+            "cc".into(),
+            "_g1".into(),
+            "_g2".into(),
+        ],
+        loops: Vec::new(),
+        in_repeat: false,
+        depth: 0,
+        next_label: 0,
+        callees: callees.clone(),
+        fanuc,
+        me: Some((i, k)),
+        counter: 0,
+    };
+    let mut body = Vec::new();
+    let mut init = vec!["a", "b", "cc"];
+    if rec > 0 {
+        init.push("depth");
+    }
+    let mut init_line = g.init_line(&c, &init);
+    if rec > 0
+        && let Stmt::Line(items) = &mut init_line
+    {
+        items.pop();
+        items.push("#<depth>=#1".into());
+    }
+    body.push(init_line);
+    let nstmt = g.rng.range(1, 5);
+    body.extend(g.block(&mut c, nstmt));
+    if rec > 0 {
+        // self-recursion, never inside a repeat body
+        let lbl = g.label(&mut c);
+        let call = g.call(&mut c, i, Some("#<depth> - 1".into()));
+        let pos = g.rng.range(1, body.len());
+        body.insert(
+            pos,
+            Stmt::If {
+                label: lbl,
+                arms: vec![("#<depth> GT 0".into(), call)],
+                els: None,
+            },
+        );
+    }
+    let end_value = if k != SubKind::Fanuc && g.rng.chance(0.4) {
+        Some(g.stored(&c).s).filter(|v| v.len() < 200)
+    } else {
+        None
+    };
+    {
+        let s = g.subs[i].as_mut().unwrap();
+        s.body = body;
+        s.end_value = end_value;
+        if k == SubKind::File {
+            s.file_pre = vec![
+                "(file header, never executed)".into(),
+                "(debug, must not print)".into(),
+            ];
+            if g.rng.chance(0.5) {
+                s.file_post = vec!["M2".into()];
             }
         }
-        let body_cost = cost(&g.subs[i].as_ref().unwrap().body, &g);
-        g.cost[i] = body_cost * (rec as f64 + 1.0) + 1.0;
+    }
+    let body_cost = cost(&g.subs[i].as_ref().unwrap().body, g);
+    g.cost[i] = body_cost * (rec as f64 + 1.0) + 1.0;
+}
+
+fn generate_once(seed: u64) -> (Program, f64) {
+    let mut rng = Rng::new(seed);
+    let mut kinds = Vec::new();
+    for (k, max) in [
+        (SubKind::Pre, 2),
+        (SubKind::Fanuc, 2),
+        (SubKind::Post, 2),
+        (SubKind::File, 3),
+    ] {
+        for _ in 0..rng.range(0, max) {
+            kinds.push(k);
+        }
+    }
+    let n = kinds.len();
+    let mut g = Gen {
+        rng,
+        subs: vec![None; n],
+        kinds: kinds.clone(),
+        levels: vec![0; n],
+        cost: vec![0.0; n],
+        rec: vec![0; n],
+        nargs: vec![0; n],
+        msg: 0,
+    };
+    // names first (calls need them)
+    name_subs(&mut g, &kinds);
+    // bodies, callees first
+    for i in (0..n).rev() {
+        sub_body(&mut g, &kinds, i);
     }
     // main
     let mut main = Vec::new();
@@ -1781,45 +1794,50 @@ fn generate_once(seed: u64) -> (Program, f64) {
     // a deliberately wrong line somewhere (rs274 and ngcflat must both
     // refuse it when it runs)
     if g.rng.chance(0.12) {
-        let bad = [
-            "#31=[1/[#31-#31]]",
-            "#31=SQRT[-1-ABS[#32]]",
-            "#31=LN[0]",
-            "#31=ACOS[1.0002]",
-            "#31=ASIN[-1.5]",
-            "#31=[-2 ** 0.5]",
-            "#31=[5 MOD 0]",
-            "#31=EXP[1000]",
-            "#31=[0 ** -1]",
-            "#31=#<nope>",
-            "#0=1",
-            "#31=#5602",
-            "(abort, stopped #31)",
-            "G1 X[1/0]",
-            "#<_value>=1",
-            "o<missing> call",
-        ];
-        let line = g.rng.pick(&bad).to_string();
-        let st = if line.starts_with('o') {
-            Stmt::OLine(line)
-        } else {
-            Stmt::Line(vec![line])
-        };
-        let total: usize = count_bodies(&prog.main)
-            + prog
-                .subs
-                .iter()
-                .map(|s| count_bodies(&s.body))
-                .sum::<usize>();
-        let mut k = g.rng.below(total);
-        let frac = g.rng.below(1000) as f64 / 1000.0;
-        let mut st = Some(st);
-        insert_into(&mut prog.main, &mut k, frac, &mut st);
-        for s in prog.subs.iter_mut() {
-            insert_into(&mut s.body, &mut k, frac, &mut st);
-        }
+        insert_bad_line(&mut g.rng, &mut prog);
     }
     (prog, total)
+}
+
+/// Puts a line both rs274 and ngcflat refuse at a random place.
+fn insert_bad_line(rng: &mut Rng, prog: &mut Program) {
+    let bad = [
+        "#31=[1/[#31-#31]]",
+        "#31=SQRT[-1-ABS[#32]]",
+        "#31=LN[0]",
+        "#31=ACOS[1.0002]",
+        "#31=ASIN[-1.5]",
+        "#31=[-2 ** 0.5]",
+        "#31=[5 MOD 0]",
+        "#31=EXP[1000]",
+        "#31=[0 ** -1]",
+        "#31=#<nope>",
+        "#0=1",
+        "#31=#5602",
+        "(abort, stopped #31)",
+        "G1 X[1/0]",
+        "#<_value>=1",
+        "o<missing> call",
+    ];
+    let line = rng.pick(&bad).to_string();
+    let st = if line.starts_with('o') {
+        Stmt::OLine(line)
+    } else {
+        Stmt::Line(vec![line])
+    };
+    let total: usize = count_bodies(&prog.main)
+        + prog
+            .subs
+            .iter()
+            .map(|s| count_bodies(&s.body))
+            .sum::<usize>();
+    let mut k = rng.below(total);
+    let frac = rng.below(1000) as f64 / 1000.0;
+    let mut st = Some(st);
+    insert_into(&mut prog.main, &mut k, frac, &mut st);
+    for s in prog.subs.iter_mut() {
+        insert_into(&mut s.body, &mut k, frac, &mut st);
+    }
 }
 
 fn count_bodies(body: &[Stmt]) -> usize {

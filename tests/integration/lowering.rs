@@ -129,6 +129,191 @@ const KINDS: &[(CycleKind, &str)] = &[
     (CycleKind::G89, "G89"),
 ];
 
+/// A random block of the cycle `kind` (`code`): the block as the lowering
+/// reads it, and the line as written. `same`: the previous block was a
+/// cycle of the same kind (its words may be left out).
+fn random_cycle_block(
+    rng: &mut Rng,
+    kind: CycleKind,
+    code: &str,
+    same: bool,
+    plane: Plane,
+    distance: Distance,
+    depth_axis: usize,
+) -> (CycleBlock, String) {
+    let letters = [b'X', b'Y', b'Z'];
+    let mut block = CycleBlock::default();
+    let mut words = vec![code.to_string()];
+    let put = |words: &mut Vec<String>, letter: char, v: f64| {
+        words.push(format!("{letter}{}", num(v)));
+    };
+    let polar = plane == Plane::XY && rng.chance(0.2);
+    for (i, letter) in letters.into_iter().enumerate() {
+        if i == depth_axis {
+            continue;
+        }
+        if polar || rng.chance(0.3) {
+            continue;
+        }
+        let v = if distance == Distance::Absolute {
+            rng.val(-5.0, 5.0)
+        } else {
+            rng.val(-2.0, 2.0)
+        };
+        block.axes[i] = Some(v);
+        put(&mut words, letter as char, v);
+    }
+    if polar {
+        if rng.chance(0.7) {
+            let v = if distance == Distance::Absolute {
+                rng.val(0.5, 6.0)
+            } else {
+                rng.val(-1.0, 1.0)
+            };
+            block.radius = Some(v);
+            words.push(format!("@{}", num(v)));
+        }
+        if rng.chance(0.7) {
+            let v = rng.val(-180.0, 180.0);
+            block.angle = Some(v);
+            words.push(format!("^{}", num(v)));
+        }
+    }
+    let (r, depth) = if distance == Distance::Absolute {
+        let r = rng.val(-3.0, 6.0);
+        (r, r - rng.val(0.0, 4.0))
+    } else {
+        (rng.val(-4.0, 3.0), -rng.val(0.0, 4.0))
+    };
+    if !same || rng.chance(0.6) {
+        block.r = Some(r);
+        put(&mut words, 'R', r);
+    }
+    let no_axis =
+        block.axes.iter().all(Option::is_none) && block.radius.is_none() && block.angle.is_none();
+    if !same || no_axis || rng.chance(0.6) {
+        block.axes[depth_axis] = Some(depth);
+        put(&mut words, letters[depth_axis] as char, depth);
+    }
+    if rng.chance(0.3) {
+        let l = 1 + rng.below(3) as u32;
+        block.l = Some(l);
+        words.push(format!("L{l}"));
+    }
+    match kind {
+        CycleKind::G82 | CycleKind::G86 | CycleKind::G88 | CycleKind::G89 | CycleKind::G84
+            if (!same || rng.chance(0.5)) && (kind != CycleKind::G84 || rng.chance(0.5)) =>
+        {
+            let p = rng.val(0.0, 2.0);
+            block.p = Some(p);
+            put(&mut words, 'P', p);
+        }
+        CycleKind::G73 | CycleKind::G83 if !same || rng.chance(0.5) => {
+            let q = rng.val(0.3, 2.5);
+            block.q = Some(q);
+            put(&mut words, 'Q', q);
+        }
+        CycleKind::G87 if !same || rng.chance(0.5) => {
+            for (n, letter) in ['I', 'J', 'K'].into_iter().enumerate() {
+                // The back-bore level: between the depth and R.
+                let v = if n == 2 - depth_axis_slot(plane) {
+                    if distance == Distance::Absolute {
+                        depth + 0.5
+                    } else {
+                        0.5
+                    }
+                } else {
+                    rng.val(-1.0, 1.0)
+                };
+                block.ijk[n] = Some(v);
+                put(&mut words, letter, v);
+            }
+        }
+        _ => {}
+    }
+    (block, words.join(" "))
+}
+
+/// Something between two cycle blocks, at random: a move, G80, a change
+/// of retract or distance mode (written to both programs as needed).
+/// `after_cycle`: the last block was a cycle. True when it ends the cycle.
+fn interlude(
+    rng: &mut Rng,
+    after_cycle: bool,
+    pos: &mut [f64; 3],
+    distance: &mut Distance,
+    retract: &mut Retract,
+    orig: &mut String,
+    low: &mut String,
+) -> bool {
+    let mut ended = false;
+    match rng.below(8) {
+        0 => {
+            *pos = [rng.val(-5.0, 5.0), rng.val(-5.0, 5.0), rng.val(-5.0, 10.0)];
+            let l = format!(
+                "G90 G0 X{} Y{} Z{}\n",
+                num(pos[0]),
+                num(pos[1]),
+                num(pos[2])
+            );
+            orig.push_str(&l);
+            low.push_str(&l);
+            *distance = Distance::Absolute;
+            ended = true;
+        }
+        1 => {
+            orig.push_str("G80\n");
+            ended = true;
+        }
+        2 => {
+            *retract = if *retract == Retract::OldZ {
+                Retract::RPlane
+            } else {
+                Retract::OldZ
+            };
+            orig.push_str(if *retract == Retract::OldZ {
+                "G98\n"
+            } else {
+                "G99\n"
+            });
+        }
+        4 if after_cycle => {
+            // An incremental move from where LinuxCNC has the tool after
+            // the cycle (written absolute in the lowered program).
+            let d = [rng.val(-2.0, 2.0), rng.val(-2.0, 2.0), rng.val(-1.0, 3.0)];
+            orig.push_str(&format!(
+                "G91 G0 X{} Y{} Z{}\n",
+                num(d[0]),
+                num(d[1]),
+                num(d[2])
+            ));
+            *pos = [pos[0] + d[0], pos[1] + d[1], pos[2] + d[2]];
+            low.push_str(&format!(
+                "G0 X{} Y{} Z{}\n",
+                num(pos[0]),
+                num(pos[1]),
+                num(pos[2])
+            ));
+            *distance = Distance::Incremental;
+            ended = true;
+        }
+        3 => {
+            *distance = if *distance == Distance::Absolute {
+                Distance::Incremental
+            } else {
+                Distance::Absolute
+            };
+            orig.push_str(if *distance == Distance::Absolute {
+                "G90\n"
+            } else {
+                "G91\n"
+            });
+        }
+        _ => {}
+    }
+    ended
+}
+
 /// One program of canned cycles, written both ways.
 fn cycle_program(seed: u64) -> Result<(String, String), String> {
     let mut rng = Rng::new(seed);
@@ -177,75 +362,19 @@ fn cycle_program(seed: u64) -> Result<(String, String), String> {
         Plane::XZ => 1,
         Plane::YZ => 0,
     };
-    let letters = [b'X', b'Y', b'Z'];
     for _ in 0..(3 + rng.below(6)) {
         // Something between the cycle blocks now and then.
-        match rng.below(8) {
-            0 => {
-                pos = [rng.val(-5.0, 5.0), rng.val(-5.0, 5.0), rng.val(-5.0, 10.0)];
-                let l = format!(
-                    "G90 G0 X{} Y{} Z{}\n",
-                    num(pos[0]),
-                    num(pos[1]),
-                    num(pos[2])
-                );
-                orig.push_str(&l);
-                low.push_str(&l);
-                distance = Distance::Absolute;
-                state.end();
-                last = None;
-            }
-            1 => {
-                orig.push_str("G80\n");
-                state.end();
-                last = None;
-            }
-            2 => {
-                retract = if retract == Retract::OldZ {
-                    Retract::RPlane
-                } else {
-                    Retract::OldZ
-                };
-                orig.push_str(if retract == Retract::OldZ {
-                    "G98\n"
-                } else {
-                    "G99\n"
-                });
-            }
-            4 if last.is_some() => {
-                // An incremental move from where LinuxCNC has the tool after
-                // the cycle (written absolute in the lowered program).
-                let d = [rng.val(-2.0, 2.0), rng.val(-2.0, 2.0), rng.val(-1.0, 3.0)];
-                orig.push_str(&format!(
-                    "G91 G0 X{} Y{} Z{}\n",
-                    num(d[0]),
-                    num(d[1]),
-                    num(d[2])
-                ));
-                pos = [pos[0] + d[0], pos[1] + d[1], pos[2] + d[2]];
-                low.push_str(&format!(
-                    "G0 X{} Y{} Z{}\n",
-                    num(pos[0]),
-                    num(pos[1]),
-                    num(pos[2])
-                ));
-                distance = Distance::Incremental;
-                state.end();
-                last = None;
-            }
-            3 => {
-                distance = if distance == Distance::Absolute {
-                    Distance::Incremental
-                } else {
-                    Distance::Absolute
-                };
-                orig.push_str(if distance == Distance::Absolute {
-                    "G90\n"
-                } else {
-                    "G91\n"
-                });
-            }
-            _ => {}
+        if interlude(
+            &mut rng,
+            last.is_some(),
+            &mut pos,
+            &mut distance,
+            &mut retract,
+            &mut orig,
+            &mut low,
+        ) {
+            state.end();
+            last = None;
         }
         let (kind, code) = if last.is_some() && rng.chance(0.4) {
             let k = last.unwrap_or(CycleKind::G81);
@@ -263,97 +392,8 @@ fn cycle_program(seed: u64) -> Result<(String, String), String> {
             continue;
         }
         let same = last == Some(kind);
-        let mut block = CycleBlock::default();
-        let mut words = vec![code.to_string()];
-        let put = |words: &mut Vec<String>, letter: char, v: f64| {
-            words.push(format!("{letter}{}", num(v)));
-        };
-        let polar = plane == Plane::XY && rng.chance(0.2);
-        for (i, letter) in letters.into_iter().enumerate() {
-            if i == depth_axis {
-                continue;
-            }
-            if polar || rng.chance(0.3) {
-                continue;
-            }
-            let v = if distance == Distance::Absolute {
-                rng.val(-5.0, 5.0)
-            } else {
-                rng.val(-2.0, 2.0)
-            };
-            block.axes[i] = Some(v);
-            put(&mut words, letter as char, v);
-        }
-        if polar {
-            if rng.chance(0.7) {
-                let v = if distance == Distance::Absolute {
-                    rng.val(0.5, 6.0)
-                } else {
-                    rng.val(-1.0, 1.0)
-                };
-                block.radius = Some(v);
-                words.push(format!("@{}", num(v)));
-            }
-            if rng.chance(0.7) {
-                let v = rng.val(-180.0, 180.0);
-                block.angle = Some(v);
-                words.push(format!("^{}", num(v)));
-            }
-        }
-        let (r, depth) = if distance == Distance::Absolute {
-            let r = rng.val(-3.0, 6.0);
-            (r, r - rng.val(0.0, 4.0))
-        } else {
-            (rng.val(-4.0, 3.0), -rng.val(0.0, 4.0))
-        };
-        if !same || rng.chance(0.6) {
-            block.r = Some(r);
-            put(&mut words, 'R', r);
-        }
-        let no_axis = block.axes.iter().all(Option::is_none)
-            && block.radius.is_none()
-            && block.angle.is_none();
-        if !same || no_axis || rng.chance(0.6) {
-            block.axes[depth_axis] = Some(depth);
-            put(&mut words, letters[depth_axis] as char, depth);
-        }
-        if rng.chance(0.3) {
-            let l = 1 + rng.below(3) as u32;
-            block.l = Some(l);
-            words.push(format!("L{l}"));
-        }
-        match kind {
-            CycleKind::G82 | CycleKind::G86 | CycleKind::G88 | CycleKind::G89 | CycleKind::G84
-                if (!same || rng.chance(0.5)) && (kind != CycleKind::G84 || rng.chance(0.5)) =>
-            {
-                let p = rng.val(0.0, 2.0);
-                block.p = Some(p);
-                put(&mut words, 'P', p);
-            }
-            CycleKind::G73 | CycleKind::G83 if !same || rng.chance(0.5) => {
-                let q = rng.val(0.3, 2.5);
-                block.q = Some(q);
-                put(&mut words, 'Q', q);
-            }
-            CycleKind::G87 if !same || rng.chance(0.5) => {
-                for (n, letter) in ['I', 'J', 'K'].into_iter().enumerate() {
-                    // The back-bore level: between the depth and R.
-                    let v = if n == 2 - depth_axis_slot(plane) {
-                        if distance == Distance::Absolute {
-                            depth + 0.5
-                        } else {
-                            0.5
-                        }
-                    } else {
-                        rng.val(-1.0, 1.0)
-                    };
-                    block.ijk[n] = Some(v);
-                    put(&mut words, letter, v);
-                }
-            }
-            _ => {}
-        }
-        let line = words.join(" ");
+        let (block, line) =
+            random_cycle_block(&mut rng, kind, code, same, plane, distance, depth_axis);
         let modal = CycleModal {
             plane,
             distance,
