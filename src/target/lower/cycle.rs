@@ -172,6 +172,68 @@ fn peck_clearance(units: Units) -> f64 {
 }
 
 /// Writes moves in plane coordinates (a, b, c) as XYZ lines.
+/// G87: the offset point and the back-bore level, from I/J/K in plane
+/// order.
+fn back_bore(modal: &CycleModal, ijk: [f64; 3], bottom: f64) -> (f64, f64, f64) {
+    let (off_a, off_b, middle) = match modal.plane {
+        Plane::XY => (ijk[0], ijk[1], ijk[2]),
+        Plane::XZ => (ijk[2], ijk[0], ijk[1]),
+        Plane::YZ => (ijk[1], ijk[2], ijk[0]),
+    };
+    let middle = match modal.distance {
+        Distance::Incremental => bottom + middle,
+        Distance::Absolute => middle,
+    };
+    (off_a, off_b, middle)
+}
+
+/// One repeat's step in polar coordinates (G91 with `@`/`^`): the radius,
+/// then the angle, changed about the origin.
+fn polar_step(
+    mut a: f64,
+    mut b: f64,
+    radius_step: f64,
+    angle_step: f64,
+) -> Result<(f64, f64), LowerError> {
+    if radius_step != 0.0 {
+        if a == 0.0 && b == 0.0 {
+            return Err(LowerError::PolarAtOrigin);
+        }
+        let theta = b.atan2(a);
+        let radius = b.hypot(a) + radius_step;
+        a = radius * theta.cos();
+        b = radius * theta.sin();
+    }
+    if angle_step != 0.0 {
+        if a == 0.0 && b == 0.0 {
+            return Err(LowerError::PolarAtOrigin);
+        }
+        let theta = b.atan2(a) + angle_step;
+        let radius = b.hypot(a);
+        a = radius * theta.cos();
+        b = radius * theta.sin();
+    }
+    Ok((a, b))
+}
+
+/// The levels and values a cycle's moves use.
+#[derive(Clone, Copy)]
+struct Levels {
+    /// The R level, the bottom, and the level to go back to.
+    r: f64,
+    bottom: f64,
+    clear: f64,
+    /// G87: the back-bore level and the offset point.
+    middle: f64,
+    offset: (f64, f64),
+    /// G73/G83: the peck clearance and depth.
+    delta: f64,
+    q: f64,
+    /// The dwell.
+    p: f64,
+    dir: Spindle,
+}
+
 struct Out {
     map: [usize; 3],
     lines: Vec<PlainLine>,
@@ -210,6 +272,97 @@ impl Out {
             &mut self.lines,
             PlainLine::new(&[(b'M', 19.0), (b'R', 0.0), (b'P', 2.0)]),
         )
+    }
+
+    /// The moves of one cycle at the point (`a`, `b`) of the plane, from
+    /// the R level down and back to the clearance level.
+    fn drill(&mut self, kind: CycleKind, (a, b): (f64, f64), l: &Levels) -> Result<(), LowerError> {
+        let Levels {
+            r,
+            bottom,
+            clear,
+            middle,
+            delta,
+            p,
+            q,
+            offset: (off_a, off_b),
+            dir,
+        } = *l;
+        match kind {
+            CycleKind::G81 => {
+                self.feed(a, b, bottom)?;
+                self.traverse(a, b, clear)?;
+            }
+            CycleKind::G82 => {
+                self.feed(a, b, bottom)?;
+                self.dwell(p)?;
+                self.traverse(a, b, clear)?;
+            }
+            CycleKind::G73 | CycleKind::G83 => {
+                let mut depth = r - q;
+                while depth > bottom {
+                    self.feed(a, b, depth)?;
+                    if kind == CycleKind::G83 {
+                        self.traverse(a, b, r)?;
+                    }
+                    self.traverse(a, b, depth + delta)?;
+                    depth -= q;
+                }
+                self.feed(a, b, bottom)?;
+                self.traverse(a, b, clear)?;
+            }
+            CycleKind::G84 => {
+                self.feed(a, b, bottom)?;
+                self.m(5.0)?;
+                self.m(4.0)?;
+                self.dwell(p)?;
+                self.feed(a, b, clear)?;
+                self.m(5.0)?;
+                self.m(3.0)?;
+            }
+            CycleKind::G85 => {
+                self.feed(a, b, bottom)?;
+                self.feed(a, b, r)?;
+                self.traverse(a, b, clear)?;
+            }
+            CycleKind::G86 => {
+                self.feed(a, b, bottom)?;
+                self.dwell(p)?;
+                self.m(5.0)?;
+                self.traverse(a, b, clear)?;
+                self.spindle_on(dir)?;
+            }
+            CycleKind::G87 => {
+                let (oa, ob) = (a + off_a, b + off_b);
+                self.traverse(oa, ob, r)?;
+                self.m(5.0)?;
+                self.orient()?;
+                self.traverse(oa, ob, bottom)?;
+                self.traverse(a, b, bottom)?;
+                self.spindle_on(dir)?;
+                self.feed(a, b, middle)?;
+                self.feed(a, b, bottom)?;
+                self.m(5.0)?;
+                self.orient()?;
+                self.traverse(oa, ob, bottom)?;
+                self.traverse(oa, ob, clear)?;
+                self.traverse(a, b, clear)?;
+                self.spindle_on(dir)?;
+            }
+            CycleKind::G88 => {
+                self.feed(a, b, bottom)?;
+                self.dwell(p)?;
+                self.m(5.0)?;
+                self.m(0.0)?;
+                self.spindle_on(dir)?;
+            }
+            CycleKind::G89 => {
+                self.feed(a, b, bottom)?;
+                self.dwell(p)?;
+                self.feed(a, b, clear)?;
+            }
+        }
+        Ok(())
     }
 }
 
@@ -257,45 +410,7 @@ impl CycleState {
         let cur_b = known(map[1])?;
         let current_c = known(map[2])?;
 
-        if (block.radius.is_some() || block.angle.is_some()) && modal.plane != Plane::XY {
-            return Err(LowerError::NotExpressible {
-                construct: name,
-                why: "polar coordinates are only allowed in the XY plane",
-            });
-        }
-        if kind == CycleKind::G84 && modal.plane != Plane::XY {
-            return Err(LowerError::NotExpressible {
-                construct: name,
-                why: "outside G17, LinuxCNC 2.9 moves to points with the axes swapped",
-            });
-        }
-        let r_word = match (block.r, same) {
-            (Some(r), _) => r,
-            (None, true) => self.r,
-            (None, false) => {
-                return Err(LowerError::MissingWord {
-                    construct: name,
-                    letter: 'R',
-                });
-            }
-        };
-        let repeats = block.l.unwrap_or(1);
-        if repeats == 0 {
-            return Err(LowerError::BadValue {
-                construct: name,
-                what: "L 0 repeats",
-            });
-        }
-        let depth_word = match (block.axes[map[2]], same) {
-            (Some(z), _) => z,
-            (None, true) => self.depth,
-            (None, false) => {
-                return Err(LowerError::MissingWord {
-                    construct: name,
-                    letter: axis_letter(map[2]),
-                });
-            }
-        };
+        let (r_word, repeats, depth_word) = self.cycle_start(kind, block, modal, same, map)?;
         let initial = self.initial_level.unwrap_or(current_c);
         let mut old_c = initial;
         let mut current_c = current_c;
@@ -350,6 +465,131 @@ impl CycleState {
 
         // Per-cycle words, resolved before any motion so that an error
         // leaves no partial output.
+        let (p, q, ijk) = self.cycle_words(kind, block, modal, same)?;
+        // Refuse a runaway (a tiny Q, a huge L) before writing anything.
+        let pecks = match kind {
+            CycleKind::G73 | CycleKind::G83 => ((r - bottom) / q).ceil().max(0.0),
+            _ => 0.0,
+        };
+        if (16.0 + 3.0 * pecks) * f64::from(repeats) + 1.0 > super::MAX_LINES as f64 {
+            return Err(LowerError::TooManyLines);
+        }
+        let dir = modal.spindle;
+        let (off_a, off_b, middle) = back_bore(modal, ijk, bottom);
+        let delta = peck_clearance(modal.units);
+
+        for repeat in 0..repeats {
+            (a, b) = polar_step(a + a_step, b + b_step, radius_step, angle_step)?;
+            if repeat == 0 && current_c > r {
+                out.traverse(a, b, current_c)?;
+                out.traverse(a, b, r)?;
+            } else {
+                out.traverse(a, b, clear)?;
+                if clear > r {
+                    out.traverse(a, b, r)?;
+                }
+            }
+            out.drill(
+                kind,
+                (a, b),
+                &Levels {
+                    r,
+                    bottom,
+                    clear,
+                    middle,
+                    delta,
+                    p,
+                    q,
+                    offset: (off_a, off_b),
+                    dir,
+                },
+            )?;
+        }
+
+        self.active = Some(kind);
+        self.initial_level = Some(initial);
+        self.r = r_word;
+        self.depth = depth_word;
+        self.p = p;
+        self.q = q;
+        self.ijk = ijk;
+        let end = out.point(a, b, clear);
+        let target_end = if kind == CycleKind::G88 {
+            out.point(a, b, bottom)
+        } else {
+            end
+        };
+        Ok(CycleOutput {
+            lines: out.lines,
+            end,
+            target_end,
+        })
+    }
+
+    /// What the block itself must give or the cycle keeps: the R level,
+    /// the repeats and the depth; and where the cycle cannot be expressed.
+    fn cycle_start(
+        &self,
+        kind: CycleKind,
+        block: &CycleBlock,
+        modal: &CycleModal,
+        same: bool,
+        map: [usize; 3],
+    ) -> Result<(f64, u32, f64), LowerError> {
+        let name = kind.name();
+        let axis_letter = |i: usize| ['X', 'Y', 'Z'][i];
+        if (block.radius.is_some() || block.angle.is_some()) && modal.plane != Plane::XY {
+            return Err(LowerError::NotExpressible {
+                construct: name,
+                why: "polar coordinates are only allowed in the XY plane",
+            });
+        }
+        if kind == CycleKind::G84 && modal.plane != Plane::XY {
+            return Err(LowerError::NotExpressible {
+                construct: name,
+                why: "outside G17, LinuxCNC 2.9 moves to points with the axes swapped",
+            });
+        }
+        let r_word = match (block.r, same) {
+            (Some(r), _) => r,
+            (None, true) => self.r,
+            (None, false) => {
+                return Err(LowerError::MissingWord {
+                    construct: name,
+                    letter: 'R',
+                });
+            }
+        };
+        let repeats = block.l.unwrap_or(1);
+        if repeats == 0 {
+            return Err(LowerError::BadValue {
+                construct: name,
+                what: "L 0 repeats",
+            });
+        }
+        let depth_word = match (block.axes[map[2]], same) {
+            (Some(z), _) => z,
+            (None, true) => self.depth,
+            (None, false) => {
+                return Err(LowerError::MissingWord {
+                    construct: name,
+                    letter: axis_letter(map[2]),
+                });
+            }
+        };
+        Ok((r_word, repeats, depth_word))
+    }
+
+    /// The cycle's own words (P, Q, I/J/K), given or kept from the last
+    /// block of the same cycle, and the spindle it needs.
+    fn cycle_words(
+        &self,
+        kind: CycleKind,
+        block: &CycleBlock,
+        modal: &CycleModal,
+        same: bool,
+    ) -> Result<(f64, f64, [f64; 3]), LowerError> {
+        let name = kind.name();
         let needs = |word: Option<f64>, last: f64, letter: char| match (word, same) {
             (Some(v), _) => Ok(v),
             (None, true) => Ok(last),
@@ -396,151 +636,7 @@ impl CycleState {
             }
             _ => {}
         }
-        // Refuse a runaway (a tiny Q, a huge L) before writing anything.
-        let pecks = match kind {
-            CycleKind::G73 | CycleKind::G83 => ((r - bottom) / q).ceil().max(0.0),
-            _ => 0.0,
-        };
-        if (16.0 + 3.0 * pecks) * f64::from(repeats) + 1.0 > super::MAX_LINES as f64 {
-            return Err(LowerError::TooManyLines);
-        }
-        let dir = modal.spindle;
-        // G87: the offset point and the back-bore level in plane order.
-        let (off_a, off_b, middle) = match modal.plane {
-            Plane::XY => (ijk[0], ijk[1], ijk[2]),
-            Plane::XZ => (ijk[2], ijk[0], ijk[1]),
-            Plane::YZ => (ijk[1], ijk[2], ijk[0]),
-        };
-        let middle = match modal.distance {
-            Distance::Incremental => bottom + middle,
-            Distance::Absolute => middle,
-        };
-        let delta = peck_clearance(modal.units);
-
-        for repeat in 0..repeats {
-            a += a_step;
-            b += b_step;
-            if radius_step != 0.0 {
-                if a == 0.0 && b == 0.0 {
-                    return Err(LowerError::PolarAtOrigin);
-                }
-                let theta = b.atan2(a);
-                let radius = b.hypot(a) + radius_step;
-                a = radius * theta.cos();
-                b = radius * theta.sin();
-            }
-            if angle_step != 0.0 {
-                if a == 0.0 && b == 0.0 {
-                    return Err(LowerError::PolarAtOrigin);
-                }
-                let theta = b.atan2(a) + angle_step;
-                let radius = b.hypot(a);
-                a = radius * theta.cos();
-                b = radius * theta.sin();
-            }
-            if repeat == 0 && current_c > r {
-                out.traverse(a, b, current_c)?;
-                out.traverse(a, b, r)?;
-            } else {
-                out.traverse(a, b, clear)?;
-                if clear > r {
-                    out.traverse(a, b, r)?;
-                }
-            }
-            match kind {
-                CycleKind::G81 => {
-                    out.feed(a, b, bottom)?;
-                    out.traverse(a, b, clear)?;
-                }
-                CycleKind::G82 => {
-                    out.feed(a, b, bottom)?;
-                    out.dwell(p)?;
-                    out.traverse(a, b, clear)?;
-                }
-                CycleKind::G73 | CycleKind::G83 => {
-                    let mut depth = r - q;
-                    while depth > bottom {
-                        out.feed(a, b, depth)?;
-                        if kind == CycleKind::G83 {
-                            out.traverse(a, b, r)?;
-                        }
-                        out.traverse(a, b, depth + delta)?;
-                        depth -= q;
-                    }
-                    out.feed(a, b, bottom)?;
-                    out.traverse(a, b, clear)?;
-                }
-                CycleKind::G84 => {
-                    out.feed(a, b, bottom)?;
-                    out.m(5.0)?;
-                    out.m(4.0)?;
-                    out.dwell(p)?;
-                    out.feed(a, b, clear)?;
-                    out.m(5.0)?;
-                    out.m(3.0)?;
-                }
-                CycleKind::G85 => {
-                    out.feed(a, b, bottom)?;
-                    out.feed(a, b, r)?;
-                    out.traverse(a, b, clear)?;
-                }
-                CycleKind::G86 => {
-                    out.feed(a, b, bottom)?;
-                    out.dwell(p)?;
-                    out.m(5.0)?;
-                    out.traverse(a, b, clear)?;
-                    out.spindle_on(dir)?;
-                }
-                CycleKind::G87 => {
-                    let (oa, ob) = (a + off_a, b + off_b);
-                    out.traverse(oa, ob, r)?;
-                    out.m(5.0)?;
-                    out.orient()?;
-                    out.traverse(oa, ob, bottom)?;
-                    out.traverse(a, b, bottom)?;
-                    out.spindle_on(dir)?;
-                    out.feed(a, b, middle)?;
-                    out.feed(a, b, bottom)?;
-                    out.m(5.0)?;
-                    out.orient()?;
-                    out.traverse(oa, ob, bottom)?;
-                    out.traverse(oa, ob, clear)?;
-                    out.traverse(a, b, clear)?;
-                    out.spindle_on(dir)?;
-                }
-                CycleKind::G88 => {
-                    out.feed(a, b, bottom)?;
-                    out.dwell(p)?;
-                    out.m(5.0)?;
-                    out.m(0.0)?;
-                    out.spindle_on(dir)?;
-                }
-                CycleKind::G89 => {
-                    out.feed(a, b, bottom)?;
-                    out.dwell(p)?;
-                    out.feed(a, b, clear)?;
-                }
-            }
-        }
-
-        self.active = Some(kind);
-        self.initial_level = Some(initial);
-        self.r = r_word;
-        self.depth = depth_word;
-        self.p = p;
-        self.q = q;
-        self.ijk = ijk;
-        let end = out.point(a, b, clear);
-        let target_end = if kind == CycleKind::G88 {
-            out.point(a, b, bottom)
-        } else {
-            end
-        };
-        Ok(CycleOutput {
-            lines: out.lines,
-            end,
-            target_end,
-        })
+        Ok((p, q, ijk))
     }
 }
 
