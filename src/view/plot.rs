@@ -391,60 +391,9 @@ impl Plot {
 
     /// The SVG document. `caption` is printed under the drawing (program
     /// name), `note` lines after it.
-    pub fn svg(&self, caption: &str) -> String {
-        let view = self.view;
-        let (w0, h0) = (self.max[0] - self.min[0], self.max[1] - self.min[1]);
-        let ext = w0.max(h0);
-        let scale = if ext > 0.0 { AREA / ext } else { 1.0 };
-        let margin_l = 70.0;
-        let margin_t = 40.0;
-        let legend_h = 70.0;
-        let dw = (w0 * scale).max(1.0);
-        let dh = (h0 * scale).max(1.0);
-        let width = (dw + margin_l + 70.0).max(420.0).ceil();
-        let height = (dh + margin_t + 40.0 + legend_h).ceil();
-        let tx = |p: [f64; 2]| -> (f64, f64) {
-            (
-                q10(margin_l + (p[0] - self.min[0]) * scale),
-                q10(margin_t + (self.max[1] - p[1]) * scale),
-            )
-        };
-        let mut s = String::with_capacity(1 << 16);
-        let _ = write!(
-            s,
-            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width}\" height=\"{height}\" viewBox=\"0 0 {width} {height}\" font-family=\"sans-serif\" font-size=\"12\">\n\
-             <rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>\n"
-        );
-        // Bounding box.
-        let (bx0, by0) = tx([self.min[0], self.max[1]]);
-        let (bx1, by1) = tx([self.max[0], self.min[1]]);
-        let _ = writeln!(
-            s,
-            "<rect x=\"{bx0}\" y=\"{by0}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#b0b0b0\" stroke-width=\"0.8\" stroke-dasharray=\"2 3\"/>",
-            q10(bx1 - bx0),
-            q10(by1 - by0)
-        );
-        if let Some((hn, vn)) = view.axis_names() {
-            let _ = writeln!(
-                s,
-                "<text x=\"{bx0}\" y=\"{}\" fill=\"#555\">{hn} {}</text>\n<text x=\"{bx1}\" y=\"{}\" fill=\"#555\" text-anchor=\"end\">{hn} {}</text>\n\
-                 <text x=\"{}\" y=\"{by1}\" fill=\"#555\" text-anchor=\"end\">{vn} {}</text>\n<text x=\"{}\" y=\"{}\" fill=\"#555\" text-anchor=\"end\">{vn} {}</text>",
-                q10(by1 + 16.0),
-                fmt_mm(self.min[0]),
-                q10(by1 + 16.0),
-                fmt_mm(self.max[0]),
-                q10(bx0 - 6.0),
-                fmt_mm(self.min[1]),
-                q10(bx0 - 6.0),
-                q10(by0 + 10.0),
-                fmt_mm(self.max[1]),
-            );
-        }
-        // Toolpath.
-        let _ = writeln!(
-            s,
-            "<g fill=\"none\" stroke-width=\"1\" stroke-linecap=\"round\" stroke-linejoin=\"round\">"
-        );
+    /// The SVG path data of the toolpath, one string per style; a segment
+    /// drawn already (either way for a line) is left out.
+    fn path_data(&self, tx: &impl Fn([f64; 2]) -> (f64, f64), scale: f64) -> Vec<(Style, String)> {
         let mut seen: HashSet<(Style, [i64; 4])> = HashSet::new();
         let mut by_style: Vec<(Style, String)> = Vec::new();
         for p in &self.paths {
@@ -516,6 +465,64 @@ impl Plot {
                 pen_down_at = Some(end);
             }
         }
+        by_style
+    }
+
+    pub fn svg(&self, caption: &str) -> String {
+        let view = self.view;
+        let (w0, h0) = (self.max[0] - self.min[0], self.max[1] - self.min[1]);
+        let ext = w0.max(h0);
+        let scale = if ext > 0.0 { AREA / ext } else { 1.0 };
+        let margin_l = 70.0;
+        let margin_t = 40.0;
+        let legend_h = 70.0;
+        let dw = (w0 * scale).max(1.0);
+        let dh = (h0 * scale).max(1.0);
+        let width = (dw + margin_l + 70.0).max(420.0).ceil();
+        let height = (dh + margin_t + 40.0 + legend_h).ceil();
+        let tx = |p: [f64; 2]| -> (f64, f64) {
+            (
+                q10(margin_l + (p[0] - self.min[0]) * scale),
+                q10(margin_t + (self.max[1] - p[1]) * scale),
+            )
+        };
+        let mut s = String::with_capacity(1 << 16);
+        let _ = write!(
+            s,
+            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width}\" height=\"{height}\" viewBox=\"0 0 {width} {height}\" font-family=\"sans-serif\" font-size=\"12\">\n\
+             <rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>\n"
+        );
+        // Bounding box.
+        let (bx0, by0) = tx([self.min[0], self.max[1]]);
+        let (bx1, by1) = tx([self.max[0], self.min[1]]);
+        let _ = writeln!(
+            s,
+            "<rect x=\"{bx0}\" y=\"{by0}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#b0b0b0\" stroke-width=\"0.8\" stroke-dasharray=\"2 3\"/>",
+            q10(bx1 - bx0),
+            q10(by1 - by0)
+        );
+        if let Some((hn, vn)) = view.axis_names() {
+            let _ = writeln!(
+                s,
+                "<text x=\"{bx0}\" y=\"{}\" fill=\"#555\">{hn} {}</text>\n<text x=\"{bx1}\" y=\"{}\" fill=\"#555\" text-anchor=\"end\">{hn} {}</text>\n\
+                 <text x=\"{}\" y=\"{by1}\" fill=\"#555\" text-anchor=\"end\">{vn} {}</text>\n<text x=\"{}\" y=\"{}\" fill=\"#555\" text-anchor=\"end\">{vn} {}</text>",
+                q10(by1 + 16.0),
+                fmt_mm(self.min[0]),
+                q10(by1 + 16.0),
+                fmt_mm(self.max[0]),
+                q10(bx0 - 6.0),
+                fmt_mm(self.min[1]),
+                q10(bx0 - 6.0),
+                q10(by0 + 10.0),
+                fmt_mm(self.max[1]),
+            );
+        }
+        // Toolpath.
+        let _ = writeln!(
+            s,
+            "<g fill=\"none\" stroke-width=\"1\" stroke-linecap=\"round\" stroke-linejoin=\"round\">"
+        );
+        let mut by_style = self.path_data(&tx, scale);
         by_style.sort_by_key(|(st, _)| (st.rapid, st.tool));
         let tools: Vec<i64> = self.tools.iter().copied().collect();
         let colour =
@@ -536,17 +543,7 @@ impl Plot {
         }
         let _ = writeln!(s, "</g>");
         // Work origin.
-        let (ox, oy) = tx([0.0, 0.0]);
-        let _ = writeln!(
-            s,
-            "<g stroke=\"#d00000\" stroke-width=\"1.2\"><line x1=\"{}\" y1=\"{oy}\" x2=\"{}\" y2=\"{oy}\"/><line x1=\"{ox}\" y1=\"{}\" x2=\"{ox}\" y2=\"{}\"/><circle cx=\"{ox}\" cy=\"{oy}\" r=\"4\" fill=\"none\"/></g>\n<text x=\"{}\" y=\"{}\" fill=\"#d00000\">work 0</text>",
-            q10(ox - 9.0),
-            q10(ox + 9.0),
-            q10(oy - 9.0),
-            q10(oy + 9.0),
-            q10(ox + 6.0),
-            q10(oy - 6.0),
-        );
+        work_origin(&mut s, tx([0.0, 0.0]));
         // Scale bar and units.
         let bar = nice_length(ext.max(1e-9) / 5.0);
         let bar_px = q10(bar * scale);
@@ -566,35 +563,8 @@ impl Plot {
             fmt_mm(bar),
         );
         // Legend.
-        let mut lx = margin_l;
         let ly2 = q10(ly + 24.0);
-        for t in &tools {
-            let c = colour(*t);
-            let name = if *t == 0 {
-                "no tool".to_string()
-            } else {
-                format!("T{t}")
-            };
-            let _ = writeln!(
-                s,
-                "<line x1=\"{lx}\" y1=\"{ly2}\" x2=\"{}\" y2=\"{ly2}\" stroke=\"{c}\" stroke-width=\"2\"/><text x=\"{}\" y=\"{}\">{name}</text>",
-                q10(lx + 20.0),
-                q10(lx + 24.0),
-                q10(ly2 + 4.0)
-            );
-            lx += 80.0;
-        }
-        let _ = writeln!(
-            s,
-            "<line x1=\"{lx}\" y1=\"{ly2}\" x2=\"{}\" y2=\"{ly2}\" stroke=\"#444\"/><text x=\"{}\" y=\"{}\">feed</text><line x1=\"{}\" y1=\"{ly2}\" x2=\"{}\" y2=\"{ly2}\" stroke=\"#444\" stroke-dasharray=\"4 3\"/><text x=\"{}\" y=\"{}\">rapid</text>",
-            q10(lx + 20.0),
-            q10(lx + 24.0),
-            q10(ly2 + 4.0),
-            q10(lx + 70.0),
-            q10(lx + 90.0),
-            q10(lx + 94.0),
-            q10(ly2 + 4.0),
-        );
+        legend(&mut s, &tools, &colour, margin_l, ly2);
         let ranges: Vec<String> = ["X", "Y", "Z"]
             .iter()
             .zip(self.range)
@@ -697,6 +667,51 @@ pub fn xml_escape(s: &str) -> String {
         }
     }
     o
+}
+
+/// The work origin: a red cross in a circle, named.
+fn work_origin(s: &mut String, (ox, oy): (f64, f64)) {
+    let _ = writeln!(
+        s,
+        "<g stroke=\"#d00000\" stroke-width=\"1.2\"><line x1=\"{}\" y1=\"{oy}\" x2=\"{}\" y2=\"{oy}\"/><line x1=\"{ox}\" y1=\"{}\" x2=\"{ox}\" y2=\"{}\"/><circle cx=\"{ox}\" cy=\"{oy}\" r=\"4\" fill=\"none\"/></g>\n<text x=\"{}\" y=\"{}\" fill=\"#d00000\">work 0</text>",
+        q10(ox - 9.0),
+        q10(ox + 9.0),
+        q10(oy - 9.0),
+        q10(oy + 9.0),
+        q10(ox + 6.0),
+        q10(oy - 6.0),
+    );
+}
+/// The legend: a line per tool in its colour, then feed and rapid.
+fn legend(s: &mut String, tools: &[i64], colour: &impl Fn(i64) -> &'static str, x: f64, ly2: f64) {
+    let mut lx = x;
+    for t in tools {
+        let c = colour(*t);
+        let name = if *t == 0 {
+            "no tool".to_string()
+        } else {
+            format!("T{t}")
+        };
+        let _ = writeln!(
+            s,
+            "<line x1=\"{lx}\" y1=\"{ly2}\" x2=\"{}\" y2=\"{ly2}\" stroke=\"{c}\" stroke-width=\"2\"/><text x=\"{}\" y=\"{}\">{name}</text>",
+            q10(lx + 20.0),
+            q10(lx + 24.0),
+            q10(ly2 + 4.0)
+        );
+        lx += 80.0;
+    }
+    let _ = writeln!(
+        s,
+        "<line x1=\"{lx}\" y1=\"{ly2}\" x2=\"{}\" y2=\"{ly2}\" stroke=\"#444\"/><text x=\"{}\" y=\"{}\">feed</text><line x1=\"{}\" y1=\"{ly2}\" x2=\"{}\" y2=\"{ly2}\" stroke=\"#444\" stroke-dasharray=\"4 3\"/><text x=\"{}\" y=\"{}\">rapid</text>",
+        q10(lx + 20.0),
+        q10(lx + 24.0),
+        q10(ly2 + 4.0),
+        q10(lx + 70.0),
+        q10(lx + 90.0),
+        q10(lx + 94.0),
+        q10(ly2 + 4.0),
+    );
 }
 
 #[cfg(test)]
