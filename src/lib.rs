@@ -298,6 +298,10 @@ fn finish_flatten(diags: &[Diagnostic], code: u8, format: MessageFormat) -> Exit
 
 /// The CLI edge: configuration problems become `anyhow` errors with context;
 /// program problems are diagnostics.
+#[expect(
+    clippy::too_many_lines,
+    reason = "not split yet: its file is being changed"
+)]
 fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
     let env_path = std::env::var("NGCFLAT_SUBROUTINE_PATH").ok();
     let common = match &cli.command {
