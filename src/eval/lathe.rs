@@ -8,7 +8,7 @@ use std::rc::Rc;
 
 use crate::diag::{Error, ErrorKind, LatheError};
 use crate::emit::number_string;
-use crate::geom::lathe::{C, Contour, Cycle, Move, cut};
+use crate::geom::lathe::{C, Contour, Cycle, Move, cut_partial};
 use crate::parse::Name;
 use crate::parse::ast::{Item, Line, LineKind};
 use crate::program::{FileIndex, Window, next_line};
@@ -428,12 +428,9 @@ impl Interp<'_> {
         {
             return Err(self.lathe_err(LatheError::INotPositive, file, start, len));
         }
-        let moves = match cut(&run.contour, run.begin, &run.cycle) {
-            Ok(m) => m,
-            Err(g) => {
-                return Err(self.lathe_err(LatheError::Geometry(g), file, start, len));
-            }
-        };
+        // The moves made before a geometry error are checked first: the
+        // reference makes them before it stops.
+        let (moves, failed) = cut_partial(&run.contour, run.begin, &run.cycle);
         // The moves start where the machine is (LinuxCNC's position is the
         // contour's end, which only its arcs' skip test reads).
         if !moves.is_empty() {
@@ -449,7 +446,10 @@ impl Interp<'_> {
             self.lathe_move(&cf, cs, clen, m)?;
         }
         (self.current_line_start, self.current_line_idx) = saved;
-        Ok(())
+        match failed {
+            Some(g) => Err(self.lathe_err(LatheError::Geometry(g), file, start, len)),
+            None => Ok(()),
+        }
     }
 
     /// Writes one move of a cycle and applies it.

@@ -1091,19 +1091,27 @@ impl Path {
 }
 
 /// The moves of a lathe cycle over `contour`, from the start point
-/// `start` (the cycle's X and Z), in program coordinates. `at` is where the
-/// reference's position is when the moves begin (the contour's end).
+/// `start` (the cycle's X and Z), in program coordinates.
 pub fn cut(contour: &Contour, start: C, cycle: &Cycle) -> Result<Vec<Move>, LatheError> {
+    match cut_partial(contour, start, cycle) {
+        (moves, None) => Ok(moves),
+        (_, Some(e)) => Err(e),
+    }
+}
+
+/// As [`cut`], with the moves made before an error (the reference makes
+/// them, one by one, before it stops; a move it refuses comes first).
+pub fn cut_partial(contour: &Contour, start: C, cycle: &Cycle) -> (Vec<Move>, Option<LatheError>) {
     let mut out = Out {
         flip: 0,
         moves: Vec::new(),
     };
     if contour.segs.len() <= 1 {
-        return Ok(Vec::new());
+        return (Vec::new(), None);
     }
     let path = Path::new(contour.segs.clone());
-    match *cycle {
-        Cycle::Finish { d, e, passes } => path.g70(&mut out, start, d, e, passes)?,
+    let r = match *cycle {
+        Cycle::Finish { d, e, passes } => path.g70(&mut out, start, d, e, passes),
         Cycle::Rough {
             face,
             mode,
@@ -1112,8 +1120,8 @@ pub fn cut(contour: &Contour, start: C, cycle: &Cycle) -> Result<Vec<Move>, Lath
             d,
             i,
             r,
-        } => path.rough(&mut out, mode, start, face, C::new(w, u), d, i, r)?,
-    }
+        } => path.rough(&mut out, mode, start, face, C::new(w, u), d, i, r),
+    };
     // An arc to where the machine already is (within 0.0001 on both axes)
     // is not made.
     let mut cur = contour.last;
@@ -1127,7 +1135,7 @@ pub fn cut(contour: &Contour, start: C, cycle: &Cycle) -> Result<Vec<Move>, Lath
         cur = e;
         true
     });
-    Ok(moves)
+    (moves, r.err())
 }
 
 #[cfg(test)]
