@@ -147,6 +147,12 @@ pub struct MachineArgs {
     /// Do not check travel limits (the INI's, GRBL's or --limits).
     #[arg(long)]
     pub no_limits: bool,
+    /// Also stop at moves outside the INI's [AXIS_*] MIN_LIMIT/MAX_LIMIT
+    /// when flattening and checking (with --ini; off by default, so that
+    /// giving a machine's INI for its subroutine path and switches does not
+    /// also need its offsets; `stats` always reports them).
+    #[arg(long)]
+    pub ini_limits: bool,
 }
 
 #[derive(Args, Debug)]
@@ -803,7 +809,12 @@ impl CommonArgs {
         if let Some(l) = &self.machine.limits {
             machine.add_limits(l)?;
         }
-        let check_limits = !self.machine.no_limits && machine.has_limits();
+        // --limits and a GRBL listing ask for the check; an INI's limits
+        // only with --ini-limits.
+        let asked = self.machine.limits.is_some()
+            || self.machine.grbl_settings.is_some()
+            || self.machine.ini_limits;
+        let check_limits = !self.machine.no_limits && asked && machine.has_limits();
         let format = match self.message_format {
             FormatArg::Human => MessageFormat::Human,
             FormatArg::Short => MessageFormat::Short,

@@ -896,3 +896,37 @@ fn stats_report_the_travel_limits_instead_of_stopping() {
         "{text}"
     );
 }
+
+/// An INI given for its subroutine path and switches does not make
+/// flattening check its travel limits (which would need the machine's
+/// offsets): only --ini-limits does.
+#[test]
+fn ini_limits_are_checked_only_when_asked() {
+    let dir = crate::tmp();
+    crate::put(
+        dir.path(),
+        "m.ini",
+        "[TRAJ]\nLINEAR_UNITS = mm\n[AXIS_X]\nMIN_LIMIT = 0\nMAX_LIMIT = 10\n",
+    );
+    crate::put(dir.path(), "p.ngc", "G21 G90\nG0 X50 Y1\nM2\n");
+    // Offsets unknown, limits not asked for: flattens.
+    let (code, out, err) = crate::run(dir.path(), &["--ini", "m.ini", "p.ngc"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("G0 X50 Y1"), "{out}");
+    // Known offsets, limits not asked for: flattens.
+    let (code, _, err) = crate::run(dir.path(), &["--ini", "m.ini", "--zero-start", "p.ngc"]);
+    assert_eq!(code, 0, "{err}");
+    // Asked for: the move leaves the envelope.
+    let (code, out, err) = crate::run(
+        dir.path(),
+        &["--ini", "m.ini", "--zero-start", "--ini-limits", "p.ngc"],
+    );
+    assert_eq!(code, 1, "{err}");
+    assert!(out.is_empty());
+    assert!(err.contains("E1203"), "{err}");
+    assert!(err.contains("p.ngc:2:"), "{err}");
+    // Asked for without known offsets: the error names the options.
+    let (code, _, err) = crate::run(dir.path(), &["--ini", "m.ini", "--ini-limits", "p.ngc"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("E1204"), "{err}");
+}
