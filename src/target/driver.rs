@@ -639,7 +639,13 @@ impl Lowering {
                 }
                 Fate::Drop
             }
-            GCode::ArcDistance(ArcDistance::Absolute) => Fate::Drop,
+            GCode::ArcDistance(ArcDistance::Absolute) => {
+                problems.push(refuse(
+                    self,
+                    "absolute arc centres (G90.1) are not lowered; the target reads I J K as offsets from the start",
+                ));
+                Fate::Drop
+            }
             GCode::ArcDistance(ArcDistance::Incremental) => Fate::Drop,
             GCode::Retract(_) => Fate::Drop,
             GCode::ToolLength(ToolLength::Apply | ToolLength::Add) if p.has_g(431) => Fate::Drop,
