@@ -30,6 +30,9 @@ struct Problem {
     kind: ErrorKind,
 }
 
+/// Why G90.1 is refused where the target lacks it.
+const ABSOLUTE_ARC_CENTRES: &str = "absolute arc centres (G90.1) are not lowered; the target reads I J K as offsets from the start";
+
 /// What happens to one word of a block.
 #[derive(Clone, Copy, PartialEq)]
 enum Fate {
@@ -640,14 +643,10 @@ impl Lowering {
                 Fate::Drop
             }
             GCode::ArcDistance(ArcDistance::Absolute) => {
-                problems.push(refuse(
-                    self,
-                    "absolute arc centres (G90.1) are not lowered; the target reads I J K as offsets from the start",
-                ));
+                problems.push(refuse(self, ABSOLUTE_ARC_CENTRES));
                 Fate::Drop
             }
-            GCode::ArcDistance(ArcDistance::Incremental) => Fate::Drop,
-            GCode::Retract(_) => Fate::Drop,
+            GCode::ArcDistance(ArcDistance::Incremental) | GCode::Retract(_) => Fate::Drop,
             GCode::ToolLength(ToolLength::Apply | ToolLength::Add) if p.has_g(431) => Fate::Drop,
             GCode::CutterComp(CutterComp::Off) => Fate::Drop,
             GCode::CutterComp(_) => {
