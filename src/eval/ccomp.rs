@@ -131,14 +131,8 @@ impl Interp<'_> {
             && !self.tools.contains_key(&n)
             && !self.unknown_tools.contains(&n)
         {
-            let diameter = match n {
-                1 => 0.125,
-                2 => 0.0625,
-                3 => 0.201,
-                _ => 0.0,
-            };
             return Some(super::tools::ToolData {
-                diameter,
+                diameter: super::tools::standalone_diameter(n),
                 ..Default::default()
             });
         }

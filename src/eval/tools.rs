@@ -16,6 +16,18 @@ pub struct ToolData {
     pub orientation: f64,
 }
 
+/// The diameter (machine units) of tool `t` in the standalone
+/// interpreter's built-in tool table, which `--zero-start` without a tool
+/// table stands for: T1-T3 have diameters, every other tool none.
+pub fn standalone_diameter(t: i64) -> f64 {
+    match t {
+        1 => 0.125,
+        2 => 0.0625,
+        3 => 0.201,
+        _ => 0.0,
+    }
+}
+
 /// Reads a LinuxCNC tool table (`T1 P1 Z0.5 D0.125 ;comment` per line).
 pub fn parse_tool_table(text: &str) -> Result<Vec<(i64, ToolData)>, String> {
     let mut out = Vec::new();

@@ -10,6 +10,7 @@ use std::sync::Arc;
 use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};
 use crate::emit::Output;
 use crate::eval::{LineConsumer, Origin, Settings};
+use crate::geom::comp::{Arc as CompArc, ArcCenter, Comp, Out, Side, Tolerances};
 use crate::machine::Machine;
 use crate::machine::block::{
     ArcDistance, Block, CommentKind, CoordSystem, CutterComp, DecodeError, Distance, FeedMode,
@@ -64,6 +65,28 @@ pub struct Lowering {
     last_pq: Option<[f64; 2]>,
     /// Warnings of the line being lowered, waiting for its site.
     pending: Vec<WarningKind>,
+    /// Cutter compensation computed into the path (targets without it).
+    comp: Option<Box<CompPath>>,
+    /// After G40: the tool is where the last compensated move left it,
+    /// and the next move goes to the programmed point with every axis.
+    after_off: Option<[f64; 3]>,
+    /// `--zero-start` without a tool table: tools the program has not set
+    /// have the standalone interpreter's built-in data.
+    standalone_tools: bool,
+    /// The value of the last F word read, and the one before the block.
+    last_f: Option<f64>,
+    f_before: Option<f64>,
+    /// The F value the target has after compensated moves were written.
+    comp_f: Option<f64>,
+}
+
+/// Cutter compensation on, on a target without it.
+struct CompPath {
+    comp: Comp<Option<f64>>,
+    plane: lower::Plane,
+    /// Where the tool is (X Y Z, program units): the end of the last
+    /// compensated move written.
+    at: [f64; 3],
 }
 
 impl Lowering {
@@ -85,6 +108,12 @@ impl Lowering {
             seen_words: false,
             last_pq: None,
             pending: Vec::new(),
+            comp: None,
+            after_off: None,
+            standalone_tools: settings.zero_start && settings.tool_table.is_empty(),
+            last_f: None,
+            f_before: None,
+            comp_f: None,
         }
     }
 
@@ -337,20 +366,30 @@ impl Lowering {
                 }
             }
         }
-        // Lowered motion replaces the line's motion words.
-        let lowered = match self.lower_motion(b, &before) {
-            Ok(l) => l,
-            Err(k) => {
-                return Ok(vec![Problem {
-                    span: b.motion.and_then(|_| {
-                        b.g_codes()
-                            .find(|(g, _)| matches!(g, GCode::Motion(_)))
-                            .map(|(_, w)| w.span)
-                    }),
-                    kind: k,
-                }]);
-            }
+        // Compensated moves, or lowered motion, replace the line's motion
+        // words.
+        self.f_before = self.last_f;
+        if let Some(f) = b.value(b'F') {
+            self.last_f = Some(f);
+        }
+        let compensated = match self.comp_block(b, &before, &mut fates) {
+            Ok(c) => c,
+            Err(p) => return Ok(vec![p]),
         };
+        let lowered =
+            match compensated.map_or_else(|| self.lower_motion(b, &before), |c| Ok(Some(c))) {
+                Ok(l) => l,
+                Err(k) => {
+                    return Ok(vec![Problem {
+                        span: b.motion.and_then(|_| {
+                            b.g_codes()
+                                .find(|(g, _)| matches!(g, GCode::Motion(_)))
+                                .map(|(_, w)| w.span)
+                        }),
+                        kind: k,
+                    }]);
+                }
+            };
         if let Some(lines) = &lowered {
             for (i, w) in b.words.iter().enumerate() {
                 let motion_word = matches!(w.kind, WordKind::G(GCode::Motion(_)))
@@ -363,8 +402,8 @@ impl Lowering {
         }
         self.feed_words(b, &before, &mut fates, &mut extra);
         // The line itself.
-        let incremental_lowered =
-            lowered.is_some() && self.m.modes.distance == Distance::Incremental;
+        let incremental_lowered = lowered.as_ref().is_some_and(|l| !l.is_empty())
+            && self.m.modes.distance == Distance::Incremental;
         let mut after_lowered: Vec<(u8, f64)> = Vec::new();
         let mut written = Vec::new();
         self.w.begin(b, self.m.modes.units);
@@ -649,13 +688,8 @@ impl Lowering {
             GCode::ArcDistance(ArcDistance::Incremental) | GCode::Retract(_) => Fate::Drop,
             GCode::ToolLength(ToolLength::Apply | ToolLength::Add) if p.has_g(431) => Fate::Drop,
             GCode::CutterComp(CutterComp::Off) => Fate::Drop,
-            GCode::CutterComp(_) => {
-                problems.push(refuse(
-                    self,
-                    "cutter radius compensation is not lowered for this target yet",
-                ));
-                Fate::Drop
-            }
+            // Computed into the path (comp_block).
+            GCode::CutterComp(_) => Fate::Drop,
             GCode::Coord(CoordSystem(n)) => {
                 let _ = n;
                 problems.push(refuse(self, "the target has only G54–G59"));
@@ -1231,6 +1265,426 @@ impl Lowering {
             self.m.pos[i] = Some(out.end[i] * s);
         }
         Ok(out.lines)
+    }
+    fn comp_refusal(
+        &self,
+        span: Option<crate::machine::block::Span>,
+        code: &'static str,
+        message: &str,
+    ) -> Problem {
+        Problem {
+            span,
+            kind: ErrorKind::TargetLowering {
+                target: self.name(),
+                code,
+                message: message.into(),
+            },
+        }
+    }
+
+    /// The first word of `b` that would act while compensation holds a
+    /// move back (spindle, coolant, dwell, tools, units, offsets, ...):
+    /// the reference runs it only after the held move.
+    fn held_action(b: &Block) -> Option<&Word> {
+        b.words.iter().find(|w| match w.kind {
+            WordKind::G(g) => !matches!(
+                g,
+                GCode::Motion(
+                    MotionMode::Rapid | MotionMode::Linear | MotionMode::ArcCw | MotionMode::ArcCcw
+                ) | GCode::Plane(_)
+                    | GCode::Distance(_)
+                    | GCode::ArcDistance(_)
+                    | GCode::CutterComp(_)
+                    | GCode::Path(_)
+                    | GCode::FeedMode(FeedMode::PerMinute)
+            ),
+            WordKind::M(m) => !matches!(m, MCode::Pause { .. } | MCode::End { .. }),
+            WordKind::Value => !b"XYZIJKRPFN".contains(&w.letter),
+        })
+    }
+
+    /// Cutter compensation on a target without it: the programmed moves
+    /// of the blocks run while it is on go to a [`Comp`], and the moves it
+    /// releases are written (absolute, each with its block's feed) in place
+    /// of the line's motion. `None` when compensation plays no part in `b`.
+    fn comp_block(
+        &mut self,
+        b: &Block,
+        before: &Machine,
+        fates: &mut [Fate],
+    ) -> Result<Option<Vec<PlainLine>>, Problem> {
+        if self.p.has_g(410)
+            || self.comp.is_none() && b.cutter_comp.is_none() && self.after_off.is_none()
+        {
+            return Ok(None);
+        }
+        let cc_span = b
+            .g_codes()
+            .find(|(g, _)| matches!(g, GCode::CutterComp(_)))
+            .map(|(_, w)| w.span);
+        let motion_span = b
+            .g_codes()
+            .find(|(g, _)| matches!(g, GCode::Motion(_)))
+            .map(|(_, w)| w.span);
+        let moves = b.has_axis();
+        let other_axis_use = b.non_modal.is_some_and(|n| !matches!(n, NonModal::Dwell))
+            || b.tool_length == Some(ToolLength::Dynamic);
+        let motion = self.m.modes.motion;
+        if self.comp.as_ref().is_some_and(|c| c.comp.holding())
+            && let Some(w) = Self::held_action(b)
+        {
+            return Err(self.comp_refusal(
+                Some(w.span),
+                "E1180",
+                "while cutter compensation holds a move back (until the next move is known), LinuxCNC runs this only after that move; it is not lowered: put it before G41/G42 or after G40",
+            ));
+        }
+        for (i, w) in b.words.iter().enumerate() {
+            if matches!(w.kind, WordKind::G(GCode::CutterComp(_))) {
+                fates[i] = Fate::Drop;
+            }
+        }
+        let mut released: Vec<Out<Option<f64>>> = Vec::new();
+        let mut lines: Vec<PlainLine> = Vec::new();
+        let mut handled = false;
+        // G40 comes before the block's motion.
+        if b.cutter_comp == Some(CutterComp::Off)
+            && let Some(mut c) = self.comp.take()
+        {
+            c.comp
+                .off(&mut released)
+                .map_err(|e| self.comp_problem(cc_span, e))?;
+            let at = self.write_released(&mut c, &released, &mut lines, motion_span)?;
+            released.clear();
+            self.after_off = Some(at);
+            handled = true;
+        }
+        if let Some(cc) = b.cutter_comp.filter(|c| *c != CutterComp::Off) {
+            for (i, w) in b.words.iter().enumerate() {
+                if matches!(w.kind, WordKind::Value) && matches!(w.letter, b'D' | b'L') {
+                    fates[i] = Fate::Drop;
+                }
+            }
+            self.comp_on(b, before, cc, cc_span)?;
+            handled = true;
+        }
+        if let Some(mut c) = self.comp.take() {
+            let r = self.comp_move(
+                &mut c,
+                b,
+                motion,
+                moves,
+                other_axis_use,
+                motion_span,
+                &mut lines,
+            );
+            self.comp = Some(c);
+            if r? {
+                handled = true;
+            }
+        } else if self.after_off.is_some() && (moves || other_axis_use) {
+            if other_axis_use || !matches!(motion, MotionMode::Rapid | MotionMode::Linear) {
+                return Err(self.comp_refusal(
+                    motion_span,
+                    "E1181",
+                    "the first move after G40 starts where the compensated path ended and must be G0 or G1 to be lowered",
+                ));
+            }
+            let end = self.prog_pos(&self.m);
+            let mut words = vec![(
+                b'G',
+                if motion == MotionMode::Rapid {
+                    0.0
+                } else {
+                    1.0
+                },
+            )];
+            for (i, l) in [b'X', b'Y', b'Z'].into_iter().enumerate() {
+                if let Some(v) = end[i] {
+                    words.push((l, v));
+                }
+            }
+            if self.last_f != self.comp_f
+                && let Some(f) = self.last_f
+            {
+                // The feed as the program has it (compensated moves wrote
+                // their own).
+                words.push((b'F', f));
+                self.comp_f = self.last_f;
+            }
+            lines.push(words_line(&words));
+            self.after_off = None;
+            self.cycles.end();
+            handled = true;
+        }
+        // Program stops release the held moves (an end also turns
+        // compensation off).
+        let stop = b.m_codes().find_map(|(m, _)| match m {
+            MCode::Pause { .. } => Some(false),
+            MCode::End { .. } => Some(true),
+            _ => None,
+        });
+        if let Some(end) = stop
+            && let Some(mut c) = self.comp.take()
+        {
+            c.comp
+                .stop(end, &mut released)
+                .map_err(|e| self.comp_problem(None, e))?;
+            self.write_released(&mut c, &released, &mut lines, None)?;
+            if !end {
+                self.comp = Some(c);
+            }
+            handled = true;
+        }
+        if stop == Some(true) {
+            self.after_off = None;
+        }
+        if self.comp.is_some() || handled {
+            // Each compensated feed move carries its own F.
+            for (i, w) in b.words.iter().enumerate() {
+                if w.letter == b'F' && matches!(w.kind, WordKind::Value) {
+                    fates[i] = Fate::Drop;
+                }
+            }
+        }
+        Ok(handled.then_some(lines))
+    }
+
+    fn comp_problem(
+        &self,
+        span: Option<crate::machine::block::Span>,
+        error: crate::geom::comp::CompError,
+    ) -> Problem {
+        Problem {
+            span,
+            kind: ErrorKind::CutterComp { error },
+        }
+    }
+
+    /// Writes `released` (plain blocks, feeds on G1/G2/G3) into `lines`;
+    /// returns where the tool is after them.
+    fn write_released(
+        &mut self,
+        c: &mut CompPath,
+        released: &[Out<Option<f64>>],
+        lines: &mut Vec<PlainLine>,
+        span: Option<crate::machine::block::Span>,
+    ) -> Result<[f64; 3], Problem> {
+        let (out, at) =
+            lower::comp::lower_comp_moves(c.plane, c.at, released).map_err(|e| Problem {
+                span,
+                kind: self.lower_error(e),
+            })?;
+        for (mut l, feed) in out {
+            let feeds = l
+                .words
+                .first()
+                .is_some_and(|w| w.letter == b'G' && w.value != 0.0);
+            if feeds
+                && *feed != self.comp_f
+                && let Some(f) = *feed
+            {
+                l.words.push(lower::Word {
+                    letter: b'F',
+                    value: f,
+                });
+                self.comp_f = Some(f);
+            }
+            lines.push(l);
+        }
+        c.at = at;
+        Ok(at)
+    }
+
+    /// G41/G42/G41.1/G42.1 on block `b`.
+    fn comp_on(
+        &mut self,
+        b: &Block,
+        before: &Machine,
+        cc: CutterComp,
+        span: Option<crate::machine::block::Span>,
+    ) -> Result<(), Problem> {
+        let need = |s: &Self, value: &str, option: &str| Problem {
+            span,
+            kind: ErrorKind::TargetNeedsValue {
+                target: s.name(),
+                what: "cutter radius compensation (computed into the path)".into(),
+                value: value.into(),
+                option: option.into(),
+            },
+        };
+        let xz = match self.m.modes.plane {
+            Plane::XY => false,
+            Plane::XZ => true,
+            _ => {
+                return Err(Problem {
+                    span,
+                    kind: ErrorKind::Unsupported {
+                        what: "cutter radius compensation outside G17 and G18 is not lowered"
+                            .into(),
+                    },
+                });
+            }
+        };
+        if self.feed_rewrite || self.m.modes.feed_mode != FeedMode::PerMinute {
+            return Err(self.comp_refusal(
+                span,
+                "E1182",
+                "compensated moves are written with feeds per minute; G93/G95 with cutter radius compensation is not lowered",
+            ));
+        }
+        let side = if matches!(cc, CutterComp::Left | CutterComp::DynamicLeft) {
+            Side::Left
+        } else {
+            Side::Right
+        };
+        let metric = self.m.modes.units == Units::Mm;
+        let (radius, orientation) =
+            if matches!(cc, CutterComp::DynamicLeft | CutterComp::DynamicRight) {
+                let Some(d) = b.value(b'D') else {
+                    return Err(need(self, "the tool's diameter", "a D word on G41.1/G42.1"));
+                };
+                (d / 2.0, b.value(b'L').map_or(0, |l| l.round() as i32))
+            } else {
+                let t = b
+                    .value(b'D')
+                    .map(|d| (d + 0.5) as i64)
+                    .or(self.m.current_tool);
+                let data = t.and_then(|t| match self.m.tools.get(&t) {
+                    Some(d) => Some((d.diameter, d.orientation.round() as i32)),
+                    None if self.standalone_tools => {
+                        Some((crate::eval::tools::standalone_diameter(t), 0))
+                    }
+                    None if self.m.tools_known || t == 0 => Some((0.0, 0)),
+                    None => None,
+                });
+                let Some((diameter, o)) = data else {
+                    return Err(need(
+                        self,
+                        "the tool's diameter",
+                        "--tool-table (the tool table of the machine), or --zero-start",
+                    ));
+                };
+                // Machine units to program units as the reference computes it
+                // (through millimetres).
+                let mm = if self.m.machine_metric {
+                    diameter
+                } else {
+                    diameter / 0.03937007874016
+                };
+                let v = if metric { mm } else { mm / 25.4 };
+                (v / 2.0, o)
+            };
+        let plane = if xz {
+            lower::Plane::XZ
+        } else {
+            lower::Plane::XY
+        };
+        let s = self.m.scale();
+        let p = before.pos;
+        let (Some(x), Some(y), Some(z)) = (p[0], p[1], p[2]) else {
+            return Err(need(
+                self,
+                "the current position",
+                "--start-position (or --zero-start), or an absolute move first",
+            ));
+        };
+        let xyz = [x / s, y / s, z / s];
+        let pos = if xz { [xyz[2], xyz[0], xyz[1]] } else { xyz };
+        let mut comp = Comp::new(Tolerances::default_for(metric));
+        comp.start(side, radius, orientation, xz, pos);
+        if self.after_off.is_none() {
+            self.comp_f = self.f_before;
+        }
+        let at = self.after_off.take().unwrap_or(xyz);
+        self.comp = Some(Box::new(CompPath { comp, plane, at }));
+        Ok(())
+    }
+
+    /// The move of block `b` while compensation is on. Returns whether the
+    /// block's motion was taken.
+    #[allow(clippy::too_many_arguments)]
+    fn comp_move(
+        &mut self,
+        c: &mut CompPath,
+        b: &Block,
+        motion: MotionMode,
+        moves: bool,
+        other_axis_use: bool,
+        span: Option<crate::machine::block::Span>,
+        lines: &mut Vec<PlainLine>,
+    ) -> Result<bool, Problem> {
+        let arc = matches!(motion, MotionMode::ArcCw | MotionMode::ArcCcw);
+        let ijk_only = !moves
+            && (b.value(b'I').is_some() || b.value(b'J').is_some() || b.value(b'K').is_some());
+        if other_axis_use
+            || (moves || ijk_only)
+                && !matches!(motion, MotionMode::Rapid | MotionMode::Linear)
+                && !arc
+            || b.words
+                .iter()
+                .any(|w| matches!(w.kind, WordKind::Value) && b"ABCUVW".contains(&w.letter))
+        {
+            return Err(self.comp_refusal(
+                span,
+                "E1181",
+                "with cutter radius compensation on, only G0, G1, G2 and G3 moves in X Y Z (with an end point) are lowered",
+            ));
+        }
+        // An arc with I J K alone is a full circle back to where it starts.
+        if !(moves || arc && ijk_only) {
+            return Ok(false);
+        }
+        if b.units.is_some() && c.comp.holding() {
+            return Err(self.comp_refusal(
+                span,
+                "E1180",
+                "G20/G21 while a compensated move is held is not lowered",
+            ));
+        }
+        let e = self.prog_pos(&self.m);
+        let (Some(x), Some(y), Some(z)) = (e[0], e[1], e[2]) else {
+            return Err(self.comp_refusal(
+                span,
+                "E1181",
+                "the end of a compensated move is not known",
+            ));
+        };
+        let xz = c.plane == lower::Plane::XZ;
+        let end = if xz { [z, x, y] } else { [x, y, z] };
+        let feed = self.last_f;
+        let mut released = Vec::new();
+        let r = if arc {
+            let center = match b.value(b'R') {
+                Some(r) => ArcCenter::Radius(r),
+                None => {
+                    let (i, j) = if xz {
+                        (b.value(b'K'), b.value(b'I'))
+                    } else {
+                        (b.value(b'I'), b.value(b'J'))
+                    };
+                    ArcCenter::Offsets {
+                        i: i.unwrap_or(0.0),
+                        j: j.unwrap_or(0.0),
+                        absolute: self.m.modes.arc_distance == ArcDistance::Absolute,
+                    }
+                }
+            };
+            let turns = b.value(b'P').map_or(1, |p| p.round() as i32);
+            let a = CompArc {
+                ccw: motion == MotionMode::ArcCcw,
+                center,
+                turns,
+            };
+            c.comp.arc(a, end, feed, &mut released)
+        } else {
+            c.comp
+                .straight(motion == MotionMode::Rapid, end, feed, &mut released)
+        };
+        r.map_err(|e| self.comp_problem(span, e))?;
+        self.cycles.end();
+        self.write_released(c, &released, lines, span)?;
+        Ok(true)
     }
 }
 
