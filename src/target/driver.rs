@@ -1383,38 +1383,7 @@ impl Lowering {
                 handled = true;
             }
         } else if self.after_off.is_some() && (moves || other_axis_use) {
-            if other_axis_use || !matches!(motion, MotionMode::Rapid | MotionMode::Linear) {
-                return Err(self.comp_refusal(
-                    motion_span,
-                    "E1181",
-                    "the first move after G40 starts where the compensated path ended and must be G0 or G1 to be lowered",
-                ));
-            }
-            let end = self.prog_pos(&self.m);
-            let mut words = vec![(
-                b'G',
-                if motion == MotionMode::Rapid {
-                    0.0
-                } else {
-                    1.0
-                },
-            )];
-            for (i, l) in [b'X', b'Y', b'Z'].into_iter().enumerate() {
-                if let Some(v) = end[i] {
-                    words.push((l, v));
-                }
-            }
-            if self.last_f != self.comp_f
-                && let Some(f) = self.last_f
-            {
-                // The feed as the program has it (compensated moves wrote
-                // their own).
-                words.push((b'F', f));
-                self.comp_f = self.last_f;
-            }
-            lines.push(words_line(&words));
-            self.after_off = None;
-            self.cycles.end();
+            lines.push(self.after_off_move(motion, other_axis_use, motion_span)?);
             handled = true;
         }
         // Program stops release the held moves (an end also turns
@@ -1448,6 +1417,48 @@ impl Lowering {
             }
         }
         Ok(handled.then_some(lines))
+    }
+
+    /// The first move after G40: from where the compensated path ended to
+    /// the programmed point, with every axis (and the program's feed).
+    fn after_off_move(
+        &mut self,
+        motion: MotionMode,
+        other_axis_use: bool,
+        motion_span: Option<crate::machine::block::Span>,
+    ) -> Result<PlainLine, Problem> {
+        if other_axis_use || !matches!(motion, MotionMode::Rapid | MotionMode::Linear) {
+            return Err(self.comp_refusal(
+                motion_span,
+                "E1181",
+                "the first move after G40 starts where the compensated path ended and must be G0 or G1 to be lowered",
+            ));
+        }
+        let end = self.prog_pos(&self.m);
+        let mut words = vec![(
+            b'G',
+            if motion == MotionMode::Rapid {
+                0.0
+            } else {
+                1.0
+            },
+        )];
+        for (i, l) in [b'X', b'Y', b'Z'].into_iter().enumerate() {
+            if let Some(v) = end[i] {
+                words.push((l, v));
+            }
+        }
+        if self.last_f != self.comp_f
+            && let Some(f) = self.last_f
+        {
+            // The feed as the program has it (compensated moves wrote
+            // their own).
+            words.push((b'F', f));
+            self.comp_f = self.last_f;
+        }
+        self.after_off = None;
+        self.cycles.end();
+        Ok(words_line(&words))
     }
 
     fn comp_problem(
