@@ -250,14 +250,7 @@ impl Interp<'_> {
         let line_idx = self.cur.line;
         self.current_line_start = start;
         self.current_line_idx = line_idx;
-        if let Some(o) = file.olines.get(self.cur.next_o)
-            && o.line_idx == line_idx
-        {
-            self.count_step()?;
-            let oidx = self.cur.next_o as u32;
-            self.cur.next_o += 1;
-            self.cur.pos = o.next;
-            self.cur.line += 1;
+        if let Some(oidx) = self.take_oline(&file, line_idx)? {
             self.exec_oline(&file, oidx)?;
             if self
                 .lathe

@@ -673,6 +673,26 @@ impl<'s> Interp<'s> {
     }
 
     /// Reads and runs one line.
+    /// When line `line_idx` of `file` (the cursor's) is an O-line: counts
+    /// the step, moves the cursor past it and returns its index.
+    #[inline(always)]
+    fn take_oline(&mut self, file: &FileIndex, line_idx: u32) -> Result<Option<u32>, Error> {
+        let Some(o) = file.olines.get(self.cur.next_o) else {
+            return Ok(None);
+        };
+        if o.line_idx != line_idx {
+            return Ok(None);
+        }
+        // Loops and calls all pass through O-lines: counting them bounds
+        // any runaway, while straight code runs uncounted.
+        self.count_step()?;
+        let oidx = self.cur.next_o as u32;
+        self.cur.next_o += 1;
+        self.cur.pos = o.next;
+        self.cur.line += 1;
+        Ok(Some(oidx))
+    }
+
     fn step(&mut self) -> Result<(), Error> {
         if self.lathe.is_some() {
             return self.step_contour();
@@ -685,16 +705,7 @@ impl<'s> Interp<'s> {
         let line_idx = self.cur.line;
         self.current_line_start = start;
         self.current_line_idx = line_idx;
-        if let Some(o) = file.olines.get(self.cur.next_o)
-            && o.line_idx == line_idx
-        {
-            // Loops and calls all pass through O-lines: counting them bounds
-            // any runaway, while straight code runs uncounted.
-            self.count_step()?;
-            let oidx = self.cur.next_o as u32;
-            self.cur.next_o += 1;
-            self.cur.pos = o.next;
-            self.cur.line += 1;
+        if let Some(oidx) = self.take_oline(&file, line_idx)? {
             return self.exec_oline(&file, oidx);
         }
         if let Some(data) = file.file.memory()
