@@ -164,26 +164,18 @@ impl Structure {
                 },
             };
         match kind {
-            If | Do | Repeat => {
+            // The `while` of a do-while closes its `do`.
+            While if top_is(self, &[Do]) => {
+                self.stack.pop();
+                None
+            }
+            If | Do | Repeat | While => {
                 self.stack.push(Open {
                     kind,
                     label: label.to_string(),
                     line,
                     at,
                 });
-                None
-            }
-            While => {
-                if top_is(self, &[Do]) {
-                    self.stack.pop();
-                } else {
-                    self.stack.push(Open {
-                        kind,
-                        label: label.to_string(),
-                        line,
-                        at,
-                    });
-                }
                 None
             }
             ElseIf | Else => (!top_is(self, &[If])).then(|| mismatch(self, kind)),

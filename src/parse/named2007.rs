@@ -78,6 +78,23 @@ fn o_word_at(t: &[u8]) -> Option<usize> {
     (t.get(i) == Some(&b'o')).then_some(i)
 }
 
+/// The 2007-style parameter reference at the `#` at `i`, if there is one:
+/// `#[name]` and `#$name$` (local) or `#name$` (global). Gives the name's
+/// start and end (the offset of its closing byte) and whether it is global.
+fn named_form(t: &[u8], i: usize) -> Option<(usize, usize, bool)> {
+    let (s, close, global) = match *t.get(i + 1)? {
+        b'[' => (i + 2, b']', false),
+        b'$' => (i + 2, b'$', false),
+        c if name_start(c) => (i + 1, b'$', true),
+        _ => return None,
+    };
+    if !t.get(s).is_some_and(|&c| name_start(c)) {
+        return None;
+    }
+    let e = s + t[s..].iter().take_while(|&&c| name_char(c)).count();
+    (t.get(e) == Some(&close)).then_some((s, e, global))
+}
+
 /// Rewrites a processed line (`map`: raw offset of each byte, plus one for
 /// the end); `None` when nothing in it uses the syntax.
 pub fn rewrite(text: &str, map: &[u32]) -> Option<(String, Vec<u32>)> {
@@ -130,59 +147,17 @@ pub fn rewrite(text: &str, map: &[u32]) -> Option<(String, Vec<u32>)> {
                 continue;
             }
             b'#' => {
-                // #[name]
-                if t.get(i + 1) == Some(&b'[') && t.get(i + 2).is_some_and(|&c| name_start(c)) {
-                    let s = i + 2;
-                    let mut e = s;
-                    while t.get(e).is_some_and(|&c| name_char(c)) {
-                        e += 1;
+                if let Some((s, e, global)) = named_form(t, i) {
+                    out.push(b'#', at(i));
+                    out.push(b'<', at(if global { s } else { i + 1 }));
+                    if global && t[s] != b'_' {
+                        out.push(b'_', at(s));
                     }
-                    if t.get(e) == Some(&b']') {
-                        out.push(b'#', at(i));
-                        out.push(b'<', at(i + 1));
-                        out.copy(t, map, s, e);
-                        out.push(b'>', at(e));
-                        i = e + 1;
-                        changed = true;
-                        continue;
-                    }
-                }
-                // #$name$ (local)
-                if t.get(i + 1) == Some(&b'$') && t.get(i + 2).is_some_and(|&c| name_start(c)) {
-                    let s = i + 2;
-                    let mut e = s;
-                    while t.get(e).is_some_and(|&c| name_char(c)) {
-                        e += 1;
-                    }
-                    if t.get(e) == Some(&b'$') {
-                        out.push(b'#', at(i));
-                        out.push(b'<', at(i + 1));
-                        out.copy(t, map, s, e);
-                        out.push(b'>', at(e));
-                        i = e + 1;
-                        changed = true;
-                        continue;
-                    }
-                }
-                // #name$ (global)
-                if t.get(i + 1).is_some_and(|&c| name_start(c)) {
-                    let s = i + 1;
-                    let mut e = s;
-                    while t.get(e).is_some_and(|&c| name_char(c)) {
-                        e += 1;
-                    }
-                    if t.get(e) == Some(&b'$') {
-                        out.push(b'#', at(i));
-                        out.push(b'<', at(s));
-                        if t[s] != b'_' {
-                            out.push(b'_', at(s));
-                        }
-                        out.copy(t, map, s, e);
-                        out.push(b'>', at(e));
-                        i = e + 1;
-                        changed = true;
-                        continue;
-                    }
+                    out.copy(t, map, s, e);
+                    out.push(b'>', at(e));
+                    i = e + 1;
+                    changed = true;
+                    continue;
                 }
                 out.push(b, at(i));
             }

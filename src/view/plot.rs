@@ -320,34 +320,18 @@ impl Plot {
                 Seg::Line(l) | Seg::Arc { to: l, .. } => l,
             },
         };
-        if dist(prev_end, q) <= tol && !p.segs.is_empty() {
-            // Sub-pixel: replace the end point only if that keeps the shape.
-            if let Some(l) = last {
-                let anchor = anchor_of(p);
-                if p.dropped.len() < MERGE_WINDOW
-                    && p.dropped
-                        .iter()
-                        .chain([&l])
-                        .all(|d| seg_dist(*d, anchor, q) <= tol)
-                {
-                    p.dropped.push(l);
-                    if let Some(Seg::Line(e)) = p.segs.last_mut() {
-                        *e = q;
-                    }
-                    Self::compress_window(p);
-                    return;
-                }
-            }
-        }
         if let Some(l) = last {
+            // A sub-pixel step may turn back; a longer one must go on forward.
+            let sub_pixel = dist(prev_end, q) <= tol;
             let anchor = anchor_of(p);
             if p.dropped.len() < MERGE_WINDOW
-                && forward(anchor, l, q)
+                && (sub_pixel || forward(anchor, l, q))
                 && p.dropped
                     .iter()
                     .chain([&l])
                     .all(|d| seg_dist(*d, anchor, q) <= tol)
             {
+                // Replace the end point only if that keeps the shape.
                 p.dropped.push(l);
                 if let Some(Seg::Line(e)) = p.segs.last_mut() {
                     *e = q;
