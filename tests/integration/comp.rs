@@ -15,38 +15,10 @@
 //! `NGCFLAT_COMP_CASES=N` sets the number of programs (default 300),
 //! `NGCFLAT_COMP_SEED=S` the first seed.
 
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
-
 use ngcflat::geom::comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
 
 use crate::oracle;
-
-struct Rng(u64);
-
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xD1B5_4A32_D192_ED03)
-    }
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-    fn chance(&mut self, p: f64) -> bool {
-        self.unit() < p
-    }
-}
+use crate::rng::Rng;
 
 /// What a program line does, for the model run.
 #[derive(Debug, Clone)]
@@ -203,10 +175,10 @@ impl Gen {
     fn tool(&mut self, xz: bool, mm: bool, scale: f64) -> ToolSetup {
         let g = self;
         let rel = match g.rng.below(4) {
-            0 => g.rng.range(0.01, 0.05),
-            1 => g.rng.range(0.05, 0.2),
-            2 => g.rng.range(0.2, 0.5),
-            _ => g.rng.range(0.4, 0.9),
+            0 => g.rng.float(0.01, 0.05),
+            1 => g.rng.float(0.05, 0.2),
+            2 => g.rng.float(0.2, 0.5),
+            _ => g.rng.float(0.4, 0.9),
         };
         let tool_r_prog = rel * scale;
         let mut tools = String::new();
@@ -276,22 +248,22 @@ impl Gen {
         let n = 2 + g.rng.below(7);
         let closed = g.rng.chance(0.6);
         let center = [
-            g.rng.range(-1.0, 1.0) * scale,
-            g.rng.range(-1.0, 1.0) * scale,
+            g.rng.float(-1.0, 1.0) * scale,
+            g.rng.float(-1.0, 1.0) * scale,
         ];
-        let size = g.rng.range(0.3, 2.0) * scale;
+        let size = g.rng.float(0.3, 2.0) * scale;
         let dir = if g.rng.chance(0.5) { 1.0 } else { -1.0 };
         let mut verts = Vec::new();
-        let mut ang = g.rng.range(0.0, std::f64::consts::TAU);
+        let mut ang = g.rng.float(0.0, std::f64::consts::TAU);
         for _ in 0..n {
             let r = size
                 * if g.rng.chance(0.3) {
-                    g.rng.range(0.2, 0.6)
+                    g.rng.float(0.2, 0.6)
                 } else {
-                    g.rng.range(0.8, 1.2)
+                    g.rng.float(0.8, 1.2)
                 };
             verts.push([center[0] + r * ang.cos(), center[1] + r * ang.sin()]);
-            ang += dir * std::f64::consts::TAU / n as f64 * g.rng.range(0.5, 1.3);
+            ang += dir * std::f64::consts::TAU / n as f64 * g.rng.float(0.5, 1.3);
         }
         if closed {
             let v0 = verts[0];
@@ -313,7 +285,7 @@ impl Gen {
             let roll = g.rng.unit();
             if roll < 0.06 {
                 // A move off the plane.
-                let dz = g.rng.range(-0.2, 0.2) * scale;
+                let dz = g.rng.float(-0.2, 0.2) * scale;
                 let gm = if g.rng.chance(0.5) { "G0" } else { "G1" };
                 let p = [g.pos[0], g.pos[1], g.pos[2] + dz];
                 g.straight(gm, p, true);
@@ -323,9 +295,9 @@ impl Gen {
             }
             if g.rng.chance(0.45) {
                 let k = match g.rng.below(4) {
-                    0 => g.rng.range(-0.3, 0.3),
-                    1 => g.rng.range(-3.0, 3.0),
-                    _ => g.rng.range(-1.2, 1.2),
+                    0 => g.rng.float(-0.3, 0.3),
+                    1 => g.rng.float(-3.0, 3.0),
+                    _ => g.rng.float(-1.2, 1.2),
                 };
                 let ccw = g.rng.chance(0.5);
                 g.arc(to, k, ccw, "");
@@ -357,8 +329,8 @@ impl Gen {
             }
             _ => {
                 let to = [
-                    g.pos[0] + g.rng.range(-1.0, 1.0) * scale,
-                    g.pos[1] + g.rng.range(-1.0, 1.0) * scale,
+                    g.pos[0] + g.rng.float(-1.0, 1.0) * scale,
+                    g.pos[1] + g.rng.float(-1.0, 1.0) * scale,
                     g.pos[2],
                 ];
                 let (w, p) = g.axes(to);
@@ -412,9 +384,9 @@ fn generate(seed: u64) -> Case {
     } = g.tool(xz, mm, scale);
     // Start position.
     let start = [
-        g.rng.range(-2.0, 2.0) * scale,
-        g.rng.range(-2.0, 2.0) * scale,
-        g.rng.range(0.0, 0.5) * scale,
+        g.rng.float(-2.0, 2.0) * scale,
+        g.rng.float(-2.0, 2.0) * scale,
+        g.rng.float(0.0, 0.5) * scale,
     ];
     g.straight("G0", start, false);
     // Contour: vertices around a centre, some pulled in (inside corners).
@@ -444,8 +416,8 @@ fn generate(seed: u64) -> Case {
     let mut first_target = verts[0];
     if g.rng.chance(0.1) {
         // An entry move close to the tool radius.
-        let d = radius * g.rng.range(0.8, 1.3);
-        let a = g.rng.range(0.0, std::f64::consts::TAU);
+        let d = radius * g.rng.float(0.8, 1.3);
+        let a = g.rng.float(0.0, std::f64::consts::TAU);
         first_target = [g.pos[0] + d * a.cos(), g.pos[1] + d * a.sin()];
         verts[0] = first_target;
     }
@@ -455,7 +427,7 @@ fn generate(seed: u64) -> Case {
     if together {
         let idx_before = g.steps.len();
         if entry_arc {
-            let k = g.rng.range(-2.0, 2.0);
+            let k = g.rng.float(-2.0, 2.0);
             let ccw = g.rng.chance(0.5);
             g.arc(to, k, ccw, &prefix);
         } else {
@@ -474,7 +446,7 @@ fn generate(seed: u64) -> Case {
         let l = g.steps[idx_before].0;
         g.steps.insert(idx_before, (l, on_step));
     } else if entry_arc {
-        let k = g.rng.range(-2.0, 2.0);
+        let k = g.rng.float(-2.0, 2.0);
         let ccw = g.rng.chance(0.5);
         g.arc(to, k, ccw, "");
     } else {
@@ -819,10 +791,6 @@ fn lowered_matches(case: &Case, original: &[String]) -> Result<bool, String> {
     Ok(true)
 }
 
-fn env_u64(name: &str) -> Option<u64> {
-    std::env::var(name).ok()?.parse().ok()
-}
-
 #[test]
 fn comp_generator_is_deterministic() {
     for seed in 0..100 {
@@ -837,61 +805,39 @@ fn generated_comp_programs_match_rs274() {
     if !oracle::available("generated_comp_programs_match_rs274") {
         return;
     }
-    let cases = env_u64("NGCFLAT_COMP_CASES").unwrap_or(300) as usize;
-    let start = env_u64("NGCFLAT_COMP_SEED").unwrap_or(1);
-    let next = AtomicUsize::new(0);
-    let agreed = AtomicUsize::new(0);
-    let refused = AtomicUsize::new(0);
-    let lowered = AtomicUsize::new(0);
-    let messages: Mutex<std::collections::BTreeMap<String, usize>> = Mutex::default();
-    let failures: Mutex<Vec<(u64, String)>> = Mutex::new(Vec::new());
-    let threads = std::thread::available_parallelism()
-        .map(|n| n.get())
-        .unwrap_or(2)
-        .max(2);
-    std::thread::scope(|s| {
-        for _ in 0..threads {
-            s.spawn(|| {
-                loop {
-                    let i = next.fetch_add(1, Ordering::Relaxed);
-                    if i >= cases {
-                        break;
-                    }
-                    let seed = start.wrapping_add(i as u64);
-                    let case = generate(seed);
-                    match check(&case) {
-                        Verdict::Agree {
-                            refused: r,
-                            lowered: l,
-                        } => {
-                            agreed.fetch_add(1, Ordering::Relaxed);
-                            if let Some(m) = r {
-                                refused.fetch_add(1, Ordering::Relaxed);
-                                *messages.lock().unwrap().entry(m).or_default() += 1;
-                            }
-                            if l {
-                                lowered.fetch_add(1, Ordering::Relaxed);
-                            }
-                        }
-                        Verdict::Differ(d) => failures.lock().unwrap().push((
-                            seed,
-                            format!("{}{}---- tools\n{}---- {d}", case.text(), "", case.tools),
-                        )),
-                    }
-                }
-            });
+    let seeds = oracle::suite_seeds("NGCFLAT_COMP", 300);
+    let (cases, start) = (seeds.end - seeds.start, seeds.start);
+    let results = oracle::on_threads(seeds, 1, |seed| {
+        let case = generate(seed);
+        match check(&case) {
+            Verdict::Agree { refused, lowered } => Ok((refused, lowered)),
+            Verdict::Differ(d) => Err(format!("{}---- tools\n{}---- {d}", case.text(), case.tools)),
         }
     });
-    let mut failures = failures.into_inner().unwrap();
-    failures.sort_by_key(|f| f.0);
+    let (mut agreed, mut refused, mut lowered) = (0, 0, 0);
+    let mut messages = std::collections::BTreeMap::<String, usize>::new();
+    let mut failures = Vec::new();
+    for (seed, r) in results {
+        match r {
+            Ok((r, l)) => {
+                agreed += 1;
+                if let Some(m) = r {
+                    refused += 1;
+                    *messages.entry(m).or_default() += 1;
+                }
+                lowered += l as usize;
+            }
+            Err(d) => failures.push((seed, d)),
+        }
+    }
     eprintln!(
         "generated compensation programs: {cases} from seed {start}: {} agree ({} refused by both at the same line, {} paths lowered for controllers without compensation and run the same), {} differ",
-        agreed.load(Ordering::Relaxed),
-        refused.load(Ordering::Relaxed),
-        lowered.load(Ordering::Relaxed),
+        agreed,
+        refused,
+        lowered,
         failures.len()
     );
-    for (m, n) in messages.into_inner().unwrap() {
+    for (m, n) in messages {
         eprintln!("  {n:6}  refused: {m}");
     }
     if failures.is_empty() {

@@ -21,10 +21,9 @@
 //! never written.
 
 use std::path::Path;
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::oracle;
+use crate::rng::Rng;
 
 /// Bound on the magnitude of every value stored in a parameter.
 const B: f64 = 1000.0;
@@ -32,34 +31,6 @@ const B: f64 = 1000.0;
 const CAP: f64 = 1e12;
 
 // ---------------------------------------------------------------- PRNG
-
-struct Rng(u64);
-
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Rng(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0x9E37_79B9_7F4A_7C15)
-    }
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-    /// Inclusive range.
-    fn range(&mut self, lo: usize, hi: usize) -> usize {
-        lo + self.below(hi - lo + 1)
-    }
-    fn chance(&mut self, p: f64) -> bool {
-        ((self.next() >> 11) as f64 / (1u64 << 53) as f64) < p
-    }
-    fn pick<'a, T>(&mut self, xs: &'a [T]) -> &'a T {
-        &xs[self.below(xs.len())]
-    }
-}
 
 // ---------------------------------------------------------------- program model
 
@@ -811,7 +782,7 @@ impl Gen {
         let mut s = format!("[{} ** {k_text}", b.s);
         let mut m = m;
         if kint && !kneg && m <= 1000.0 && self.rng.chance(0.3) {
-            let k2 = self.rng.range(0, 2);
+            let k2 = self.rng.int(0, 2);
             s.push_str(&format!(" ** {k2}"));
             m = m.powi(k2 as i32).max(1.0);
         }
@@ -824,7 +795,7 @@ impl Gen {
     }
 
     fn chain(&mut self, c: &Ctx, d: usize) -> Ex {
-        let n = self.rng.range(2, 4);
+        let n = self.rng.int(2, 4);
         let mut vals = vec![self.value(c, d - 1)];
         let mut ops = Vec::new();
         let mut s = format!("[{}", vals[0].s);
@@ -926,7 +897,7 @@ impl Gen {
                 ));
             }
             _ => {
-                for _ in 0..self.rng.range(1, 3) {
+                for _ in 0..self.rng.int(1, 3) {
                     let t = self.assign_target(c);
                     let v = self.stored(c);
                     let sp = if self.rng.chance(0.3) { " = " } else { "=" };
@@ -946,7 +917,7 @@ impl Gen {
         if kw == "msg" {
             return format!("({kw}, {text} plain #31 text)");
         }
-        for _ in 0..self.rng.range(1, 4) {
+        for _ in 0..self.rng.int(1, 4) {
             if self.rng.chance(0.3) {
                 let f = *self
                     .rng
@@ -1094,7 +1065,7 @@ impl Gen {
     fn line(&mut self, c: &mut Ctx) -> Stmt {
         let mut items = Vec::new();
         if self.rng.chance(0.08) {
-            items.push(format!("N{}", self.rng.range(1, 9999)));
+            items.push(format!("N{}", self.rng.int(1, 9999)));
         }
         if self.rng.chance(0.04) {
             items.insert(0, "/".into());
@@ -1147,7 +1118,7 @@ impl Gen {
                 )
             };
             let l = if self.rng.chance(0.4) {
-                format!(" L{}", self.rng.range(1, 3))
+                format!(" L{}", self.rng.int(1, 3))
             } else {
                 String::new()
             };
@@ -1156,14 +1127,14 @@ impl Gen {
             let name = self.subs_name(target);
             let mut args = Vec::new();
             let n = if self.rng.chance(0.1) {
-                self.rng.range(0, 30)
+                self.rng.int(0, 30)
             } else {
                 let want = self.nargs[target];
                 (want + self.rng.below(3)).saturating_sub(1).min(30)
             };
             if self.rec[target] > 0 {
                 args.push(
-                    depth_arg.unwrap_or_else(|| format!("{}", self.rng.range(0, self.rec[target]))),
+                    depth_arg.unwrap_or_else(|| format!("{}", self.rng.int(0, self.rec[target]))),
                 );
             }
             while args.len() < n {
@@ -1296,13 +1267,13 @@ impl Gen {
         let label = self.label(c);
         c.depth += 1;
         let mut arms = Vec::new();
-        for _ in 0..self.rng.range(1, 3) {
+        for _ in 0..self.rng.int(1, 3) {
             let cond = self.cond(c);
-            let n = self.rng.range(1, 3);
+            let n = self.rng.int(1, 3);
             arms.push((cond, self.block(c, n)));
         }
         let els = if self.rng.chance(0.5) {
-            let n = self.rng.range(1, 2);
+            let n = self.rng.int(1, 2);
             Some(self.block(c, n))
         } else {
             None
@@ -1371,7 +1342,7 @@ impl Gen {
             c.in_repeat = true;
         }
         c.depth += 1;
-        let n = self.rng.range(1, 3);
+        let n = self.rng.int(1, 3);
         let body = self.block(c, n);
         c.depth -= 1;
         c.in_repeat = saved_rep;
@@ -1447,7 +1418,7 @@ impl Gen {
         let mut items = Vec::new();
         for n in names {
             let v = if c.numbered.contains(&1) && self.rng.chance(0.6) {
-                let k = self.rng.range(1, 6);
+                let k = self.rng.int(1, 6);
                 ex(format!("#{k}"), -B, B)
             } else {
                 let mut c2 = c.clone();
@@ -1591,16 +1562,16 @@ fn sub_body(g: &mut Gen, kinds: &[SubKind], i: usize) {
         .max()
         .unwrap_or(0);
     let rec = if k != SubKind::Fanuc && g.rng.chance(0.35) {
-        g.rng.range(1, (8 - maxc).min(5))
+        g.rng.int(1, (8 - maxc).min(5))
     } else {
         0
     };
     g.rec[i] = rec;
     g.levels[i] = 1 + rec + maxc;
     g.nargs[i] = if g.rng.chance(0.15) {
-        g.rng.range(10, 30)
+        g.rng.int(10, 30)
     } else {
-        g.rng.range(0, 5)
+        g.rng.int(0, 5)
     };
     let numbered: Vec<u32> = (1..=10).chain(31..=38).collect();
     let mut c = Ctx {
@@ -1635,13 +1606,13 @@ fn sub_body(g: &mut Gen, kinds: &[SubKind], i: usize) {
         items.push("#<depth>=#1".into());
     }
     body.push(init_line);
-    let nstmt = g.rng.range(1, 5);
+    let nstmt = g.rng.int(1, 5);
     body.extend(g.block(&mut c, nstmt));
     if rec > 0 {
         // self-recursion, never inside a repeat body
         let lbl = g.label(&mut c);
         let call = g.call(&mut c, i, Some("#<depth> - 1".into()));
-        let pos = g.rng.range(1, body.len());
+        let pos = g.rng.int(1, body.len());
         body.insert(
             pos,
             Stmt::If {
@@ -1683,7 +1654,7 @@ fn generate_once(seed: u64) -> (Program, f64) {
         (SubKind::Post, 2),
         (SubKind::File, 3),
     ] {
-        for _ in 0..rng.range(0, max) {
+        for _ in 0..rng.int(0, max) {
             kinds.push(k);
         }
     }
@@ -1729,8 +1700,8 @@ fn generate_once(seed: u64) -> (Program, f64) {
     let mut init = vec![Stmt::Line(vec!["G21 G90 G17 F100".into()])];
     init.push(Stmt::Line(vec![format!(
         "#50={} #51={}",
-        g.rng.range(31, 38),
-        g.rng.range(31, 38)
+        g.rng.int(31, 38),
+        g.rng.int(31, 38)
     )]));
     {
         let mut items = Vec::new();
@@ -1751,13 +1722,13 @@ fn generate_once(seed: u64) -> (Program, f64) {
     }
     let gl = g.init_line(&c, &["_g1", "_g2", "a", "b", "cc"]);
     init.push(gl);
-    let nstmt = g.rng.range(4, 12);
+    let nstmt = g.rng.int(4, 12);
     main.extend(g.block(&mut c, nstmt));
     // make sure every sub is called at least sometimes
     for j in 0..n {
         if g.rng.chance(0.7) {
             let stmts = g.call(&mut c, j, None);
-            let pos = g.rng.range(0, main.len());
+            let pos = g.rng.int(0, main.len());
             for (k, s) in stmts.into_iter().enumerate() {
                 main.insert(pos + k, s);
             }
@@ -2112,10 +2083,6 @@ fn shrink(p: &Program, kind: &Kind, detail: &str) -> (Program, String) {
 
 // ---------------------------------------------------------------- tests
 
-fn env_u64(name: &str) -> Option<u64> {
-    std::env::var(name).ok().and_then(|v| v.trim().parse().ok())
-}
-
 #[test]
 fn generator_is_deterministic_and_well_formed() {
     for seed in 0..200 {
@@ -2135,57 +2102,41 @@ fn generated_programs_match_rs274() {
     if !oracle::available("generated_programs_match_rs274") {
         return;
     }
-    let cases = env_u64("NGCFLAT_DIFF_CASES").unwrap_or(300) as usize;
-    let start = env_u64("NGCFLAT_DIFF_SEED").unwrap_or(1);
-    let next = AtomicUsize::new(0);
-    let both_ok = AtomicUsize::new(0);
-    let both_rej = AtomicUsize::new(0);
-    let failures: Mutex<Vec<(u64, Program, Kind, String)>> = Mutex::new(Vec::new());
+    let seeds = oracle::suite_seeds("NGCFLAT_DIFF", 300);
+    let (cases, start) = (seeds.end - seeds.start, seeds.start);
     let t0 = std::time::Instant::now();
-    let threads = std::thread::available_parallelism()
-        .map(|n| n.get())
-        .unwrap_or(2)
-        .max(2)
-        * 2;
-    std::thread::scope(|s| {
-        for _ in 0..threads {
-            s.spawn(|| {
-                loop {
-                    let i = next.fetch_add(1, Ordering::Relaxed);
-                    if i >= cases {
-                        break;
-                    }
-                    let seed = start.wrapping_add(i as u64);
-                    let p = generate(seed);
-                    let v = check(&p);
-                    if let Ok(dir) = std::env::var("NGCFLAT_DIFF_DUMP") {
-                        let what = match &v {
-                            Verdict::BothOk => "both ok".to_string(),
-                            Verdict::BothRejected(e) => format!("both rejected; rs274: {e}"),
-                            Verdict::Mismatch(k, d) => format!("MISMATCH {k:?}: {d}"),
-                        };
-                        let _ = std::fs::write(
-                            Path::new(&dir).join(format!("{seed}.txt")),
-                            format!("{}==== {what}\n", p.full_text()),
-                        );
-                    }
-                    match v {
-                        Verdict::BothOk => {
-                            both_ok.fetch_add(1, Ordering::Relaxed);
-                        }
-                        Verdict::BothRejected(_) => {
-                            both_rej.fetch_add(1, Ordering::Relaxed);
-                        }
-                        Verdict::Mismatch(k, d) => failures.lock().unwrap().push((seed, p, k, d)),
-                    }
-                }
-            });
+    let results = oracle::on_threads(seeds, 2, |seed| {
+        let p = generate(seed);
+        let v = check(&p);
+        if let Ok(dir) = std::env::var("NGCFLAT_DIFF_DUMP") {
+            let what = match &v {
+                Verdict::BothOk => "both ok".to_string(),
+                Verdict::BothRejected(e) => format!("both rejected; rs274: {e}"),
+                Verdict::Mismatch(k, d) => format!("MISMATCH {k:?}: {d}"),
+            };
+            let _ = std::fs::write(
+                Path::new(&dir).join(format!("{seed}.txt")),
+                format!("{}==== {what}\n", p.full_text()),
+            );
+        }
+        match v {
+            Verdict::Mismatch(k, d) => Err(Box::new((p, k, d))),
+            Verdict::BothOk => Ok(true),
+            Verdict::BothRejected(_) => Ok(false),
         }
     });
-    let mut failures = failures.into_inner().unwrap();
-    failures.sort_by_key(|f| f.0);
-    let ok = both_ok.load(Ordering::Relaxed);
-    let rej = both_rej.load(Ordering::Relaxed);
+    let (mut ok, mut rej) = (0, 0);
+    let mut failures = Vec::new();
+    for (seed, r) in results {
+        match r {
+            Ok(true) => ok += 1,
+            Ok(false) => rej += 1,
+            Err(m) => {
+                let (p, k, d) = *m;
+                failures.push((seed, p, k, d));
+            }
+        }
+    }
     eprintln!(
         "generated programs: {cases} from seed {start}: {} agree ({ok} flattened identically, {rej} refused by both), {} differ; {:.1}s",
         ok + rej,
@@ -2196,7 +2147,10 @@ fn generated_programs_match_rs274() {
         return;
     }
     let mut report = String::new();
-    let shrink_max = env_u64("NGCFLAT_DIFF_SHRINK").unwrap_or(2) as usize;
+    let shrink_max = std::env::var("NGCFLAT_DIFF_SHRINK")
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(2);
     let seeds: Vec<String> = failures
         .iter()
         .map(|f| format!("{} ({:?})", f.0, f.2))

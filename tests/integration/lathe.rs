@@ -13,31 +13,7 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use crate::oracle;
-
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        // splitmix64
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-    fn chance(&mut self, p: f64) -> bool {
-        self.unit() < p
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-}
+use crate::rng::Rng;
 
 /// Rounded to 3 decimals, as a program would write it.
 fn r3(v: f64) -> f64 {
@@ -62,21 +38,21 @@ pub fn case(seed: u64) -> Case {
     // (z, x) points; pockets when X may go down.
     let pockets = g.chance(0.4);
     let n = 2 + g.below(5);
-    let mut pts = vec![(r3(g.range(-0.5, 1.0)), r3(g.range(1.0, 6.0)))];
+    let mut pts = vec![(r3(g.float(-0.5, 1.0)), r3(g.float(1.0, 6.0)))];
     for _ in 0..n {
         let (z, x) = *pts.last().unwrap_or(&(0.0, 0.0));
-        let dz = g.range(0.5, 4.0);
+        let dz = g.float(0.5, 4.0);
         let dx = if pockets {
-            g.range(-2.5, 3.0)
+            g.float(-2.5, 3.0)
         } else if g.chance(0.3) {
             0.0
         } else {
-            g.range(0.0, 3.0)
+            g.float(0.0, 3.0)
         };
         pts.push((r3(z - dz), r3((x + dx).max(0.5))));
     }
-    let top = pts.iter().map(|p| p.1).fold(0.0, f64::max) + r3(g.range(1.0, 4.0));
-    let zs = pts[0].0 + r3(g.range(0.5, 3.0));
+    let top = pts.iter().map(|p| p.1).fold(0.0, f64::max) + r3(g.float(1.0, 4.0));
+    let zs = pts[0].0 + r3(g.float(0.5, 3.0));
     let code = ["G70", "G71", "G71.1", "G71.2", "G72", "G72.1", "G72.2"][g.below(7)];
     // G72 faces: the same contour turned a quarter (Z from X, X from Z),
     // and sometimes G70/G71 are given such a contour too.
@@ -94,9 +70,9 @@ pub fn case(seed: u64) -> Case {
         let corner = if k + 1 < pts.len() && g.chance(0.15) {
             finishes = true;
             if g.chance(0.5) {
-                format!(" A{}", num(g.range(0.1, 0.8)))
+                format!(" A{}", num(g.float(0.1, 0.8)))
             } else {
-                format!(" C{}", num(g.range(0.1, 0.8)))
+                format!(" C{}", num(g.float(0.1, 0.8)))
             }
         } else {
             String::new()
@@ -105,7 +81,7 @@ pub fn case(seed: u64) -> Case {
             // An arc through both points: radius from half the chord up.
             let (cz, cx) = (q.0 - p.0, q.1 - p.1);
             let chord = (cz * cz + cx * cx).sqrt();
-            let r = chord / 2.0 * g.range(1.2, 4.0);
+            let r = chord / 2.0 * g.float(1.2, 4.0);
             let h = (r * r - chord * chord / 4.0).max(0.0).sqrt();
             let side = if g.chance(0.5) { 1.0 } else { -1.0 };
             let (midz, midx) = ((p.0 + q.0) / 2.0, (p.1 + q.1) / 2.0);
@@ -156,15 +132,15 @@ pub fn case(seed: u64) -> Case {
     let d = if g.chance(0.2) {
         0.0
     } else {
-        r3(g.range(0.05, 1.0))
+        r3(g.float(0.05, 1.0))
     };
     let words = if code == "G70" {
-        let e = r3(g.range(0.0, d));
+        let e = r3(g.float(0.0, d));
         let p = 1 + g.below(3);
         format!("D{} E{} P{p}", num(d), num(e))
     } else {
-        let i = r3(g.range(0.2, 2.0));
-        let r = r3(g.range(0.0, 0.8));
+        let i = r3(g.float(0.2, 2.0));
+        let r = r3(g.float(0.0, 0.8));
         format!("D{} I{} R{}", num(d), num(i), num(r))
     };
     text.push_str(&format!("{code} Q100 X{} Z{} {words}\n", num(sx), num(sz)));

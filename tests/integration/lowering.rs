@@ -14,35 +14,7 @@ use ngcflat::target::lower::{
 };
 
 use crate::oracle;
-
-struct Rng(u64);
-
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Rng(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0x9E37_79B9_7F4A_7C15)
-    }
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-    fn chance(&mut self, p: f64) -> bool {
-        ((self.next() >> 11) as f64 / (1u64 << 53) as f64) < p
-    }
-    /// A value in [lo, hi] with three decimals.
-    fn val(&mut self, lo: f64, hi: f64) -> f64 {
-        let (lo, hi) = ((lo * 1000.0).round() as i64, (hi * 1000.0).round() as i64);
-        (lo + self.below((hi - lo + 1) as usize) as i64) as f64 / 1000.0
-    }
-    fn pick<T: Copy>(&mut self, xs: &[T]) -> T {
-        xs[self.below(xs.len())]
-    }
-}
+use crate::rng::Rng;
 
 fn cases() -> u64 {
     std::env::var("NGCFLAT_LOWER_CASES")
@@ -156,9 +128,9 @@ fn random_cycle_block(
             continue;
         }
         let v = if distance == Distance::Absolute {
-            rng.val(-5.0, 5.0)
+            rng.milli(-5.0, 5.0)
         } else {
-            rng.val(-2.0, 2.0)
+            rng.milli(-2.0, 2.0)
         };
         block.axes[i] = Some(v);
         put(&mut words, letter as char, v);
@@ -166,24 +138,24 @@ fn random_cycle_block(
     if polar {
         if rng.chance(0.7) {
             let v = if distance == Distance::Absolute {
-                rng.val(0.5, 6.0)
+                rng.milli(0.5, 6.0)
             } else {
-                rng.val(-1.0, 1.0)
+                rng.milli(-1.0, 1.0)
             };
             block.radius = Some(v);
             words.push(format!("@{}", num(v)));
         }
         if rng.chance(0.7) {
-            let v = rng.val(-180.0, 180.0);
+            let v = rng.milli(-180.0, 180.0);
             block.angle = Some(v);
             words.push(format!("^{}", num(v)));
         }
     }
     let (r, depth) = if distance == Distance::Absolute {
-        let r = rng.val(-3.0, 6.0);
-        (r, r - rng.val(0.0, 4.0))
+        let r = rng.milli(-3.0, 6.0);
+        (r, r - rng.milli(0.0, 4.0))
     } else {
-        (rng.val(-4.0, 3.0), -rng.val(0.0, 4.0))
+        (rng.milli(-4.0, 3.0), -rng.milli(0.0, 4.0))
     };
     if !same || rng.chance(0.6) {
         block.r = Some(r);
@@ -204,12 +176,12 @@ fn random_cycle_block(
         CycleKind::G82 | CycleKind::G86 | CycleKind::G88 | CycleKind::G89 | CycleKind::G84
             if (!same || rng.chance(0.5)) && (kind != CycleKind::G84 || rng.chance(0.5)) =>
         {
-            let p = rng.val(0.0, 2.0);
+            let p = rng.milli(0.0, 2.0);
             block.p = Some(p);
             put(&mut words, 'P', p);
         }
         CycleKind::G73 | CycleKind::G83 if !same || rng.chance(0.5) => {
-            let q = rng.val(0.3, 2.5);
+            let q = rng.milli(0.3, 2.5);
             block.q = Some(q);
             put(&mut words, 'Q', q);
         }
@@ -223,7 +195,7 @@ fn random_cycle_block(
                         0.5
                     }
                 } else {
-                    rng.val(-1.0, 1.0)
+                    rng.milli(-1.0, 1.0)
                 };
                 block.ijk[n] = Some(v);
                 put(&mut words, letter, v);
@@ -249,7 +221,11 @@ fn interlude(
     let mut ended = false;
     match rng.below(8) {
         0 => {
-            *pos = [rng.val(-5.0, 5.0), rng.val(-5.0, 5.0), rng.val(-5.0, 10.0)];
+            *pos = [
+                rng.milli(-5.0, 5.0),
+                rng.milli(-5.0, 5.0),
+                rng.milli(-5.0, 10.0),
+            ];
             let l = format!(
                 "G90 G0 X{} Y{} Z{}\n",
                 num(pos[0]),
@@ -280,7 +256,11 @@ fn interlude(
         4 if after_cycle => {
             // An incremental move from where LinuxCNC has the tool after
             // the cycle (written absolute in the lowered program).
-            let d = [rng.val(-2.0, 2.0), rng.val(-2.0, 2.0), rng.val(-1.0, 3.0)];
+            let d = [
+                rng.milli(-2.0, 2.0),
+                rng.milli(-2.0, 2.0),
+                rng.milli(-1.0, 3.0),
+            ];
             orig.push_str(&format!(
                 "G91 G0 X{} Y{} Z{}\n",
                 num(d[0]),
@@ -322,7 +302,7 @@ fn cycle_program(seed: u64) -> Result<(String, String), String> {
     } else {
         Units::Mm
     };
-    let plane = rng.pick(&[Plane::XY, Plane::XY, Plane::XZ, Plane::YZ]);
+    let plane = *rng.pick(&[Plane::XY, Plane::XY, Plane::XZ, Plane::YZ]);
     let (g_units, g_plane) = (
         if units == Units::Inch { "G20" } else { "G21" },
         match plane {
@@ -340,7 +320,11 @@ fn cycle_program(seed: u64) -> Result<(String, String), String> {
     let header = format!("{g_units} {g_plane} G90 G94 F100 S1000 {m_spindle}\n");
     let mut orig = header.clone();
     let mut low = header;
-    let mut pos = [rng.val(-5.0, 5.0), rng.val(-5.0, 5.0), rng.val(-5.0, 10.0)];
+    let mut pos = [
+        rng.milli(-5.0, 5.0),
+        rng.milli(-5.0, 5.0),
+        rng.milli(-5.0, 10.0),
+    ];
     let start = format!("G0 X{} Y{} Z{}\n", num(pos[0]), num(pos[1]), num(pos[2]));
     orig.push_str(&start);
     low.push_str(&start);
@@ -383,7 +367,7 @@ fn cycle_program(seed: u64) -> Result<(String, String), String> {
                 KINDS.iter().find(|(c, _)| *c == k).map_or("G81", |x| x.1),
             )
         } else {
-            rng.pick(KINDS)
+            *rng.pick(KINDS)
         };
         // Constructs LinuxCNC runs but no target block expresses.
         if (kind == CycleKind::G84 && (plane != Plane::XY || spindle != Spindle::Cw))
@@ -630,20 +614,28 @@ fn plane_code(plane: Plane) -> &'static str {
 fn arc_program(seed: u64) -> (String, String, Plane) {
     use ngcflat::target::lower::arc::{ArcInput, lower_arc};
     let mut rng = Rng::new(seed);
-    let plane = rng.pick(&[Plane::XY, Plane::XZ, Plane::YZ]);
+    let plane = *rng.pick(&[Plane::XY, Plane::XZ, Plane::YZ]);
     let [p, q, n] = arc_axes(plane);
     let units = if rng.chance(0.3) { "G20" } else { "G21" };
     let header = format!("{units} {} G90 G94 F120\n", plane_code(plane));
     let (mut orig, mut low) = (header.clone(), header);
     let letters = ['X', 'Y', 'Z'];
     let offset_letter = ['I', 'J', 'K'];
-    let mut pos = [rng.val(-5.0, 5.0), rng.val(-5.0, 5.0), rng.val(-5.0, 5.0)];
+    let mut pos = [
+        rng.milli(-5.0, 5.0),
+        rng.milli(-5.0, 5.0),
+        rng.milli(-5.0, 5.0),
+    ];
     let start = format!("G0 X{} Y{} Z{}\n", num(pos[0]), num(pos[1]), num(pos[2]));
     orig.push_str(&start);
     low.push_str(&start);
     for _ in 0..(2 + rng.below(5)) {
         if rng.chance(0.3) {
-            pos = [rng.val(-5.0, 5.0), rng.val(-5.0, 5.0), rng.val(-5.0, 5.0)];
+            pos = [
+                rng.milli(-5.0, 5.0),
+                rng.milli(-5.0, 5.0),
+                rng.milli(-5.0, 5.0),
+            ];
             let l = format!("G1 X{} Y{} Z{}\n", num(pos[0]), num(pos[1]), num(pos[2]));
             orig.push_str(&l);
             low.push_str(&l);
@@ -653,8 +645,8 @@ fn arc_program(seed: u64) -> (String, String, Plane) {
         // Centre offsets, radius at least 0.5.
         let (mut op, mut oq) = (0.0f64, 0.0f64);
         while op.hypot(oq) < 0.5 {
-            op = rng.val(-4.0, 4.0);
-            oq = rng.val(-4.0, 4.0);
+            op = rng.milli(-4.0, 4.0);
+            oq = rng.milli(-4.0, 4.0);
         }
         let mut centre = pos;
         centre[p] += op;
@@ -664,14 +656,14 @@ fn arc_program(seed: u64) -> (String, String, Plane) {
         let with_end = rng.chance(0.5);
         if with_end {
             let r = op.hypot(oq);
-            let phi = rng.val(-3.2, 3.2);
+            let phi = rng.milli(-3.2, 3.2);
             end[p] = centre[p] + r * phi.cos();
             end[q] = centre[q] + r * phi.sin();
             words.push(format!("{}{}", letters[p], num(end[p])));
             words.push(format!("{}{}", letters[q], num(end[q])));
         }
         if rng.chance(0.5) {
-            end[n] = pos[n] + rng.val(-3.0, 3.0);
+            end[n] = pos[n] + rng.milli(-3.0, 3.0);
             words.push(format!("{}{}", letters[n], num(end[n])));
         }
         // Offsets written in axis order (I before J before K).
@@ -753,7 +745,11 @@ fn polar_program(seed: u64) -> Result<(String, String), String> {
     let mut rng = Rng::new(seed);
     let header = "G21 G17 G90 G94 F150\n".to_string();
     let (mut orig, mut low) = (header.clone(), header);
-    let mut pos = [rng.val(-5.0, 5.0), rng.val(-5.0, 5.0), rng.val(-5.0, 5.0)];
+    let mut pos = [
+        rng.milli(-5.0, 5.0),
+        rng.milli(-5.0, 5.0),
+        rng.milli(-5.0, 5.0),
+    ];
     let start = format!("G0 X{} Y{} Z{}\n", num(pos[0]), num(pos[1]), num(pos[2]));
     orig.push_str(&start);
     low.push_str(&start);
@@ -781,21 +777,21 @@ fn polar_program(seed: u64) -> Result<(String, String), String> {
         let (mut radius, mut angle) = (None, None);
         if rng.chance(0.7) {
             let v = if distance == Distance::Absolute {
-                rng.val(0.0, 8.0)
+                rng.milli(0.0, 8.0)
             } else {
-                rng.val(-2.0, 2.0)
+                rng.milli(-2.0, 2.0)
             };
             radius = Some(v);
             words.push(format!("@{}", num(v)));
         }
         if radius.is_none() || rng.chance(0.7) {
-            let v = rng.val(-400.0, 400.0);
+            let v = rng.milli(-400.0, 400.0);
             angle = Some(v);
             words.push(format!("^{}", num(v)));
         }
         let mut z = pos[2];
         if rng.chance(0.3) {
-            let v = rng.val(-3.0, 3.0);
+            let v = rng.milli(-3.0, 3.0);
             z = if distance == Distance::Absolute {
                 v
             } else {
@@ -871,7 +867,7 @@ fn diameter_program(seed: u64) -> (String, String) {
     let mut orig = format!("G21 G18 G7 G90 {ijk} G94 F90\n");
     let mut low = format!("G21 G18 G8 G90 {ijk} G94 F90\n");
     // Position (radius X, Z).
-    let mut pos = [rng.val(0.0, 10.0), rng.val(-5.0, 5.0)];
+    let mut pos = [rng.milli(0.0, 10.0), rng.milli(-5.0, 5.0)];
     let mut distance = Distance::Absolute;
     let mut lines: Vec<Vec<(u8, f64)>> =
         vec![vec![(b'G', 0.0), (b'X', 2.0 * pos[0]), (b'Z', pos[1])]];
@@ -889,16 +885,16 @@ fn diameter_program(seed: u64) -> (String, String) {
         }
         let (g, end, centre) = if rng.chance(0.5) {
             let g = if rng.chance(0.3) { 0.0 } else { 1.0 };
-            (g, [rng.val(0.0, 10.0), rng.val(-5.0, 5.0)], None)
+            (g, [rng.milli(0.0, 10.0), rng.milli(-5.0, 5.0)], None)
         } else {
             let (mut ox, mut oz) = (0.0f64, 0.0f64);
             while ox.hypot(oz) < 0.5 {
-                ox = rng.val(-3.0, 3.0);
-                oz = rng.val(-3.0, 3.0);
+                ox = rng.milli(-3.0, 3.0);
+                oz = rng.milli(-3.0, 3.0);
             }
             let c = [pos[0] + ox, pos[1] + oz];
             let r = ox.hypot(oz);
-            let phi = rng.val(-3.2, 3.2);
+            let phi = rng.milli(-3.2, 3.2);
             let end = [c[0] + r * phi.cos(), c[1] + r * phi.sin()];
             (if rng.chance(0.5) { 2.0 } else { 3.0 }, end, Some((ox, oz)))
         };
@@ -1097,8 +1093,8 @@ fn splines_stay_within_tolerance() {
     let seed0 = first_seed();
     for seed in seed0..seed0 + cases() {
         let mut rng = Rng::new(seed);
-        let tol = rng.pick(&[0.001, 0.01, 0.0004, 0.05]);
-        let mut pt = || [rng.val(-20.0, 20.0), rng.val(-20.0, 20.0)];
+        let tol = *rng.pick(&[0.001, 0.01, 0.0004, 0.05]);
+        let mut pt = || [rng.milli(-20.0, 20.0), rng.milli(-20.0, 20.0)];
         let (start, a, b, end) = (pt(), pt(), pt(), pt());
         let ij = [a[0] - start[0], a[1] - start[1]];
         let pq = [b[0] - end[0], b[1] - end[1]];
@@ -1121,9 +1117,9 @@ fn splines_stay_within_tolerance() {
         let pts: Vec<[f64; 3]> = (0..count)
             .map(|_| {
                 [
-                    rng.val(-20.0, 20.0),
-                    rng.val(-20.0, 20.0),
-                    rng.val(0.3, 3.0),
+                    rng.milli(-20.0, 20.0),
+                    rng.milli(-20.0, 20.0),
+                    rng.milli(0.3, 3.0),
                 ]
             })
             .collect();
@@ -1168,7 +1164,7 @@ fn splines_end_where_rs274_ends_them() {
     let seed0 = first_seed();
     for seed in seed0..seed0 + cases() / 4 + 1 {
         let mut rng = Rng::new(seed);
-        let mut pt = || [rng.val(-20.0, 20.0), rng.val(-20.0, 20.0)];
+        let mut pt = || [rng.milli(-20.0, 20.0), rng.milli(-20.0, 20.0)];
         let (start, a, b, end) = (pt(), pt(), pt(), pt());
         let n1 = [pt(), pt(), pt()];
         let head = format!(

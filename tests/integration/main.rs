@@ -14,6 +14,7 @@ mod motion;
 mod named2007;
 mod oracle;
 mod props;
+mod rng;
 mod view;
 mod warn_only;
 

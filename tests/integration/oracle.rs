@@ -157,3 +157,49 @@ pub fn ini_with(dirs: &[PathBuf], extra: &str) -> String {
     s.push_str(extra);
     s
 }
+
+/// The seeds of a generated suite: `{var}_CASES` programs (default `cases`)
+/// from seed `{var}_SEED` (default 1).
+pub fn suite_seeds(var: &str, cases: u64) -> std::ops::Range<u64> {
+    let env = |name: &str| -> Option<u64> {
+        std::env::var(format!("{var}_{name}"))
+            .ok()
+            .and_then(|v| v.trim().parse().ok())
+    };
+    let start = env("SEED").unwrap_or(1);
+    start..start.saturating_add(env("CASES").unwrap_or(cases))
+}
+
+/// Runs `f` on every seed, on `per_core` threads a core (two at least),
+/// each thread taking the next seed; the results in seed order.
+pub fn on_threads<T: Send>(
+    seeds: std::ops::Range<u64>,
+    per_core: usize,
+    f: impl Fn(u64) -> T + Sync,
+) -> Vec<(u64, T)> {
+    use std::sync::Mutex;
+    use std::sync::atomic::{AtomicU64, Ordering};
+    let next = AtomicU64::new(seeds.start);
+    let results = Mutex::new(Vec::new());
+    let threads = std::thread::available_parallelism()
+        .map_or(2, |n| n.get())
+        .max(2)
+        * per_core.max(1);
+    std::thread::scope(|s| {
+        for _ in 0..threads {
+            s.spawn(|| {
+                loop {
+                    let seed = next.fetch_add(1, Ordering::Relaxed);
+                    if seed >= seeds.end {
+                        break;
+                    }
+                    let r = f(seed);
+                    results.lock().expect("results").push((seed, r));
+                }
+            });
+        }
+    });
+    let mut results = results.into_inner().expect("results");
+    results.sort_by_key(|r| r.0);
+    results
+}
