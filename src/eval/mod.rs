@@ -2,29 +2,20 @@
 //! writes the lines it executes, with every parameter and expression replaced
 //! by its value.
 
-mod block;
-mod ccomp;
-mod code;
-mod control;
-mod cycle;
-mod degrees;
 mod expr;
-mod fast;
-mod hook;
-mod lathe;
-mod message;
-mod modal;
-mod named;
-mod nurbs;
-pub mod params;
-mod progress;
-mod restore;
-mod scan_ahead;
+mod flow;
+mod out;
+mod read;
 mod settings;
 pub mod state;
-mod straight;
-pub mod tools;
-mod validate;
+
+pub use expr::params;
+pub use state::tools;
+
+use flow::control;
+use out::progress;
+use read::{block, fast};
+use state::{ccomp, cycle, lathe, nurbs, restore};
 
 use std::collections::HashSet;
 
@@ -37,10 +28,10 @@ use crate::parse::ast::{Line, LineKind, OKind, Span};
 use crate::parse::{LineParser, Name};
 use crate::program::{FileIndex, Loader, Window, next_line};
 
-pub use hook::{LineConsumer, Origin};
+pub use out::hook::{LineConsumer, Origin};
 pub use settings::{Define, Settings};
 
-use params::Params;
+use expr::params::Params;
 use state::{Modal, Position};
 
 /// Deepest nesting of active calls (the tenth nested call fails).

@@ -2,6 +2,14 @@
 //! starting from LinuxCNC's power-on state; it answers the predefined named
 //! parameters and the position parameters.
 
+pub(super) mod ccomp;
+pub(super) mod cycle;
+pub(super) mod lathe;
+pub(super) mod modal;
+pub(super) mod nurbs;
+pub(super) mod restore;
+pub mod tools;
+
 /// Axis letters in parameter order (X Y Z A B C U V W).
 pub const AXES: [u8; 9] = *b"xyzabcuvw";
 

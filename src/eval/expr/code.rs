@@ -6,9 +6,9 @@
 use crate::parse::code::{Op, STACK};
 use crate::parse::integer_value;
 
-use super::Interp;
-use super::expr::{TOLERANCE_EQUAL, binary, modulo, unary};
-use super::params::MAX_PARAM;
+use crate::eval::Interp;
+use crate::eval::expr::params::MAX_PARAM;
+use crate::eval::expr::{TOLERANCE_EQUAL, binary, modulo, unary};
 use crate::parse::ast::{BinOp, Span};
 
 /// A binary operation, `None` where it fails (division by zero, a negative
@@ -30,7 +30,7 @@ fn apply(op: BinOp, a: f64, c: f64) -> Option<f64> {
 impl Interp<'_> {
     /// The value of a compiled expression, or `None` to evaluate the tree.
     #[inline]
-    pub(super) fn run_code(&self, ops: &[Op]) -> Option<f64> {
+    pub(in crate::eval) fn run_code(&self, ops: &[Op]) -> Option<f64> {
         // The most common shape, `[a op b]` of two readings, without the
         // stack.
         if let [a, b @ (Op::BinK(..) | Op::BinS(..) | Op::BinN(..))] = ops
@@ -140,7 +140,7 @@ impl Interp<'_> {
                     n = n.wrapping_sub(1);
                     let x = stack[n & MASK];
                     let top = &mut stack[n.wrapping_sub(1) & MASK];
-                    let v = super::degrees::to_degrees(top.atan2(x));
+                    let v = crate::eval::expr::degrees::to_degrees(top.atan2(x));
                     if !v.is_finite() {
                         return None;
                     }

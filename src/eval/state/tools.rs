@@ -3,8 +3,8 @@
 //! by the program itself (G10 L1/L10/L11). Tool data is kept in machine
 //! units, as LinuxCNC stores it.
 
-use super::Interp;
-use super::state::Unknown;
+use crate::eval::Interp;
+use crate::eval::state::Unknown;
 
 /// One tool: offsets X..W, diameter, front and back angle, orientation.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -54,7 +54,7 @@ pub fn parse_tool_table(text: &str) -> Result<Vec<(i64, ToolData)>, String> {
                 "i" => data.front = v,
                 "j" => data.back = v,
                 "q" => data.orientation = v,
-                l => match super::state::AXES
+                l => match crate::eval::state::AXES
                     .iter()
                     .position(|&c| c as char == l.chars().next().unwrap_or(' '))
                 {
@@ -73,7 +73,7 @@ pub fn parse_tool_table(text: &str) -> Result<Vec<(i64, ToolData)>, String> {
 
 impl Interp<'_> {
     /// Data of a tool, if the program can know it.
-    pub(super) fn tool(&self, t: f64) -> Option<ToolData> {
+    pub(in crate::eval) fn tool(&self, t: f64) -> Option<ToolData> {
         let t = t.round() as i64;
         if self.unknown_tools.contains(&t) {
             return None;
@@ -86,7 +86,7 @@ impl Interp<'_> {
     }
 
     /// How to make the tool data of the tool in the spindle known.
-    pub(super) fn tool_data_hint(&self) -> String {
+    pub(in crate::eval) fn tool_data_hint(&self) -> String {
         if self.current_tool.is_none() {
             "--tool-table FILE (LinuxCNC's tool table; the spindle then starts with tool 0 until an M6 or M61), or --zero-start".into()
         } else {
@@ -95,7 +95,7 @@ impl Interp<'_> {
     }
 
     /// A tool-data parameter #5400..#5413.
-    pub(super) fn tool_param(&self, i: usize) -> Option<f64> {
+    pub(in crate::eval) fn tool_param(&self, i: usize) -> Option<f64> {
         let current = self.current_tool?;
         if i == 5400 {
             return Some(current);
@@ -112,7 +112,7 @@ impl Interp<'_> {
 
     /// Applies a new tool length offset (machine units), moving the
     /// program position the other way.
-    pub(super) fn set_tlo(&mut self, new: Option<[f64; 9]>, what: &'static str) {
+    pub(in crate::eval) fn set_tlo(&mut self, new: Option<[f64; 9]>, what: &'static str) {
         let line = self.current_line_idx + 1;
         for a in 0..9 {
             let f = self.to_prog(a);
@@ -129,7 +129,7 @@ impl Interp<'_> {
     }
 
     /// G10 L1/L10/L11: the program writes the tool table.
-    pub(super) fn g10_tool(
+    pub(in crate::eval) fn g10_tool(
         &mut self,
         l: i32,
         p: Option<f64>,

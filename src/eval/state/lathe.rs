@@ -13,7 +13,7 @@ use crate::parse::Name;
 use crate::parse::ast::{Item, Line, LineKind};
 use crate::program::{FileIndex, Window, next_line};
 
-use super::{FrameKind, Interp, SubRec, file_key, read_error};
+use crate::eval::{FrameKind, Interp, SubRec, file_key, read_error};
 
 /// A cycle whose contour subroutine is running.
 pub struct LatheRun {
@@ -34,8 +34,8 @@ pub struct LatheRun {
     ijk_absolute: bool,
     /// Where the machine is while the contour is read (after the rapid).
     at: (
-        Result<f64, super::state::Unknown>,
-        Result<f64, super::state::Unknown>,
+        Result<f64, crate::eval::state::Unknown>,
+        Result<f64, crate::eval::state::Unknown>,
     ),
 }
 
@@ -56,7 +56,7 @@ impl Interp<'_> {
 
     /// A block with G70–G72 (checked): its other words act first, then the
     /// rapid to the cycle's start and the contour subroutine's call.
-    pub(super) fn lathe_block(
+    pub(in crate::eval) fn lathe_block(
         &mut self,
         file: &Rc<FileIndex>,
         start: u32,
@@ -167,12 +167,12 @@ impl Interp<'_> {
                 f.reset(FrameKind::Call, label.clone());
                 f
             }
-            None => Box::new(super::Frame::new(FrameKind::Call, label.clone())),
+            None => Box::new(crate::eval::Frame::new(FrameKind::Call, label.clone())),
         };
-        if self.level() + 1 > super::MAX_CALL_LEVEL {
+        if self.level() + 1 > crate::eval::MAX_CALL_LEVEL {
             return Err(self.error(
                 ErrorKind::TooDeep {
-                    limit: super::MAX_CALL_LEVEL,
+                    limit: crate::eval::MAX_CALL_LEVEL,
                 },
                 file,
                 start,
@@ -241,7 +241,7 @@ impl Interp<'_> {
     }
 
     /// One line while the contour subroutine runs.
-    pub(super) fn step_contour(&mut self) -> Result<(), Error> {
+    pub(in crate::eval) fn step_contour(&mut self) -> Result<(), Error> {
         let file = self.cur.file.clone();
         let start = self.cur.pos;
         if start as u64 >= file.file.len() {
@@ -346,7 +346,7 @@ impl Interp<'_> {
         let mut motion = run.motion;
         for &(l, v) in &words {
             let g = (v * 10.0).round() as i32;
-            if l == b'g' && super::validate::is_motion(g) {
+            if l == b'g' && crate::eval::read::validate::is_motion(g) {
                 motion = g;
             }
         }
@@ -477,7 +477,7 @@ impl Interp<'_> {
                 words.push((b'k', c.re - cz));
             }
         }
-        if let Err((k, _)) = super::validate::check_block(
+        if let Err((k, _)) = crate::eval::read::validate::check_block(
             &words,
             &self.modal,
             &self.nurbs,

@@ -2,12 +2,18 @@
 //! tolerance, MOD sign, ROUND half away from zero, domain errors, and the
 //! NaN/infinity check on every value (not on intermediate results).
 
+pub(super) mod code;
+pub(super) mod degrees;
+pub(super) mod message;
+pub(super) mod named;
+pub mod params;
+
 use crate::diag::ErrorKind;
 use crate::parse::ast::{BinOp, Expr, ExprKind, Func, ParamRef, Span};
 use crate::parse::integer_value;
 
-use super::Interp;
-use super::params::{MAX_PARAM, ParamClass, classify};
+use crate::eval::Interp;
+use crate::eval::expr::params::{MAX_PARAM, ParamClass, classify};
 
 /// EQ/NE tolerance of LinuxCNC 2.9.
 pub const TOLERANCE_EQUAL: f64 = 0.0001;
@@ -123,17 +129,17 @@ pub fn unary(f: Func, x: f64, span: Span) -> EvalResult {
             if !(-1.0..=1.0).contains(&x) {
                 return Err(fault(ErrorKind::AcosRange, span));
             }
-            super::degrees::to_degrees(x.acos())
+            crate::eval::expr::degrees::to_degrees(x.acos())
         }
         Func::Asin => {
             if !(-1.0..=1.0).contains(&x) {
                 return Err(fault(ErrorKind::AsinRange, span));
             }
-            super::degrees::to_degrees(x.asin())
+            crate::eval::expr::degrees::to_degrees(x.asin())
         }
-        Func::Cos => super::degrees::cos_deg(x),
-        Func::Sin => super::degrees::sin_deg(x),
-        Func::Tan => super::degrees::tan_deg(x),
+        Func::Cos => crate::eval::expr::degrees::cos_deg(x),
+        Func::Sin => crate::eval::expr::degrees::sin_deg(x),
+        Func::Tan => crate::eval::expr::degrees::tan_deg(x),
         Func::Exp => x.exp(),
         Func::Fix => x.floor(),
         Func::Fup => x.ceil(),
@@ -252,7 +258,7 @@ impl Interp<'_> {
             ExprKind::Atan(args) => {
                 let y = self.eval(&args.0)?;
                 let x = self.eval(&args.1)?;
-                check(super::degrees::to_degrees(y.atan2(x)), e.span)
+                check(crate::eval::expr::degrees::to_degrees(y.atan2(x)), e.span)
             }
             ExprKind::Exists(p) => Ok(b(self.param_exists(p, e.span)?)),
         }

@@ -2,7 +2,7 @@
 //! and the depth of the last one, which a repeat of the same cycle reuses
 //! when its line leaves them out.
 
-use super::Interp;
+use crate::eval::Interp;
 
 /// Whether a motion mode (G-code ×10) is a canned cycle.
 pub fn is_cycle(motion: i32) -> bool {
@@ -30,7 +30,7 @@ pub struct Cycle {
 impl Interp<'_> {
     /// A cycle block ran (checked by `check_block`): keeps its R and depth
     /// for repeats.
-    pub(super) fn note_cycle(&mut self, words: &[(u8, f64)]) {
+    pub(in crate::eval) fn note_cycle(&mut self, words: &[(u8, f64)]) {
         let (depth, _) = depth_axis(self.modal.plane);
         for &(l, v) in words {
             if l == b'r' {

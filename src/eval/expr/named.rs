@@ -5,9 +5,9 @@ use crate::diag::ErrorKind;
 use crate::parse::Name;
 use crate::parse::ast::Span;
 
-use super::Interp;
-use super::expr::{EvalResult, Fault, fault};
-use super::state::{AXES, Unknown};
+use crate::eval::Interp;
+use crate::eval::expr::{EvalResult, Fault, fault};
+use crate::eval::state::{AXES, Unknown};
 
 fn flag(x: bool) -> f64 {
     if x { 1.0 } else { 0.0 }

@@ -3,9 +3,9 @@
 
 use crate::parse::ast::Span;
 
-use super::Interp;
-use super::expr::Fault;
-use super::params::MAX_PARAM;
+use crate::eval::Interp;
+use crate::eval::expr::Fault;
+use crate::eval::expr::params::MAX_PARAM;
 
 #[derive(Clone, Copy)]
 enum Fmt {

@@ -10,9 +10,9 @@ use crate::parse::MAX_LINE;
 use crate::parse::ast::{Assign, Comment, CommentKind, ExprKind, Item, ParamRef, Span, Word};
 use crate::program::FileIndex;
 
-use super::message::{is_stable, stabilize};
-use super::params::is_read_only;
-use super::{Interp, output_error};
+use crate::eval::expr::message::{is_stable, stabilize};
+use crate::eval::expr::params::is_read_only;
+use crate::eval::{Interp, output_error};
 
 /// Evaluated words of the line: (letter, value).
 pub type Words = Vec<(u8, f64)>;
@@ -62,7 +62,7 @@ fn plain_word(item: &Item) -> bool {
 }
 
 impl Interp<'_> {
-    pub(super) fn exec_items(
+    pub(in crate::eval) fn exec_items(
         &mut self,
         file: &Rc<FileIndex>,
         start: u32,
@@ -133,7 +133,7 @@ impl Interp<'_> {
         }
         // The reference checks the block before acting on it.
         if !words.is_empty() {
-            match super::validate::check_block(
+            match crate::eval::read::validate::check_block(
                 words,
                 &self.modal,
                 &self.nurbs,
@@ -293,7 +293,7 @@ impl Interp<'_> {
     /// Reads an assignment (target checks, then the value) into the sets
     /// applied after the line is read.
     #[inline(always)]
-    pub(super) fn read_assign(
+    pub(in crate::eval) fn read_assign(
         &mut self,
         file: &Rc<FileIndex>,
         start: u32,
@@ -328,7 +328,7 @@ impl Interp<'_> {
     }
 
     /// The line's assignments, numbered in order, then named in order.
-    pub(super) fn apply_assigns(
+    pub(in crate::eval) fn apply_assigns(
         &mut self,
         num_set: &[(usize, f64)],
         named_set: &[(crate::parse::Name, f64)],
@@ -343,7 +343,7 @@ impl Interp<'_> {
 
     /// A block ended the program (M2, M30, M99 at the top): the closing `%`
     /// of a `%` program, then nothing more runs.
-    pub(super) fn end_program(&mut self) -> Result<(), crate::diag::Error> {
+    pub(in crate::eval) fn end_program(&mut self) -> Result<(), crate::diag::Error> {
         if self.main.percent_start {
             self.emit_raw(b"%")?;
         }
@@ -378,7 +378,7 @@ impl Interp<'_> {
             // Checked and applied: a plain move.
             return self.write_line(file, start, raw, repl);
         }
-        match super::validate::check_block(
+        match crate::eval::read::validate::check_block(
             words,
             &self.modal,
             &self.nurbs,
@@ -474,12 +474,12 @@ impl Interp<'_> {
 impl Interp<'_> {
     /// Runs a plain line (literal words only) scanned by the fast path.
     /// `None` sends the line to the grammar instead.
-    pub(super) fn exec_plain(
+    pub(in crate::eval) fn exec_plain(
         &mut self,
         file: &Rc<FileIndex>,
         start: u32,
         raw: &[u8],
-        fw: &[super::fast::FastWord],
+        fw: &[crate::eval::read::fast::FastWord],
     ) -> Option<Result<(), crate::diag::Error>> {
         let mut words = std::mem::take(&mut self.words_buf);
         words.clear();
@@ -509,7 +509,7 @@ impl Interp<'_> {
             words.push((w.letter, w.value));
         }
         let r = (|| {
-            match super::validate::check_block(
+            match crate::eval::read::validate::check_block(
                 &words,
                 &self.modal,
                 &self.nurbs,

@@ -9,8 +9,10 @@ use crate::parse::ast::{Label, LineKind, OKind, OLine};
 use crate::parse::{Name, integer_value};
 use crate::program::{FileIndex, control_key};
 
-use super::expr::round_half_even_int;
-use super::{Cursor, Frame, FrameKind, Interp, LabelRec, MAX_CALL_LEVEL, SubRec, label_of_key};
+use crate::eval::expr::round_half_even_int;
+use crate::eval::{
+    Cursor, Frame, FrameKind, Interp, LabelRec, MAX_CALL_LEVEL, SubRec, label_of_key,
+};
 
 /// What a forward search was looking for (for the error when nothing is found).
 enum Seek {
@@ -26,13 +28,13 @@ impl Interp<'_> {
         }
     }
 
-    pub(super) fn osite(&self, file: &Rc<FileIndex>, oidx: u32) -> (u32, u32) {
+    pub(in crate::eval) fn osite(&self, file: &Rc<FileIndex>, oidx: u32) -> (u32, u32) {
         osite_of(file, oidx)
     }
 }
 
 /// Span of O-line `oidx` of `file`, from its O-word to its last non-blank.
-pub(super) fn osite_of(file: &Rc<FileIndex>, oidx: u32) -> (u32, u32) {
+pub(in crate::eval) fn osite_of(file: &Rc<FileIndex>, oidx: u32) -> (u32, u32) {
     let o = &file.olines[oidx as usize];
     let end = o.start + o.line_len();
     // Point at the O-word, not at the indentation before it.
@@ -103,7 +105,7 @@ impl Interp<'_> {
     }
 
     /// Moves reading to an O-line (`after`: to the line after it).
-    pub(super) fn goto(&mut self, file: &Rc<FileIndex>, oidx: u32, after: bool) {
+    pub(in crate::eval) fn goto(&mut self, file: &Rc<FileIndex>, oidx: u32, after: bool) {
         let o = &file.olines[oidx as usize];
         if Rc::ptr_eq(&self.cur.file, file) {
             // The same file (any jump within a body): no count to touch.
@@ -373,7 +375,11 @@ impl Interp<'_> {
     }
 
     /// Runs the O-line `oidx` of `file` (reached in normal flow).
-    pub(super) fn exec_oline(&mut self, file: &Rc<FileIndex>, oidx: u32) -> Result<(), Error> {
+    pub(in crate::eval) fn exec_oline(
+        &mut self,
+        file: &Rc<FileIndex>,
+        oidx: u32,
+    ) -> Result<(), Error> {
         self.current_line_idx = file.olines[oidx as usize].line_idx;
         self.current_line_start = file.olines[oidx as usize].start;
         let o = match &file.olines[oidx as usize].line.kind {
@@ -1151,7 +1157,7 @@ impl Interp<'_> {
     }
 
     /// `M99` inside a subprogram called with M98.
-    pub(super) fn return_m99(
+    pub(in crate::eval) fn return_m99(
         &mut self,
         file: &Rc<FileIndex>,
         start: u32,

@@ -3,8 +3,8 @@
 //! -1). The points survive a switch to another motion until the next G5.2,
 //! as in the reference, whose checks depend on how many are pending.
 
-use super::Interp;
-use super::state::Unknown;
+use crate::eval::Interp;
+use crate::eval::state::Unknown;
 
 /// Motion mode of a NURBS block (G5.2 ×10).
 pub const NURBS: i32 = 52;
@@ -46,7 +46,7 @@ impl Interp<'_> {
     /// A G5.2 block (on the line, or modal with axis words; checked by
     /// `check_block`): the control point. `motion_before` is the motion mode
     /// the line found.
-    pub(super) fn nurbs_point(
+    pub(in crate::eval) fn nurbs_point(
         &mut self,
         motion_before: i32,
         axis_words: &[(usize, f64)],
@@ -77,7 +77,7 @@ impl Interp<'_> {
 
     /// G5.3 (checked by `check_block`): the move to the last control
     /// point.
-    pub(super) fn nurbs_end(&mut self) {
+    pub(in crate::eval) fn nurbs_end(&mut self) {
         let [x, y] = std::mem::replace(
             &mut self.nurbs.last,
             [Err(Unknown::Start), Err(Unknown::Start)],

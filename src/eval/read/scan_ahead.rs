@@ -14,7 +14,7 @@
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Condvar, Mutex};
 
-use super::straight::{Plain, read_line};
+use crate::eval::read::straight::{Plain, read_line};
 
 /// Chunks read ahead of the one being applied, at most.
 const AHEAD: usize = 4;

@@ -7,8 +7,8 @@ use crate::diag::{Error, ErrorKind};
 use crate::parse::ast::Span;
 use crate::program::FileIndex;
 
-use super::Interp;
-use super::state::Modal;
+use crate::eval::Interp;
+use crate::eval::state::Modal;
 
 /// The state M70 or M73 saves: the modal state, and whether G92 offsets
 /// were applied (M72 turns them on or off again).
@@ -20,7 +20,7 @@ pub struct Saved {
 
 impl Interp<'_> {
     /// M70 save, M71 invalidate, M72 restore, M73 save and restore on return.
-    pub(super) fn context_op(
+    pub(in crate::eval) fn context_op(
         &mut self,
         op: u8,
         file: &Rc<FileIndex>,
@@ -67,7 +67,7 @@ impl Interp<'_> {
     /// Writes the words that bring the machine from the current state to
     /// `saved`, and adopts it, moving the position model as those words do.
     /// Writes nothing if nothing changed.
-    pub(super) fn restore_modal(&mut self, saved: &Saved) -> Result<(), Error> {
+    pub(in crate::eval) fn restore_modal(&mut self, saved: &Saved) -> Result<(), Error> {
         let Saved {
             modal: saved,
             g92_applied,

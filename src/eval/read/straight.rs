@@ -12,9 +12,9 @@ use std::rc::Rc;
 use crate::diag::Error;
 use crate::program::FileIndex;
 
-use super::fast::POW10;
-use super::scan_ahead::{Ahead, InPlace, Lines, Read, Shared};
-use super::{Interp, output_error};
+use crate::eval::read::fast::POW10;
+use crate::eval::read::scan_ahead::{Ahead, InPlace, Lines, Read, Shared};
+use crate::eval::{Interp, output_error};
 
 /// Word slots: G, X, Y, Z, A, B, C, F, S (the fast set), then I, J, K, R, P
 /// (lines with these take the block checks).
@@ -74,15 +74,15 @@ struct Run {
 
 /// One line read by [`read_line`].
 #[derive(Clone, Copy, Default)]
-pub(super) struct Plain {
-    pub(super) mask: u32,
+pub(in crate::eval) struct Plain {
+    pub(in crate::eval) mask: u32,
     /// Values by slot.
-    pub(super) vals: [f64; 14],
-    pub(super) count: usize,
+    pub(in crate::eval) vals: [f64; 14],
+    pub(in crate::eval) count: usize,
     /// End of the text to write (without trailing blanks and terminator).
-    pub(super) text_end: usize,
+    pub(in crate::eval) text_end: usize,
     /// Start of the next line.
-    pub(super) next: usize,
+    pub(in crate::eval) next: usize,
 }
 
 #[inline(always)]
@@ -193,7 +193,7 @@ fn number_slow(buf: &[u8], mut i: usize) -> Option<(f64, usize)> {
 /// each at most once, ending in a newline. False sends the line to the
 /// general path.
 #[inline(always)]
-pub(super) fn read_line(buf: &[u8], line: usize, p: &mut Plain, comments: bool) -> bool {
+pub(in crate::eval) fn read_line(buf: &[u8], line: usize, p: &mut Plain, comments: bool) -> bool {
     let at = |j: usize| buf.get(j).copied().unwrap_or(0);
     let mut i = line;
     p.mask = 0;
@@ -299,7 +299,7 @@ impl Interp<'_> {
     /// Runs plain lines from `buf` (the file's bytes from offset `base`),
     /// stopping before line `stop_line`. Returns the number of lines run; 0
     /// means the first line needs the general path.
-    pub(super) fn straight_run(
+    pub(in crate::eval) fn straight_run(
         &mut self,
         file: &Rc<FileIndex>,
         buf: &[u8],
@@ -411,7 +411,7 @@ impl Interp<'_> {
                 let raw = &buf[*i..p.next - 1];
                 // The words again, with their spans for messages.
                 let mut fw = std::mem::take(&mut self.fast_words);
-                let r = if super::fast::scan(raw, &mut fw) && !fw.is_empty() {
+                let r = if crate::eval::read::fast::scan(raw, &mut fw) && !fw.is_empty() {
                     self.exec_plain(file, base + *i as u32, raw, &fw)
                 } else {
                     None
@@ -514,7 +514,7 @@ impl Interp<'_> {
     /// `fast_line` for the evaluated words of a line: true if it ran them
     /// (the block checks accept them and the state model is updated), false
     /// to leave them to the general checks.
-    pub(super) fn fast_words(&mut self, words: &[(u8, f64)]) -> bool {
+    pub(in crate::eval) fn fast_words(&mut self, words: &[(u8, f64)]) -> bool {
         if self.rotated || (self.modal.ccomp != 400 || self.comp_pending) || !self.s.plain_runs {
             return false;
         }

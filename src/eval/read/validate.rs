@@ -5,10 +5,10 @@
 
 use crate::diag::ErrorKind;
 
-use super::cycle::{Cycle, depth_axis, is_cycle};
-use super::nurbs::{NO_MOTION, NURBS, Nurbs};
-use super::state::Modal;
 use crate::diag::BlockError;
+use crate::eval::state::Modal;
+use crate::eval::state::cycle::{Cycle, depth_axis, is_cycle};
+use crate::eval::state::nurbs::{NO_MOTION, NURBS, Nurbs};
 
 /// Modal group of a G-code (×10), or None for an unknown code.
 fn g_group(g: i32) -> Option<u8> {

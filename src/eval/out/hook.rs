@@ -11,7 +11,7 @@ use crate::diag::{Diagnostic, Error, Site};
 use crate::emit::Output;
 use crate::program::SourceFile;
 
-use super::Interp;
+use crate::eval::Interp;
 
 /// Where an output line came from.
 pub struct Origin<'a> {
@@ -41,7 +41,7 @@ pub trait LineConsumer {
 impl Interp<'_> {
     /// Hands a line to the consumer (there is one).
     #[cold]
-    pub(super) fn consume(
+    pub(in crate::eval) fn consume(
         &mut self,
         file: &Arc<SourceFile>,
         line_start: u32,
@@ -52,7 +52,7 @@ impl Interp<'_> {
             return Ok(());
         };
         let frames = &self.frames;
-        let stack = || super::stack_of(frames);
+        let stack = || crate::eval::stack_of(frames);
         let origin = Origin {
             file,
             line_start,
@@ -67,7 +67,7 @@ impl Interp<'_> {
     /// Hands each line of `bytes` (the file's bytes from offset `start`,
     /// whole lines) to the consumer.
     #[cold]
-    pub(super) fn consume_input(
+    pub(in crate::eval) fn consume_input(
         &mut self,
         file: &Arc<SourceFile>,
         start: u64,
@@ -104,11 +104,11 @@ mod tests {
             let mut l = format!("{} {} ", o.line_start, o.verbatim as u8).into_bytes();
             l.extend_from_slice(text);
             l.extend(format!(" {}", (o.stack)().len()).bytes());
-            out.line(&l).map_err(super::super::output_error)
+            out.line(&l).map_err(crate::eval::output_error)
         }
 
         fn finish(&mut self, out: &mut Output) -> Result<Vec<Diagnostic>, Error> {
-            out.line(b"end").map_err(super::super::output_error)?;
+            out.line(b"end").map_err(crate::eval::output_error)?;
             Ok(Vec::new())
         }
     }

@@ -6,15 +6,15 @@ use crate::diag::BlockError;
 use crate::diag::{Error, ErrorKind};
 use crate::program::FileIndex;
 
-use super::Interp;
-use super::block::Words;
-use super::nurbs::{NO_MOTION, NURBS};
-use super::state::Unknown;
+use crate::eval::Interp;
+use crate::eval::read::block::Words;
+use crate::eval::state::Unknown;
+use crate::eval::state::nurbs::{NO_MOTION, NURBS};
 
 const LINEAR: [bool; 9] = [true, true, true, false, false, false, true, true, true];
 
 fn axis_index(letter: u8) -> Option<usize> {
-    super::state::AXES.iter().position(|&c| c == letter)
+    crate::eval::state::AXES.iter().position(|&c| c == letter)
 }
 
 impl Interp<'_> {
@@ -22,7 +22,7 @@ impl Interp<'_> {
         self.current_line_idx + 1
     }
 
-    pub(super) fn forget(&mut self, axes: &[usize], what: &'static str) {
+    pub(in crate::eval) fn forget(&mut self, axes: &[usize], what: &'static str) {
         let line = self.line_no();
         for &a in axes {
             self.pos.axes[a] = Err(Unknown::After(what, line));
@@ -30,7 +30,7 @@ impl Interp<'_> {
     }
 
     /// Factor from machine units (parameter storage) to program units.
-    pub(super) fn to_prog(&self, axis: usize) -> f64 {
+    pub(in crate::eval) fn to_prog(&self, axis: usize) -> f64 {
         if !LINEAR[axis] || self.s.machine_metric == self.modal.metric {
             1.0
         } else if self.s.machine_metric {
@@ -72,7 +72,7 @@ impl Interp<'_> {
     }
 
     /// G92 offsets are applied (#5210 is not known to be 0).
-    pub(super) fn g92_applied(&self) -> bool {
+    pub(in crate::eval) fn g92_applied(&self) -> bool {
         !(self.params.known[5210] && self.params.values[5210] == 0.0)
     }
 
@@ -92,7 +92,7 @@ impl Interp<'_> {
 
     /// Absolute machine position including the tool length offset, program
     /// units (for `#<_abs_x>`...).
-    pub(super) fn abs_position(&self, axis: usize) -> Option<f64> {
+    pub(in crate::eval) fn abs_position(&self, axis: usize) -> Option<f64> {
         let tlo = self.tlo?[axis] * self.to_prog(axis);
         Some(self.machine_pos(axis)? + tlo)
     }
@@ -126,7 +126,7 @@ impl Interp<'_> {
 
     /// G43 without H (`on`: the current tool's offset) or G49, as M72
     /// restores them.
-    pub(super) fn tool_offset_words(&mut self, on: bool) {
+    pub(in crate::eval) fn tool_offset_words(&mut self, on: bool) {
         if on {
             self.g43(430, None);
         } else {
@@ -137,7 +137,7 @@ impl Interp<'_> {
 
     /// G92.3 (`on`) applies the offsets kept in the parameters, G92.2 stops
     /// applying them and keeps the parameters; the machine does not move.
-    pub(super) fn g92_switch(&mut self, on: bool) {
+    pub(in crate::eval) fn g92_switch(&mut self, on: bool) {
         let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
         self.params.assign(5210, if on { 1.0 } else { 0.0 });
         let what = if on { "G92.3" } else { "G92.1/G92.2" };
@@ -155,7 +155,7 @@ impl Interp<'_> {
 
     /// Applies the line's words to the model. Returns true when the line ends
     /// the program.
-    pub(super) fn apply_words(
+    pub(in crate::eval) fn apply_words(
         &mut self,
         file: &Rc<FileIndex>,
         start: u32,
@@ -351,14 +351,14 @@ impl Interp<'_> {
         let other_motion = w
             .gs()
             .iter()
-            .any(|&g| g != 800 && super::validate::is_motion(g));
+            .any(|&g| g != 800 && crate::eval::read::validate::is_motion(g));
         for &g in w.gs() {
             if g == 800 && other_motion {
                 continue;
             }
             match g {
                 // G5.3 ends a NURBS block without choosing a motion.
-                g if g != 53 && super::validate::is_motion(g) => self.modal.motion = g,
+                g if g != 53 && crate::eval::read::validate::is_motion(g) => self.modal.motion = g,
                 170 | 180 | 190 | 171 | 181 | 191 => self.modal.plane = g,
                 200 => self.set_units(false),
                 210 => self.set_units(true),
@@ -526,12 +526,12 @@ impl Interp<'_> {
             let explicit_motion = w
                 .gs()
                 .iter()
-                .any(|&g| g != 800 && super::validate::is_motion(g));
+                .any(|&g| g != 800 && crate::eval::read::validate::is_motion(g));
             if !axis_words.is_empty() && (!dynamic_tlo || explicit_motion) {
                 if let Err(k) = self.check_motion(words, axis_words) {
                     return Err(self.error(k, file, start, start));
                 }
-                if super::cycle::is_cycle(self.modal.motion) {
+                if crate::eval::state::cycle::is_cycle(self.modal.motion) {
                     self.note_cycle(words);
                 }
                 self.move_to(axis_words);
@@ -600,7 +600,7 @@ impl Interp<'_> {
 
     /// A read of the position after the standalone reference's position
     /// departed from the machine's: warning W0110 at the read.
-    pub(super) fn note_standalone_drift(&mut self, span: crate::parse::ast::Span) {
+    pub(in crate::eval) fn note_standalone_drift(&mut self, span: crate::parse::ast::Span) {
         if let Some((why, line)) = self.standalone_drift {
             self.warn_standalone(why, line, span);
         }
@@ -621,7 +621,7 @@ impl Interp<'_> {
     /// A read of the current tool (`data`: or of its data) after M61, which
     /// the standalone reference does not apply: warning W0110 at the read if
     /// the value differs there.
-    pub(super) fn note_m61(&mut self, span: crate::parse::ast::Span, data: bool) {
+    pub(in crate::eval) fn note_m61(&mut self, span: crate::parse::ast::Span, data: bool) {
         if let Some((line, old)) = self.m61
             && (old != self.current_tool
                 && (!data
@@ -646,7 +646,7 @@ impl Interp<'_> {
 
     /// Where a word sends an axis: its value (G90) or the position plus it
     /// (G91).
-    pub(super) fn axis_end(&self, axis: usize, v: f64) -> Result<f64, Unknown> {
+    pub(in crate::eval) fn axis_end(&self, axis: usize, v: f64) -> Result<f64, Unknown> {
         let v = self.radius_word(axis, v);
         if self.modal.absolute {
             Ok(v)
@@ -658,7 +658,7 @@ impl Interp<'_> {
     /// The end of a move on one axis: the word's value (G90) or the
     /// position plus it (G91); an unknown position stays unknown.
     #[inline]
-    pub(super) fn move_axis(&mut self, axis: usize, v: f64) {
+    pub(in crate::eval) fn move_axis(&mut self, axis: usize, v: f64) {
         self.tlo_moved = false;
         let v = self.radius_word(axis, v);
         if self.modal.absolute {
@@ -668,7 +668,7 @@ impl Interp<'_> {
         }
     }
 
-    pub(super) fn set_units(&mut self, metric: bool) {
+    pub(in crate::eval) fn set_units(&mut self, metric: bool) {
         if self.modal.metric == metric {
             return;
         }
@@ -689,7 +689,7 @@ impl Interp<'_> {
         self.comp_units(metric);
     }
 
-    pub(super) fn select_cs(&mut self, cs: i32) {
+    pub(in crate::eval) fn select_cs(&mut self, cs: i32) {
         let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
         self.modal.coord_index = cs;
         self.params.assign(5220, cs as f64);
@@ -794,7 +794,7 @@ impl Interp<'_> {
 
     /// Checks the reference makes with the start position: arc geometry and
     /// probe distance. Skipped where the position is not known.
-    pub(super) fn check_motion(
+    pub(in crate::eval) fn check_motion(
         &self,
         words: &[(u8, f64)],
         axis_words: &[(usize, f64)],

@@ -13,11 +13,11 @@
 use crate::diag::{ErrorKind, WarningKind};
 use crate::geom::comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
 
-use super::Interp;
+use crate::eval::Interp;
 
 /// Compensation state of a run, made when a program first turns it on.
 #[derive(Debug)]
-pub(super) struct CompRun {
+pub(in crate::eval) struct CompRun {
     comp: Comp<()>,
     /// Whether the geometry is being followed (radius and position known
     /// when compensation was turned on).
@@ -47,7 +47,7 @@ impl Interp<'_> {
 
     /// G41/G42 (`g` 410 or 420) or G41.1/G42.1 (411, 421) on the block
     /// with `words`; the block checks have accepted them.
-    pub(super) fn comp_on(
+    pub(in crate::eval) fn comp_on(
         &mut self,
         g: i32,
         words: &[(u8, f64)],
@@ -124,15 +124,15 @@ impl Interp<'_> {
     /// A tool's data for G41/G42. Under `--zero-start` without a tool
     /// table, tools the program has not set itself have the data of the
     /// standalone interpreter's built-in table (T1-T3 have diameters).
-    fn comp_tool(&self, t: f64) -> Option<super::tools::ToolData> {
+    fn comp_tool(&self, t: f64) -> Option<crate::eval::state::tools::ToolData> {
         let n = t.round() as i64;
         if self.s.zero_start
             && self.s.tool_table.is_empty()
             && !self.tools.contains_key(&n)
             && !self.unknown_tools.contains(&n)
         {
-            return Some(super::tools::ToolData {
-                diameter: super::tools::standalone_diameter(n),
+            return Some(crate::eval::state::tools::ToolData {
+                diameter: crate::eval::state::tools::standalone_diameter(n),
                 ..Default::default()
             });
         }
@@ -154,7 +154,7 @@ impl Interp<'_> {
     }
 
     /// G40.
-    pub(super) fn comp_off(&mut self) -> Result<(), ErrorKind> {
+    pub(in crate::eval) fn comp_off(&mut self) -> Result<(), ErrorKind> {
         let Some(run) = self.comp.as_mut() else {
             return Ok(());
         };
@@ -170,7 +170,11 @@ impl Interp<'_> {
 
     /// The move of a block just applied to the position model (`motion`
     /// is the motion mode, ×10).
-    pub(super) fn comp_move(&mut self, words: &[(u8, f64)], motion: i32) -> Result<(), ErrorKind> {
+    pub(in crate::eval) fn comp_move(
+        &mut self,
+        words: &[(u8, f64)],
+        motion: i32,
+    ) -> Result<(), ErrorKind> {
         if self.modal.ccomp == 400 {
             if self.comp_pending {
                 match motion {
@@ -233,7 +237,7 @@ impl Interp<'_> {
     }
 
     /// Whether G53 would move with an offset path (the reference refuses it).
-    pub(super) fn comp_offsetting(&self) -> bool {
+    pub(in crate::eval) fn comp_offsetting(&self) -> bool {
         self.modal.ccomp != 400
             && self
                 .comp
@@ -243,7 +247,7 @@ impl Interp<'_> {
 
     /// A program stop (M0, M1, M60) or end (M2, M30): held moves are
     /// released; an end also turns compensation off.
-    pub(super) fn comp_stop(&mut self, end: bool) -> Result<(), ErrorKind> {
+    pub(in crate::eval) fn comp_stop(&mut self, end: bool) -> Result<(), ErrorKind> {
         if end {
             self.comp_pending = false;
         }
@@ -262,7 +266,7 @@ impl Interp<'_> {
     }
 
     /// G20/G21 while compensation state exists.
-    pub(super) fn comp_units(&mut self, metric: bool) {
+    pub(in crate::eval) fn comp_units(&mut self, metric: bool) {
         if let Some(run) = self.comp.as_mut() {
             run.comp.scale(if metric { 25.4 } else { 1.0 / 25.4 });
             run.comp.set_tolerances(Tolerances::default_for(metric));

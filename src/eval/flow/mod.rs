@@ -1,0 +1,3 @@
+//! Control flow: O-word blocks, loops, calls and their frames.
+
+pub(super) mod control;
