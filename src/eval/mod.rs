@@ -12,18 +12,18 @@ pub mod state;
 pub use expr::params;
 pub use state::tools;
 
-use flow::control;
-use out::progress;
-use read::{block, fast};
-use state::{ccomp, cycle, lathe, nurbs, restore};
+use flow::{Flow, Frame, FrameKind, label_of_key};
+use out::Writer;
+use read::Reader;
+use read::fast;
+use state::Machine;
 
 use std::collections::HashSet;
 
-use crate::fx_hasher::{FxMap, FxSet};
 use std::rc::Rc;
 
 use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};
-use crate::emit::{Output, Sink};
+use crate::emit::Sink;
 use crate::parse::ast::{Line, LineKind, OKind, Span};
 use crate::parse::{LineParser, Name};
 use crate::program::{FileIndex, Loader, Window, next_line};
@@ -32,221 +32,39 @@ pub use out::hook::{LineConsumer, Origin};
 pub use settings::{Define, Settings};
 
 use expr::params::Params;
-use state::{Modal, Position};
 
-/// Deepest nesting of active calls (the tenth nested call fails).
-pub const MAX_CALL_LEVEL: usize = 9;
-
-/// Where reading continues.
-#[derive(Clone)]
-pub struct Cursor {
-    pub file: Rc<FileIndex>,
-    /// Byte offset of the next line.
-    pub pos: u32,
-    /// 0-based index of the next line.
-    pub line: u32,
-    /// Index of the first O-line at or after `line`.
-    pub next_o: usize,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum FrameKind {
-    Main,
-    Call,
-    M98,
-}
-
-/// Record of a control label reached in this activation.
-#[derive(Debug, Clone, Copy)]
-pub struct LabelRec {
-    pub kind: OKind,
-    pub oidx: u32,
-    pub line: u32,
-    /// Remaining passes of a repeat loop (-1: not running).
-    pub repeat: i64,
-}
-
-pub struct Frame {
-    pub kind: FrameKind,
-    pub name: Name,
-    pub ret: Option<Cursor>,
-    /// The O-line (of the file `ret` is in) that made the call; its site is
-    /// worked out only for a message.
-    pub call_oidx: Option<u32>,
-    pub saved: Option<Box<[f64; 30]>>,
-    pub locals: FxMap<Name, f64>,
-    pub labels: FxMap<Name, LabelRec>,
-    /// Pending passes of an `M98 ... L` on the given line of this frame.
-    pub m98_loop: Option<(u32, i64)>,
-    /// Modal state saved by M70/M73; `auto` restores it on return (M73).
-    pub saved_modal: Option<Box<restore::Saved>>,
-    pub auto_restore: bool,
-}
-
-impl Frame {
-    /// Makes a pooled frame like a new one, keeping its tables' room.
-    fn reset(&mut self, kind: FrameKind, name: Name) {
-        let Frame {
-            kind: k,
-            name: n,
-            ret,
-            call_oidx,
-            saved,
-            locals,
-            labels,
-            m98_loop,
-            saved_modal,
-            auto_restore,
-        } = self;
-        *k = kind;
-        *n = name;
-        *ret = None;
-        *call_oidx = None;
-        *saved = None;
-        locals.clear();
-        labels.clear();
-        *m98_loop = None;
-        *saved_modal = None;
-        *auto_restore = false;
-    }
-
-    fn new(kind: FrameKind, name: Name) -> Frame {
-        Frame {
-            kind,
-            name,
-            ret: None,
-            call_oidx: None,
-            saved: None,
-            locals: FxMap::default(),
-            labels: FxMap::default(),
-            m98_loop: None,
-            saved_modal: None,
-            auto_restore: false,
-        }
-    }
-}
-
-/// A registered subroutine definition.
-#[derive(Clone)]
-pub struct SubRec {
-    pub file: Rc<FileIndex>,
-    pub oidx: u32,
-}
-
+/// The evaluator. Its state is in owned parts, each changed through its own
+/// fields and methods: the machine model (`mach`), control flow (`flow`),
+/// parameters (`params`), the reader (`reader`), the output (`out`) and the
+/// diagnostics (`diags`).
 pub struct Interp<'s> {
     s: &'s Settings,
     pub loader: Loader,
     main: Rc<FileIndex>,
+    mach: Machine,
+    flow: Flow,
     params: Params,
-    globals: FxMap<Name, f64>,
-    /// Boxed: a call moves a pointer, not the frame.
-    #[allow(clippy::vec_box)]
-    frames: Vec<Box<Frame>>,
-    /// Frames of returned calls, reused by the next calls.
-    #[allow(clippy::vec_box)]
-    frame_pool: Vec<Box<Frame>>,
-    /// Argument save areas of returned calls (boxed: they move between
-    /// frames and the pool without copying).
-    #[allow(clippy::vec_box)]
-    saved_pool: Vec<Box<[f64; 30]>>,
-    value: f64,
-    value_returned: bool,
-    /// Reading undefined named parameters gives 0 (sub definition skip).
-    defining: bool,
-    cur: Cursor,
-    output: Output,
-    out_lines: u64,
-    /// Output lines allowed: `--max-output-lines` plus the main file's own
-    /// line count, so that the guard counts generated lines, not lines
-    /// copied from the input.
-    line_budget: u64,
-    /// Output line count at which `count_line` looks further: the output
-    /// limit, or earlier, the next progress update.
-    line_check: u64,
-    progress: Option<progress::Progress>,
-    steps: u64,
-    pub warnings: Vec<Diagnostic>,
-    subs: FxMap<Name, SubRec>,
-    called: FxSet<Name>,
-    /// The sub of the last call, already registered and marked called.
-    last_called: Option<Name>,
-    modal: Modal,
-    pos: Position,
-    current_tool: Option<f64>,
-    /// RETAIN_G43 changed the tool length offset on this line: the output
-    /// line to add after it (G43 or G49).
-    retain_line: Option<bool>,
-    selected_tool: Option<f64>,
-    /// Pockets of the current and the selected tool, known as the standalone
-    /// reference numbers them (by tool number) under `--zero-start`.
-    pockets: Option<(f64, f64)>,
-    executed_if: bool,
-    /// The reference's never-cleared break/continue flags (for warnings).
-    ref_stale_break: Option<u32>,
-    ref_stale_continue: Option<u32>,
-    /// Control key, line and file of the last loop passed (for limit
-    /// messages).
-    last_loop: Option<(Name, u32, Rc<FileIndex>)>,
-    parser: LineParser,
-    /// Parsed lines of loop and sub bodies, with their end and the start of
-    /// the next line.
-    cache: FxMap<(usize, u32), (Rc<Line>, u32, u32)>,
-    out: Vec<u8>,
-    ended: bool,
-    current_line_start: u32,
-    current_line_idx: u32,
-    /// Warnings already given, to report each site once.
-    warned: HashSet<(&'static str, usize, u32)>,
-    window: Window,
-    fast_words: Vec<fast::FastWord>,
-    words_buf: Vec<(u8, f64)>,
-    tools: FxMap<i64, tools::ToolData>,
-    tools_known: bool,
-    unknown_tools: HashSet<i64>,
-    /// Applied tool length offset, machine units.
-    tlo: Option<[f64; 9]>,
-    /// An XY rotation was set (not modelled).
-    rotated: bool,
-    /// The repeat line (O-line index) an endrepeat just jumped back to.
-    repeat_again: Option<u32>,
-    scratch: Option<Box<block::Scratch>>,
-    /// Control points of the NURBS block being read.
-    nurbs: nurbs::Nurbs,
-    /// R plane and depth of the last canned cycle.
-    cycle: cycle::Cycle,
-    /// The tool length offset changed since the last move.
-    tlo_moved: bool,
-    /// Line of the last G38 probe that left the results unknown.
-    probed_at: Option<u32>,
-    /// Why and since which line the standalone reference's position
-    /// differs from the machine's (see W0110).
-    standalone_drift: Option<(&'static str, u32)>,
-    /// The line of an M61 not followed by a tool change, and the tool the
-    /// standalone reference still has as current (see W0110).
-    m61: Option<(u32, Option<f64>)>,
-    /// Reads every output line instead of the output (see [`hook`]).
-    consumer: Option<Box<dyn LineConsumer + 's>>,
-    /// Cutter compensation, once a program turns it on.
-    comp: Option<Box<ccomp::CompRun>>,
-    /// G40 ended an offset path: the next move must be straight (the fast
-    /// paths leave such lines to the general one).
-    comp_pending: bool,
-    /// A lathe cycle whose contour subroutine is running.
-    lathe: Option<Box<lathe::LatheRun>>,
+    reader: Reader,
+    out: Writer<'s>,
+    diags: Diags,
 }
 
-/// The call stack of `frames` as sites, innermost caller first.
-#[allow(clippy::vec_box)]
-fn stack_of(frames: &[Box<Frame>]) -> Vec<Site> {
-    frames
-        .iter()
-        .rev()
-        .filter_map(|f| {
-            let (ret, oidx) = (f.ret.as_ref()?, f.call_oidx?);
-            let (a, b) = control::osite_of(&ret.file, oidx);
-            Some(Site::new(&ret.file.file, a, b))
-        })
-        .collect()
+/// Warnings given so far.
+#[derive(Default)]
+struct Diags {
+    warnings: Vec<Diagnostic>,
+    /// Warnings already given, to report each site once.
+    warned: HashSet<(&'static str, usize, u32)>,
+    /// Tools a warning named as missing from the tool table.
+    unknown_tools: HashSet<i64>,
+}
+
+impl Diags {
+    /// Notes a warning of `code` at `start` of the file `file_key`; false
+    /// when one was given there already.
+    fn first_at(&mut self, code: &'static str, file_key: usize, start: u32) -> bool {
+        self.warned.insert((code, file_key, start))
+    }
 }
 
 /// An error writing the output.
@@ -277,11 +95,6 @@ fn read_error(file: &FileIndex, e: std::io::Error) -> Error {
     )
 }
 
-/// The label part of a control key (`scope#label`).
-fn label_of_key(key: &str) -> String {
-    key.rsplit('#').next().unwrap_or("").to_string()
-}
-
 fn file_key(f: &Rc<FileIndex>) -> usize {
     Rc::as_ptr(f) as usize
 }
@@ -298,125 +111,38 @@ impl<'s> Interp<'s> {
 
     pub fn new(s: &'s Settings, loader: Loader, main: Rc<FileIndex>, sink: Sink) -> Interp<'s> {
         let mut params = Params::new(s.zero_start);
-        let mut globals = FxMap::default();
-        let mut main_frame = Frame::new(FrameKind::Main, Name::new(""));
         for d in &s.defines {
             match d {
                 Define::Numbered(i, v) => params.assign(*i, *v),
+                // Level-0 locals share the global table.
                 Define::Named(n, v) => {
-                    if n.starts_with('_') {
-                        globals.insert(Name::new(n), *v);
-                    } else {
-                        main_frame.locals.insert(Name::new(n), *v);
-                    }
+                    params.globals.insert(Name::new(n), *v);
                 }
             }
         }
-        // Level-0 locals share the global table.
-        for (k, v) in main_frame.locals.drain() {
-            globals.insert(k, v);
-        }
-        let mut pos = if s.zero_start {
-            Position::zero()
-        } else {
-            Position::unknown()
-        };
-        for &(axis, v) in &s.start_position {
-            pos.axes[axis] = Ok(v);
-        }
-        let cur = Cursor {
-            file: main.clone(),
-            pos: 0,
-            line: 0,
-            next_o: 0,
-        };
-        let line_budget = s
-            .max_output_lines
-            .saturating_add(u64::from(main.line_count));
+        let main_frame = Frame::new(FrameKind::Main, Name::new(""));
         Interp {
             s,
             loader,
-            main,
+            mach: Machine::new(s),
+            flow: Flow::new(main.clone(), main_frame),
             params,
-            globals,
-            frames: vec![Box::new(main_frame)],
-            frame_pool: Vec::new(),
-            saved_pool: Vec::new(),
-            value: 0.0,
-            value_returned: false,
-            defining: false,
-            cur,
-            output: Output::new(sink, s.precision, s.format_thread_after),
-            out_lines: 0,
-            line_budget,
-            line_check: if s.progress.is_some() {
-                line_budget.min(progress::EVERY)
-            } else {
-                line_budget
-            },
-            progress: s.progress.map(progress::Progress::new),
-            steps: 0,
-            warnings: Vec::new(),
-            subs: FxMap::default(),
-            called: FxSet::default(),
-            last_called: None,
-            modal: Modal::default(),
-            pos,
-            retain_line: None,
-            current_tool: if s.zero_start || !s.tool_table.is_empty() {
-                Some(0.0)
-            } else {
-                None
-            },
-            selected_tool: if s.zero_start { Some(0.0) } else { None },
-            pockets: s.zero_start.then_some((1.0, -1.0)),
-            executed_if: true,
-            ref_stale_break: None,
-            ref_stale_continue: None,
-            last_loop: None,
-            parser: LineParser::default(),
-            cache: FxMap::default(),
-            out: Vec::with_capacity(256),
-            ended: false,
-            current_line_start: 0,
-            current_line_idx: 0,
-            warned: HashSet::new(),
-            window: Window::default(),
-            fast_words: Vec::with_capacity(16),
-            words_buf: Vec::with_capacity(16),
-            tools: s.tool_table.iter().copied().collect(),
-            tools_known: s.zero_start,
-            unknown_tools: HashSet::new(),
-            tlo: Some([0.0; 9]),
-            rotated: false,
-            repeat_again: None,
-            scratch: Some(Box::default()),
-            nurbs: nurbs::Nurbs::default(),
-            cycle: cycle::Cycle::default(),
-            tlo_moved: false,
-            probed_at: None,
-            standalone_drift: None,
-            comp: None,
-            comp_pending: false,
-            m61: None,
-            consumer: None,
-            lathe: None,
+            reader: Reader::new(),
+            out: Writer::new(sink, s, main.line_count),
+            diags: Diags::default(),
+            main,
         }
     }
 
     /// Hands every output line to `consumer` instead of the output.
     pub fn with_consumer(mut self, consumer: Box<dyn LineConsumer + 's>) -> Interp<'s> {
-        self.consumer = Some(consumer);
+        self.out.consumer = Some(consumer);
         self
-    }
-
-    pub fn level(&self) -> usize {
-        self.frames.len() - 1
     }
 
     /// The call stack as sites, innermost caller first.
     fn stack(&self) -> Vec<Site> {
-        stack_of(&self.frames)
+        self.flow.stack()
     }
 
     pub(crate) fn error(
@@ -456,12 +182,12 @@ impl<'s> Interp<'s> {
         if !self.s.warnings {
             return;
         }
-        if !self.warned.insert((kind.code(), file_key(file), start)) {
+        if !self.diags.first_at(kind.code(), file_key(file), start) {
             return;
         }
         let mut d = Diagnostic::warning(kind, Some(Site::new(&file.file, start, end)));
         d.stack = self.stack();
-        self.warnings.push(d);
+        self.diags.warnings.push(d);
     }
 
     /// Runs the program to its end and releases the output.
@@ -477,17 +203,21 @@ impl<'s> Interp<'s> {
     /// any. The output is released only without an error.
     pub fn run_all(mut self) -> (Vec<Diagnostic>, Option<Error>) {
         let r = self.run_steps();
-        if let Some(p) = &self.progress {
+        if let Some(p) = &self.out.progress {
             p.clear();
         }
         if r.is_ok() {
             self.finish_warnings();
         }
         let Interp {
-            mut output,
-            mut warnings,
+            out:
+                Writer {
+                    mut output,
+                    consumer,
+                    ..
+                },
+            diags: Diags { mut warnings, .. },
             loader,
-            consumer,
             ..
         } = self;
         warnings.extend(loader.warnings);
@@ -525,13 +255,13 @@ impl<'s> Interp<'s> {
                 if main.percent_start {
                     self.emit_raw(b"%")?;
                     // Continue after the opening % line.
-                    self.cur.pos = main.first_nonblank_next;
-                    self.cur.line = first + 1;
-                    self.cur.next_o = main.oline_at_or_after(first + 1);
+                    self.flow.cur.pos = main.first_nonblank_next;
+                    self.flow.cur.line = first + 1;
+                    self.flow.cur.next_o = main.oline_at_or_after(first + 1);
                 }
             }
         }
-        while !self.ended {
+        while !self.out.ended {
             self.step()?;
         }
         Ok(())
@@ -544,7 +274,7 @@ impl<'s> Interp<'s> {
         for (i, o) in main.olines.iter().enumerate() {
             if o.kind() == Some(OKind::Sub)
                 && let Some(k) = &o.key
-                && !self.called.contains(k)
+                && !self.flow.called.contains(k)
                 && main.defs.contains_key(&(i as u32))
             {
                 let end = o.start + o.line_len();
@@ -563,7 +293,8 @@ impl<'s> Interp<'s> {
     /// Code after the program end that is not a subroutine definition
     /// never runs.
     fn warn_unreachable(&mut self, main: &Rc<FileIndex>) {
-        if !self.s.warnings || !Rc::ptr_eq(&self.cur.file, main) || self.frames.len() > 1 {
+        if !self.s.warnings || !Rc::ptr_eq(&self.flow.cur.file, main) || self.flow.frames.len() > 1
+        {
             return;
         }
         let Some(data) = main.file.memory() else {
@@ -588,8 +319,8 @@ impl<'s> Interp<'s> {
             reach = reach.max(r.1);
             r.1 = reach;
         }
-        let mut pos = self.cur.pos as usize;
-        let mut idx = self.cur.line;
+        let mut pos = self.flow.cur.pos as usize;
+        let mut idx = self.flow.cur.line;
         let mut parser = LineParser::default();
         let mut in_fanuc = false;
         while pos < data.len() {
@@ -638,18 +369,18 @@ impl<'s> Interp<'s> {
     }
 
     fn count_step(&mut self) -> Result<(), Error> {
-        self.steps += 1;
-        if self.steps > self.s.max_steps {
-            let (label, line, file) = match &self.last_loop {
+        self.flow.steps += 1;
+        if self.flow.steps > self.s.max_steps {
+            let (label, line, file) = match &self.flow.last_loop {
                 Some((k, n, f)) => (Some(label_of_key(k)), Some(*n), f.clone()),
-                None => (None, None, self.cur.file.clone()),
+                None => (None, None, self.flow.cur.file.clone()),
             };
             let kind = ErrorKind::StepLimit {
                 limit: self.s.max_steps,
                 label,
                 line: line.map(|n| n + 1),
             };
-            let site = match (&self.last_loop, line) {
+            let site = match (&self.flow.last_loop, line) {
                 (Some(_), Some(n)) => file
                     .olines
                     .iter()
@@ -657,7 +388,7 @@ impl<'s> Interp<'s> {
                     .map(|o| (o.start, o.start + o.line_len())),
                 _ => None,
             };
-            let (a, b) = site.unwrap_or((self.current_line_start, self.current_line_start));
+            let (a, b) = site.unwrap_or((self.reader.line_start, self.reader.line_start));
             return Err(self.error(kind, &file, a, b));
         }
         Ok(())
@@ -668,7 +399,7 @@ impl<'s> Interp<'s> {
     /// the step, moves the cursor past it and returns its index.
     #[inline(always)]
     fn take_oline(&mut self, file: &FileIndex, line_idx: u32) -> Result<Option<u32>, Error> {
-        let Some(o) = file.olines.get(self.cur.next_o) else {
+        let Some(o) = file.olines.get(self.flow.cur.next_o) else {
             return Ok(None);
         };
         if o.line_idx != line_idx {
@@ -677,42 +408,41 @@ impl<'s> Interp<'s> {
         // Loops and calls all pass through O-lines: counting them bounds
         // any runaway, while straight code runs uncounted.
         self.count_step()?;
-        let oidx = self.cur.next_o as u32;
-        self.cur.next_o += 1;
-        self.cur.pos = o.next;
-        self.cur.line += 1;
+        let oidx = self.flow.cur.next_o as u32;
+        self.flow.cur.next_o += 1;
+        self.flow.cur.pos = o.next;
+        self.flow.cur.line += 1;
         Ok(Some(oidx))
     }
 
     fn step(&mut self) -> Result<(), Error> {
-        if self.lathe.is_some() {
+        if self.mach.lathe.is_some() {
             return self.step_contour();
         }
-        let file = self.cur.file.clone();
-        let start = self.cur.pos;
+        let file = self.flow.cur.file.clone();
+        let start = self.flow.cur.pos;
         if start as u64 >= file.file.len() {
             return self.end_of_file(&file);
         }
-        let line_idx = self.cur.line;
-        self.current_line_start = start;
-        self.current_line_idx = line_idx;
+        let line_idx = self.flow.cur.line;
+        self.reader.at(start, line_idx);
         if let Some(oidx) = self.take_oline(&file, line_idx)? {
             return self.exec_oline(&file, oidx);
         }
         if let Some(data) = file.file.memory()
-            && let Some((line, end, next)) = self.cache.get(&(file_key(&file), line_idx))
+            && let Some((line, end, next)) = self.flow.cache.get(&(file_key(&file), line_idx))
         {
             // A line of a loop or sub body run before.
             let (line, end, next) = (line.clone(), *end, *next);
-            self.cur.pos = next;
-            self.cur.line += 1;
+            self.flow.cur.pos = next;
+            self.flow.cur.line += 1;
             return self.exec_line(&file, start, &data[start as usize..end as usize], &line);
         }
-        let mut window = std::mem::take(&mut self.window);
+        let mut window = std::mem::take(&mut self.reader.window);
         if self.s.plain_runs {
             let stop = file
                 .olines
-                .get(self.cur.next_o)
+                .get(self.flow.cur.next_o)
                 .map_or(u32::MAX, |o| o.line_idx);
             let run = match file.file.memory() {
                 Some(data) => {
@@ -726,13 +456,13 @@ impl<'s> Interp<'s> {
             match run {
                 Ok(0) => {}
                 other => {
-                    self.window = window;
+                    self.reader.window = window;
                     return other.map(|_| ());
                 }
             }
         }
         let r = self.step_line(&file, start, line_idx, &mut window);
-        self.window = window;
+        self.reader.window = window;
         r
     }
 
@@ -757,26 +487,26 @@ impl<'s> Interp<'s> {
                 (window.bytes(&l), next, t)
             }
         };
-        self.cur.pos = next;
-        self.cur.line += 1;
-        let mut fw = std::mem::take(&mut self.fast_words);
+        self.flow.cur.pos = next;
+        self.flow.cur.line += 1;
+        let mut fw = std::mem::take(&mut self.reader.fast_words);
         if fast::scan(raw, &mut fw) && !fw.is_empty() {
             let r = self.exec_plain(file, start, raw, &fw);
-            self.fast_words = fw;
+            self.reader.fast_words = fw;
             if let Some(r) = r {
                 return r;
             }
         } else {
-            self.fast_words = fw;
+            self.reader.fast_words = fw;
         }
         let line = if file.keeps(line_idx) {
             let key = (file_key(file), line_idx);
-            match self.cache.get(&key) {
+            match self.flow.cache.get(&key) {
                 Some(l) => l.0.clone(),
                 None => {
                     let l = Rc::new(self.parse_line(file, start, raw, terminated)?);
                     let end = start + raw.len() as u32;
-                    self.cache.insert(key, (l.clone(), end, next));
+                    self.flow.cache.insert(key, (l.clone(), end, next));
                     l
                 }
             }
@@ -793,7 +523,8 @@ impl<'s> Interp<'s> {
         raw: &[u8],
         terminated: bool,
     ) -> Result<Line, Error> {
-        self.parser
+        self.reader
+            .parser
             .parse(raw, terminated)
             .map_err(|e| self.error_in_line(e.kind, file, start, e.span))
     }
@@ -810,7 +541,7 @@ impl<'s> Interp<'s> {
             LineKind::Percent => {
                 if self.main.percent_start {
                     self.emit_raw(b"%")?;
-                    self.ended = true;
+                    self.out.ended = true;
                     Ok(())
                 } else {
                     Err(self.error(ErrorKind::StrayPercent, file, start, start + 1))
@@ -825,8 +556,9 @@ impl<'s> Interp<'s> {
 
     fn end_of_file(&mut self, file: &Rc<FileIndex>) -> Result<(), Error> {
         let end = file.file.len() as u32;
-        if self.level() > 0 && !Rc::ptr_eq(file, &self.main) {
+        if self.flow.level() > 0 && !Rc::ptr_eq(file, &self.main) {
             let name = self
+                .flow
                 .frames
                 .last()
                 .map(|f| f.name.to_string())
@@ -846,29 +578,28 @@ impl<'s> Interp<'s> {
     /// Writes one finished output line.
     fn emit_raw(&mut self, bytes: &[u8]) -> Result<(), Error> {
         self.count_line()?;
-        if self.consumer.is_some() {
-            let file = self.cur.file.file.clone();
-            return self.consume(&file, self.current_line_start, bytes, false);
+        if self.out.consumer.is_some() {
+            let file = self.flow.cur.file.file.clone();
+            return self.consume(&file, self.reader.line_start, bytes, false);
         }
-        self.output.line(bytes).map_err(output_error)
+        self.out.output.line(bytes).map_err(output_error)
     }
 
     /// Writes a source line as it is (`bytes`: its text without trailing
     /// blanks, starting at `start` in `file`).
     fn emit_source(&mut self, file: &Rc<FileIndex>, start: u32, bytes: &[u8]) -> Result<(), Error> {
         self.count_line()?;
-        if self.consumer.is_some() {
+        if self.out.consumer.is_some() {
             let file = file.file.clone();
             return self.consume(&file, start, bytes, true);
         }
-        self.output.line(bytes).map_err(output_error)
+        self.out.output.line(bytes).map_err(output_error)
     }
 
     /// Counts an output line about to be written, against the limit.
     #[inline]
     fn count_line(&mut self) -> Result<(), Error> {
-        self.out_lines += 1;
-        if self.out_lines > self.line_check {
+        if self.out.count_line() {
             return self.line_checkpoint();
         }
         Ok(())
@@ -877,25 +608,22 @@ impl<'s> Interp<'s> {
     /// The output limit, or a progress update, is due.
     #[cold]
     fn line_checkpoint(&mut self) -> Result<(), Error> {
-        if self.out_lines > self.line_budget {
-            return Err(self.output_limit());
+        let name = self.flow.cur.file.file.display_name();
+        if self.out.checkpoint(self.reader.line_idx + 1, &name) {
+            Ok(())
+        } else {
+            Err(self.output_limit())
         }
-        if let Some(p) = &mut self.progress {
-            let name = self.cur.file.file.display_name();
-            p.tick(self.out_lines, self.current_line_idx + 1, &name);
-            self.line_check = self.line_budget.min(self.out_lines + progress::EVERY);
-        }
-        Ok(())
     }
 
     /// The error of an output past the limit.
     #[cold]
     fn output_limit(&self) -> Error {
-        let (label, line, file) = match &self.last_loop {
+        let (label, line, file) = match &self.flow.last_loop {
             Some((k, n, f)) => (Some(label_of_key(k)), Some(*n + 1), f.clone()),
-            None => (None, None, self.cur.file.clone()),
+            None => (None, None, self.flow.cur.file.clone()),
         };
-        let at = self.current_line_start;
+        let at = self.reader.line_start;
         self.error(
             ErrorKind::OutputLimit {
                 limit: self.s.max_output_lines,

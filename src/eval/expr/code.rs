@@ -71,10 +71,10 @@ impl Interp<'_> {
     /// `read_named` does first).
     #[inline(always)]
     fn named(&self, name: &crate::parse::Name) -> Option<f64> {
-        let table = if name.starts_with('_') || self.frames.len() == 1 {
-            &self.globals
+        let table = if name.starts_with('_') || self.flow.frames.len() == 1 {
+            &self.params.globals
         } else {
-            &self.frames.last()?.locals
+            &self.flow.frames.last()?.locals
         };
         let v = *table.get(name)?;
         v.is_finite().then_some(v)

@@ -336,7 +336,7 @@ impl Interp<'_> {
             return Ok(v);
         }
         if !self.params.known[i] {
-            if let (Some(line), 5061..=5070) = (self.probed_at, i) {
+            if let (Some(line), 5061..=5070) = (self.mach.probed_at, i) {
                 return Err(fault(
                     ErrorKind::ProbeResultUnknown { index: i, line },
                     span,
@@ -365,9 +365,13 @@ impl Interp<'_> {
                 span,
             ));
         }
-        if !self.params.set[i] && self.s.warnings && self.level() == 0 && (1..5000).contains(&i) {
-            let file = self.cur.file.clone();
-            let at = self.current_line_start;
+        if !self.params.set[i]
+            && self.s.warnings
+            && self.flow.level() == 0
+            && (1..5000).contains(&i)
+        {
+            let file = self.flow.cur.file.clone();
+            let at = self.reader.line_start;
             self.warn(
                 crate::diag::WarningKind::ReadBeforeSet { index: i as i64 },
                 &file,

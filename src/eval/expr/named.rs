@@ -124,12 +124,12 @@ impl Interp<'_> {
         let Some(p) = predef(name) else {
             return self.predefined_pattern(name, span);
         };
-        let m = &self.modal;
+        let m = &self.mach.modal;
         let v = match p {
-            Predef::Value => self.value,
-            Predef::ValueReturned => flag(self.value_returned),
-            Predef::Line => (self.current_line_idx + 1) as f64,
-            Predef::CallLevel => self.level() as f64,
+            Predef::Value => self.flow.value,
+            Predef::ValueReturned => flag(self.flow.value_returned),
+            Predef::Line => (self.reader.line_idx + 1) as f64,
+            Predef::CallLevel => self.flow.level() as f64,
             Predef::RemapLevel => 0.0,
             Predef::Task => 0.0,
             Predef::Vmajor => 2.9,
@@ -187,10 +187,10 @@ impl Interp<'_> {
                     self.note_m61(span, false);
                 }
                 let v = match p {
-                    Predef::CurrentTool => self.current_tool,
-                    Predef::SelectedTool => self.selected_tool,
-                    Predef::CurrentPocket => self.pockets.map(|p| p.0),
-                    _ => self.pockets.map(|p| p.1),
+                    Predef::CurrentTool => self.mach.current_tool,
+                    Predef::SelectedTool => self.mach.selected_tool,
+                    Predef::CurrentPocket => self.mach.pockets.map(|p| p.0),
+                    _ => self.mach.pockets.map(|p| p.1),
                 };
                 return Some(v.ok_or_else(|| {
                     fault(
@@ -273,7 +273,7 @@ impl Interp<'_> {
 
     /// Current position on an axis, or why it is unknown.
     pub(crate) fn position(&self, axis: usize, span: Span) -> EvalResult {
-        if self.modal.ccomp != 400 {
+        if self.mach.modal.ccomp != 400 {
             let why = "cutter radius compensation is on".to_string();
             return Err(fault(
                 ErrorKind::UnknownPosition {
@@ -283,7 +283,7 @@ impl Interp<'_> {
                 span,
             ));
         }
-        match &self.pos.axes[axis] {
+        match &self.mach.pos.axes[axis] {
             Ok(v) => Ok(*v),
             Err(why) => {
                 let why = match why {
@@ -304,24 +304,24 @@ impl Interp<'_> {
     }
 
     fn named_table(&mut self, name: &str) -> &mut crate::fx_hasher::FxMap<Name, f64> {
-        if name.starts_with('_') || self.frames.len() == 1 {
-            &mut self.globals
+        if name.starts_with('_') || self.flow.frames.len() == 1 {
+            &mut self.params.globals
         } else {
-            &mut self.frames.last_mut().expect("frame").locals
+            &mut self.flow.frames.last_mut().expect("frame").locals
         }
     }
 
     pub(crate) fn read_named(&mut self, name: &Name, span: Span) -> EvalResult {
         if name.starts_with('_') {
             // A -D value overrides a predefined one (e.g. _hal values).
-            if let Some(v) = self.globals.get(name) {
+            if let Some(v) = self.params.globals.get(name) {
                 return Ok(*v);
             }
             if let Some(r) = self.predefined(name, span) {
                 return r;
             }
         }
-        let defining = self.defining;
+        let defining = self.flow.defining;
         match self.named_table(name).get(name) {
             Some(v) => Ok(*v),
             None if defining => Ok(0.0),
@@ -338,7 +338,7 @@ impl Interp<'_> {
         if (name.starts_with("_ini[") && self.s.ini_vars)
             || (name.starts_with("_hal[") && self.s.hal_pin_vars)
         {
-            if self.globals.contains_key(name) {
+            if self.params.globals.contains_key(name) {
                 return Ok(true);
             }
             return Ok(self.predefined(name, span).is_some_and(|r| r.is_ok()));
@@ -355,7 +355,7 @@ impl Interp<'_> {
         let ini_missing =
             name.starts_with("_ini[") && self.predefined(name, span).is_none_or(|r| r.is_err());
         if (self.is_predefined(name) && !ini_missing)
-            || (name.as_str() == "n_args" && self.s.oword_nargs && self.level() > 0)
+            || (name.as_str() == "n_args" && self.s.oword_nargs && self.flow.level() > 0)
         {
             return Err(fault(
                 ErrorKind::NamedReadOnly {

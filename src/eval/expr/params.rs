@@ -1,6 +1,9 @@
 //! Numbered parameters #1–#5601 and which of them hold values only the
 //! running machine knows.
 
+use crate::fx_hasher::FxMap;
+use crate::parse::Name;
+
 /// One past the highest numbered parameter.
 pub const MAX_PARAM: usize = 5602;
 
@@ -63,6 +66,8 @@ pub struct Params {
     pub known: Vec<bool>,
     /// Assigned by the program, a -D or a var file (for read-before-set).
     pub set: Vec<bool>,
+    /// Global named parameters (`#<_name>`, and the main program's locals).
+    pub globals: FxMap<Name, f64>,
 }
 
 impl Params {
@@ -80,7 +85,12 @@ impl Params {
         values[5599] = 1.0;
         let mut set = vec![false; MAX_PARAM];
         set[5599] = true;
-        Params { values, known, set }
+        Params {
+            values,
+            known,
+            set,
+            globals: FxMap::default(),
+        }
     }
 
     pub fn assign(&mut self, i: usize, v: f64) {

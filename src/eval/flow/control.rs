@@ -9,10 +9,9 @@ use crate::parse::ast::{Label, LineKind, OKind, OLine};
 use crate::parse::{Name, integer_value};
 use crate::program::{FileIndex, control_key};
 
+use crate::eval::Interp;
 use crate::eval::expr::round_half_even_int;
-use crate::eval::{
-    Cursor, Frame, FrameKind, Interp, LabelRec, MAX_CALL_LEVEL, SubRec, label_of_key,
-};
+use crate::eval::flow::{Cursor, FrameKind, LabelRec, MAX_CALL_LEVEL, SubRec, label_of_key};
 
 /// What a forward search was looking for (for the error when nothing is found).
 enum Seek {
@@ -107,9 +106,9 @@ impl Interp<'_> {
     /// Moves reading to an O-line (`after`: to the line after it).
     pub(in crate::eval) fn goto(&mut self, file: &Rc<FileIndex>, oidx: u32, after: bool) {
         let o = &file.olines[oidx as usize];
-        if Rc::ptr_eq(&self.cur.file, file) {
+        if Rc::ptr_eq(&self.flow.cur.file, file) {
             // The same file (any jump within a body): no count to touch.
-            let c = &mut self.cur;
+            let c = &mut self.flow.cur;
             (c.pos, c.line, c.next_o) = if after {
                 (o.next, o.line_idx + 1, oidx as usize + 1)
             } else {
@@ -117,7 +116,7 @@ impl Interp<'_> {
             };
             return;
         }
-        self.cur = if after {
+        self.flow.cur = if after {
             Cursor {
                 file: file.clone(),
                 pos: o.next,
@@ -243,10 +242,6 @@ impl Interp<'_> {
         }
     }
 
-    fn frame(&mut self) -> &mut Frame {
-        self.frames.last_mut().expect("frame")
-    }
-
     fn record(
         &mut self,
         file: &Rc<FileIndex>,
@@ -255,7 +250,7 @@ impl Interp<'_> {
         kind: OKind,
     ) -> Result<(), Error> {
         let line = file.olines[oidx as usize].line_idx;
-        if let Some(rec) = self.frame().labels.get(key).copied() {
+        if let Some(rec) = self.flow.frame().labels.get(key).copied() {
             if rec.line != line && matches!(kind, OKind::If | OKind::While | OKind::Repeat) {
                 let first_line = rec.line + 1;
                 let label = self.label_text(file, oidx)?.to_string();
@@ -270,7 +265,7 @@ impl Interp<'_> {
                 self.warn(WarningKind::LabelReused { first_line }, file, a, b);
             }
         }
-        self.frame().labels.insert(
+        self.flow.frame().labels.insert(
             key.clone(),
             LabelRec {
                 kind,
@@ -292,7 +287,7 @@ impl Interp<'_> {
         _expected: &'static str,
     ) -> Result<LabelRec, Error> {
         let label = || label_of_key(key);
-        match self.frame().labels.get(key).copied() {
+        match self.flow.frame().labels.get(key).copied() {
             None => Err(self.oerr(ErrorKind::UndefinedLabel { label: label() }, file, oidx)),
             Some(rec) if kinds.contains(&rec.kind) => Ok(rec),
             Some(rec) => Err(self.oerr(
@@ -312,9 +307,9 @@ impl Interp<'_> {
         let line = file.olines[oidx as usize].line_idx;
         // The key is kept as it is (no allocation per pass); the label is
         // cut from it only for a message.
-        let same = matches!(&self.last_loop, Some((k, l, f)) if *l == line && k == key && Rc::ptr_eq(f, file));
+        let same = matches!(&self.flow.last_loop, Some((k, l, f)) if *l == line && k == key && Rc::ptr_eq(f, file));
         if !same {
-            self.last_loop = Some((key.clone(), line, file.clone()));
+            self.flow.last_loop = Some((key.clone(), line, file.clone()));
         }
     }
 
@@ -380,8 +375,10 @@ impl Interp<'_> {
         file: &Rc<FileIndex>,
         oidx: u32,
     ) -> Result<(), Error> {
-        self.current_line_idx = file.olines[oidx as usize].line_idx;
-        self.current_line_start = file.olines[oidx as usize].start;
+        self.reader.at(
+            file.olines[oidx as usize].start,
+            file.olines[oidx as usize].line_idx,
+        );
         let o = match &file.olines[oidx as usize].line.kind {
             LineKind::O(o) => o,
             LineKind::M98(m) => return self.exec_m98(file, oidx, m),
@@ -411,7 +408,7 @@ impl Interp<'_> {
                 if let Err(e) = self.expect(file, oidx, key, &[OKind::If], "if") {
                     return self.soft(e, file);
                 }
-                self.executed_if = true;
+                self.flow.executed_if = true;
                 Ok(())
             }
             OKind::Do => self.exec_do(file, oidx, key),
@@ -440,16 +437,16 @@ impl Interp<'_> {
         let c = self.o_eval(file, oidx, Self::expr_of(o, "condition")?)?;
         // Each pass after the first finds its own record.
         let line = file.olines[oidx as usize].line_idx;
-        let recorded = matches!(self.frame().labels.get(key),
+        let recorded = matches!(self.flow.frame().labels.get(key),
             Some(r) if r.kind == OKind::If && r.line == line);
         if !recorded && let Err(e) = self.record(file, oidx, key, OKind::If) {
             return self.soft(e, file);
         }
         if c != 0.0 {
-            self.executed_if = true;
+            self.flow.executed_if = true;
             Ok(())
         } else {
-            self.executed_if = false;
+            self.flow.executed_if = false;
             self.skip_if(file, oidx, key)
         }
     }
@@ -474,7 +471,7 @@ impl Interp<'_> {
             let t = self.seek(file, at, key, Seek::Control, &[])?;
             match file.kind_of(t) {
                 Some(OKind::EndIf) => {
-                    self.executed_if = true;
+                    self.flow.executed_if = true;
                     self.goto(file, t, true);
                     return Ok(());
                 }
@@ -494,7 +491,7 @@ impl Interp<'_> {
     /// `do`: records the loop start.
     fn exec_do(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) -> Result<(), Error> {
         // The reference records a do label only on first sight.
-        match self.frame().labels.get(key).copied() {
+        match self.flow.frame().labels.get(key).copied() {
             Some(rec) if rec.oidx != oidx => {
                 let (a, b) = self.osite(file, oidx);
                 let first_line = rec.line + 1;
@@ -518,7 +515,7 @@ impl Interp<'_> {
         let line = file.olines[oidx as usize].line_idx;
         // One look at the label: the end of a do loop, this loop
         // already recorded (each pass after the first), or new.
-        let (do_rec, recorded) = match self.frame().labels.get(key) {
+        let (do_rec, recorded) = match self.flow.frame().labels.get(key) {
             Some(r) if r.kind == OKind::Do => (Some(*r), false),
             Some(r) => (None, r.kind == OKind::While && r.line == line),
             None => (None, false),
@@ -526,14 +523,14 @@ impl Interp<'_> {
         let c = self.o_eval(file, oidx, Self::expr_of(o, "condition")?)?;
         if let Some(rec) = do_rec {
             if c != 0.0 {
-                if let Some(first_line) = self.ref_stale_break.take() {
+                if let Some(first_line) = self.flow.ref_stale_break.take() {
                     let (a, b) = self.osite(file, oidx);
                     self.warn(WarningKind::QuirkStaleBreak { first_line }, file, a, b);
                 }
                 self.note_loop(file, rec.oidx, key);
                 self.goto(file, rec.oidx, true);
             } else {
-                self.ref_stale_break = None;
+                self.flow.ref_stale_break = None;
             }
             return Ok(());
         }
@@ -572,12 +569,18 @@ impl Interp<'_> {
         if let Err(e) = self.record(file, oidx, key, OKind::Repeat) {
             return self.soft(e, file);
         }
-        let count = self.frame().labels.get(key).map(|r| r.repeat).unwrap_or(-1);
+        let count = self
+            .flow
+            .frame()
+            .labels
+            .get(key)
+            .map(|r| r.repeat)
+            .unwrap_or(-1);
         let mut count = count;
         // Reached from its endrepeat, the loop goes on; reached any
         // other way it starts afresh (the reference would continue a
         // count left over by a jump out of the loop).
-        let again = self.repeat_again.take() == Some(oidx);
+        let again = self.flow.repeat_again.take() == Some(oidx);
         if !again && count != -1 {
             let (a, b) = self.osite(file, oidx);
             self.warn(WarningKind::QuirkRepeatCount, file, a, b);
@@ -588,12 +591,12 @@ impl Interp<'_> {
             count = round_half_even_int(n);
         }
         if count > 0 {
-            if let Some(r) = self.frame().labels.get_mut(key) {
+            if let Some(r) = self.flow.frame().labels.get_mut(key) {
                 r.repeat = count - 1;
             }
             Ok(())
         } else {
-            if let Some(r) = self.frame().labels.get_mut(key) {
+            if let Some(r) = self.flow.frame().labels.get_mut(key) {
                 r.repeat = -1;
             }
             self.loop_exit(file, oidx, key, OKind::EndRepeat)
@@ -609,7 +612,7 @@ impl Interp<'_> {
             Err(e) => return self.soft(e, file),
         };
         self.note_loop(file, rec.oidx, key);
-        self.repeat_again = Some(rec.oidx);
+        self.flow.repeat_again = Some(rec.oidx);
         self.goto(file, rec.oidx, false);
         Ok(())
     }
@@ -645,11 +648,11 @@ impl Interp<'_> {
         };
         match (rec.kind, tkind, o.kind) {
             (OKind::While, Some(OKind::EndWhile), OKind::Break) => {
-                if let Some(first_line) = self.ref_stale_continue.take() {
+                if let Some(first_line) = self.flow.ref_stale_continue.take() {
                     let (a, b) = self.osite(file, t);
                     self.warn(WarningKind::QuirkStaleContinue { first_line }, file, a, b);
                 }
-                self.ref_stale_break = Some(file.olines[oidx as usize].line_idx + 1);
+                self.flow.ref_stale_break = Some(file.olines[oidx as usize].line_idx + 1);
                 self.goto(file, t, true);
                 Ok(())
             }
@@ -664,7 +667,7 @@ impl Interp<'_> {
                 Ok(())
             }
             (OKind::Do, Some(OKind::While), _) => {
-                self.ref_stale_continue = Some(file.olines[oidx as usize].line_idx + 1);
+                self.flow.ref_stale_continue = Some(file.olines[oidx as usize].line_idx + 1);
                 let e = self.condition_of(file, t)?;
                 let c = self.o_eval(file, t, &e)?;
                 if c != 0.0 {
@@ -681,11 +684,11 @@ impl Interp<'_> {
 
     /// `endsub`/`return`: leaves the subroutine with its value, if any.
     fn exec_return(&mut self, file: &Rc<FileIndex>, oidx: u32, o: &OLine) -> Result<(), Error> {
-        if self.level() == 0 {
+        if self.flow.level() == 0 {
             let e = self.oerr(ErrorKind::NotInSub, file, oidx);
             return self.soft(e, file);
         }
-        if self.frame().kind == FrameKind::M98 {
+        if self.flow.frame().kind == FrameKind::M98 {
             return Err(self.oerr(ErrorKind::EndsubInFanuc, file, oidx));
         }
         let v = match &o.expr {
@@ -706,7 +709,7 @@ impl Interp<'_> {
                 oidx,
             ));
         }
-        if self.level() > 0 {
+        if self.flow.level() > 0 {
             return Err(self.oerr(
                 ErrorKind::FanucNeedsM98 {
                     name: key.to_string(),
@@ -748,7 +751,7 @@ impl Interp<'_> {
     fn stray(&mut self, file: &Rc<FileIndex>, t: u32, key: &Name) -> Result<(), Error> {
         let label = label_of_key(key);
         let found = file.kind_of(t).map(|k| k.name()).unwrap_or("?");
-        let rec = self.frame().labels.get(key).copied();
+        let rec = self.flow.frame().labels.get(key).copied();
         if let Some(r) = &rec
             && file.kind_of(t) == Some(r.kind)
             && matches!(r.kind, OKind::If | OKind::While | OKind::Repeat)
@@ -775,21 +778,23 @@ impl Interp<'_> {
         let mut at = oidx;
         loop {
             let t = self.seek(file, at, key, Seek::Control, &[])?;
-            self.current_line_idx = file.olines[t as usize].line_idx;
-            self.current_line_start = file.olines[t as usize].start;
+            self.reader.at(
+                file.olines[t as usize].start,
+                file.olines[t as usize].line_idx,
+            );
             match file.kind_of(t) {
                 Some(OKind::ElseIf) => {
                     let e = self.condition_of(file, t)?;
                     let c = self.o_eval(file, t, &e)?;
                     if c != 0.0 {
-                        self.executed_if = true;
+                        self.flow.executed_if = true;
                         self.goto(file, t, true);
                         return Ok(());
                     }
                     at = t;
                 }
                 Some(OKind::Else) | Some(OKind::EndIf) => {
-                    self.executed_if = true;
+                    self.flow.executed_if = true;
                     self.goto(file, t, true);
                     return Ok(());
                 }
@@ -819,7 +824,7 @@ impl Interp<'_> {
             self.stray(file, t, key)?;
             at = t;
         };
-        if let Some(first_line) = self.ref_stale_continue.take() {
+        if let Some(first_line) = self.flow.ref_stale_continue.take() {
             let (a, b) = self.osite(file, t);
             self.warn(WarningKind::QuirkStaleContinue { first_line }, file, a, b);
         }
@@ -830,8 +835,9 @@ impl Interp<'_> {
     /// A `sub` line reached by normal flow: a definition to register and
     /// skip.
     fn reach_sub(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) -> Result<(), Error> {
-        if self.level() > 0 {
+        if self.flow.level() > 0 {
             let outer = self
+                .flow
                 .frames
                 .last()
                 .map(|f| f.name.to_string())
@@ -845,7 +851,7 @@ impl Interp<'_> {
                 oidx,
             ));
         }
-        if let Some(rec) = self.subs.get(key) {
+        if let Some(rec) = self.flow.subs.get(key) {
             if Rc::ptr_eq(&rec.file, file) && rec.oidx == oidx {
                 return Err(self.oerr(
                     ErrorKind::IllegalSubLocation {
@@ -867,7 +873,7 @@ impl Interp<'_> {
                 oidx,
             ));
         }
-        self.subs.insert(
+        self.flow.subs.insert(
             key.clone(),
             SubRec {
                 file: file.clone(),
@@ -898,28 +904,30 @@ impl Interp<'_> {
         }
         // The reference evaluates valued endsub/return lines of the
         // definition while skipping it, setting #<_value>.
-        self.defining = true;
+        self.flow.defining = true;
         for &j in &def.valued {
-            self.current_line_idx = file.olines[j as usize].line_idx;
-            self.current_line_start = file.olines[j as usize].start;
+            self.reader.at(
+                file.olines[j as usize].start,
+                file.olines[j as usize].line_idx,
+            );
             match self.oline(file, j).expr.clone() {
                 Some(e) => match self.o_eval(file, j, &e) {
                     Ok(v) => {
-                        self.value = v;
-                        self.value_returned = true;
+                        self.flow.value = v;
+                        self.flow.value_returned = true;
                     }
                     Err(e) => {
-                        self.defining = false;
+                        self.flow.defining = false;
                         return Err(e);
                     }
                 },
                 None => {
-                    self.value = 0.0;
-                    self.value_returned = false;
+                    self.flow.value = 0.0;
+                    self.flow.value_returned = false;
                 }
             }
         }
-        self.defining = false;
+        self.flow.defining = false;
         match def.end {
             Some(e) => {
                 self.goto(file, e, true);
@@ -944,7 +952,7 @@ impl Interp<'_> {
         name: &Name,
         base: &Name,
     ) -> Result<SubRec, Error> {
-        if let Some(rec) = self.subs.get(base) {
+        if let Some(rec) = self.flow.subs.get(base) {
             return Ok(rec.clone());
         }
         let found = self
@@ -977,8 +985,8 @@ impl Interp<'_> {
             if sub_file.m99_lines.first().is_some_and(|&l| l < until) {
                 // The reference reads M99 lines while seeking, which clears
                 // #<_value>.
-                self.value = 0.0;
-                self.value_returned = false;
+                self.flow.value = 0.0;
+                self.flow.value_returned = false;
             }
             return Ok(SubRec {
                 file: sub_file,
@@ -999,8 +1007,8 @@ impl Interp<'_> {
         match t {
             Ok(t) => {
                 if file.m99_between(line, file.olines[t as usize].line_idx) {
-                    self.value = 0.0;
-                    self.value_returned = false;
+                    self.flow.value = 0.0;
+                    self.flow.value_returned = false;
                 }
                 Ok(SubRec {
                     file: file.clone(),
@@ -1030,7 +1038,7 @@ impl Interp<'_> {
         name: Name,
         ret: Cursor,
     ) -> Result<(), Error> {
-        if self.level() + 1 > MAX_CALL_LEVEL {
+        if self.flow.level() + 1 > MAX_CALL_LEVEL {
             return Err(self.oerr(
                 ErrorKind::TooDeep {
                     limit: MAX_CALL_LEVEL,
@@ -1039,17 +1047,11 @@ impl Interp<'_> {
                 oidx,
             ));
         }
-        let mut f = match self.frame_pool.pop() {
-            Some(mut f) => {
-                f.reset(kind, name);
-                f
-            }
-            None => Box::new(Frame::new(kind, name)),
-        };
+        let mut f = self.flow.new_frame(kind, name);
         debug_assert!(Rc::ptr_eq(&ret.file, file));
         f.ret = Some(ret);
         f.call_oidx = Some(oidx);
-        self.frames.push(f);
+        self.flow.frames.push(f);
         Ok(())
     }
 
@@ -1076,8 +1078,9 @@ impl Interp<'_> {
         }
         // Recursion from inside a running repeat shares its counter in the
         // reference.
-        if self.frame().name == base
+        if self.flow.frame().name == base
             && self
+                .flow
                 .frame()
                 .labels
                 .values()
@@ -1086,12 +1089,13 @@ impl Interp<'_> {
             let (a, b) = self.osite(file, oidx);
             self.warn(WarningKind::QuirkRepeatRecursion, file, a, b);
         }
-        if self.last_called.as_ref() != Some(&base) {
-            self.subs
+        if self.flow.last_called.as_ref() != Some(&base) {
+            self.flow
+                .subs
                 .entry(base.clone())
                 .or_insert_with(|| target.clone());
-            self.called.insert(base.clone());
-            self.last_called = Some(base.clone());
+            self.flow.called.insert(base.clone());
+            self.flow.last_called = Some(base.clone());
         }
         let o_info = &file.olines[oidx as usize];
         let ret = Cursor {
@@ -1101,13 +1105,17 @@ impl Interp<'_> {
             next_o: oidx as usize + 1,
         };
         self.push_frame(file, oidx, FrameKind::Call, base, ret)?;
-        let mut saved = self.saved_pool.pop().unwrap_or_else(|| Box::new([0.0; 30]));
+        let mut saved = self
+            .flow
+            .saved_pool
+            .pop()
+            .unwrap_or_else(|| Box::new([0.0; 30]));
         saved.copy_from_slice(&self.params.values[1..31]);
         self.params.values[1..31].copy_from_slice(&argv);
         self.params.set[1..31].fill(true);
         let nargs = nargs as f64;
         let oword_nargs = self.s.oword_nargs;
-        let f = self.frame();
+        let f = self.flow.frame();
         f.saved = Some(saved);
         if oword_nargs {
             f.locals.insert(Name::new("n_args"), nargs);
@@ -1124,15 +1132,16 @@ impl Interp<'_> {
     ) -> Result<(), Error> {
         match v {
             Some(v) => {
-                self.value = v;
-                self.value_returned = true;
+                self.flow.value = v;
+                self.flow.value_returned = true;
             }
             None => {
-                self.value = 0.0;
-                self.value_returned = false;
+                self.flow.value = 0.0;
+                self.flow.value_returned = false;
             }
         }
         if self
+            .flow
             .frame()
             .labels
             .values()
@@ -1141,18 +1150,18 @@ impl Interp<'_> {
             let (a, b) = self.osite(file, oidx);
             self.warn(WarningKind::QuirkRepeatCount, file, a, b);
         }
-        let mut f = self.frames.pop().expect("call frame");
+        let mut f = self.flow.frames.pop().expect("call frame");
         if let Some(saved) = f.saved.take() {
             self.params.values[1..31].copy_from_slice(&saved[..]);
-            self.saved_pool.push(saved);
+            self.flow.saved_pool.push(saved);
         }
         if f.auto_restore
             && let Some(m) = f.saved_modal.take()
         {
             self.restore_modal(&m)?;
         }
-        self.cur = f.ret.take().expect("return cursor");
-        self.frame_pool.push(f);
+        self.flow.cur = f.ret.take().expect("return cursor");
+        self.flow.frame_pool.push(f);
         Ok(())
     }
 
@@ -1163,19 +1172,19 @@ impl Interp<'_> {
         start: u32,
         len: u32,
     ) -> Result<(), Error> {
-        if self.frame().kind != FrameKind::M98 {
+        if self.flow.frame().kind != FrameKind::M98 {
             return Err(self.error(ErrorKind::M99InSub, file, start, start + len));
         }
-        self.value = 0.0;
-        self.value_returned = false;
-        let mut f = self.frames.pop().expect("M98 frame");
+        self.flow.value = 0.0;
+        self.flow.value_returned = false;
+        let mut f = self.flow.frames.pop().expect("M98 frame");
         if f.auto_restore
             && let Some(m) = f.saved_modal.take()
         {
             self.restore_modal(&m)?;
         }
-        self.cur = f.ret.take().expect("return cursor");
-        self.frame_pool.push(f);
+        self.flow.cur = f.ret.take().expect("return cursor");
+        self.flow.frame_pool.push(f);
         Ok(())
     }
 
@@ -1195,16 +1204,16 @@ impl Interp<'_> {
         let pv = self.o_eval(file, oidx, p)?;
         let start = file.olines[oidx as usize].start;
         let n = integer_value(pv).map_err(|k| self.error_in_line(k, file, start, p.span))?;
-        let pending = match self.frame().m98_loop {
+        let pending = match self.flow.frame().m98_loop {
             Some((l, rem)) if l == line => Some(rem),
             _ => None,
         };
         match pending {
             Some(0) => {
-                self.frame().m98_loop = None;
+                self.flow.frame().m98_loop = None;
                 return Ok(());
             }
-            Some(rem) => self.frame().m98_loop = Some((line, rem - 1)),
+            Some(rem) => self.flow.frame().m98_loop = Some((line, rem - 1)),
             None => {
                 let count = match &m.l {
                     Some(l) => {
@@ -1220,7 +1229,7 @@ impl Interp<'_> {
                     }
                     return Ok(());
                 }
-                self.frame().m98_loop = Some((line, count - 1));
+                self.flow.frame().m98_loop = Some((line, count - 1));
             }
         }
         let name = Name::new(&n.to_string());
@@ -1234,10 +1243,11 @@ impl Interp<'_> {
                 oidx,
             ));
         }
-        self.subs
+        self.flow
+            .subs
             .entry(name.clone())
             .or_insert_with(|| target.clone());
-        self.called.insert(name.clone());
+        self.flow.called.insert(name.clone());
         let info = &file.olines[oidx as usize];
         let ret = Cursor {
             file: file.clone(),

@@ -1,3 +1,229 @@
-//! Control flow: O-word blocks, loops, calls and their frames.
+//! Control flow: where reading continues, O-word blocks, loops, calls and
+//! their frames, the subroutines known, and the parsed lines of bodies that
+//! run again.
 
 pub(super) mod control;
+
+use std::rc::Rc;
+
+use crate::diag::Site;
+use crate::fx_hasher::{FxMap, FxSet};
+use crate::parse::Name;
+use crate::parse::ast::{Line, OKind};
+use crate::program::FileIndex;
+
+/// Deepest nesting of active calls (the tenth nested call fails).
+pub const MAX_CALL_LEVEL: usize = 9;
+
+/// Where reading continues.
+#[derive(Clone)]
+pub struct Cursor {
+    pub file: Rc<FileIndex>,
+    /// Byte offset of the next line.
+    pub pos: u32,
+    /// 0-based index of the next line.
+    pub line: u32,
+    /// Index of the first O-line at or after `line`.
+    pub next_o: usize,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrameKind {
+    Main,
+    Call,
+    M98,
+}
+
+/// Record of a control label reached in this activation.
+#[derive(Debug, Clone, Copy)]
+pub struct LabelRec {
+    pub kind: OKind,
+    pub oidx: u32,
+    pub line: u32,
+    /// Remaining passes of a repeat loop (-1: not running).
+    pub repeat: i64,
+}
+
+pub struct Frame {
+    pub kind: FrameKind,
+    pub name: Name,
+    pub ret: Option<Cursor>,
+    /// The O-line (of the file `ret` is in) that made the call; its site is
+    /// worked out only for a message.
+    pub call_oidx: Option<u32>,
+    pub saved: Option<Box<[f64; 30]>>,
+    pub locals: FxMap<Name, f64>,
+    pub labels: FxMap<Name, LabelRec>,
+    /// Pending passes of an `M98 ... L` on the given line of this frame.
+    pub m98_loop: Option<(u32, i64)>,
+    /// Modal state saved by M70/M73; `auto` restores it on return (M73).
+    pub saved_modal: Option<Box<crate::eval::state::restore::Saved>>,
+    pub auto_restore: bool,
+}
+
+impl Frame {
+    /// Makes a pooled frame like a new one, keeping its tables' room.
+    pub(in crate::eval) fn reset(&mut self, kind: FrameKind, name: Name) {
+        let Frame {
+            kind: k,
+            name: n,
+            ret,
+            call_oidx,
+            saved,
+            locals,
+            labels,
+            m98_loop,
+            saved_modal,
+            auto_restore,
+        } = self;
+        *k = kind;
+        *n = name;
+        *ret = None;
+        *call_oidx = None;
+        *saved = None;
+        locals.clear();
+        labels.clear();
+        *m98_loop = None;
+        *saved_modal = None;
+        *auto_restore = false;
+    }
+
+    pub(in crate::eval) fn new(kind: FrameKind, name: Name) -> Frame {
+        Frame {
+            kind,
+            name,
+            ret: None,
+            call_oidx: None,
+            saved: None,
+            locals: FxMap::default(),
+            labels: FxMap::default(),
+            m98_loop: None,
+            saved_modal: None,
+            auto_restore: false,
+        }
+    }
+}
+
+/// A registered subroutine definition.
+#[derive(Clone)]
+pub struct SubRec {
+    pub file: Rc<FileIndex>,
+    pub oidx: u32,
+}
+
+/// The call stack of `frames` as sites, innermost caller first.
+#[allow(clippy::vec_box)]
+pub(super) fn stack_of(frames: &[Box<Frame>]) -> Vec<Site> {
+    frames
+        .iter()
+        .rev()
+        .filter_map(|f| {
+            let (ret, oidx) = (f.ret.as_ref()?, f.call_oidx?);
+            let (a, b) = control::osite_of(&ret.file, oidx);
+            Some(Site::new(&ret.file.file, a, b))
+        })
+        .collect()
+}
+
+/// The label part of a control key (`scope#label`).
+pub(super) fn label_of_key(key: &str) -> String {
+    key.rsplit('#').next().unwrap_or("").to_string()
+}
+
+/// The control-flow state.
+pub(super) struct Flow {
+    /// Where reading continues.
+    pub(super) cur: Cursor,
+    /// Active calls, the main program first. Boxed: a call moves a pointer,
+    /// not the frame.
+    #[allow(clippy::vec_box)]
+    pub(super) frames: Vec<Box<Frame>>,
+    /// Frames of returned calls, reused by the next calls.
+    #[allow(clippy::vec_box)]
+    pub(super) frame_pool: Vec<Box<Frame>>,
+    /// Argument save areas of returned calls (boxed: they move between
+    /// frames and the pool without copying).
+    #[allow(clippy::vec_box)]
+    pub(super) saved_pool: Vec<Box<[f64; 30]>>,
+    /// The value of the last `return`/`endsub` with a value (`#<_value>`).
+    pub(super) value: f64,
+    pub(super) value_returned: bool,
+    /// Reading undefined named parameters gives 0 (sub definition skip).
+    pub(super) defining: bool,
+    /// O-lines executed (the `--max-steps` guard).
+    pub(super) steps: u64,
+    pub(super) subs: FxMap<Name, SubRec>,
+    pub(super) called: FxSet<Name>,
+    /// The sub of the last call, already registered and marked called.
+    pub(super) last_called: Option<Name>,
+    pub(super) executed_if: bool,
+    /// The reference's never-cleared break/continue flags (for warnings).
+    pub(super) ref_stale_break: Option<u32>,
+    pub(super) ref_stale_continue: Option<u32>,
+    /// Control key, line and file of the last loop passed (for limit
+    /// messages).
+    pub(super) last_loop: Option<(Name, u32, Rc<FileIndex>)>,
+    /// Parsed lines of loop and sub bodies, with their end and the start of
+    /// the next line.
+    pub(super) cache: FxMap<(usize, u32), (Rc<Line>, u32, u32)>,
+    /// The repeat line (O-line index) an endrepeat just jumped back to.
+    pub(super) repeat_again: Option<u32>,
+}
+
+impl Flow {
+    /// At the start of `main`, with the main program's frame.
+    pub(super) fn new(main: Rc<FileIndex>, main_frame: Frame) -> Flow {
+        Flow {
+            cur: Cursor {
+                file: main,
+                pos: 0,
+                line: 0,
+                next_o: 0,
+            },
+            frames: vec![Box::new(main_frame)],
+            frame_pool: Vec::new(),
+            saved_pool: Vec::new(),
+            value: 0.0,
+            value_returned: false,
+            defining: false,
+            steps: 0,
+            subs: FxMap::default(),
+            called: FxSet::default(),
+            last_called: None,
+            executed_if: true,
+            ref_stale_break: None,
+            ref_stale_continue: None,
+            last_loop: None,
+            cache: FxMap::default(),
+            repeat_again: None,
+        }
+    }
+
+    /// Call level: 0 in the main program.
+    pub(super) fn level(&self) -> usize {
+        self.frames.len() - 1
+    }
+
+    /// The innermost frame.
+    pub(super) fn frame(&mut self) -> &mut Frame {
+        self.frames
+            .last_mut()
+            .expect("the main frame is never popped")
+    }
+
+    /// The call stack as sites, innermost caller first.
+    pub(super) fn stack(&self) -> Vec<Site> {
+        stack_of(&self.frames)
+    }
+
+    /// A frame for a new call, reusing a returned one's tables.
+    pub(super) fn new_frame(&mut self, kind: FrameKind, name: Name) -> Box<Frame> {
+        match self.frame_pool.pop() {
+            Some(mut f) => {
+                f.reset(kind, name);
+                f
+            }
+            None => Box::new(Frame::new(kind, name)),
+        }
+    }
+}

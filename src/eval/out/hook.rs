@@ -48,19 +48,19 @@ impl Interp<'_> {
         text: &[u8],
         verbatim: bool,
     ) -> Result<(), Error> {
-        let Some(mut c) = self.consumer.take() else {
+        let Some(mut c) = self.out.consumer.take() else {
             return Ok(());
         };
-        let frames = &self.frames;
-        let stack = || crate::eval::stack_of(frames);
+        let frames = &self.flow.frames;
+        let stack = || crate::eval::flow::stack_of(frames);
         let origin = Origin {
             file,
             line_start,
             verbatim,
             stack: &stack,
         };
-        let r = c.line(text, &origin, &mut self.output);
-        self.consumer = Some(c);
+        let r = c.line(text, &origin, &mut self.out.output);
+        self.out.consumer = Some(c);
         r
     }
 

@@ -3,3 +3,76 @@
 
 pub mod hook;
 pub(super) mod progress;
+
+use crate::emit::{Output, Sink};
+use crate::eval::Settings;
+
+/// Where the executed lines go, and how many went.
+pub(super) struct Writer<'s> {
+    pub(super) output: Output,
+    /// The line being built.
+    pub(super) buf: Vec<u8>,
+    /// Lines written.
+    pub(super) lines: u64,
+    /// Output lines allowed: `--max-output-lines` plus the main file's own
+    /// line count, so that the guard counts generated lines, not lines
+    /// copied from the input.
+    pub(super) budget: u64,
+    /// Line count at which `count_line` looks further: the output limit,
+    /// or earlier, the next progress update.
+    pub(super) check: u64,
+    pub(super) progress: Option<progress::Progress>,
+    /// The program has ended (M2/M30 or the closing `%`).
+    pub(super) ended: bool,
+    /// Reads every output line instead of the output (see [`hook`]).
+    pub(super) consumer: Option<Box<dyn hook::LineConsumer + 's>>,
+}
+
+impl<'s> Writer<'s> {
+    /// `main_lines`: the main file's line count.
+    pub(super) fn new(sink: Sink, s: &Settings, main_lines: u32) -> Writer<'s> {
+        let budget = s.max_output_lines.saturating_add(u64::from(main_lines));
+        Writer {
+            output: Output::new(sink, s.precision, s.format_thread_after),
+            buf: Vec::with_capacity(256),
+            lines: 0,
+            budget,
+            check: if s.progress.is_some() {
+                budget.min(progress::EVERY)
+            } else {
+                budget
+            },
+            progress: s.progress.map(progress::Progress::new),
+            ended: false,
+            consumer: None,
+        }
+    }
+
+    /// Counts a line about to be written; true when the limit or a
+    /// progress update is due (see [`Writer::checkpoint`]).
+    #[inline]
+    pub(super) fn count_line(&mut self) -> bool {
+        self.count_lines(1)
+    }
+
+    /// Counts `n` lines written at once (see [`Writer::count_line`]).
+    #[inline]
+    pub(super) fn count_lines(&mut self, n: u64) -> bool {
+        self.lines += n;
+        self.lines > self.check
+    }
+
+    /// At a due check: false when the output is past its limit, else
+    /// updates the progress (`line`: 1-based line being run in `file`).
+    #[cold]
+    pub(super) fn checkpoint(&mut self, line: u32, file: &str) -> bool {
+        if self.lines > self.budget {
+            return false;
+        }
+        if let Some(p) = &mut self.progress {
+            p.tick(self.lines, line, file);
+            self.check = self.budget.min(self.lines + progress::EVERY);
+        }
+        true
+    }
+}

@@ -71,9 +71,9 @@ impl Interp<'_> {
     ) -> Result<(), crate::diag::Error> {
         // Scratch buffers are reused from line to line.
         // Boxed: taking it out and putting it back moves a pointer.
-        let mut scratch = self.scratch.take().unwrap_or_default();
+        let mut scratch = self.reader.scratch.take().unwrap_or_default();
         let r = self.exec_items_with(file, start, raw, items, &mut scratch);
-        self.scratch = Some(scratch);
+        self.reader.scratch = Some(scratch);
         r
     }
 
@@ -135,9 +135,9 @@ impl Interp<'_> {
         if !words.is_empty() {
             match crate::eval::read::validate::check_block(
                 words,
-                &self.modal,
-                &self.nurbs,
-                &self.cycle,
+                &self.mach.modal,
+                &self.mach.nurbs,
+                &self.mach.cycle,
                 self.s.user_m,
             ) {
                 Err((k, at)) => {
@@ -161,7 +161,7 @@ impl Interp<'_> {
         }
         // 4. Program flow words.
         let m99 = words.iter().any(|&(l, v)| l == b'm' && v == 99.0);
-        if m99 && self.level() > 0 {
+        if m99 && self.flow.level() > 0 {
             return self.return_m99(file, start, raw.len() as u32);
         }
         if m99 {
@@ -347,7 +347,7 @@ impl Interp<'_> {
         if self.main.percent_start {
             self.emit_raw(b"%")?;
         }
-        self.ended = true;
+        self.out.ended = true;
         Ok(())
     }
 
@@ -380,9 +380,9 @@ impl Interp<'_> {
         }
         match crate::eval::read::validate::check_block(
             words,
-            &self.modal,
-            &self.nurbs,
-            &self.cycle,
+            &self.mach.modal,
+            &self.mach.nurbs,
+            &self.mach.cycle,
             self.s.user_m,
         ) {
             Err((k, at)) => {
@@ -436,22 +436,22 @@ impl Interp<'_> {
         raw: &[u8],
         repl: &[(Span, Edit)],
     ) -> Result<(), crate::diag::Error> {
-        if self.consumer.is_none()
+        if self.out.consumer.is_none()
             && max_edited_len(raw.len(), repl, self.s.precision).is_some_and(|n| n <= MAX_LINE)
         {
             self.count_line()?;
-            return self.output.edited_line(raw, repl).map_err(output_error);
+            return self.out.output.edited_line(raw, repl).map_err(output_error);
         }
-        let mut out = std::mem::take(&mut self.out);
+        let mut out = std::mem::take(&mut self.out.buf);
         out.clear();
         if let Err((value, span)) = write_edited(&mut out, raw, repl, self.s.precision) {
-            self.out = out;
+            self.out.buf = out;
             let k = ErrorKind::Unprintable { value };
             return Err(self.error_in_line(k, file, start, span));
         }
         if out.len() > MAX_LINE {
             let len = out.len();
-            self.out = out;
+            self.out.buf = out;
             let trimmed_len = raw
                 .iter()
                 .rposition(|b| !b.is_ascii_whitespace())
@@ -459,14 +459,14 @@ impl Interp<'_> {
             let end = start + trimmed_len as u32;
             return Err(self.error(ErrorKind::OutputLineTooLong { len }, file, start, end));
         }
-        let r = if self.consumer.is_some() {
+        let r = if self.out.consumer.is_some() {
             let f = file.file.clone();
             self.count_line()
                 .and_then(|_| self.consume(&f, start, &out, repl.is_empty()))
         } else {
             self.emit_raw(&out)
         };
-        self.out = out;
+        self.out.buf = out;
         r
     }
 }
@@ -481,7 +481,7 @@ impl Interp<'_> {
         raw: &[u8],
         fw: &[crate::eval::read::fast::FastWord],
     ) -> Option<Result<(), crate::diag::Error>> {
-        let mut words = std::mem::take(&mut self.words_buf);
+        let mut words = std::mem::take(&mut self.reader.words_buf);
         words.clear();
         let mut seen = 0u32;
         let mut m_count = 0;
@@ -511,9 +511,9 @@ impl Interp<'_> {
         let r = (|| {
             match crate::eval::read::validate::check_block(
                 &words,
-                &self.modal,
-                &self.nurbs,
-                &self.cycle,
+                &self.mach.modal,
+                &self.mach.nurbs,
+                &self.mach.cycle,
                 self.s.user_m,
             ) {
                 Err((k, at)) => {
@@ -536,7 +536,7 @@ impl Interp<'_> {
             }
             Ok(())
         })();
-        self.words_buf = words;
+        self.reader.words_buf = words;
         Some(r)
     }
 }

@@ -5,3 +5,39 @@ pub(super) mod fast;
 mod scan_ahead;
 pub(super) mod straight;
 pub(super) mod validate;
+
+use crate::parse::LineParser;
+use crate::program::Window;
+
+/// Reading the source: the line being run and the buffers the readers
+/// reuse.
+#[derive(Default)]
+pub(super) struct Reader {
+    pub(super) parser: LineParser,
+    /// Lines of a streamed file.
+    pub(super) window: Window,
+    pub(super) fast_words: Vec<fast::FastWord>,
+    pub(super) words_buf: Vec<(u8, f64)>,
+    pub(super) scratch: Option<Box<block::Scratch>>,
+    /// Byte offset and 0-based index of the line being run.
+    pub(super) line_start: u32,
+    pub(super) line_idx: u32,
+}
+
+impl Reader {
+    pub(super) fn new() -> Reader {
+        Reader {
+            fast_words: Vec::with_capacity(16),
+            words_buf: Vec::with_capacity(16),
+            scratch: Some(Box::default()),
+            ..Reader::default()
+        }
+    }
+
+    /// Notes the line about to run.
+    #[inline]
+    pub(super) fn at(&mut self, start: u32, idx: u32) {
+        self.line_start = start;
+        self.line_idx = idx;
+    }
+}

@@ -308,9 +308,9 @@ impl Interp<'_> {
         stop_line: u32,
     ) -> Result<u32, Error> {
         if !self.s.plain_runs
-            || self.rotated
-            || (self.modal.ccomp != 400 || self.comp_pending)
-            || self.ended
+            || self.mach.rotated
+            || (self.mach.modal.ccomp != 400 || self.mach.comp_pending)
+            || self.out.ended
         {
             return Ok(0);
         }
@@ -347,16 +347,15 @@ impl Interp<'_> {
             })?;
         }
         self.flush_input(file, base, &buf[run.batch_start..run.i], run.batch_start)?;
-        self.out_lines += run.emitted;
-        if self.out_lines > self.line_check {
+        if self.out.count_lines(run.emitted) {
             self.line_checkpoint()?;
         }
         let lines = run.lines;
         if lines > 0 {
-            self.current_line_start = base + run.last_start as u32;
-            self.current_line_idx = first_line + lines - 1;
-            self.cur.pos = base + run.i as u32;
-            self.cur.line = first_line + lines;
+            self.reader
+                .at(base + run.last_start as u32, first_line + lines - 1);
+            self.flow.cur.pos = base + run.i as u32;
+            self.flow.cur.line = first_line + lines;
         }
         Ok(lines)
     }
@@ -384,7 +383,7 @@ impl Interp<'_> {
             batch_start,
             last_start,
         } = run;
-        while *lines < max_lines && self.out_lines + *emitted < self.line_budget {
+        while *lines < max_lines && self.out.lines + *emitted < self.out.budget {
             let p = match src.read(*i) {
                 Read::Pause => return Ok(true),
                 Read::Stop => break,
@@ -404,25 +403,27 @@ impl Interp<'_> {
                 // state update, still without the grammar.
                 self.flush_input(file, base, &buf[*batch_start..*i], *batch_start)?;
                 *batch_start = *i;
-                self.out_lines += *emitted;
+                self.out.lines += *emitted;
                 *emitted = 0;
-                self.current_line_start = base + *i as u32;
-                self.current_line_idx = first_line + *lines;
+                self.reader.at(base + *i as u32, first_line + *lines);
                 let raw = &buf[*i..p.next - 1];
                 // The words again, with their spans for messages.
-                let mut fw = std::mem::take(&mut self.fast_words);
+                let mut fw = std::mem::take(&mut self.reader.fast_words);
                 let r = if crate::eval::read::fast::scan(raw, &mut fw) && !fw.is_empty() {
                     self.exec_plain(file, base + *i as u32, raw, &fw)
                 } else {
                     None
                 };
-                self.fast_words = fw;
+                self.reader.fast_words = fw;
                 match r {
                     None => break,
                     Some(r) => r?,
                 }
                 *batch_start = p.next;
-                if self.ended || self.rotated || (self.modal.ccomp != 400 || self.comp_pending) {
+                if self.out.ended
+                    || self.mach.rotated
+                    || (self.mach.modal.ccomp != 400 || self.mach.comp_pending)
+                {
                     *last_start = *i;
                     *i = p.next;
                     *lines += 1;
@@ -433,11 +434,12 @@ impl Interp<'_> {
                 if p.text_end + 1 != p.next {
                     // Trailing blanks: the line is written trimmed.
                     self.flush_input(file, base, &buf[*batch_start..*i], *batch_start)?;
-                    if self.consumer.is_some() {
+                    if self.out.consumer.is_some() {
                         let start = base + *i as u32;
                         self.consume(&file.file, start, &buf[*i..p.text_end], true)?;
                     } else {
-                        self.output
+                        self.out
+                            .output
                             .line(&buf[*i..p.text_end])
                             .map_err(output_error)?;
                     }
@@ -465,7 +467,7 @@ impl Interp<'_> {
         }
         let g = p.mask & 1 != 0;
         let motion = if !g {
-            self.modal.motion
+            self.mach.modal.motion
         } else {
             match p.vals[G] {
                 0.0 => 0,
@@ -478,16 +480,16 @@ impl Interp<'_> {
         let feed = if p.mask & (1 << F) != 0 {
             p.vals[F]
         } else {
-            self.modal.feed
+            self.mach.modal.feed
         };
         let moves = g || p.mask & AXIS_MASK != 0;
-        let feed_ok = self.modal.feed_mode != 930 && feed != 0.0;
+        let feed_ok = self.mach.modal.feed_mode != 930 && feed != 0.0;
         let accepted = match motion {
             0 => p.mask & !FAST_MASK == 0,
             10 => p.mask & !FAST_MASK == 0 && (!moves || feed_ok),
             20 | 30 => {
                 p.mask & !ARC_MASK == 0
-                    && self.modal.plane == 170
+                    && self.mach.modal.plane == 170
                     && p.mask & (1 << I | 1 << J | 1 << R) != 0
                     && feed_ok
                     && self.arc_ok(p, motion)
@@ -497,10 +499,10 @@ impl Interp<'_> {
         if !accepted || feed < 0.0 || (p.mask & (1 << S) != 0 && p.vals[S] < 0.0) {
             return false;
         }
-        self.modal.motion = motion;
-        self.modal.feed = feed;
+        self.mach.modal.motion = motion;
+        self.mach.modal.feed = feed;
         if p.mask & (1 << S) != 0 {
-            self.modal.speed = p.vals[S];
+            self.mach.modal.speed = p.vals[S];
         }
         let mut axes = p.mask & AXIS_MASK;
         while axes != 0 {
@@ -515,7 +517,10 @@ impl Interp<'_> {
     /// (the block checks accept them and the state model is updated), false
     /// to leave them to the general checks.
     pub(in crate::eval) fn fast_words(&mut self, words: &[(u8, f64)]) -> bool {
-        if self.rotated || (self.modal.ccomp != 400 || self.comp_pending) || !self.s.plain_runs {
+        if self.mach.rotated
+            || (self.mach.modal.ccomp != 400 || self.mach.comp_pending)
+            || !self.s.plain_runs
+        {
             return false;
         }
         let mut p = Plain::default();
@@ -555,9 +560,9 @@ impl Interp<'_> {
             n += 1;
         }
         // The checks read the motion mode the line sets.
-        let old = std::mem::replace(&mut self.modal.motion, motion);
+        let old = std::mem::replace(&mut self.mach.modal.motion, motion);
         let ok = self.check_motion(&words[..count], &axes[..n]).is_ok();
-        self.modal.motion = old;
+        self.mach.modal.motion = old;
         ok
     }
 
@@ -574,10 +579,11 @@ impl Interp<'_> {
             return Ok(());
         }
         let start = base as u64 + at as u64;
-        if self.consumer.is_some() {
+        if self.out.consumer.is_some() {
             return self.consume_input(&file.file, start, bytes);
         }
-        self.output
+        self.out
+            .output
             .write_input(&file.file, start, bytes)
             .map_err(output_error)
     }

@@ -32,7 +32,7 @@ fn geom(error: CompError) -> ErrorKind {
 impl Interp<'_> {
     /// Axis indices of the compensation plane's coordinates (a, b, third).
     fn comp_axes(&self) -> [usize; 3] {
-        if self.modal.plane == 180 {
+        if self.mach.modal.plane == 180 {
             [2, 0, 1]
         } else {
             [0, 1, 2]
@@ -41,7 +41,7 @@ impl Interp<'_> {
 
     fn comp_pos(&self) -> Option<[f64; 3]> {
         let [a, b, c] = self.comp_axes();
-        let p = |i: usize| self.pos.axes[i].as_ref().ok().copied();
+        let p = |i: usize| self.mach.pos.axes[i].as_ref().ok().copied();
         Some([p(a)?, p(b)?, p(c)?])
     }
 
@@ -60,7 +60,7 @@ impl Interp<'_> {
         } else {
             Side::Right
         };
-        let xz = self.modal.plane == 180;
+        let xz = self.mach.modal.plane == 180;
         let tool = if matches!(g, 411 | 421) {
             word(b'd').map(|d| (d / 2.0, word(b'l').map_or(0, |l| l.round() as i32)))
         } else {
@@ -69,13 +69,13 @@ impl Interp<'_> {
                     let t = ((d + 0.5) as i64) as f64;
                     if !self.s.tool_table.is_empty()
                         && t != 0.0
-                        && !self.tools.contains_key(&(t as i64))
+                        && !self.mach.tools.contains_key(&(t as i64))
                     {
                         return Err(ErrorKind::ToolNotInTable { tool: t as i64 });
                     }
                     Some(t)
                 }
-                None => self.current_tool,
+                None => self.mach.current_tool,
             };
             match number.and_then(|t| self.comp_tool(t)) {
                 Some(data) => {
@@ -94,8 +94,8 @@ impl Interp<'_> {
             }
         };
         let pos = self.comp_pos();
-        let tol = Tolerances::default_for(self.modal.metric);
-        let run = self.comp.get_or_insert_with(|| {
+        let tol = Tolerances::default_for(self.mach.modal.metric);
+        let run = self.mach.comp.get_or_insert_with(|| {
             Box::new(CompRun {
                 comp: Comp::new(tol),
                 known: false,
@@ -128,8 +128,8 @@ impl Interp<'_> {
         let n = t.round() as i64;
         if self.s.zero_start
             && self.s.tool_table.is_empty()
-            && !self.tools.contains_key(&n)
-            && !self.unknown_tools.contains(&n)
+            && !self.mach.tools.contains_key(&n)
+            && !self.diags.unknown_tools.contains(&n)
         {
             return Some(crate::eval::state::tools::ToolData {
                 diameter: crate::eval::state::tools::standalone_diameter(n),
@@ -150,19 +150,23 @@ impl Interp<'_> {
             0.03937007874016
         };
         let mm = v / ext;
-        if self.modal.metric { mm } else { mm / 25.4 }
+        if self.mach.modal.metric {
+            mm
+        } else {
+            mm / 25.4
+        }
     }
 
     /// G40.
     pub(in crate::eval) fn comp_off(&mut self) -> Result<(), ErrorKind> {
-        let Some(run) = self.comp.as_mut() else {
+        let Some(run) = self.mach.comp.as_mut() else {
             return Ok(());
         };
         if run.known {
-            self.comp_pending = run.comp.off(&mut run.out).map_err(geom)?;
+            self.mach.comp_pending = run.comp.off(&mut run.out).map_err(geom)?;
             run.out.clear();
         } else {
-            run.comp = Comp::new(Tolerances::default_for(self.modal.metric));
+            run.comp = Comp::new(Tolerances::default_for(self.mach.modal.metric));
         }
         run.known = false;
         Ok(())
@@ -175,20 +179,20 @@ impl Interp<'_> {
         words: &[(u8, f64)],
         motion: i32,
     ) -> Result<(), ErrorKind> {
-        if self.modal.ccomp == 400 {
-            if self.comp_pending {
+        if self.mach.modal.ccomp == 400 {
+            if self.mach.comp_pending {
                 match motion {
                     20 | 30 => return Err(ErrorKind::CompArcAfterOff),
-                    0 | 10 | 330 | 331 => self.comp_pending = false,
+                    0 | 10 | 330 | 331 => self.mach.comp_pending = false,
                     _ => {}
                 }
             }
             return Ok(());
         }
         let end = self.comp_pos();
-        let xz = self.modal.plane == 180;
-        let ijk_absolute = self.modal.ijk_absolute;
-        let Some(run) = self.comp.as_mut().filter(|r| r.known) else {
+        let xz = self.mach.modal.plane == 180;
+        let ijk_absolute = self.mach.modal.ijk_absolute;
+        let Some(run) = self.mach.comp.as_mut().filter(|r| r.known) else {
             return Ok(());
         };
         let Some(end) = end else {
@@ -238,8 +242,9 @@ impl Interp<'_> {
 
     /// Whether G53 would move with an offset path (the reference refuses it).
     pub(in crate::eval) fn comp_offsetting(&self) -> bool {
-        self.modal.ccomp != 400
+        self.mach.modal.ccomp != 400
             && self
+                .mach
                 .comp
                 .as_ref()
                 .is_some_and(|r| r.known && r.comp.is_offsetting())
@@ -249,9 +254,9 @@ impl Interp<'_> {
     /// released; an end also turns compensation off.
     pub(in crate::eval) fn comp_stop(&mut self, end: bool) -> Result<(), ErrorKind> {
         if end {
-            self.comp_pending = false;
+            self.mach.comp_pending = false;
         }
-        let Some(run) = self.comp.as_mut() else {
+        let Some(run) = self.mach.comp.as_mut() else {
             return Ok(());
         };
         if run.known {
@@ -259,7 +264,7 @@ impl Interp<'_> {
             run.out.clear();
         }
         if end {
-            run.comp = Comp::new(Tolerances::default_for(self.modal.metric));
+            run.comp = Comp::new(Tolerances::default_for(self.mach.modal.metric));
             run.known = false;
         }
         Ok(())
@@ -267,7 +272,7 @@ impl Interp<'_> {
 
     /// G20/G21 while compensation state exists.
     pub(in crate::eval) fn comp_units(&mut self, metric: bool) {
-        if let Some(run) = self.comp.as_mut() {
+        if let Some(run) = self.mach.comp.as_mut() {
             run.comp.scale(if metric { 25.4 } else { 1.0 / 25.4 });
             run.comp.set_tolerances(Tolerances::default_for(metric));
         }

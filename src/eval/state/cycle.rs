@@ -31,12 +31,12 @@ impl Interp<'_> {
     /// A cycle block ran (checked by `check_block`): keeps its R and depth
     /// for repeats.
     pub(in crate::eval) fn note_cycle(&mut self, words: &[(u8, f64)]) {
-        let (depth, _) = depth_axis(self.modal.plane);
+        let (depth, _) = depth_axis(self.mach.modal.plane);
         for &(l, v) in words {
             if l == b'r' {
-                self.cycle.r = v;
+                self.mach.cycle.r = v;
             } else if l == depth {
-                self.cycle.depth = v;
+                self.mach.cycle.depth = v;
             }
         }
     }

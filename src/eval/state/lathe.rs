@@ -13,7 +13,8 @@ use crate::parse::Name;
 use crate::parse::ast::{Item, Line, LineKind};
 use crate::program::{FileIndex, Window, next_line};
 
-use crate::eval::{FrameKind, Interp, SubRec, file_key, read_error};
+use crate::eval::flow::{FrameKind, SubRec};
+use crate::eval::{Interp, file_key, read_error};
 
 /// A cycle whose contour subroutine is running.
 pub struct LatheRun {
@@ -97,10 +98,10 @@ impl Interp<'_> {
         let Some(q) = word(b'q') else {
             return Err(self.lathe_err(LatheError::NoQ { code: name }, file, start, len));
         };
-        if self.modal.ccomp != 400 && code != 700 {
+        if self.mach.modal.ccomp != 400 && code != 700 {
             return Err(self.lathe_err(LatheError::WithComp { code: name }, file, start, len));
         }
-        if self.modal.plane != 180 {
+        if self.mach.modal.plane != 180 {
             return Err(self.lathe_err(LatheError::NotXz { code: name }, file, start, len));
         }
         if q.fract() != 0.0 || !(0.0..1e9).contains(&q) {
@@ -114,7 +115,7 @@ impl Interp<'_> {
             .position(2, span)
             .map_err(|f| self.fault_in_line(*f, file, start))?;
         let (mut x, mut z) = (cx, cz);
-        if self.modal.absolute {
+        if self.mach.modal.absolute {
             x = word(b'x').unwrap_or(x);
             z = word(b'z').unwrap_or(z);
         } else {
@@ -133,19 +134,19 @@ impl Interp<'_> {
         let target = self.contour_sub(file, start, len, &label)?;
         let level = self.enter_contour(file, start, len, label, &target)?;
         let begin = C::new(z, x);
-        self.lathe = Some(Box::new(LatheRun {
+        self.mach.lathe = Some(Box::new(LatheRun {
             level,
             file: file.clone(),
             start,
-            line: self.current_line_idx,
+            line: self.reader.line_idx,
             cycle,
             begin,
             contour: Contour::new(begin),
             point: begin,
-            motion: self.modal.motion,
-            absolute: self.modal.absolute,
-            ijk_absolute: self.modal.ijk_absolute,
-            at: (self.pos.axes[0].clone(), self.pos.axes[2].clone()),
+            motion: self.mach.modal.motion,
+            absolute: self.mach.modal.absolute,
+            ijk_absolute: self.mach.modal.ijk_absolute,
+            at: (self.mach.pos.axes[0].clone(), self.mach.pos.axes[2].clone()),
         }));
         Ok(())
     }
@@ -160,19 +161,13 @@ impl Interp<'_> {
         label: Name,
         target: &SubRec,
     ) -> Result<usize, Error> {
-        let ret = self.cur.clone();
-        let level = self.frames.len();
-        let mut f = match self.frame_pool.pop() {
-            Some(mut f) => {
-                f.reset(FrameKind::Call, label.clone());
-                f
-            }
-            None => Box::new(crate::eval::Frame::new(FrameKind::Call, label.clone())),
-        };
-        if self.level() + 1 > crate::eval::MAX_CALL_LEVEL {
+        let ret = self.flow.cur.clone();
+        let level = self.flow.frames.len();
+        let mut f = self.flow.new_frame(FrameKind::Call, label.clone());
+        if self.flow.level() + 1 > crate::eval::flow::MAX_CALL_LEVEL {
             return Err(self.error(
                 ErrorKind::TooDeep {
-                    limit: crate::eval::MAX_CALL_LEVEL,
+                    limit: crate::eval::flow::MAX_CALL_LEVEL,
                 },
                 file,
                 start,
@@ -180,7 +175,11 @@ impl Interp<'_> {
             ));
         }
         f.ret = Some(ret);
-        let mut saved = self.saved_pool.pop().unwrap_or_else(|| Box::new([0.0; 30]));
+        let mut saved = self
+            .flow
+            .saved_pool
+            .pop()
+            .unwrap_or_else(|| Box::new([0.0; 30]));
         saved.copy_from_slice(&self.params.values[1..31]);
         self.params.values[1..31].fill(0.0);
         self.params.set[1..31].fill(true);
@@ -188,12 +187,13 @@ impl Interp<'_> {
         if self.s.oword_nargs {
             f.locals.insert(Name::new("n_args"), 0.0);
         }
-        self.frames.push(f);
-        self.subs
+        self.flow.frames.push(f);
+        self.flow
+            .subs
             .entry(label.clone())
             .or_insert_with(|| target.clone());
-        self.called.insert(label.clone());
-        self.last_called = Some(label);
+        self.flow.called.insert(label.clone());
+        self.flow.last_called = Some(label);
         self.goto(&target.file, target.oidx, true);
         Ok(level)
     }
@@ -207,14 +207,14 @@ impl Interp<'_> {
         len: u32,
         label: &Name,
     ) -> Result<SubRec, Error> {
-        if let Some(rec) = self.subs.get(label) {
+        if let Some(rec) = self.flow.subs.get(label) {
             return Ok(rec.clone());
         }
         let err = |s: &Self, k: ErrorKind| s.error(k, file, start, start + len);
         let found = self.loader.find(label).map_err(|k| err(self, k))?;
         let (sub_file, from) = match found {
             Some(f) => (f, 0),
-            None => (file.clone(), self.current_line_idx),
+            None => (file.clone(), self.reader.line_idx),
         };
         let target = sub_file.occ.get(label).and_then(|l| {
             l.iter().copied().find(|&j| {
@@ -242,29 +242,29 @@ impl Interp<'_> {
 
     /// One line while the contour subroutine runs.
     pub(in crate::eval) fn step_contour(&mut self) -> Result<(), Error> {
-        let file = self.cur.file.clone();
-        let start = self.cur.pos;
+        let file = self.flow.cur.file.clone();
+        let start = self.flow.cur.pos;
         if start as u64 >= file.file.len() {
             return self.end_of_file(&file);
         }
-        let line_idx = self.cur.line;
-        self.current_line_start = start;
-        self.current_line_idx = line_idx;
+        let line_idx = self.flow.cur.line;
+        self.reader.at(start, line_idx);
         if let Some(oidx) = self.take_oline(&file, line_idx)? {
             self.exec_oline(&file, oidx)?;
             if self
+                .mach
                 .lathe
                 .as_ref()
-                .is_some_and(|l| l.level == self.frames.len())
+                .is_some_and(|l| l.level == self.flow.frames.len())
             {
                 let end = file.olines[oidx as usize].line_len();
                 return self.finish_lathe(&file, start, end);
             }
             return Ok(());
         }
-        let mut window = std::mem::take(&mut self.window);
+        let mut window = std::mem::take(&mut self.reader.window);
         let r = self.contour_read(&file, start, line_idx, &mut window);
-        self.window = window;
+        self.reader.window = window;
         r
     }
 
@@ -276,12 +276,12 @@ impl Interp<'_> {
         window: &mut Window,
     ) -> Result<(), Error> {
         if let Some(data) = file.file.memory()
-            && let Some((line, _, next)) = self.cache.get(&(file_key(file), line_idx))
+            && let Some((line, _, next)) = self.flow.cache.get(&(file_key(file), line_idx))
         {
             let (line, next) = (line.clone(), *next);
             let _ = data;
-            self.cur.pos = next;
-            self.cur.line += 1;
+            self.flow.cur.pos = next;
+            self.flow.cur.line += 1;
             return self.contour_line(file, start, &line);
         }
         let (raw, next, terminated): (Vec<u8>, u32, bool) = match file.file.memory() {
@@ -296,8 +296,8 @@ impl Interp<'_> {
                 (window.bytes(&l).to_vec(), l.next, l.terminated)
             }
         };
-        self.cur.pos = next;
-        self.cur.line += 1;
+        self.flow.cur.pos = next;
+        self.flow.cur.line += 1;
         let line = self.parse_line(file, start, &raw, terminated)?;
         self.contour_line(file, start, &line)
     }
@@ -332,8 +332,8 @@ impl Interp<'_> {
         let len = line_len(file, start);
         let bad = |s: &Self, k: LatheError| s.lathe_err(k, file, start, len);
         let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
-        let diameter = self.modal.lathe_diameter;
-        let Some(run) = self.lathe.as_deref() else {
+        let diameter = self.mach.modal.lathe_diameter;
+        let Some(run) = self.mach.lathe.as_deref() else {
             return Ok(());
         };
         let (absolute, ijk_absolute, point) = (run.absolute, run.ijk_absolute, run.point);
@@ -386,7 +386,7 @@ impl Interp<'_> {
         } else {
             (None, None)
         };
-        let Some(run) = self.lathe.as_deref_mut() else {
+        let Some(run) = self.mach.lathe.as_deref_mut() else {
             return Ok(());
         };
         run.motion = motion;
@@ -403,8 +403,8 @@ impl Interp<'_> {
                 run.contour.chamfer(c);
             }
             run.point = end;
-            self.pos.axes[0] = Ok(end.im);
-            self.pos.axes[2] = Ok(end.re);
+            self.mach.pos.axes[0] = Ok(end.im);
+            self.mach.pos.axes[2] = Ok(end.re);
         }
         Ok(())
     }
@@ -412,7 +412,7 @@ impl Interp<'_> {
     /// The contour subroutine returned (at the line `start` of `file`):
     /// the cycle's moves.
     fn finish_lathe(&mut self, file: &Rc<FileIndex>, start: u32, len: u32) -> Result<(), Error> {
-        let Some(run) = self.lathe.take() else {
+        let Some(run) = self.mach.lathe.take() else {
             return Ok(());
         };
         if let Cycle::Rough { i, .. } = run.cycle
@@ -427,18 +427,17 @@ impl Interp<'_> {
         // The moves start where the machine is (LinuxCNC's position is the
         // contour's end, which only its arcs' skip test reads).
         if !moves.is_empty() {
-            (self.pos.axes[0], self.pos.axes[2]) = run.at.clone();
+            (self.mach.pos.axes[0], self.mach.pos.axes[2]) = run.at.clone();
         }
         // The moves belong to the cycle line.
         let (cf, cs) = (run.file.clone(), run.start);
-        let saved = (self.current_line_start, self.current_line_idx);
-        self.current_line_start = cs;
-        self.current_line_idx = run.line;
+        let saved = (self.reader.line_start, self.reader.line_idx);
+        self.reader.at(cs, run.line);
         let clen = line_len(&cf, cs);
         for m in moves {
             self.lathe_move(&cf, cs, clen, m)?;
         }
-        (self.current_line_start, self.current_line_idx) = saved;
+        (self.reader.line_start, self.reader.line_idx) = saved;
         match failed {
             Some(g) => Err(self.lathe_err(LatheError::Geometry(g), file, start, len)),
             None => Ok(()),
@@ -453,23 +452,23 @@ impl Interp<'_> {
         len: u32,
         m: Move,
     ) -> Result<(), Error> {
-        let cx = self.pos.axes[0].clone().unwrap_or(0.0);
-        let cz = self.pos.axes[2].clone().unwrap_or(0.0);
+        let cx = self.mach.pos.axes[0].clone().unwrap_or(0.0);
+        let cz = self.mach.pos.axes[2].clone().unwrap_or(0.0);
         let (g, end, center) = match m {
             Move::Rapid(e) => (0.0, e, None),
             Move::Feed(e) => (1.0, e, None),
             Move::Arc { ccw, center, end } => (if ccw { 3.0 } else { 2.0 }, end, Some(center)),
         };
-        let (xw, zw) = if self.modal.absolute {
+        let (xw, zw) = if self.mach.modal.absolute {
             (end.im, end.re)
-        } else if self.modal.lathe_diameter {
+        } else if self.mach.modal.lathe_diameter {
             (end.im - 2.0 * cx, end.re - cz)
         } else {
             (end.im - cx, end.re - cz)
         };
         let mut words = vec![(b'g', g), (b'x', xw), (b'z', zw)];
         if let Some(c) = center {
-            if self.modal.ijk_absolute {
+            if self.mach.modal.ijk_absolute {
                 words.push((b'i', c.im));
                 words.push((b'k', c.re));
             } else {
@@ -479,9 +478,9 @@ impl Interp<'_> {
         }
         if let Err((k, _)) = crate::eval::read::validate::check_block(
             &words,
-            &self.modal,
-            &self.nurbs,
-            &self.cycle,
+            &self.mach.modal,
+            &self.mach.nurbs,
+            &self.mach.cycle,
             self.s.user_m,
         ) {
             return Err(self.error(k, file, start, start + len));

@@ -10,6 +10,9 @@ pub(super) mod nurbs;
 pub(super) mod restore;
 pub mod tools;
 
+use crate::eval::Settings;
+use crate::fx_hasher::FxMap;
+
 /// Axis letters in parameter order (X Y Z A B C U V W).
 pub const AXES: [u8; 9] = *b"xyzabcuvw";
 
@@ -122,6 +125,88 @@ impl Position {
     pub fn zero() -> Position {
         Position {
             axes: std::array::from_fn(|_| Ok(0.0)),
+        }
+    }
+}
+
+/// The machine model: what the program has done to the machine so far
+/// (modal state, position, offsets, tools, the cycles and paths in progress).
+pub(super) struct Machine {
+    pub(super) modal: Modal,
+    pub(super) pos: Position,
+    pub(super) current_tool: Option<f64>,
+    /// RETAIN_G43 changed the tool length offset on this line: the output
+    /// line to add after it (G43 or G49).
+    pub(super) retain_line: Option<bool>,
+    pub(super) selected_tool: Option<f64>,
+    /// Pockets of the current and the selected tool, known as the standalone
+    /// reference numbers them (by tool number) under `--zero-start`.
+    pub(super) pockets: Option<(f64, f64)>,
+    pub(super) tools: FxMap<i64, tools::ToolData>,
+    pub(super) tools_known: bool,
+    /// Applied tool length offset, machine units.
+    pub(super) tlo: Option<[f64; 9]>,
+    /// An XY rotation was set (not modelled).
+    pub(super) rotated: bool,
+    /// Control points of the NURBS block being read.
+    pub(super) nurbs: nurbs::Nurbs,
+    /// R plane and depth of the last canned cycle.
+    pub(super) cycle: cycle::Cycle,
+    /// The tool length offset changed since the last move.
+    pub(super) tlo_moved: bool,
+    /// Line of the last G38 probe that left the results unknown.
+    pub(super) probed_at: Option<u32>,
+    /// Why and since which line the standalone reference's position
+    /// differs from the machine's (see W0110).
+    pub(super) standalone_drift: Option<(&'static str, u32)>,
+    /// The line of an M61 not followed by a tool change, and the tool the
+    /// standalone reference still has as current (see W0110).
+    pub(super) m61: Option<(u32, Option<f64>)>,
+    /// Cutter compensation, once a program turns it on.
+    pub(super) comp: Option<Box<ccomp::CompRun>>,
+    /// G40 ended an offset path: the next move must be straight (the fast
+    /// paths leave such lines to the general one).
+    pub(super) comp_pending: bool,
+    /// A lathe cycle whose contour subroutine is running.
+    pub(super) lathe: Option<Box<lathe::LatheRun>>,
+}
+
+impl Machine {
+    /// The machine at the start: LinuxCNC's power-on modal state, the
+    /// position, tool and table the settings give.
+    pub(super) fn new(s: &Settings) -> Machine {
+        let mut pos = if s.zero_start {
+            Position::zero()
+        } else {
+            Position::unknown()
+        };
+        for &(axis, v) in &s.start_position {
+            pos.axes[axis] = Ok(v);
+        }
+        Machine {
+            modal: Modal::default(),
+            pos,
+            current_tool: if s.zero_start || !s.tool_table.is_empty() {
+                Some(0.0)
+            } else {
+                None
+            },
+            retain_line: None,
+            selected_tool: if s.zero_start { Some(0.0) } else { None },
+            pockets: s.zero_start.then_some((1.0, -1.0)),
+            tools: s.tool_table.iter().copied().collect(),
+            tools_known: s.zero_start,
+            tlo: Some([0.0; 9]),
+            rotated: false,
+            nurbs: nurbs::Nurbs::default(),
+            cycle: cycle::Cycle::default(),
+            tlo_moved: false,
+            probed_at: None,
+            standalone_drift: None,
+            m61: None,
+            comp: None,
+            comp_pending: false,
+            lathe: None,
         }
     }
 }

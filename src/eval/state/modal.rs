@@ -19,19 +19,19 @@ fn axis_index(letter: u8) -> Option<usize> {
 
 impl Interp<'_> {
     fn line_no(&self) -> u32 {
-        self.current_line_idx + 1
+        self.reader.line_idx + 1
     }
 
     pub(in crate::eval) fn forget(&mut self, axes: &[usize], what: &'static str) {
         let line = self.line_no();
         for &a in axes {
-            self.pos.axes[a] = Err(Unknown::After(what, line));
+            self.mach.pos.axes[a] = Err(Unknown::After(what, line));
         }
     }
 
     /// Factor from machine units (parameter storage) to program units.
     pub(in crate::eval) fn to_prog(&self, axis: usize) -> f64 {
-        if !LINEAR[axis] || self.s.machine_metric == self.modal.metric {
+        if !LINEAR[axis] || self.s.machine_metric == self.mach.modal.metric {
             1.0
         } else if self.s.machine_metric {
             1.0 / 25.4
@@ -86,14 +86,14 @@ impl Interp<'_> {
 
     /// Machine position (without tool offsets), program units.
     fn machine_pos(&self, axis: usize) -> Option<f64> {
-        let p = self.pos.axes[axis].as_ref().ok()?;
-        Some(p + self.g5x_offset(self.modal.coord_index, axis)? + self.g92_offset(axis)?)
+        let p = self.mach.pos.axes[axis].as_ref().ok()?;
+        Some(p + self.g5x_offset(self.mach.modal.coord_index, axis)? + self.g92_offset(axis)?)
     }
 
     /// Absolute machine position including the tool length offset, program
     /// units (for `#<_abs_x>`...).
     pub(in crate::eval) fn abs_position(&self, axis: usize) -> Option<f64> {
-        let tlo = self.tlo?[axis] * self.to_prog(axis);
+        let tlo = self.mach.tlo?[axis] * self.to_prog(axis);
         Some(self.machine_pos(axis)? + tlo)
     }
 
@@ -101,19 +101,20 @@ impl Interp<'_> {
     fn set_from_machine(&mut self, axis: usize, m: Option<f64>, what: &'static str) {
         let line = self.line_no();
         let v = m.and_then(|m| {
-            Some(m - self.g5x_offset(self.modal.coord_index, axis)? - self.g92_offset(axis)?)
+            Some(m - self.g5x_offset(self.mach.modal.coord_index, axis)? - self.g92_offset(axis)?)
         });
-        self.pos.axes[axis] = v.ok_or(Unknown::After(what, line));
+        self.mach.pos.axes[axis] = v.ok_or(Unknown::After(what, line));
     }
 
     /// G43 (430) or G43.2 (432) with the tool of `h` or the current one.
     fn g43(&mut self, g: i32, h: Option<f64>) {
-        self.modal.tool_offset = true;
-        let tool = h.or(self.current_tool);
+        self.mach.modal.tool_offset = true;
+        let tool = h.or(self.mach.current_tool);
         let data = tool.and_then(|t| self.tool(t));
         let new = match (g, data) {
             (430, Some(d)) => Some(d.offsets),
             (_, Some(d)) => self
+                .mach
                 .tlo
                 .map(|old| std::array::from_fn(|a| old[a] + d.offsets[a])),
             _ => None,
@@ -130,7 +131,7 @@ impl Interp<'_> {
         if on {
             self.g43(430, None);
         } else {
-            self.modal.tool_offset = false;
+            self.mach.modal.tool_offset = false;
             self.set_tlo(Some([0.0; 9]), "G49");
         }
     }
@@ -149,7 +150,7 @@ impl Interp<'_> {
     /// Sets the position from a machine position of the tool tip (G53, G28,
     /// G30 targets), which includes the tool length offset.
     fn set_from_machine_tip(&mut self, axis: usize, m: Option<f64>, what: &'static str) {
-        let tlo = self.tlo.map(|t| t[axis] * self.to_prog(axis));
+        let tlo = self.mach.tlo.map(|t| t[axis] * self.to_prog(axis));
         self.set_from_machine(axis, m.zip(tlo).map(|(m, t)| m - t), what);
     }
 
@@ -165,7 +166,7 @@ impl Interp<'_> {
         if !m99 && self.apply_simple(words) {
             return Ok(false);
         }
-        let motion_before = self.modal.motion;
+        let motion_before = self.mach.modal.motion;
         // Filled in place: returning it would copy it.
         let mut w = LineWords::new(m99);
         self.read_words(file, start, words, &mut w)?;
@@ -173,16 +174,16 @@ impl Interp<'_> {
         // RETAIN_G43: a tool change while G43 is in effect applies the new
         // tool's offset, and unloading the tool (T0) cancels G43, before the
         // line's own G43/G49. The output says so in a line of its own.
-        if w.tool_changed && self.s.retain_g43 && self.modal.tool_offset {
-            let on = self.current_tool != Some(0.0);
+        if w.tool_changed && self.s.retain_g43 && self.mach.modal.tool_offset {
+            let on = self.mach.current_tool != Some(0.0);
             self.tool_offset_words(on);
             if !w.gs().iter().any(|g| matches!(g, 430 | 431 | 432 | 490)) {
-                self.retain_line = Some(on);
+                self.mach.retain_line = Some(on);
             }
         }
         let (special, dynamic_tlo) = self.apply_g_modes(&w);
         let _ = self.line_no();
-        if self.comp.is_some() || self.modal.ccomp != 400 {
+        if self.mach.comp.is_some() || self.mach.modal.ccomp != 400 {
             for &g in w.gs() {
                 let r = match g {
                     400 => self.comp_off(),
@@ -198,10 +199,10 @@ impl Interp<'_> {
             Some(g) => self.apply_non_modal(file, start, g, words, &w)?,
             None => self.apply_motion(file, start, words, &w, motion_before, dynamic_tlo)?,
         }
-        if let Some(on) = self.retain_line.take() {
+        if let Some(on) = self.mach.retain_line.take() {
             self.emit_raw(if on { b"G43" } else { b"G49" })?;
         }
-        if self.comp.is_some() {
+        if self.mach.comp.is_some() {
             let stop = w.ends
                 || words
                     .iter()
@@ -211,7 +212,7 @@ impl Interp<'_> {
             }
         }
         if w.ends {
-            self.modal.reset_at_end();
+            self.mach.modal.reset_at_end();
         }
         Ok(w.ends)
     }
@@ -235,17 +236,18 @@ impl Interp<'_> {
                         w.gn += 1;
                     }
                 }
-                b'f' => self.modal.feed = v,
-                b's' => self.modal.speed = v,
+                b'f' => self.mach.modal.feed = v,
+                b's' => self.mach.modal.speed = v,
                 b't' => {
                     // With a tool table, a tool must be in it (T0: none).
                     let t = v.round() as i64;
-                    if !self.s.tool_table.is_empty() && t != 0 && !self.tools.contains_key(&t) {
+                    if !self.s.tool_table.is_empty() && t != 0 && !self.mach.tools.contains_key(&t)
+                    {
                         let k = ErrorKind::ToolNotInTable { tool: t };
                         return Err(self.error(k, file, start, start));
                     }
-                    self.selected_tool = Some(v);
-                    if let Some(p) = &mut self.pockets {
+                    self.mach.selected_tool = Some(v);
+                    if let Some(p) = &mut self.mach.pockets {
                         p.1 = v;
                     }
                 }
@@ -275,36 +277,36 @@ impl Interp<'_> {
     fn apply_m(&mut self, m: i32, w: &mut LineWords) {
         match m {
             20 | 300 => w.ends = true,
-            30 => self.modal.spindle = 3,
-            40 => self.modal.spindle = 4,
-            50 => self.modal.spindle = 0,
+            30 => self.mach.modal.spindle = 3,
+            40 => self.mach.modal.spindle = 4,
+            50 => self.mach.modal.spindle = 0,
             60 => {
-                self.current_tool = self.selected_tool;
-                if let Some(p) = &mut self.pockets {
+                self.mach.current_tool = self.mach.selected_tool;
+                if let Some(p) = &mut self.mach.pockets {
                     p.0 = p.1;
                 }
-                self.m61 = None;
+                self.mach.m61 = None;
                 self.tool_change_sync();
                 w.tool_changed = true;
             }
-            70 => self.modal.mist = true,
-            80 => self.modal.flood = true,
+            70 => self.mach.modal.mist = true,
+            80 => self.mach.modal.flood = true,
             90 => {
-                self.modal.mist = false;
-                self.modal.flood = false;
+                self.mach.modal.mist = false;
+                self.mach.modal.flood = false;
             }
             480 => {
-                self.modal.speed_override = true;
-                self.modal.feed_override = true;
+                self.mach.modal.speed_override = true;
+                self.mach.modal.feed_override = true;
             }
             490 => {
-                self.modal.speed_override = false;
-                self.modal.feed_override = false;
+                self.mach.modal.speed_override = false;
+                self.mach.modal.feed_override = false;
             }
-            500 => self.modal.feed_override = w.p.is_none_or(|p| p != 0.0),
-            510 => self.modal.speed_override = w.p.is_none_or(|p| p != 0.0),
-            520 => self.modal.adaptive_feed = w.p.is_none_or(|p| p != 0.0),
-            530 => self.modal.feed_hold = w.p.is_none_or(|p| p != 0.0),
+            500 => self.mach.modal.feed_override = w.p.is_none_or(|p| p != 0.0),
+            510 => self.mach.modal.speed_override = w.p.is_none_or(|p| p != 0.0),
+            520 => self.mach.modal.adaptive_feed = w.p.is_none_or(|p| p != 0.0),
+            530 => self.mach.modal.feed_hold = w.p.is_none_or(|p| p != 0.0),
             _ => {}
         }
     }
@@ -318,17 +320,17 @@ impl Interp<'_> {
                 let m = (v * 10.0).round() as i32;
                 let on = w.p.is_none_or(|p| p != 0.0);
                 match m {
-                    500 => self.modal.feed_override = on,
-                    510 => self.modal.speed_override = on,
-                    520 => self.modal.adaptive_feed = on,
-                    530 => self.modal.feed_hold = on,
+                    500 => self.mach.modal.feed_override = on,
+                    510 => self.mach.modal.speed_override = on,
+                    520 => self.mach.modal.adaptive_feed = on,
+                    530 => self.mach.modal.feed_hold = on,
                     // M61's Q may come after it on the line.
                     610 => {
-                        if self.m61.is_none() {
-                            self.m61 = Some((self.line_no(), self.current_tool));
+                        if self.mach.m61.is_none() {
+                            self.mach.m61 = Some((self.line_no(), self.mach.current_tool));
                         }
-                        self.current_tool = w.q;
-                        if let (Some(p), Some(q)) = (&mut self.pockets, w.q) {
+                        self.mach.current_tool = w.q;
+                        if let (Some(p), Some(q)) = (&mut self.mach.pockets, w.q) {
                             p.0 = q;
                         }
                         self.tool_change_sync();
@@ -358,21 +360,23 @@ impl Interp<'_> {
             }
             match g {
                 // G5.3 ends a NURBS block without choosing a motion.
-                g if g != 53 && crate::eval::read::validate::is_motion(g) => self.modal.motion = g,
-                170 | 180 | 190 | 171 | 181 | 191 => self.modal.plane = g,
+                g if g != 53 && crate::eval::read::validate::is_motion(g) => {
+                    self.mach.modal.motion = g
+                }
+                170 | 180 | 190 | 171 | 181 | 191 => self.mach.modal.plane = g,
                 200 => self.set_units(false),
                 210 => self.set_units(true),
-                900 => self.modal.absolute = true,
-                910 => self.modal.absolute = false,
-                901 => self.modal.ijk_absolute = true,
-                911 => self.modal.ijk_absolute = false,
-                930 | 940 | 950 => self.modal.feed_mode = g,
-                400 => self.modal.ccomp = 400,
-                410 | 411 => self.modal.ccomp = 410,
-                420 | 421 => self.modal.ccomp = 420,
+                900 => self.mach.modal.absolute = true,
+                910 => self.mach.modal.absolute = false,
+                901 => self.mach.modal.ijk_absolute = true,
+                911 => self.mach.modal.ijk_absolute = false,
+                930 | 940 | 950 => self.mach.modal.feed_mode = g,
+                400 => self.mach.modal.ccomp = 400,
+                410 | 411 => self.mach.modal.ccomp = 410,
+                420 | 421 => self.mach.modal.ccomp = 420,
                 430 | 432 => self.g43(g, w.h),
                 431 => {
-                    self.modal.tool_offset = true;
+                    self.mach.modal.tool_offset = true;
                     let mut new = [0.0; 9];
                     for &(a, v) in w.axis_words() {
                         new[a] = v / self.to_prog(a);
@@ -382,14 +386,14 @@ impl Interp<'_> {
                 }
                 490 => self.tool_offset_words(false),
                 610 | 611 | 640 => {
-                    self.modal.path = g;
+                    self.mach.modal.path = g;
                 }
-                980 => self.modal.retract_r = false,
-                990 => self.modal.retract_r = true,
-                960 => self.modal.css = true,
-                970 => self.modal.css = false,
-                70 => self.modal.lathe_diameter = true,
-                80 => self.modal.lathe_diameter = false,
+                980 => self.mach.modal.retract_r = false,
+                990 => self.mach.modal.retract_r = true,
+                960 => self.mach.modal.css = true,
+                970 => self.mach.modal.css = false,
+                70 => self.mach.modal.lathe_diameter = true,
+                80 => self.mach.modal.lathe_diameter = false,
                 540 | 550 | 560 | 570 | 580 | 590 | 591 | 592 | 593 => {
                     let cs = match g {
                         591 => 7,
@@ -425,10 +429,10 @@ impl Interp<'_> {
                     // The position becomes the given value; the offset is
                     // known only if the machine position was.
                     let m = self.machine_pos(a);
-                    let g5x = self.g5x_offset(self.modal.coord_index, a);
+                    let g5x = self.g5x_offset(self.mach.modal.coord_index, a);
                     let off = m.zip(g5x).map(|(m, o)| m - o - v);
                     self.set_param_prog(5211 + a, a, off);
-                    self.pos.axes[a] = Ok(v);
+                    self.mach.pos.axes[a] = Ok(v);
                 }
                 self.params.assign(5210, 1.0);
             }
@@ -450,7 +454,7 @@ impl Interp<'_> {
                 }
                 self.params.assign(5210, 1.0);
                 for (a, m) in machine.into_iter().enumerate() {
-                    if self.pos.axes[a].is_ok() {
+                    if self.mach.pos.axes[a].is_ok() {
                         self.set_from_machine(a, m, "G52");
                     }
                 }
@@ -485,7 +489,7 @@ impl Interp<'_> {
                     let k = ErrorKind::CompForbids { action: "use G53" };
                     return Err(self.error(k, file, start, start));
                 }
-                if self.modal.ccomp != 400 {
+                if self.mach.modal.ccomp != 400 {
                     self.forget(&[0, 1, 2], "cutter radius compensation");
                 }
                 for &(a, v) in w.axis_words() {
@@ -531,12 +535,12 @@ impl Interp<'_> {
                 if let Err(k) = self.check_motion(words, axis_words) {
                     return Err(self.error(k, file, start, start));
                 }
-                if crate::eval::state::cycle::is_cycle(self.modal.motion) {
+                if crate::eval::state::cycle::is_cycle(self.mach.modal.motion) {
                     self.note_cycle(words);
                 }
                 self.move_to(axis_words);
-                if (self.comp.is_some() || self.modal.ccomp != 400)
-                    && let Err(k) = self.comp_move(words, self.modal.motion)
+                if (self.mach.comp.is_some() || self.mach.modal.ccomp != 400)
+                    && let Err(k) = self.comp_move(words, self.mach.modal.motion)
                 {
                     return Err(self.error(k, file, start, start));
                 }
@@ -549,10 +553,10 @@ impl Interp<'_> {
     /// a plain state: as the general update below, in a few steps. False
     /// leaves the state untouched.
     fn apply_simple(&mut self, words: &[(u8, f64)]) -> bool {
-        if self.rotated || self.modal.ccomp != 400 || self.comp_pending {
+        if self.mach.rotated || self.mach.modal.ccomp != 400 || self.mach.comp_pending {
             return false;
         }
-        let mut motion = self.modal.motion;
+        let mut motion = self.mach.modal.motion;
         let mut seen = 0u32;
         for &(l, v) in words {
             let bit = 1u32 << (l.wrapping_sub(b'a') & 31);
@@ -570,11 +574,11 @@ impl Interp<'_> {
         if !matches!(motion, 0 | 10) {
             return false;
         }
-        self.modal.motion = motion;
+        self.mach.modal.motion = motion;
         for &(l, v) in words {
             match l {
-                b'f' => self.modal.feed = v,
-                b's' => self.modal.speed = v,
+                b'f' => self.mach.modal.feed = v,
+                b's' => self.mach.modal.speed = v,
                 _ => {
                     if let Some(a) = axis_index(l) {
                         self.move_axis(a, v);
@@ -589,9 +593,9 @@ impl Interp<'_> {
     /// move, which misses a tool length offset changed since (the machine
     /// does not move).
     fn tool_change_sync(&mut self) {
-        if self.tlo_moved {
+        if self.mach.tlo_moved {
             let line = self.line_no();
-            self.standalone_drift = Some((
+            self.mach.standalone_drift = Some((
                 "a tool change after the tool length offset changed without a move",
                 line,
             ));
@@ -601,15 +605,15 @@ impl Interp<'_> {
     /// A read of the position after the standalone reference's position
     /// departed from the machine's: warning W0110 at the read.
     pub(in crate::eval) fn note_standalone_drift(&mut self, span: crate::parse::ast::Span) {
-        if let Some((why, line)) = self.standalone_drift {
+        if let Some((why, line)) = self.mach.standalone_drift {
             self.warn_standalone(why, line, span);
         }
     }
 
     /// Warning W0110 at `span` of the current line.
     fn warn_standalone(&mut self, why: &'static str, line: u32, span: crate::parse::ast::Span) {
-        let file = self.cur.file.clone();
-        let at = self.current_line_start;
+        let file = self.flow.cur.file.clone();
+        let at = self.reader.line_start;
         self.warn(
             crate::diag::WarningKind::QuirkStandalone { why, line },
             &file,
@@ -622,11 +626,11 @@ impl Interp<'_> {
     /// the standalone reference does not apply: warning W0110 at the read if
     /// the value differs there.
     pub(in crate::eval) fn note_m61(&mut self, span: crate::parse::ast::Span, data: bool) {
-        if let Some((line, old)) = self.m61
-            && (old != self.current_tool
+        if let Some((line, old)) = self.mach.m61
+            && (old != self.mach.current_tool
                 && (!data
                     || old.and_then(|t| self.tool(t))
-                        != self.current_tool.and_then(|t| self.tool(t))))
+                        != self.mach.current_tool.and_then(|t| self.tool(t))))
         {
             let why = "M61 (the standalone interpreter keeps its current tool)";
             self.warn_standalone(why, line, span);
@@ -637,7 +641,7 @@ impl Interp<'_> {
     /// diameter mode (G7), and the position is a radius.
     #[inline(always)]
     fn radius_word(&self, axis: usize, v: f64) -> f64 {
-        if axis == 0 && self.modal.lathe_diameter {
+        if axis == 0 && self.mach.modal.lathe_diameter {
             v / 2.0
         } else {
             v
@@ -648,10 +652,10 @@ impl Interp<'_> {
     /// (G91).
     pub(in crate::eval) fn axis_end(&self, axis: usize, v: f64) -> Result<f64, Unknown> {
         let v = self.radius_word(axis, v);
-        if self.modal.absolute {
+        if self.mach.modal.absolute {
             Ok(v)
         } else {
-            self.pos.axes[axis].clone().map(|p| p + v)
+            self.mach.pos.axes[axis].clone().map(|p| p + v)
         }
     }
 
@@ -659,42 +663,42 @@ impl Interp<'_> {
     /// position plus it (G91); an unknown position stays unknown.
     #[inline]
     pub(in crate::eval) fn move_axis(&mut self, axis: usize, v: f64) {
-        self.tlo_moved = false;
+        self.mach.tlo_moved = false;
         let v = self.radius_word(axis, v);
-        if self.modal.absolute {
-            self.pos.axes[axis] = Ok(v);
-        } else if let Ok(p) = &mut self.pos.axes[axis] {
+        if self.mach.modal.absolute {
+            self.mach.pos.axes[axis] = Ok(v);
+        } else if let Ok(p) = &mut self.mach.pos.axes[axis] {
             *p += v;
         }
     }
 
     pub(in crate::eval) fn set_units(&mut self, metric: bool) {
-        if self.modal.metric == metric {
+        if self.mach.modal.metric == metric {
             return;
         }
-        if self.tlo.is_some_and(|t| t.iter().any(|&v| v != 0.0)) {
+        if self.mach.tlo.is_some_and(|t| t.iter().any(|&v| v != 0.0)) {
             let line = self.line_no();
-            self.standalone_drift = Some((
+            self.mach.standalone_drift = Some((
                 "a change of units with a tool length offset in effect",
                 line,
             ));
         }
         let f = if metric { 25.4 } else { 1.0 / 25.4 };
         for (a, lin) in LINEAR.iter().enumerate() {
-            if *lin && let Ok(p) = &mut self.pos.axes[a] {
+            if *lin && let Ok(p) = &mut self.mach.pos.axes[a] {
                 *p *= f;
             }
         }
-        self.modal.metric = metric;
+        self.mach.modal.metric = metric;
         self.comp_units(metric);
     }
 
     pub(in crate::eval) fn select_cs(&mut self, cs: i32) {
         let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
-        self.modal.coord_index = cs;
+        self.mach.modal.coord_index = cs;
         self.params.assign(5220, cs as f64);
         for (a, m) in machine.into_iter().enumerate() {
-            if self.pos.axes[a].is_ok() {
+            if self.mach.pos.axes[a].is_ok() {
                 self.set_from_machine(a, m, "a coordinate system change");
             }
         }
@@ -703,16 +707,16 @@ impl Interp<'_> {
     fn g10(&mut self, l: Option<f64>, p: Option<f64>, r: Option<f64>, axis_words: &[(usize, f64)]) {
         let l = l.map(|v| v.round() as i32);
         let cs = match p.map(|v| v.round() as i32) {
-            Some(0) | None => self.modal.coord_index,
+            Some(0) | None => self.mach.modal.coord_index,
             Some(n) => n.clamp(1, 9),
         };
         let base = 5221 + 20 * (cs as usize - 1);
-        let active = cs == self.modal.coord_index;
+        let active = cs == self.mach.modal.coord_index;
         match l {
             Some(2) | Some(20) => {
                 if r.is_some_and(|r| r != 0.0) {
                     // XY rotation is not modelled: positions become unknown.
-                    self.rotated = true;
+                    self.mach.rotated = true;
                     self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "an XY rotation (G10 R)");
                 }
                 for &(a, v) in axis_words {
@@ -725,7 +729,7 @@ impl Interp<'_> {
                     self.set_param_prog(base + a, a, new_off);
                     if active {
                         if l == Some(20) {
-                            self.pos.axes[a] = Ok(v);
+                            self.mach.pos.axes[a] = Ok(v);
                         } else {
                             self.set_from_machine(a, m, "G10 L2 on the active coordinate system");
                         }
@@ -750,21 +754,21 @@ impl Interp<'_> {
             for i in 5061..=5070 {
                 self.params.known[i] = false;
             }
-            self.probed_at = Some(self.line_no());
+            self.mach.probed_at = Some(self.line_no());
             return;
         }
         let start: Vec<Option<f64>> = (0..9)
-            .map(|a| self.pos.axes[a].as_ref().ok().copied())
+            .map(|a| self.mach.pos.axes[a].as_ref().ok().copied())
             .collect();
         let mut target = start.clone();
         for &(a, v) in axis_words {
-            target[a] = if self.modal.absolute {
+            target[a] = if self.mach.modal.absolute {
                 Some(v)
             } else {
                 start[a].map(|s| s + v)
             };
         }
-        let backoff = if self.modal.metric { 0.254 } else { 0.01 };
+        let backoff = if self.mach.modal.metric { 0.254 } else { 0.01 };
         let dist: f64 = (0..3)
             .map(|a| match (start[a], target[a]) {
                 (Some(s), Some(t)) => (t - s) * (t - s),
@@ -781,11 +785,11 @@ impl Interp<'_> {
                         Some(s) if a < 3 && dist > 0.0 => (t - s) / dist * backoff,
                         _ => 0.0,
                     };
-                    self.pos.axes[a] = Ok(t - back);
+                    self.mach.pos.axes[a] = Ok(t - back);
                 }
                 None => {
                     self.params.known[5061 + a] = false;
-                    self.pos.axes[a] = Err(Unknown::After("a probing move", line));
+                    self.mach.pos.axes[a] = Err(Unknown::After("a probing move", line));
                 }
             }
         }
@@ -799,8 +803,8 @@ impl Interp<'_> {
         words: &[(u8, f64)],
         axis_words: &[(usize, f64)],
     ) -> Result<(), ErrorKind> {
-        let motion = self.modal.motion;
-        let start = |a: usize| self.pos.axes[a].as_ref().ok().copied();
+        let motion = self.mach.modal.motion;
+        let start = |a: usize| self.mach.pos.axes[a].as_ref().ok().copied();
         let end = |a: usize| -> Option<f64> {
             match axis_words.iter().find(|w| w.0 == a) {
                 Some(&(_, v)) => self.axis_end(a, v).ok(),
@@ -811,7 +815,7 @@ impl Interp<'_> {
         let bad = ErrorKind::Block;
         match motion {
             20 | 30 => {
-                let (a0, a1, c0, c1) = match self.modal.plane {
+                let (a0, a1, c0, c1) = match self.mach.modal.plane {
                     180 | 181 => (2, 0, b'k', b'i'),
                     190 | 191 => (1, 2, b'j', b'k'),
                     _ => (0, 1, b'i', b'j'),
@@ -829,7 +833,7 @@ impl Interp<'_> {
                     None => ArcCenter::Offsets {
                         i: word(c0).unwrap_or(0.0),
                         j: word(c1).unwrap_or(0.0),
-                        absolute: self.modal.ijk_absolute,
+                        absolute: self.mach.modal.ijk_absolute,
                     },
                 };
                 let arc = Arc {
@@ -837,7 +841,7 @@ impl Interp<'_> {
                     center,
                     turns: 1,
                 };
-                let tol = Tolerances::default_for(self.modal.metric);
+                let tol = Tolerances::default_for(self.mach.modal.metric);
                 match arc_center(&tol, arc, [sx, sy], [ex, ey]) {
                     Ok(_) => {}
                     Err(CompError::ArcSamePoint) => return Err(bad(BlockError::ArcSamePoint)),
@@ -847,7 +851,7 @@ impl Interp<'_> {
                     Err(CompError::ZeroRadiusArc) => return Err(bad(BlockError::ZeroRadiusArc)),
                     Err(_) => {
                         let (ci, cj) = (word(c0).unwrap_or(0.0), word(c1).unwrap_or(0.0));
-                        let (cx, cy) = if self.modal.ijk_absolute {
+                        let (cx, cy) = if self.mach.modal.ijk_absolute {
                             (ci, cj)
                         } else {
                             (sx + ci, sy + cj)
@@ -868,7 +872,7 @@ impl Interp<'_> {
                     .sqrt();
                 let known = axis_words
                     .iter()
-                    .all(|w| start(w.0).is_some() || (self.modal.absolute && w.0 >= 3));
+                    .all(|w| start(w.0).is_some() || (self.mach.modal.absolute && w.0 >= 3));
                 if known && d < 1e-7 {
                     return Err(bad(BlockError::ProbeTooClose));
                 }
@@ -879,12 +883,12 @@ impl Interp<'_> {
     }
 
     fn move_to(&mut self, axis_words: &[(usize, f64)]) {
-        self.tlo_moved = false;
-        if self.rotated {
+        self.mach.tlo_moved = false;
+        if self.mach.rotated {
             self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "an XY rotation (G10 R)");
             return;
         }
-        let motion = self.modal.motion;
+        let motion = self.mach.modal.motion;
         match motion {
             382..=385 => self.probe(axis_words),
             730 | 740 | 760 | 810..=890 | 330 | 331 => {

@@ -54,41 +54,41 @@ impl Interp<'_> {
     ) {
         let word = |a: usize| axis_words.iter().rev().find(|w| w.0 == a).map(|w| w.1);
         if motion_before != NURBS {
-            self.nurbs.points = 0;
+            self.mach.nurbs.points = 0;
         }
-        if self.nurbs.points == 0 {
-            self.nurbs.points = 1;
-            self.nurbs.order = 3;
-            self.nurbs.last = [self.pos.axes[0].clone(), self.pos.axes[1].clone()];
+        if self.mach.nurbs.points == 0 {
+            self.mach.nurbs.points = 1;
+            self.mach.nurbs.order = 3;
+            self.mach.nurbs.last = [self.mach.pos.axes[0].clone(), self.mach.pos.axes[1].clone()];
         }
         if let Some(l) = l_word
             && l > 3.0
         {
-            self.nurbs.order = l.round() as u32;
+            self.mach.nurbs.order = l.round() as u32;
         }
         if let (Some(x), Some(y)) = (word(0), word(1)) {
-            self.nurbs.points += 1;
+            self.mach.nurbs.points += 1;
             // The position does not move until G5.3: incremental points are
             // all relative to where the block started.
-            self.nurbs.last = [self.axis_end(0, x), self.axis_end(1, y)];
+            self.mach.nurbs.last = [self.axis_end(0, x), self.axis_end(1, y)];
         }
-        self.modal.motion = NURBS;
+        self.mach.modal.motion = NURBS;
     }
 
     /// G5.3 (checked by `check_block`): the move to the last control
     /// point.
     pub(in crate::eval) fn nurbs_end(&mut self) {
         let [x, y] = std::mem::replace(
-            &mut self.nurbs.last,
+            &mut self.mach.nurbs.last,
             [Err(Unknown::Start), Err(Unknown::Start)],
         );
-        self.nurbs.points = 0;
-        self.modal.motion = NO_MOTION;
-        if self.rotated || self.modal.ccomp != 400 {
+        self.mach.nurbs.points = 0;
+        self.mach.modal.motion = NO_MOTION;
+        if self.mach.rotated || self.mach.modal.ccomp != 400 {
             self.forget(&[0, 1], "a NURBS block");
         } else {
-            self.pos.axes[0] = x;
-            self.pos.axes[1] = y;
+            self.mach.pos.axes[0] = x;
+            self.mach.pos.axes[1] = y;
         }
     }
 }

@@ -30,21 +30,22 @@ impl Interp<'_> {
         match op {
             70 | 73 => {
                 let m = Saved {
-                    modal: self.modal.clone(),
+                    modal: self.mach.modal.clone(),
                     g92_applied: self.g92_applied(),
                 };
-                let nested = self.frames.len() > 1;
-                let f = self.frames.last_mut().expect("frame");
+                let nested = self.flow.frames.len() > 1;
+                let f = self.flow.frames.last_mut().expect("frame");
                 f.saved_modal = Some(Box::new(m));
                 f.auto_restore = op == 73 && nested;
             }
             71 => {
-                let f = self.frames.last_mut().expect("frame");
+                let f = self.flow.frames.last_mut().expect("frame");
                 f.saved_modal = None;
                 f.auto_restore = false;
             }
             _ => {
                 let saved = self
+                    .flow
                     .frames
                     .last()
                     .and_then(|f| f.saved_modal.as_deref().cloned());
@@ -72,7 +73,7 @@ impl Interp<'_> {
             modal: saved,
             g92_applied,
         } = saved;
-        let cur = self.modal.clone();
+        let cur = self.mach.modal.clone();
         // Units come first, on their own line, as in the reference.
         if cur.metric != saved.metric {
             self.emit_raw(if saved.metric { b"G21" } else { b"G20" })?;
@@ -173,17 +174,17 @@ impl Interp<'_> {
         if !saved.mist && !saved.flood && (cur.mist || cur.flood) {
             self.emit_raw(b"M9")?;
         }
-        let motion = self.modal.motion;
+        let motion = self.mach.modal.motion;
         let (mist, flood) = (
-            self.modal.mist || saved.mist,
-            self.modal.flood || saved.flood,
+            self.mach.modal.mist || saved.mist,
+            self.mach.modal.flood || saved.flood,
         );
         let both_off = !saved.mist && !saved.flood;
-        self.modal = saved.clone();
-        self.modal.motion = motion;
+        self.mach.modal = saved.clone();
+        self.mach.modal.motion = motion;
         if !both_off {
-            self.modal.mist = mist;
-            self.modal.flood = flood;
+            self.mach.modal.mist = mist;
+            self.mach.modal.flood = flood;
         }
         Ok(())
     }

@@ -75,19 +75,19 @@ impl Interp<'_> {
     /// Data of a tool, if the program can know it.
     pub(in crate::eval) fn tool(&self, t: f64) -> Option<ToolData> {
         let t = t.round() as i64;
-        if self.unknown_tools.contains(&t) {
+        if self.diags.unknown_tools.contains(&t) {
             return None;
         }
-        match self.tools.get(&t) {
+        match self.mach.tools.get(&t) {
             Some(d) => Some(*d),
-            None if self.tools_known => Some(ToolData::default()),
+            None if self.mach.tools_known => Some(ToolData::default()),
             None => None,
         }
     }
 
     /// How to make the tool data of the tool in the spindle known.
     pub(in crate::eval) fn tool_data_hint(&self) -> String {
-        if self.current_tool.is_none() {
+        if self.mach.current_tool.is_none() {
             "--tool-table FILE (LinuxCNC's tool table; the spindle then starts with tool 0 until an M6 or M61), or --zero-start".into()
         } else {
             "--tool-table FILE (LinuxCNC's tool table), or --zero-start".into()
@@ -96,7 +96,7 @@ impl Interp<'_> {
 
     /// A tool-data parameter #5400..#5413.
     pub(in crate::eval) fn tool_param(&self, i: usize) -> Option<f64> {
-        let current = self.current_tool?;
+        let current = self.mach.current_tool?;
         if i == 5400 {
             return Some(current);
         }
@@ -113,19 +113,19 @@ impl Interp<'_> {
     /// Applies a new tool length offset (machine units), moving the
     /// program position the other way.
     pub(in crate::eval) fn set_tlo(&mut self, new: Option<[f64; 9]>, what: &'static str) {
-        let line = self.current_line_idx + 1;
+        let line = self.reader.line_idx + 1;
         for a in 0..9 {
             let f = self.to_prog(a);
-            let ok = match (&self.pos.axes[a], self.tlo, new) {
+            let ok = match (&self.mach.pos.axes[a], self.mach.tlo, new) {
                 (Ok(p), Some(old), Some(n)) => Some(p + (old[a] - n[a]) * f),
                 _ => None,
             };
-            self.pos.axes[a] = ok.ok_or(Unknown::After(what, line));
+            self.mach.pos.axes[a] = ok.ok_or(Unknown::After(what, line));
         }
-        if new != self.tlo {
-            self.tlo_moved = true;
+        if new != self.mach.tlo {
+            self.mach.tlo_moved = true;
         }
-        self.tlo = new;
+        self.mach.tlo = new;
     }
 
     /// G10 L1/L10/L11: the program writes the tool table.
@@ -145,14 +145,14 @@ impl Interp<'_> {
             let f = self.to_prog(a);
             let value = match l {
                 1 => Some(v),
-                10 => self.pos.axes[a]
+                10 => self.mach.pos.axes[a]
                     .as_ref()
                     .ok()
-                    .zip(self.tlo)
+                    .zip(self.mach.tlo)
                     .map(|(pos, tlo)| pos + tlo[a] * f - v),
                 _ => {
                     // L11: relative to G59.3 instead of the current system.
-                    let cur = self.modal.coord_index;
+                    let cur = self.mach.modal.coord_index;
                     let g5x = |cs: i32, this: &Self| {
                         this.params.known[5221 + 20 * (cs as usize - 1) + a]
                             .then(|| this.params.values[5221 + 20 * (cs as usize - 1) + a] * f)
@@ -163,8 +163,8 @@ impl Interp<'_> {
                         self.params.known[5211 + a].then(|| self.params.values[5211 + a] * f)
                     };
                     match (
-                        self.pos.axes[a].as_ref().ok(),
-                        self.tlo,
+                        self.mach.pos.axes[a].as_ref().ok(),
+                        self.mach.tlo,
                         g5x(cur, self),
                         g5x(9, self),
                         g92,
@@ -196,11 +196,11 @@ impl Interp<'_> {
         }
         match d {
             Some(data) => {
-                self.tools.insert(t, data);
+                self.mach.tools.insert(t, data);
             }
             None => {
-                self.tools.remove(&t);
-                self.unknown_tools.insert(t);
+                self.mach.tools.remove(&t);
+                self.diags.unknown_tools.insert(t);
             }
         }
     }
