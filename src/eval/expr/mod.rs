@@ -347,7 +347,7 @@ impl Interp<'_> {
                     ErrorKind::RuntimeParam {
                         what: format!("#{i} (tool data)"),
                         why: "it comes from the tool table".to_string(),
-                        hint: self.tool_data_hint(),
+                        hint: self.mach.tool_data_hint(),
                     },
                     span,
                 ));

@@ -11,7 +11,7 @@ use crate::program::{FileIndex, control_key};
 
 use crate::eval::Interp;
 use crate::eval::expr::round_half_even_int;
-use crate::eval::flow::{Cursor, FrameKind, LabelRec, MAX_CALL_LEVEL, SubRec, label_of_key};
+use crate::eval::flow::{Cursor, Flow, FrameKind, LabelRec, MAX_CALL_LEVEL, SubRec, label_of_key};
 
 /// What a forward search was looking for (for the error when nothing is found).
 enum Seek {
@@ -101,36 +101,6 @@ impl Interp<'_> {
         } else {
             label
         })
-    }
-
-    /// Moves reading to an O-line (`after`: to the line after it).
-    pub(in crate::eval) fn goto(&mut self, file: &Rc<FileIndex>, oidx: u32, after: bool) {
-        let o = &file.olines[oidx as usize];
-        if Rc::ptr_eq(&self.flow.cur.file, file) {
-            // The same file (any jump within a body): no count to touch.
-            let c = &mut self.flow.cur;
-            (c.pos, c.line, c.next_o) = if after {
-                (o.next, o.line_idx + 1, oidx as usize + 1)
-            } else {
-                (o.start, o.line_idx, oidx as usize)
-            };
-            return;
-        }
-        self.flow.cur = if after {
-            Cursor {
-                file: file.clone(),
-                pos: o.next,
-                line: o.line_idx + 1,
-                next_o: oidx as usize + 1,
-            }
-        } else {
-            Cursor {
-                file: file.clone(),
-                pos: o.start,
-                line: o.line_idx,
-                next_o: oidx as usize,
-            }
-        };
     }
 
     /// Finds the next O-line after `from` whose label key is `key`, raising
@@ -303,16 +273,6 @@ impl Interp<'_> {
         }
     }
 
-    fn note_loop(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) {
-        let line = file.olines[oidx as usize].line_idx;
-        // The key is kept as it is (no allocation per pass); the label is
-        // cut from it only for a message.
-        let same = matches!(&self.flow.last_loop, Some((k, l, f)) if *l == line && k == key && Rc::ptr_eq(f, file));
-        if !same {
-            self.flow.last_loop = Some((key.clone(), line, file.clone()));
-        }
-    }
-
     /// Evaluates a condition the reference evaluates but ngcflat skips; warns
     /// if it would fail there.
     /// The expression an O-line must carry (its condition or count).
@@ -472,7 +432,7 @@ impl Interp<'_> {
             match file.kind_of(t) {
                 Some(OKind::EndIf) => {
                     self.flow.executed_if = true;
-                    self.goto(file, t, true);
+                    self.flow.goto(file, t, true);
                     return Ok(());
                 }
                 Some(OKind::ElseIf) => {
@@ -527,8 +487,8 @@ impl Interp<'_> {
                     let (a, b) = self.osite(file, oidx);
                     self.warn(WarningKind::QuirkStaleBreak { first_line }, file, a, b);
                 }
-                self.note_loop(file, rec.oidx, key);
-                self.goto(file, rec.oidx, true);
+                self.flow.note_loop(file, rec.oidx, key);
+                self.flow.goto(file, rec.oidx, true);
             } else {
                 self.flow.ref_stale_break = None;
             }
@@ -551,8 +511,8 @@ impl Interp<'_> {
             Ok(r) => r,
             Err(e) => return self.soft(e, file),
         };
-        self.note_loop(file, rec.oidx, key);
-        self.goto(file, rec.oidx, false);
+        self.flow.note_loop(file, rec.oidx, key);
+        self.flow.goto(file, rec.oidx, false);
         Ok(())
     }
 
@@ -611,9 +571,9 @@ impl Interp<'_> {
             Ok(r) => r,
             Err(e) => return self.soft(e, file),
         };
-        self.note_loop(file, rec.oidx, key);
+        self.flow.note_loop(file, rec.oidx, key);
         self.flow.repeat_again = Some(rec.oidx);
-        self.goto(file, rec.oidx, false);
+        self.flow.goto(file, rec.oidx, false);
         Ok(())
     }
 
@@ -653,17 +613,17 @@ impl Interp<'_> {
                     self.warn(WarningKind::QuirkStaleContinue { first_line }, file, a, b);
                 }
                 self.flow.ref_stale_break = Some(file.olines[oidx as usize].line_idx + 1);
-                self.goto(file, t, true);
+                self.flow.goto(file, t, true);
                 Ok(())
             }
             (OKind::While, Some(OKind::EndWhile), _) => {
-                self.note_loop(file, rec.oidx, key);
-                self.goto(file, rec.oidx, false);
+                self.flow.note_loop(file, rec.oidx, key);
+                self.flow.goto(file, rec.oidx, false);
                 Ok(())
             }
             (OKind::Do, Some(OKind::While), OKind::Break) => {
                 self.probe_condition(file, t);
-                self.goto(file, t, true);
+                self.flow.goto(file, t, true);
                 Ok(())
             }
             (OKind::Do, Some(OKind::While), _) => {
@@ -671,10 +631,10 @@ impl Interp<'_> {
                 let e = self.condition_of(file, t)?;
                 let c = self.o_eval(file, t, &e)?;
                 if c != 0.0 {
-                    self.note_loop(file, rec.oidx, key);
-                    self.goto(file, rec.oidx, true);
+                    self.flow.note_loop(file, rec.oidx, key);
+                    self.flow.goto(file, rec.oidx, true);
                 } else {
-                    self.goto(file, t, true);
+                    self.flow.goto(file, t, true);
                 }
                 Ok(())
             }
@@ -788,14 +748,14 @@ impl Interp<'_> {
                     let c = self.o_eval(file, t, &e)?;
                     if c != 0.0 {
                         self.flow.executed_if = true;
-                        self.goto(file, t, true);
+                        self.flow.goto(file, t, true);
                         return Ok(());
                     }
                     at = t;
                 }
                 Some(OKind::Else) | Some(OKind::EndIf) => {
                     self.flow.executed_if = true;
-                    self.goto(file, t, true);
+                    self.flow.goto(file, t, true);
                     return Ok(());
                 }
                 _ => {
@@ -828,7 +788,7 @@ impl Interp<'_> {
             let (a, b) = self.osite(file, t);
             self.warn(WarningKind::QuirkStaleContinue { first_line }, file, a, b);
         }
-        self.goto(file, t, true);
+        self.flow.goto(file, t, true);
         Ok(())
     }
 
@@ -930,7 +890,7 @@ impl Interp<'_> {
         self.flow.defining = false;
         match def.end {
             Some(e) => {
-                self.goto(file, e, true);
+                self.flow.goto(file, e, true);
                 Ok(())
             }
             None => Err(self.oerr(
@@ -1120,7 +1080,7 @@ impl Interp<'_> {
         if oword_nargs {
             f.locals.insert(Name::new("n_args"), nargs);
         }
-        self.goto(&target.file, target.oidx, true);
+        self.flow.goto(&target.file, target.oidx, true);
         Ok(())
     }
 
@@ -1256,7 +1216,7 @@ impl Interp<'_> {
             next_o: oidx as usize,
         };
         self.push_frame(file, oidx, FrameKind::M98, name, ret)?;
-        self.goto(&target.file, target.oidx, true);
+        self.flow.goto(&target.file, target.oidx, true);
         Ok(())
     }
 }
@@ -1278,5 +1238,47 @@ fn base_name(label: &str) -> &str {
     match label.bytes().rposition(|b| b == b'/') {
         Some(i) => &label[i + 1..],
         None => label,
+    }
+}
+
+impl Flow {
+    /// Moves reading to an O-line (`after`: to the line after it).
+    pub(in crate::eval) fn goto(&mut self, file: &Rc<FileIndex>, oidx: u32, after: bool) {
+        let o = &file.olines[oidx as usize];
+        if Rc::ptr_eq(&self.cur.file, file) {
+            // The same file (any jump within a body): no count to touch.
+            let c = &mut self.cur;
+            (c.pos, c.line, c.next_o) = if after {
+                (o.next, o.line_idx + 1, oidx as usize + 1)
+            } else {
+                (o.start, o.line_idx, oidx as usize)
+            };
+            return;
+        }
+        self.cur = if after {
+            Cursor {
+                file: file.clone(),
+                pos: o.next,
+                line: o.line_idx + 1,
+                next_o: oidx as usize + 1,
+            }
+        } else {
+            Cursor {
+                file: file.clone(),
+                pos: o.start,
+                line: o.line_idx,
+                next_o: oidx as usize,
+            }
+        };
+    }
+
+    fn note_loop(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) {
+        let line = file.olines[oidx as usize].line_idx;
+        // The key is kept as it is (no allocation per pass); the label is
+        // cut from it only for a message.
+        let same = matches!(&self.last_loop, Some((k, l, f)) if *l == line && k == key && Rc::ptr_eq(f, file));
+        if !same {
+            self.last_loop = Some((key.clone(), line, file.clone()));
+        }
     }
 }

@@ -508,7 +508,7 @@ impl Interp<'_> {
         while axes != 0 {
             let slot = axes.trailing_zeros() as usize;
             axes &= axes - 1;
-            self.move_axis(slot - 1, p.vals[slot]);
+            self.mach.move_axis(slot - 1, p.vals[slot]);
         }
         true
     }
@@ -561,7 +561,7 @@ impl Interp<'_> {
         }
         // The checks read the motion mode the line sets.
         let old = std::mem::replace(&mut self.mach.modal.motion, motion);
-        let ok = self.check_motion(&words[..count], &axes[..n]).is_ok();
+        let ok = self.mach.check_motion(&words[..count], &axes[..n]).is_ok();
         self.mach.modal.motion = old;
         ok
     }

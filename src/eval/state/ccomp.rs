@@ -14,6 +14,7 @@ use crate::diag::{ErrorKind, WarningKind};
 use crate::geom::comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
 
 use crate::eval::Interp;
+use crate::eval::state::Machine;
 
 /// Compensation state of a run, made when a program first turns it on.
 #[derive(Debug)]
@@ -30,21 +31,6 @@ fn geom(error: CompError) -> ErrorKind {
 }
 
 impl Interp<'_> {
-    /// Axis indices of the compensation plane's coordinates (a, b, third).
-    fn comp_axes(&self) -> [usize; 3] {
-        if self.mach.modal.plane == 180 {
-            [2, 0, 1]
-        } else {
-            [0, 1, 2]
-        }
-    }
-
-    fn comp_pos(&self) -> Option<[f64; 3]> {
-        let [a, b, c] = self.comp_axes();
-        let p = |i: usize| self.mach.pos.axes[i].as_ref().ok().copied();
-        Some([p(a)?, p(b)?, p(c)?])
-    }
-
     /// G41/G42 (`g` 410 or 420) or G41.1/G42.1 (411, 421) on the block
     /// with `words`; the block checks have accepted them.
     pub(in crate::eval) fn comp_on(
@@ -93,7 +79,7 @@ impl Interp<'_> {
                 None => None,
             }
         };
-        let pos = self.comp_pos();
+        let pos = self.mach.comp_pos();
         let tol = Tolerances::default_for(self.mach.modal.metric);
         let run = self.mach.comp.get_or_insert_with(|| {
             Box::new(CompRun {
@@ -156,17 +142,34 @@ impl Interp<'_> {
             mm / 25.4
         }
     }
+}
+
+impl Machine {
+    /// Axis indices of the compensation plane's coordinates (a, b, third).
+    fn comp_axes(&self) -> [usize; 3] {
+        if self.modal.plane == 180 {
+            [2, 0, 1]
+        } else {
+            [0, 1, 2]
+        }
+    }
+
+    fn comp_pos(&self) -> Option<[f64; 3]> {
+        let [a, b, c] = self.comp_axes();
+        let p = |i: usize| self.pos.axes[i].as_ref().ok().copied();
+        Some([p(a)?, p(b)?, p(c)?])
+    }
 
     /// G40.
     pub(in crate::eval) fn comp_off(&mut self) -> Result<(), ErrorKind> {
-        let Some(run) = self.mach.comp.as_mut() else {
+        let Some(run) = self.comp.as_mut() else {
             return Ok(());
         };
         if run.known {
-            self.mach.comp_pending = run.comp.off(&mut run.out).map_err(geom)?;
+            self.comp_pending = run.comp.off(&mut run.out).map_err(geom)?;
             run.out.clear();
         } else {
-            run.comp = Comp::new(Tolerances::default_for(self.mach.modal.metric));
+            run.comp = Comp::new(Tolerances::default_for(self.modal.metric));
         }
         run.known = false;
         Ok(())
@@ -179,20 +182,20 @@ impl Interp<'_> {
         words: &[(u8, f64)],
         motion: i32,
     ) -> Result<(), ErrorKind> {
-        if self.mach.modal.ccomp == 400 {
-            if self.mach.comp_pending {
+        if self.modal.ccomp == 400 {
+            if self.comp_pending {
                 match motion {
                     20 | 30 => return Err(ErrorKind::CompArcAfterOff),
-                    0 | 10 | 330 | 331 => self.mach.comp_pending = false,
+                    0 | 10 | 330 | 331 => self.comp_pending = false,
                     _ => {}
                 }
             }
             return Ok(());
         }
         let end = self.comp_pos();
-        let xz = self.mach.modal.plane == 180;
-        let ijk_absolute = self.mach.modal.ijk_absolute;
-        let Some(run) = self.mach.comp.as_mut().filter(|r| r.known) else {
+        let xz = self.modal.plane == 180;
+        let ijk_absolute = self.modal.ijk_absolute;
+        let Some(run) = self.comp.as_mut().filter(|r| r.known) else {
             return Ok(());
         };
         let Some(end) = end else {
@@ -242,9 +245,8 @@ impl Interp<'_> {
 
     /// Whether G53 would move with an offset path (the reference refuses it).
     pub(in crate::eval) fn comp_offsetting(&self) -> bool {
-        self.mach.modal.ccomp != 400
+        self.modal.ccomp != 400
             && self
-                .mach
                 .comp
                 .as_ref()
                 .is_some_and(|r| r.known && r.comp.is_offsetting())
@@ -254,9 +256,9 @@ impl Interp<'_> {
     /// released; an end also turns compensation off.
     pub(in crate::eval) fn comp_stop(&mut self, end: bool) -> Result<(), ErrorKind> {
         if end {
-            self.mach.comp_pending = false;
+            self.comp_pending = false;
         }
-        let Some(run) = self.mach.comp.as_mut() else {
+        let Some(run) = self.comp.as_mut() else {
             return Ok(());
         };
         if run.known {
@@ -264,7 +266,7 @@ impl Interp<'_> {
             run.out.clear();
         }
         if end {
-            run.comp = Comp::new(Tolerances::default_for(self.mach.modal.metric));
+            run.comp = Comp::new(Tolerances::default_for(self.modal.metric));
             run.known = false;
         }
         Ok(())
@@ -272,7 +274,7 @@ impl Interp<'_> {
 
     /// G20/G21 while compensation state exists.
     pub(in crate::eval) fn comp_units(&mut self, metric: bool) {
-        if let Some(run) = self.mach.comp.as_mut() {
+        if let Some(run) = self.comp.as_mut() {
             run.comp.scale(if metric { 25.4 } else { 1.0 / 25.4 });
             run.comp.set_tolerances(Tolerances::default_for(metric));
         }

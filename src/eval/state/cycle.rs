@@ -2,7 +2,7 @@
 //! and the depth of the last one, which a repeat of the same cycle reuses
 //! when its line leaves them out.
 
-use crate::eval::Interp;
+use crate::eval::state::Machine;
 
 /// Whether a motion mode (G-code ×10) is a canned cycle.
 pub fn is_cycle(motion: i32) -> bool {
@@ -27,16 +27,16 @@ pub struct Cycle {
     pub depth: f64,
 }
 
-impl Interp<'_> {
+impl Machine {
     /// A cycle block ran (checked by `check_block`): keeps its R and depth
     /// for repeats.
     pub(in crate::eval) fn note_cycle(&mut self, words: &[(u8, f64)]) {
-        let (depth, _) = depth_axis(self.mach.modal.plane);
+        let (depth, _) = depth_axis(self.modal.plane);
         for &(l, v) in words {
             if l == b'r' {
-                self.mach.cycle.r = v;
+                self.cycle.r = v;
             } else if l == depth {
-                self.mach.cycle.depth = v;
+                self.cycle.depth = v;
             }
         }
     }

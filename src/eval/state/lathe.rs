@@ -194,7 +194,7 @@ impl Interp<'_> {
             .or_insert_with(|| target.clone());
         self.flow.called.insert(label.clone());
         self.flow.last_called = Some(label);
-        self.goto(&target.file, target.oidx, true);
+        self.flow.goto(&target.file, target.oidx, true);
         Ok(level)
     }
 

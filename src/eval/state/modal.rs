@@ -8,6 +8,7 @@ use crate::program::FileIndex;
 
 use crate::eval::Interp;
 use crate::eval::read::block::Words;
+use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
 use crate::eval::state::nurbs::{NO_MOTION, NURBS};
 
@@ -163,7 +164,7 @@ impl Interp<'_> {
         words: &Words,
         m99: bool,
     ) -> Result<bool, Error> {
-        if !m99 && self.apply_simple(words) {
+        if !m99 && self.mach.apply_simple(words) {
             return Ok(false);
         }
         let motion_before = self.mach.modal.motion;
@@ -186,7 +187,7 @@ impl Interp<'_> {
         if self.mach.comp.is_some() || self.mach.modal.ccomp != 400 {
             for &g in w.gs() {
                 let r = match g {
-                    400 => self.comp_off(),
+                    400 => self.mach.comp_off(),
                     410 | 411 | 420 | 421 => self.comp_on(g, words, file, start),
                     _ => Ok(()),
                 };
@@ -207,7 +208,7 @@ impl Interp<'_> {
                 || words
                     .iter()
                     .any(|&(l, v)| l == b'm' && matches!(v, 0.0 | 1.0 | 60.0));
-            if stop && let Err(k) = self.comp_stop(w.ends) {
+            if stop && let Err(k) = self.mach.comp_stop(w.ends) {
                 return Err(self.error(k, file, start, start));
             }
         }
@@ -485,7 +486,7 @@ impl Interp<'_> {
                 }
             }
             530 => {
-                if self.comp_offsetting() {
+                if self.mach.comp_offsetting() {
                     let k = ErrorKind::CompForbids { action: "use G53" };
                     return Err(self.error(k, file, start, start));
                 }
@@ -520,10 +521,10 @@ impl Interp<'_> {
             // one (the reference runs them as G5.2).
             self.nurbs_end();
             if !axis_words.is_empty() {
-                self.nurbs_point(NO_MOTION, axis_words, w.l);
+                self.mach.nurbs_point(NO_MOTION, axis_words, w.l);
             }
         } else if w.gs().contains(&NURBS) || (motion_before == NURBS && !axis_words.is_empty()) {
-            self.nurbs_point(motion_before, axis_words, w.l);
+            self.mach.nurbs_point(motion_before, axis_words, w.l);
         } else {
             // G43.1's axis words are a move too when the line has a
             // motion code.
@@ -532,61 +533,21 @@ impl Interp<'_> {
                 .iter()
                 .any(|&g| g != 800 && crate::eval::read::validate::is_motion(g));
             if !axis_words.is_empty() && (!dynamic_tlo || explicit_motion) {
-                if let Err(k) = self.check_motion(words, axis_words) {
+                if let Err(k) = self.mach.check_motion(words, axis_words) {
                     return Err(self.error(k, file, start, start));
                 }
                 if crate::eval::state::cycle::is_cycle(self.mach.modal.motion) {
-                    self.note_cycle(words);
+                    self.mach.note_cycle(words);
                 }
                 self.move_to(axis_words);
                 if (self.mach.comp.is_some() || self.mach.modal.ccomp != 400)
-                    && let Err(k) = self.comp_move(words, self.mach.modal.motion)
+                    && let Err(k) = self.mach.comp_move(words, self.mach.modal.motion)
                 {
                     return Err(self.error(k, file, start, start));
                 }
             }
         }
         Ok(())
-    }
-
-    /// The common line (G0/G1, axis, F and S words, each at most once) in
-    /// a plain state: as the general update below, in a few steps. False
-    /// leaves the state untouched.
-    fn apply_simple(&mut self, words: &[(u8, f64)]) -> bool {
-        if self.mach.rotated || self.mach.modal.ccomp != 400 || self.mach.comp_pending {
-            return false;
-        }
-        let mut motion = self.mach.modal.motion;
-        let mut seen = 0u32;
-        for &(l, v) in words {
-            let bit = 1u32 << (l.wrapping_sub(b'a') & 31);
-            if seen & bit != 0 {
-                return false;
-            }
-            seen |= bit;
-            match l {
-                b'g' if v == 0.0 => motion = 0,
-                b'g' if v == 1.0 => motion = 10,
-                b'x' | b'y' | b'z' | b'a' | b'b' | b'c' | b'f' | b's' => {}
-                _ => return false,
-            }
-        }
-        if !matches!(motion, 0 | 10) {
-            return false;
-        }
-        self.mach.modal.motion = motion;
-        for &(l, v) in words {
-            match l {
-                b'f' => self.mach.modal.feed = v,
-                b's' => self.mach.modal.speed = v,
-                _ => {
-                    if let Some(a) = axis_index(l) {
-                        self.move_axis(a, v);
-                    }
-                }
-            }
-        }
-        true
     }
 
     /// M6 or M61: the standalone reference takes the position from its last
@@ -637,41 +598,6 @@ impl Interp<'_> {
         }
     }
 
-    /// A motion word's value on an axis: X words are diameters in lathe
-    /// diameter mode (G7), and the position is a radius.
-    #[inline(always)]
-    fn radius_word(&self, axis: usize, v: f64) -> f64 {
-        if axis == 0 && self.mach.modal.lathe_diameter {
-            v / 2.0
-        } else {
-            v
-        }
-    }
-
-    /// Where a word sends an axis: its value (G90) or the position plus it
-    /// (G91).
-    pub(in crate::eval) fn axis_end(&self, axis: usize, v: f64) -> Result<f64, Unknown> {
-        let v = self.radius_word(axis, v);
-        if self.mach.modal.absolute {
-            Ok(v)
-        } else {
-            self.mach.pos.axes[axis].clone().map(|p| p + v)
-        }
-    }
-
-    /// The end of a move on one axis: the word's value (G90) or the
-    /// position plus it (G91); an unknown position stays unknown.
-    #[inline]
-    pub(in crate::eval) fn move_axis(&mut self, axis: usize, v: f64) {
-        self.mach.tlo_moved = false;
-        let v = self.radius_word(axis, v);
-        if self.mach.modal.absolute {
-            self.mach.pos.axes[axis] = Ok(v);
-        } else if let Ok(p) = &mut self.mach.pos.axes[axis] {
-            *p += v;
-        }
-    }
-
     pub(in crate::eval) fn set_units(&mut self, metric: bool) {
         if self.mach.modal.metric == metric {
             return;
@@ -690,7 +616,7 @@ impl Interp<'_> {
             }
         }
         self.mach.modal.metric = metric;
-        self.comp_units(metric);
+        self.mach.comp_units(metric);
     }
 
     pub(in crate::eval) fn select_cs(&mut self, cs: i32) {
@@ -796,92 +722,6 @@ impl Interp<'_> {
         self.params.assign(5070, 0.0);
     }
 
-    /// Checks the reference makes with the start position: arc geometry and
-    /// probe distance. Skipped where the position is not known.
-    pub(in crate::eval) fn check_motion(
-        &self,
-        words: &[(u8, f64)],
-        axis_words: &[(usize, f64)],
-    ) -> Result<(), ErrorKind> {
-        let motion = self.mach.modal.motion;
-        let start = |a: usize| self.mach.pos.axes[a].as_ref().ok().copied();
-        let end = |a: usize| -> Option<f64> {
-            match axis_words.iter().find(|w| w.0 == a) {
-                Some(&(_, v)) => self.axis_end(a, v).ok(),
-                None => start(a),
-            }
-        };
-        let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
-        let bad = ErrorKind::Block;
-        match motion {
-            20 | 30 => {
-                let (a0, a1, c0, c1) = match self.mach.modal.plane {
-                    180 | 181 => (2, 0, b'k', b'i'),
-                    190 | 191 => (1, 2, b'j', b'k'),
-                    _ => (0, 1, b'i', b'j'),
-                };
-                let (Some(sx), Some(sy), Some(ex), Some(ey)) =
-                    (start(a0), start(a1), end(a0), end(a1))
-                else {
-                    return Ok(());
-                };
-                // The reference's checks (arc_data_r / arc_data_ijk), with
-                // its tolerances for the program's units.
-                use crate::geom::comp::{Arc, ArcCenter, CompError, Tolerances, arc_center};
-                let center = match word(b'r') {
-                    Some(r) => ArcCenter::Radius(r),
-                    None => ArcCenter::Offsets {
-                        i: word(c0).unwrap_or(0.0),
-                        j: word(c1).unwrap_or(0.0),
-                        absolute: self.mach.modal.ijk_absolute,
-                    },
-                };
-                let arc = Arc {
-                    ccw: motion == 30,
-                    center,
-                    turns: 1,
-                };
-                let tol = Tolerances::default_for(self.mach.modal.metric);
-                match arc_center(&tol, arc, [sx, sy], [ex, ey]) {
-                    Ok(_) => {}
-                    Err(CompError::ArcSamePoint) => return Err(bad(BlockError::ArcSamePoint)),
-                    Err(CompError::RadiusTooSmall) => {
-                        return Err(bad(BlockError::ArcRadiusTooSmall));
-                    }
-                    Err(CompError::ZeroRadiusArc) => return Err(bad(BlockError::ZeroRadiusArc)),
-                    Err(_) => {
-                        let (ci, cj) = (word(c0).unwrap_or(0.0), word(c1).unwrap_or(0.0));
-                        let (cx, cy) = if self.mach.modal.ijk_absolute {
-                            (ci, cj)
-                        } else {
-                            (sx + ci, sy + cj)
-                        };
-                        let r1 = (sx - cx).hypot(sy - cy);
-                        let r2 = (ex - cx).hypot(ey - cy);
-                        return Err(bad(BlockError::ArcRadiiDiffer { r1, r2 }));
-                    }
-                }
-            }
-            382 | 384 => {
-                // Axes without a word do not move, known or not.
-                let d: f64 = axis_words
-                    .iter()
-                    .filter(|w| w.0 < 3)
-                    .filter_map(|w| Some((end(w.0)? - start(w.0)?).powi(2)))
-                    .sum::<f64>()
-                    .sqrt();
-                let known = axis_words
-                    .iter()
-                    .all(|w| start(w.0).is_some() || (self.mach.modal.absolute && w.0 >= 3));
-                if known && d < 1e-7 {
-                    return Err(bad(BlockError::ProbeTooClose));
-                }
-            }
-            _ => {}
-        }
-        Ok(())
-    }
-
     fn move_to(&mut self, axis_words: &[(usize, f64)]) {
         self.mach.tlo_moved = false;
         if self.mach.rotated {
@@ -904,7 +744,7 @@ impl Interp<'_> {
                 // With compensation on this is the programmed position,
                 // which is what the reference reads missing words from.
                 for &(a, v) in axis_words {
-                    self.move_axis(a, v);
+                    self.mach.move_axis(a, v);
                 }
             }
         }
@@ -955,5 +795,168 @@ impl LineWords {
     #[inline]
     fn axis_words(&self) -> &[(usize, f64)] {
         &self.axes[..self.an]
+    }
+}
+
+impl Machine {
+    /// The common line (G0/G1, axis, F and S words, each at most once) in
+    /// a plain state: as the general update below, in a few steps. False
+    /// leaves the state untouched.
+    fn apply_simple(&mut self, words: &[(u8, f64)]) -> bool {
+        if self.rotated || self.modal.ccomp != 400 || self.comp_pending {
+            return false;
+        }
+        let mut motion = self.modal.motion;
+        let mut seen = 0u32;
+        for &(l, v) in words {
+            let bit = 1u32 << (l.wrapping_sub(b'a') & 31);
+            if seen & bit != 0 {
+                return false;
+            }
+            seen |= bit;
+            match l {
+                b'g' if v == 0.0 => motion = 0,
+                b'g' if v == 1.0 => motion = 10,
+                b'x' | b'y' | b'z' | b'a' | b'b' | b'c' | b'f' | b's' => {}
+                _ => return false,
+            }
+        }
+        if !matches!(motion, 0 | 10) {
+            return false;
+        }
+        self.modal.motion = motion;
+        for &(l, v) in words {
+            match l {
+                b'f' => self.modal.feed = v,
+                b's' => self.modal.speed = v,
+                _ => {
+                    if let Some(a) = axis_index(l) {
+                        self.move_axis(a, v);
+                    }
+                }
+            }
+        }
+        true
+    }
+
+    /// A motion word's value on an axis: X words are diameters in lathe
+    /// diameter mode (G7), and the position is a radius.
+    #[inline(always)]
+    fn radius_word(&self, axis: usize, v: f64) -> f64 {
+        if axis == 0 && self.modal.lathe_diameter {
+            v / 2.0
+        } else {
+            v
+        }
+    }
+
+    /// Where a word sends an axis: its value (G90) or the position plus it
+    /// (G91).
+    pub(in crate::eval) fn axis_end(&self, axis: usize, v: f64) -> Result<f64, Unknown> {
+        let v = self.radius_word(axis, v);
+        if self.modal.absolute {
+            Ok(v)
+        } else {
+            self.pos.axes[axis].clone().map(|p| p + v)
+        }
+    }
+
+    /// The end of a move on one axis: the word's value (G90) or the
+    /// position plus it (G91); an unknown position stays unknown.
+    #[inline]
+    pub(in crate::eval) fn move_axis(&mut self, axis: usize, v: f64) {
+        self.tlo_moved = false;
+        let v = self.radius_word(axis, v);
+        if self.modal.absolute {
+            self.pos.axes[axis] = Ok(v);
+        } else if let Ok(p) = &mut self.pos.axes[axis] {
+            *p += v;
+        }
+    }
+
+    /// Checks the reference makes with the start position: arc geometry and
+    /// probe distance. Skipped where the position is not known.
+    pub(in crate::eval) fn check_motion(
+        &self,
+        words: &[(u8, f64)],
+        axis_words: &[(usize, f64)],
+    ) -> Result<(), ErrorKind> {
+        let motion = self.modal.motion;
+        let start = |a: usize| self.pos.axes[a].as_ref().ok().copied();
+        let end = |a: usize| -> Option<f64> {
+            match axis_words.iter().find(|w| w.0 == a) {
+                Some(&(_, v)) => self.axis_end(a, v).ok(),
+                None => start(a),
+            }
+        };
+        let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
+        let bad = ErrorKind::Block;
+        match motion {
+            20 | 30 => {
+                let (a0, a1, c0, c1) = match self.modal.plane {
+                    180 | 181 => (2, 0, b'k', b'i'),
+                    190 | 191 => (1, 2, b'j', b'k'),
+                    _ => (0, 1, b'i', b'j'),
+                };
+                let (Some(sx), Some(sy), Some(ex), Some(ey)) =
+                    (start(a0), start(a1), end(a0), end(a1))
+                else {
+                    return Ok(());
+                };
+                // The reference's checks (arc_data_r / arc_data_ijk), with
+                // its tolerances for the program's units.
+                use crate::geom::comp::{Arc, ArcCenter, CompError, Tolerances, arc_center};
+                let center = match word(b'r') {
+                    Some(r) => ArcCenter::Radius(r),
+                    None => ArcCenter::Offsets {
+                        i: word(c0).unwrap_or(0.0),
+                        j: word(c1).unwrap_or(0.0),
+                        absolute: self.modal.ijk_absolute,
+                    },
+                };
+                let arc = Arc {
+                    ccw: motion == 30,
+                    center,
+                    turns: 1,
+                };
+                let tol = Tolerances::default_for(self.modal.metric);
+                match arc_center(&tol, arc, [sx, sy], [ex, ey]) {
+                    Ok(_) => {}
+                    Err(CompError::ArcSamePoint) => return Err(bad(BlockError::ArcSamePoint)),
+                    Err(CompError::RadiusTooSmall) => {
+                        return Err(bad(BlockError::ArcRadiusTooSmall));
+                    }
+                    Err(CompError::ZeroRadiusArc) => return Err(bad(BlockError::ZeroRadiusArc)),
+                    Err(_) => {
+                        let (ci, cj) = (word(c0).unwrap_or(0.0), word(c1).unwrap_or(0.0));
+                        let (cx, cy) = if self.modal.ijk_absolute {
+                            (ci, cj)
+                        } else {
+                            (sx + ci, sy + cj)
+                        };
+                        let r1 = (sx - cx).hypot(sy - cy);
+                        let r2 = (ex - cx).hypot(ey - cy);
+                        return Err(bad(BlockError::ArcRadiiDiffer { r1, r2 }));
+                    }
+                }
+            }
+            382 | 384 => {
+                // Axes without a word do not move, known or not.
+                let d: f64 = axis_words
+                    .iter()
+                    .filter(|w| w.0 < 3)
+                    .filter_map(|w| Some((end(w.0)? - start(w.0)?).powi(2)))
+                    .sum::<f64>()
+                    .sqrt();
+                let known = axis_words
+                    .iter()
+                    .all(|w| start(w.0).is_some() || (self.modal.absolute && w.0 >= 3));
+                if known && d < 1e-7 {
+                    return Err(bad(BlockError::ProbeTooClose));
+                }
+            }
+            _ => {}
+        }
+        Ok(())
     }
 }

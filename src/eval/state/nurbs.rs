@@ -4,6 +4,7 @@
 //! as in the reference, whose checks depend on how many are pending.
 
 use crate::eval::Interp;
+use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
 
 /// Motion mode of a NURBS block (G5.2 ×10).
@@ -43,38 +44,6 @@ impl Nurbs {
 }
 
 impl Interp<'_> {
-    /// A G5.2 block (on the line, or modal with axis words; checked by
-    /// `check_block`): the control point. `motion_before` is the motion mode
-    /// the line found.
-    pub(in crate::eval) fn nurbs_point(
-        &mut self,
-        motion_before: i32,
-        axis_words: &[(usize, f64)],
-        l_word: Option<f64>,
-    ) {
-        let word = |a: usize| axis_words.iter().rev().find(|w| w.0 == a).map(|w| w.1);
-        if motion_before != NURBS {
-            self.mach.nurbs.points = 0;
-        }
-        if self.mach.nurbs.points == 0 {
-            self.mach.nurbs.points = 1;
-            self.mach.nurbs.order = 3;
-            self.mach.nurbs.last = [self.mach.pos.axes[0].clone(), self.mach.pos.axes[1].clone()];
-        }
-        if let Some(l) = l_word
-            && l > 3.0
-        {
-            self.mach.nurbs.order = l.round() as u32;
-        }
-        if let (Some(x), Some(y)) = (word(0), word(1)) {
-            self.mach.nurbs.points += 1;
-            // The position does not move until G5.3: incremental points are
-            // all relative to where the block started.
-            self.mach.nurbs.last = [self.axis_end(0, x), self.axis_end(1, y)];
-        }
-        self.mach.modal.motion = NURBS;
-    }
-
     /// G5.3 (checked by `check_block`): the move to the last control
     /// point.
     pub(in crate::eval) fn nurbs_end(&mut self) {
@@ -90,5 +59,39 @@ impl Interp<'_> {
             self.mach.pos.axes[0] = x;
             self.mach.pos.axes[1] = y;
         }
+    }
+}
+
+impl Machine {
+    /// A G5.2 block (on the line, or modal with axis words; checked by
+    /// `check_block`): the control point. `motion_before` is the motion mode
+    /// the line found.
+    pub(in crate::eval) fn nurbs_point(
+        &mut self,
+        motion_before: i32,
+        axis_words: &[(usize, f64)],
+        l_word: Option<f64>,
+    ) {
+        let word = |a: usize| axis_words.iter().rev().find(|w| w.0 == a).map(|w| w.1);
+        if motion_before != NURBS {
+            self.nurbs.points = 0;
+        }
+        if self.nurbs.points == 0 {
+            self.nurbs.points = 1;
+            self.nurbs.order = 3;
+            self.nurbs.last = [self.pos.axes[0].clone(), self.pos.axes[1].clone()];
+        }
+        if let Some(l) = l_word
+            && l > 3.0
+        {
+            self.nurbs.order = l.round() as u32;
+        }
+        if let (Some(x), Some(y)) = (word(0), word(1)) {
+            self.nurbs.points += 1;
+            // The position does not move until G5.3: incremental points are
+            // all relative to where the block started.
+            self.nurbs.last = [self.axis_end(0, x), self.axis_end(1, y)];
+        }
+        self.modal.motion = NURBS;
     }
 }

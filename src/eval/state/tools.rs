@@ -4,6 +4,7 @@
 //! units, as LinuxCNC stores it.
 
 use crate::eval::Interp;
+use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
 
 /// One tool: offsets X..W, diameter, front and back angle, orientation.
@@ -82,15 +83,6 @@ impl Interp<'_> {
             Some(d) => Some(*d),
             None if self.mach.tools_known => Some(ToolData::default()),
             None => None,
-        }
-    }
-
-    /// How to make the tool data of the tool in the spindle known.
-    pub(in crate::eval) fn tool_data_hint(&self) -> String {
-        if self.mach.current_tool.is_none() {
-            "--tool-table FILE (LinuxCNC's tool table; the spindle then starts with tool 0 until an M6 or M61), or --zero-start".into()
-        } else {
-            "--tool-table FILE (LinuxCNC's tool table), or --zero-start".into()
         }
     }
 
@@ -202,6 +194,17 @@ impl Interp<'_> {
                 self.mach.tools.remove(&t);
                 self.diags.unknown_tools.insert(t);
             }
+        }
+    }
+}
+
+impl Machine {
+    /// How to make the tool data of the tool in the spindle known.
+    pub(in crate::eval) fn tool_data_hint(&self) -> String {
+        if self.current_tool.is_none() {
+            "--tool-table FILE (LinuxCNC's tool table; the spindle then starts with tool 0 until an M6 or M61), or --zero-start".into()
+        } else {
+            "--tool-table FILE (LinuxCNC's tool table), or --zero-start".into()
         }
     }
 }
