@@ -797,7 +797,73 @@ fn skip_blanks(line: &[u8], mut i: usize) -> usize {
 
 /// Reads `[+-]digits[.digits]` with blanks allowed between its characters;
 /// returns the value and the end of the number.
+///
+/// A number of at most 15 significant digits without blanks (every number
+/// the evaluator writes, and the usual CAM number) is read in one pass:
+/// its digits as an integer, exact below 2^53, divided by an exact power of
+/// ten. One correctly rounded division of two exact values is the correctly
+/// rounded value of the decimal, which is what `str::parse` returns too.
+/// Anything else goes through `str::parse`.
+#[inline]
 fn read_number(line: &[u8], start: usize) -> Option<(f64, usize)> {
+    let mut i = start;
+    let neg = match line.get(i) {
+        Some(b'-') => {
+            i += 1;
+            true
+        }
+        Some(b'+') => {
+            i += 1;
+            false
+        }
+        _ => false,
+    };
+    let mut mant: u64 = 0;
+    // Significant digits (leading zeros not counted), digits seen at all,
+    // digits after the point.
+    let mut digits = 0u32;
+    let mut seen = false;
+    let mut frac: Option<u32> = None;
+    while let Some(&c) = line.get(i) {
+        if c.is_ascii_digit() {
+            seen = true;
+            if digits < 19 {
+                mant = mant * 10 + u64::from(c - b'0');
+            }
+            if mant != 0 {
+                digits += 1;
+            }
+            if let Some(f) = frac.as_mut() {
+                *f += 1;
+            }
+        } else if c == b'.' && frac.is_none() {
+            frac = Some(0);
+        } else {
+            break;
+        }
+        i += 1;
+    }
+    // What follows must end the number for certain: not a second point,
+    // not blanks before more of it.
+    let after = skip_blanks(line, i);
+    let ends = !matches!(line.get(after), Some(c) if c.is_ascii_digit() || *c == b'.');
+    let frac = frac.unwrap_or(0);
+    if seen && ends && digits <= 15 && frac <= 22 {
+        let v = mant as f64 / POW10[frac as usize];
+        return Some((if neg { -v } else { v }, i));
+    }
+    read_number_slow(line, start)
+}
+
+/// Exact powers of ten (every one up to 1e22 is a double).
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// [`read_number`] for numbers with blanks inside or many digits.
+#[cold]
+fn read_number_slow(line: &[u8], start: usize) -> Option<(f64, usize)> {
     let mut buf = [0u8; 64];
     let mut len = 0;
     let mut i = skip_blanks(line, start);
@@ -838,6 +904,43 @@ fn read_number(line: &[u8], start: usize) -> Option<(f64, usize)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    proptest::proptest! {
+        /// The one-pass number reader gives what the general one gives
+        /// (value, end, or no number) on any text of number characters.
+        #[test]
+        fn number_reader_fast_path_is_exact(
+            text in "[-+ .0-9]{0,24}[XY; (]?",
+            at in 0usize..3,
+        ) {
+            let line = format!("X{text}");
+            let start = at.min(line.len());
+            let fast = read_number(line.as_bytes(), start);
+            let slow = read_number_slow(line.as_bytes(), start);
+            proptest::prop_assert_eq!(
+                fast.map(|(v, e)| (v.to_bits(), e)),
+                slow.map(|(v, e)| (v.to_bits(), e)),
+                "{:?}", line
+            );
+        }
+
+        #[test]
+        fn number_reader_reads_decimals_exactly(
+            int in 0u64..100_000_000,
+            frac in 0u64..10_000_000,
+            width in 0usize..12,
+            neg in proptest::bool::ANY,
+        ) {
+            let line = format!(
+                "X{}{int}.{frac:0width$} Y1",
+                if neg { "-" } else { "" },
+            );
+            let got = read_number(line.as_bytes(), 1);
+            let want: f64 = line[1..line.len() - 3].parse().unwrap();
+            proptest::prop_assert_eq!(got.map(|g| g.0.to_bits()), Some(want.to_bits()));
+            proptest::prop_assert_eq!(got.map(|g| g.1), Some(line.len() - 3));
+        }
+    }
 
     #[test]
     fn g80_beside_another_motion_code() {

@@ -113,6 +113,9 @@ pub struct Machine {
     /// The program ended (M2/M30).
     pub ended: bool,
     events: Vec<Motion>,
+    /// Motion events are recorded (a reader that only follows the state
+    /// turns this off: no event is put together).
+    record: bool,
 }
 
 fn numbered(settings: &Settings) -> FxMap<usize, f64> {
@@ -180,6 +183,7 @@ impl Machine {
             cycle_initial_z: None,
             ended: false,
             events: Vec::new(),
+            record: true,
         }
     }
 
@@ -206,6 +210,7 @@ impl Machine {
             cycle_initial_z: self.cycle_initial_z,
             ended: self.ended,
             events: Vec::new(),
+            record: self.record,
         }
     }
 
@@ -261,6 +266,19 @@ impl Machine {
         })
     }
 
+    /// Stops recording motion events ([`Machine::take_events`] then gives
+    /// none); the state is followed as before.
+    pub fn without_events(mut self) -> Machine {
+        self.record = false;
+        self
+    }
+
+    fn push(&mut self, ev: Motion) {
+        if self.record {
+            self.events.push(ev);
+        }
+    }
+
     /// Takes the motion events made since the last call.
     pub fn take_events(&mut self) -> std::vec::Drain<'_, Motion> {
         self.events.drain(..)
@@ -286,9 +304,13 @@ impl Machine {
 
     /// Moves to `to` (work coordinates, mm), emitting a line.
     fn line_to(&mut self, kind: MoveKind, to: MaybeAxes) {
+        if !self.record {
+            self.pos = to;
+            return;
+        }
         let from = self.point(self.pos);
         let to_p = self.point(to);
-        self.events.push(Motion::Line {
+        self.push(Motion::Line {
             kind,
             from,
             to: to_p,
@@ -322,7 +344,7 @@ impl Machine {
                 MCode::ToolChange => {
                     self.current_tool = self.selected_tool;
                     if let Some(t) = self.selected_tool {
-                        self.events.push(Motion::ToolChange { tool: t });
+                        self.push(Motion::ToolChange { tool: t });
                     }
                 }
                 MCode::SetTool => {
@@ -338,7 +360,7 @@ impl Machine {
                         MCode::Flood => self.modes.flood = true,
                         _ => (self.modes.mist, self.modes.flood) = (false, false),
                     }
-                    self.events.push(Motion::Coolant {
+                    self.push(Motion::Coolant {
                         mist: self.modes.mist,
                         flood: self.modes.flood,
                     });
@@ -350,7 +372,7 @@ impl Machine {
         }
         if b.non_modal == Some(NonModal::Dwell) {
             let seconds = b.value(b'P').unwrap_or(0.0);
-            self.events.push(Motion::Dwell { seconds });
+            self.push(Motion::Dwell { seconds });
         }
         if let Some(p) = b.plane {
             self.modes.plane = p;
@@ -404,8 +426,8 @@ impl Machine {
         }
         for (m, _) in b.m_codes() {
             match m {
-                MCode::Pause { optional } => self.events.push(Motion::Pause { optional }),
-                MCode::PalletPause => self.events.push(Motion::Pause { optional: false }),
+                MCode::Pause { optional } => self.push(Motion::Pause { optional }),
+                MCode::PalletPause => self.push(Motion::Pause { optional: false }),
                 MCode::End { .. } => self.end(),
                 _ => {}
             }
@@ -413,7 +435,7 @@ impl Machine {
     }
 
     fn spindle_event(&mut self) {
-        self.events.push(Motion::Spindle {
+        self.push(Motion::Spindle {
             dir: self.modes.spindle,
             speed: self.modes.speed,
             css: self.modes.spindle_mode == SpindleMode::ConstantSurface,
@@ -763,6 +785,10 @@ impl Machine {
     }
 
     fn arc(&mut self, b: &Block, to: MaybeAxes) {
+        if !self.record {
+            self.pos = to;
+            return;
+        }
         let s = self.scale();
         let (i0, i1, plane, o0, o1) = match self.modes.plane {
             BPlane::XY => (0, 1, Plane::XY, b'I', b'J'),
@@ -796,7 +822,7 @@ impl Machine {
         };
         let turns = b.value(b'P').map_or(1, |p| p.round().max(1.0) as u32);
         let (from, to_p) = (self.point(self.pos), self.point(to));
-        self.events.push(Motion::Arc {
+        self.push(Motion::Arc {
             from,
             to: to_p,
             center,
@@ -826,7 +852,7 @@ impl Machine {
             // aside); nothing to change.
         }
         self.shift(before);
-        self.events.push(Motion::End);
+        self.push(Motion::End);
         self.ended = true;
     }
 }

@@ -25,6 +25,8 @@ use super::format::LineWriter;
 use super::lower::{self, PlainLine};
 use super::profile::{Profile, ToolChange};
 
+mod plain;
+
 /// A problem found on a line: the word it is about and what it is.
 struct Problem {
     span: Option<crate::machine::block::Span>,
@@ -78,6 +80,9 @@ pub struct Lowering {
     f_before: Option<f64>,
     /// The F value the target has after compensated moves were written.
     comp_f: Option<f64>,
+    /// Lines every word of which is kept as it is take the short way
+    /// (plain.rs); off only to compare both ways in tests.
+    plain: bool,
 }
 
 /// Cutter compensation on, on a target without it.
@@ -95,7 +100,7 @@ impl Lowering {
         Lowering {
             p,
             opts,
-            m: Machine::new(settings),
+            m: Machine::new(settings).without_events(),
             block: Block::default(),
             w: LineWriter::new(p),
             errors: Vec::new(),
@@ -114,6 +119,7 @@ impl Lowering {
             last_f: None,
             f_before: None,
             comp_f: None,
+            plain: true,
         }
     }
 
@@ -235,6 +241,7 @@ impl LineConsumer for Lowering {
         }
         let mut block = std::mem::take(&mut self.block);
         let problems = match block.decode_into(text) {
+            Ok(()) if self.plain && self.is_plain(&block) => self.write_plain(&block, text, out),
             Ok(()) => self.lower_block(&block, text, origin, out),
             Err(e) => Ok(vec![decode_problem(e)]),
         };

@@ -42,20 +42,28 @@ impl LineWriter {
             self.buf.push(b' ');
         }
         self.buf.push(letter);
-        self.num.clear();
         if code {
-            let t = (v * 10.0).round();
-            use std::fmt::Write;
-            let _ = if t % 10.0 == 0.0 {
-                write!(self.num, "{}", (t / 10.0) as i64)
+            let t = v * 10.0;
+            if (0.0..9.0e15).contains(&t) {
+                // Whole, or with its tenth (G38.2).
+                let t = round_u64(t);
+                let d = usize::from(!t.is_multiple_of(10));
+                write_fixed(&mut self.buf, false, if d == 0 { t / 10 } else { t }, d);
             } else {
-                write!(self.num, "{:.1}", t / 10.0)
-            };
+                use std::fmt::Write;
+                let t = t.round();
+                self.num.clear();
+                let _ = if t % 10.0 == 0.0 {
+                    write!(self.num, "{}", (t / 10.0) as i64)
+                } else {
+                    write!(self.num, "{:.1}", t / 10.0)
+                };
+                self.buf.extend_from_slice(self.num.as_bytes());
+            }
         } else {
             let d = self.decimals();
-            format_number(&mut self.num, v, d, self.p.max_digits);
+            write_number(&mut self.buf, v, d, self.p.max_digits);
         }
-        self.buf.extend_from_slice(self.num.as_bytes());
     }
 
     fn decimals(&self) -> u8 {
@@ -118,9 +126,26 @@ impl LineWriter {
         None
     }
 
+    /// The finished line (`None` for an empty one), or the error if it
+    /// does not fit the target's line buffer: [`LineWriter::finish_line`]
+    /// without the copy.
+    pub fn finished(&self) -> Result<Option<&[u8]>, ErrorKind> {
+        if self.buf.is_empty() {
+            return Ok(None);
+        }
+        match self.check() {
+            Some(k) => Err(k),
+            None => Ok(Some(&self.buf)),
+        }
+    }
+
     fn check(&self) -> Option<ErrorKind> {
         debug_assert!(!self.buf.iter().any(|&b| self.p.is_realtime(b)));
         let (limit, how) = self.p.line_limit?;
+        if self.buf.len() < limit {
+            // Fits however it is counted.
+            return None;
+        }
         let len = match how {
             LineCount::AllBytes => self.buf.len() + 1,
             LineCount::Significant => significant_len(&self.buf) + 1,
@@ -165,57 +190,116 @@ pub fn significant_len(line: &[u8]) -> usize {
 /// significant digits (zeros after the point count), trailing zeros
 /// dropped, never an exponent or `-0`.
 pub fn format_number(out: &mut String, v: f64, decimals: u8, max_digits: u8) {
-    use std::fmt::Write;
+    let mut b = Vec::with_capacity(24);
+    write_number(&mut b, v, decimals, max_digits);
+    // Digits, a point and a sign: always text.
+    out.push_str(&String::from_utf8_lossy(&b));
+}
+
+/// [`format_number`] into bytes.
+fn write_number(out: &mut Vec<u8>, v: f64, decimals: u8, max_digits: u8) {
     let a = v.abs();
     if v.fract() == 0.0 && a < 1e15 {
-        let _ = write!(out, "{}", v as i64);
+        write_fixed(out, v < 0.0, a as u64, 0);
         return;
     }
-    let int_digits = if a < 1.0 {
-        0
-    } else {
-        (a.log10().floor() as i32 + 1).max(1)
-    };
+    let int_digits = int_digits(a);
     let d = (max_digits as i32 - int_digits).clamp(0, decimals as i32) as usize;
-    let start = out.len();
-    let scale = 10f64.powi(d as i32);
-    let scaled = (a * scale).round();
-    if d <= 12 && scaled < 9.0e15 {
+    let x = a * pow10(d);
+    if d <= 12 && x < 9.0e15 {
         // Fixed point through an integer: no float formatting.
-        let n = scaled as u64;
-        let p = 10u64.pow(d as u32);
-        let (int, mut frac) = (n / p, n % p);
-        if n != 0 && v < 0.0 {
-            out.push('-');
-        }
-        let _ = write!(out, "{int}");
-        if frac != 0 {
-            let mut digits = d;
-            while frac % 10 == 0 {
-                frac /= 10;
-                digits -= 1;
-            }
-            let _ = write!(out, ".{frac:0digits$}");
-        }
+        let n = round_u64(x);
+        write_fixed(out, n != 0 && v < 0.0, n, d);
         return;
     }
-    let _ = write!(out, "{:.*}", d, v);
-    if out[start..].contains('.') {
-        while out.ends_with('0') {
-            out.pop();
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = write!(s, "{:.*}", d, v);
+    if s.contains('.') {
+        while s.ends_with('0') {
+            s.pop();
         }
-        if out.ends_with('.') {
-            out.pop();
+        if s.ends_with('.') {
+            s.pop();
         }
     }
-    if out[start..]
-        .trim_start_matches('-')
-        .bytes()
-        .all(|b| b == b'0')
-    {
-        out.truncate(start);
-        out.push('0');
+    if s.trim_start_matches('-').bytes().all(|b| b == b'0') {
+        s.clear();
+        s.push('0');
     }
+    out.extend_from_slice(s.as_bytes());
+}
+
+/// `x.round()` (halves away from zero) for `0 <= x < 2^53`: the part
+/// after the point is exact, so comparing it with one half decides.
+#[inline]
+fn round_u64(x: f64) -> u64 {
+    let i = x as u64;
+    i + u64::from(x - i as f64 >= 0.5)
+}
+
+/// `n / 10^d` written with `d` decimals, trailing zeros (and a point left
+/// alone) dropped, `-` first when `neg`.
+#[inline]
+fn write_fixed(out: &mut Vec<u8>, neg: bool, mut n: u64, mut d: usize) {
+    while d > 0 && n.is_multiple_of(10) {
+        n /= 10;
+        d -= 1;
+    }
+    // At most 30 decimals, 20 digits before the point, the point, the sign.
+    let mut tmp = [0u8; 64];
+    let mut i = tmp.len();
+    let mut put = |i: &mut usize, c: u8| {
+        *i -= 1;
+        if let Some(slot) = tmp.get_mut(*i) {
+            *slot = c;
+        }
+    };
+    for _ in 0..d.min(30) {
+        put(&mut i, b'0' + (n % 10) as u8);
+        n /= 10;
+    }
+    if d > 0 {
+        put(&mut i, b'.');
+    }
+    loop {
+        put(&mut i, b'0' + (n % 10) as u8);
+        n /= 10;
+        if n == 0 {
+            break;
+        }
+    }
+    if neg {
+        put(&mut i, b'-');
+    }
+    out.extend_from_slice(tmp.get(i..).unwrap_or_default());
+}
+
+/// Digits before the point of `a` (0 below 1): `floor(log10(a)) + 1`,
+/// counted against exact powers of ten.
+fn int_digits(a: f64) -> i32 {
+    if a < 1.0 {
+        return 0;
+    }
+    if !a.is_finite() {
+        return i32::MAX / 2;
+    }
+    let mut n = 1;
+    let mut p = 10.0;
+    while a >= p && n < 400 {
+        n += 1;
+        p *= 10.0;
+    }
+    n
+}
+
+/// `10^d` for the decimals of a number (exact up to 22).
+fn pow10(d: usize) -> f64 {
+    const P: [f64; 23] = [
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+        1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+    ];
+    P.get(d).copied().unwrap_or_else(|| 10f64.powi(d as i32))
 }
 
 #[cfg(test)]
@@ -226,6 +310,81 @@ mod tests {
         let mut s = String::new();
         format_number(&mut s, v, d, m);
         s
+    }
+
+    /// The rules of `format_number` written the plain way (float
+    /// formatting, `log10`, `powi`): the fast writer must agree with it.
+    fn reference(v: f64, decimals: u8, max_digits: u8) -> String {
+        let a = v.abs();
+        if v.fract() == 0.0 && a < 1e15 {
+            return format!("{}", v as i64);
+        }
+        let int_digits = if a < 1.0 {
+            0
+        } else {
+            (a.log10().floor() as i32 + 1).max(1)
+        };
+        let d = (max_digits as i32 - int_digits).clamp(0, decimals as i32) as usize;
+        let scaled = (a * 10f64.powi(d as i32)).round();
+        let mut out = String::new();
+        if d <= 12 && scaled < 9.0e15 {
+            let n = scaled as u64;
+            let p = 10u64.pow(d as u32);
+            let (int, mut frac) = (n / p, n % p);
+            if n != 0 && v < 0.0 {
+                out.push('-');
+            }
+            out.push_str(&format!("{int}"));
+            if frac != 0 {
+                let mut digits = d;
+                while frac % 10 == 0 {
+                    frac /= 10;
+                    digits -= 1;
+                }
+                out.push_str(&format!(".{frac:0digits$}"));
+            }
+            return out;
+        }
+        let mut s = format!("{:.*}", d, v);
+        if s.contains('.') {
+            s = s.trim_end_matches('0').trim_end_matches('.').to_string();
+        }
+        if s.trim_start_matches('-').bytes().all(|b| b == b'0') {
+            s = "0".into();
+        }
+        s
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn fast_writer_keeps_the_rules(
+            v in proptest::num::f64::NORMAL | proptest::num::f64::ZERO,
+            small in -100_000.0f64..100_000.0,
+            pick in proptest::bool::ANY,
+            decimals in 0u8..7,
+            max_digits in 1u8..12,
+        ) {
+            let v = if pick { v } else { small };
+            proptest::prop_assert_eq!(f(v, decimals, max_digits), reference(v, decimals, max_digits));
+        }
+    }
+
+    #[test]
+    fn codes_are_written_whole_or_with_their_tenth() {
+        let p = &crate::target::profiles::grbl::PROFILE;
+        for (v, want) in [
+            (1.0, "G1"),
+            (38.2, "G38.2"),
+            (0.0, "G0"),
+            (92.1, "G92.1"),
+            (5.0000001, "G5"),
+            (-1.0, "G-1"),
+            (-0.5, "G-0.5"),
+        ] {
+            let mut w = LineWriter::new(p);
+            w.push_word(b'G', v, true);
+            assert_eq!(String::from_utf8_lossy(&w.buf), want, "{v}");
+        }
     }
 
     #[test]

@@ -1,0 +1,322 @@
+//! The common line, written without the general machinery: a block whose
+//! every word the target keeps as it is (G0–G3, plane, units, distance
+//! mode, M codes the target has, axis words, F, S, I J K) while nothing
+//! is being lowered (no cutter compensation computed into the path, no G95
+//! rewritten, no G7). It is the same decoded block, run on the same
+//! machine model and written by the same [`super::LineWriter`] calls; only
+//! the per-word decisions and the lowering steps, which keep every word and
+//! add nothing for such a block, are not gone through. The tests below run
+//! random lines both ways and compare output, state and diagnostics.
+
+use crate::diag::Error;
+use crate::emit::Output;
+use crate::machine::block::{Block, GCode, LatheMode, MCode, MotionMode, Plane, WordKind};
+
+use super::{Lowering, Problem, code10, io_error};
+
+impl Lowering {
+    /// Whether `b` is such a line in the current state.
+    pub(super) fn is_plain(&self, b: &Block) -> bool {
+        if b.percent
+            || b.block_delete
+            || self.comp.is_some()
+            || self.after_off.is_some()
+            || self.feed_rewrite
+            || self.m.modes.lathe == LatheMode::Diameter && !self.p.has_g(70)
+        {
+            return false;
+        }
+        let motion = b.motion.unwrap_or(self.m.modes.motion);
+        let arc = match motion {
+            MotionMode::Rapid | MotionMode::Linear => false,
+            MotionMode::ArcCw | MotionMode::ArcCcw => true,
+            _ => return false,
+        };
+        let mut axis = false;
+        let mut ijk = false;
+        for w in &b.words {
+            let ok = match w.kind {
+                WordKind::G(g) => {
+                    matches!(
+                        g,
+                        GCode::Motion(
+                            MotionMode::Rapid
+                                | MotionMode::Linear
+                                | MotionMode::ArcCw
+                                | MotionMode::ArcCcw
+                        ) | GCode::Plane(Plane::XY | Plane::XZ | Plane::YZ)
+                            | GCode::Units(_)
+                            | GCode::Distance(_)
+                    ) && self.p.has_g(code10(w))
+                }
+                WordKind::M(m) => {
+                    m != MCode::ToolChange
+                        && w.value.fract() == 0.0
+                        && self.p.has_m(w.value.round() as u16)
+                }
+                WordKind::Value => match w.letter {
+                    b'X' | b'Y' | b'Z' => {
+                        axis = true;
+                        self.p.has_word(w.letter)
+                    }
+                    b'I' | b'J' | b'K' => {
+                        ijk = true;
+                        self.p.has_word(w.letter)
+                    }
+                    b'F' | b'S' => self.p.has_word(w.letter),
+                    _ => false,
+                },
+            };
+            if !ok {
+                return false;
+            }
+        }
+        // An arc given by its centre alone is a full circle (lowered).
+        !(arc && ijk && !axis)
+    }
+
+    /// Runs and writes a line [`Lowering::is_plain`] accepted, as the
+    /// general path does for it.
+    pub(super) fn write_plain(
+        &mut self,
+        b: &Block,
+        text: &[u8],
+        out: &mut Output,
+    ) -> Result<Vec<Problem>, Error> {
+        if !b.words.is_empty() {
+            self.seen_words = true;
+        }
+        let motion = b.motion.unwrap_or(self.m.modes.motion);
+        // G7 is not in effect (or the target has it): values as written.
+        self.m.apply(b);
+        let _ = self.m.take_events();
+        // The canned cycle's run ends with other motion.
+        if matches!(motion, MotionMode::ArcCw | MotionMode::ArcCcw) || b.has_axis() {
+            self.cycles.end();
+        }
+        self.f_before = self.last_f;
+        if let Some(f) = b.value(b'F') {
+            self.last_f = Some(f);
+        }
+        self.w.begin(b, self.m.modes.units);
+        for w in &b.words {
+            self.w.word(w.letter, w.value, w.kind);
+        }
+        self.w.comments(b, text);
+        match self.w.finished() {
+            Ok(Some(line)) => out.line(line).map_err(io_error)?,
+            Ok(None) => {}
+            Err(kind) => return Ok(vec![Problem { span: None, kind }]),
+        }
+        Ok(Vec::new())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::PathBuf;
+    use std::sync::Arc;
+
+    use proptest::prelude::*;
+
+    use crate::emit::{Destination, Output, Sink};
+    use crate::eval::{LineConsumer, Origin, Settings};
+    use crate::program::SourceFile;
+    use crate::target::{PROFILES, TargetOptions};
+
+    use super::Lowering;
+
+    /// Output, state after each line and diagnostics of `lines` run
+    /// through a lowering for profile `p`, the short way on or off.
+    fn run(lines: &[String], p: usize, zero_start: bool, plain: bool) -> (String, Vec<String>) {
+        let settings = Settings {
+            zero_start,
+            ..Settings::default()
+        };
+        let mut opts = TargetOptions::new(PROFILES[p]);
+        opts.check = true;
+        let mut l = Lowering::new(&settings, opts);
+        l.plain = plain;
+        let dir = tempfile::tempdir().expect("dir");
+        let path = dir.path().join("out");
+        let sink = Sink::new(Destination::File(path.clone())).expect("sink");
+        let mut out = Output::new(sink, None, usize::MAX);
+        let text = lines.join("\n");
+        let file = Arc::new(SourceFile::new(
+            PathBuf::from("<t>"),
+            "<t>".into(),
+            text.clone().into_bytes(),
+        ));
+        let stack = Vec::new;
+        let mut states = Vec::new();
+        let mut at = 0;
+        for line in lines {
+            let origin = Origin {
+                file: &file,
+                line_start: at,
+                verbatim: true,
+                stack: &stack,
+            };
+            at += line.len() as u32 + 1;
+            let r = l.line(line.as_bytes(), &origin, &mut out);
+            states.push(format!(
+                "{r:?} {:?} {:?} {:?} {} {:?} {:?} {:?}",
+                l.m, l.last_f, l.f_before, l.seen_words, l.cycles, l.written_feed, l.last_pq
+            ));
+        }
+        let diags = l.finish(&mut out).expect("finish");
+        states.push(format!("{diags:?}"));
+        out.finish().expect("written");
+        (std::fs::read_to_string(path).expect("read"), states)
+    }
+
+    /// A number as a program or the evaluator may write it.
+    fn number() -> impl Strategy<Value = String> {
+        prop_oneof![
+            (-300i32..300).prop_map(|v| v.to_string()),
+            (-3000.0f64..3000.0, 0usize..7).prop_map(|(v, d)| format!("{v:.d$}")),
+            (-2.0f64..2.0).prop_map(|v| v.to_string()),
+            Just("+1.5".to_string()),
+            Just("-0".to_string()),
+            Just("0.00001".to_string()),
+            Just("12345678.9".to_string()),
+            Just("007.50".to_string()),
+            Just(".5".to_string()),
+        ]
+    }
+
+    /// A word: mostly what the short way takes, and its near misses.
+    fn word() -> impl Strategy<Value = String> {
+        let codes = prop_oneof![
+            Just("G0"),
+            Just("G1"),
+            Just("G2"),
+            Just("G3"),
+            Just("G17"),
+            Just("G18"),
+            Just("G19"),
+            Just("G20"),
+            Just("G21"),
+            Just("G90"),
+            Just("G91"),
+            Just("G7"),
+            Just("G8"),
+            Just("G80"),
+            Just("G81"),
+            Just("G94"),
+            Just("G95"),
+            Just("G64"),
+            Just("G41"),
+            Just("G40"),
+            Just("G43"),
+            Just("G5"),
+            Just("G38.2"),
+            Just("M3"),
+            Just("M5"),
+            Just("M8"),
+            Just("M9"),
+            Just("M7"),
+            Just("M0"),
+            Just("M2"),
+            Just("M6"),
+            Just("g1"),
+        ]
+        .prop_map(str::to_string);
+        let values = (
+            prop_oneof![
+                8 => proptest::sample::select(b"XYZF".to_vec()),
+                3 => proptest::sample::select(b"IJKS".to_vec()),
+                1 => proptest::sample::select(b"ARPTDHLQxz".to_vec()),
+            ],
+            number(),
+        )
+            .prop_map(|(l, v)| format!("{}{v}", l as char));
+        // Whole blocks of what is lowered, to have its state around.
+        let blocks = proptest::sample::select(vec![
+            "G81 X1 Y1 Z-1 R2",
+            "G83 Z-3 R1 Q1",
+            "G99 G82 X2 Z-1 R1 P0.5",
+            "G95 S1000",
+            "G41.1 D2",
+            "G43.1 Z2",
+            "G2 X2 Y1 R0.4",
+            "G38.2 Z-5",
+            "G5 X3 Y3 I1 J0 P1 Q1",
+        ])
+        .prop_map(str::to_string);
+        prop_oneof![4 => codes, 10 => values, 1 => blocks]
+    }
+
+    fn line() -> impl Strategy<Value = String> {
+        (
+            proptest::option::weighted(0.1, (1u32..200).prop_map(|n| format!("N{n} "))),
+            proptest::collection::vec(word(), 0..6),
+            proptest::sample::select(vec!["", " ", "  "]),
+            proptest::option::weighted(
+                0.15,
+                proptest::sample::select(vec![
+                    "(plain)",
+                    "(MSG, tool ? now!)",
+                    "; rest",
+                    "(debug, x)",
+                ]),
+            ),
+        )
+            .prop_map(|(n, words, sep, comment)| {
+                let mut l = n.unwrap_or_default();
+                l.push_str(&words.join(sep));
+                if let Some(c) = comment {
+                    l.push(' ');
+                    l.push_str(c);
+                }
+                l
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+
+        /// Lines taken the short way give the same output, state and
+        /// diagnostics as through the general lowering.
+        #[test]
+        fn short_way_matches_the_general_lowering(
+            lines in proptest::collection::vec(line(), 1..30),
+            p in 1usize..4,
+            zero_start in any::<bool>(),
+        ) {
+            let mut lines = lines;
+            // Start where most lines are plain: feed moves in millimetres.
+            lines.insert(0, "G21 G1 F100".into());
+            let fast = run(&lines, p, zero_start, true);
+            let slow = run(&lines, p, zero_start, false);
+            prop_assert_eq!(&fast.0, &slow.0, "output of {:?}", lines);
+            for (i, (a, b)) in fast.1.iter().zip(slow.1.iter()).enumerate() {
+                prop_assert_eq!(a, b, "state after line {} of {:?}", i, lines);
+            }
+        }
+    }
+
+    /// The random lines do take the short way (the test above compares
+    /// something).
+    #[test]
+    fn common_lines_are_plain() {
+        let settings = Settings::default();
+        let mut l = Lowering::new(&settings, TargetOptions::new(PROFILES[1]));
+        let mut b = crate::machine::block::Block::default();
+        for (text, want) in [
+            ("G1 X1.5000 Y-2 F300", true),
+            ("G2 X1 Y2 I1 J0", true),
+            ("G21 G90 G17 M3 S1000", true),
+            ("(a comment)", true),
+            ("G2 I1 J0", false),
+            ("G1 X1 A2", false),
+            ("G64 P0.01", false),
+            ("G2 X1 Y2 R5", false),
+            ("M6 T1", false),
+        ] {
+            b.decode_into(text.as_bytes()).expect("decodes");
+            l.m.modes.motion = crate::machine::block::MotionMode::Linear;
+            assert_eq!(l.is_plain(&b), want, "{text}");
+        }
+    }
+}
