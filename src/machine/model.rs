@@ -68,7 +68,8 @@ impl Default for Modes {
             tool_length: None,
             coord: 1,
             path: PathMode::Blend,
-            retract: Retract::Initial,
+            // LinuxCNC starts in G99 (`#<_retract_r_plane>` reads 1).
+            retract: Retract::R,
             spindle_mode: SpindleMode::Rpm,
             lathe: LatheMode::Radius,
             feed: 0.0,

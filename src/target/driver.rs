@@ -13,9 +13,8 @@ use crate::eval::{LineConsumer, Origin, Settings};
 use crate::geom::comp::{Arc as CompArc, ArcCenter, Comp, Out, Side, Tolerances};
 use crate::machine::Machine;
 use crate::machine::block::{
-    ArcDistance, Block, CommentKind, CoordSystem, CutterComp, DecodeError, Distance, FeedMode,
-    GCode, LatheMode, MCode, MotionMode, NonModal, PathMode, Plane, SpindleMode, ToolLength, Units,
-    Word, WordKind,
+    ArcDistance, Block, CommentKind, CutterComp, DecodeError, Distance, FeedMode, GCode, LatheMode,
+    MCode, MotionMode, NonModal, PathMode, Plane, SpindleMode, ToolLength, Units, Word, WordKind,
 };
 use crate::machine::motion::SpindleDir;
 use crate::program::SourceFile;
@@ -83,6 +82,20 @@ pub struct Lowering {
     /// Lines every word of which is kept as it is take the short way
     /// (plain.rs); off only to compare both ways in tests.
     plain: bool,
+    /// The coordinate system the target is in (1 = G54): the program's,
+    /// or the last one the target has when the program's is lowered.
+    target_coord: u8,
+    /// G5.2 control points collected until G5.3.
+    nurbs: Option<NurbsCurve>,
+}
+
+/// A NURBS being collected (G5.2 blocks), in program units.
+struct NurbsCurve {
+    points: Vec<lower::spline::NurbsPoint>,
+    order: usize,
+    /// The current point when the first G5.2 came (G91 points are
+    /// relative to it: LinuxCNC moves nothing until G5.3).
+    start: [f64; 2],
 }
 
 /// Cutter compensation on, on a target without it.
@@ -97,10 +110,20 @@ struct CompPath {
 impl Lowering {
     pub fn new(settings: &Settings, opts: TargetOptions) -> Lowering {
         let p = opts.profile;
+        let m = Machine::new(settings);
+        // A program starting in a system the target lacks: the target is
+        // in G54, as after its reset.
+        let target_coord = if m.modes.coord <= p.coord_systems {
+            m.modes.coord
+        } else {
+            1
+        };
         Lowering {
+            target_coord,
+            nurbs: None,
             p,
             opts,
-            m: Machine::new(settings).without_events(),
+            m: m.without_events(),
             block: Block::default(),
             w: LineWriter::new(p),
             errors: Vec::new(),
@@ -338,6 +361,32 @@ impl Lowering {
         if !problems.is_empty() {
             return Ok(problems);
         }
+        // The target's G92 offset follows LinuxCNC's effective G92/G52
+        // offset (a line before the block's own, in the target's state
+        // before it); then the target takes the block's coordinate system
+        // if it has it.
+        match self.offset_sync(b, &before) {
+            Ok(Some(ws)) if !ws.is_empty() => pre_lines.push(ws),
+            Ok(_) => {}
+            Err(k) => {
+                return Ok(vec![Problem {
+                    span: b
+                        .g_codes()
+                        .find(|(g, _)| matches!(g, GCode::NonModal(_)))
+                        .map(|(_, w)| w.span),
+                    kind: k,
+                }]);
+            }
+        }
+        if let Some(c) = b.coord
+            && c.0 <= self.p.coord_systems
+        {
+            self.target_coord = c.0;
+        }
+        if self.m.ended {
+            // M2/M30 select G54 on LinuxCNC and on the GRBL family.
+            self.target_coord = self.m.modes.coord;
+        }
         if let Some(k) = self.probe_in_place(b, &before) {
             return Ok(vec![Problem {
                 span: b
@@ -413,6 +462,33 @@ impl Lowering {
             && self.m.modes.distance == Distance::Incremental;
         let mut after_lowered: Vec<(u8, f64)> = Vec::new();
         let mut written = Vec::new();
+        // Positions in a coordinate system the target lacks: written in
+        // the one it is in.
+        let shift = if self.m.modes.coord == self.target_coord {
+            None
+        } else {
+            let needed = Self::positions_in_work(b, &self.m)
+                && b.words.iter().zip(&fates).any(|(w, f)| {
+                    *f == Fate::Keep
+                        && matches!(w.kind, WordKind::Value)
+                        && matches!(w.letter, b'X' | b'Y' | b'Z')
+                })
+                || lowered.as_ref().is_some_and(|l| !l.is_empty());
+            if needed {
+                match self.coord_shift(&self.m, self.target_coord) {
+                    Ok(s) => Some(s),
+                    Err(k) => {
+                        return Ok(vec![Problem {
+                            span: b.coord.and(g_span(b, 591, 593)),
+                            kind: k,
+                        }]);
+                    }
+                }
+            } else {
+                None
+            }
+        };
+        let word_shift = shift.filter(|_| Self::positions_in_work(b, &self.m));
         self.w.begin(b, self.m.modes.units);
         for (i, w) in b.words.iter().enumerate() {
             if fates[i] != Fate::Keep {
@@ -429,7 +505,12 @@ impl Lowering {
                 after_lowered.push((b'M', w.value));
                 continue;
             }
-            let v = self.out_value(w, &before);
+            let mut v = self.out_value(w, &before);
+            if let (Some(sh), WordKind::Value) = (word_shift, w.kind)
+                && let Some(a) = xyz_index(w.letter)
+            {
+                v += sh[a] / self.m.scale();
+            }
             self.w.word(w.letter, v, w.kind);
         }
         for &(l, v) in &extra {
@@ -462,6 +543,14 @@ impl Lowering {
             }
             for l in &lowered {
                 let mut buf = Vec::new();
+                let shifted;
+                let l = match shift {
+                    Some(sh) => {
+                        shifted = shift_line(l, sh, self.m.scale());
+                        &shifted
+                    }
+                    None => l,
+                };
                 if let Some(k) = self.plain_line(l, &mut buf) {
                     return Ok(vec![Problem {
                         span: None,
@@ -491,6 +580,137 @@ impl Lowering {
             out.line(l).map_err(io_error)?;
         }
         Ok(Vec::new())
+    }
+
+    /// Whether the axis words of `b` are positions in the active work
+    /// coordinates (motion, G28/G30 intermediate points, G92) in absolute
+    /// distance mode: those are rewritten when the program's coordinate
+    /// system is not the target's.
+    fn positions_in_work(b: &Block, m: &Machine) -> bool {
+        m.modes.distance == Distance::Absolute
+            && b.tool_length != Some(ToolLength::Dynamic)
+            && matches!(
+                b.non_modal,
+                None | Some(NonModal::Dwell | NonModal::Home | NonModal::Home2 | NonModal::SetG92)
+            )
+    }
+
+    /// What to add (mm, X Y Z) to a position in `m`'s work coordinates to
+    /// get the same machine position in the target's system `target`.
+    fn coord_shift(&self, m: &Machine, target: u8) -> Result<[f64; 3], ErrorKind> {
+        let name = |c: u8| match c {
+            7 => "G59.1".to_string(),
+            8 => "G59.2".to_string(),
+            9 => "G59.3".to_string(),
+            c => format!("G{}", 53 + c),
+        };
+        let from = m.modes.coord.clamp(1, 9);
+        let to = target.clamp(1, 9);
+        let (a, t) = (&m.g5x[from as usize - 1], &m.g5x[to as usize - 1]);
+        let mut out = [0.0; 3];
+        for i in 0..3 {
+            match (a[i], t[i]) {
+                (Some(a), Some(t)) => out[i] = a - t,
+                _ => {
+                    let param = |c: u8| 5221 + 20 * (c as usize - 1) + i;
+                    return Err(ErrorKind::TargetNeedsValue {
+                        target: self.name(),
+                        what: format!(
+                            "{} (a coordinate system the target lacks, written as coordinates in {})",
+                            name(from),
+                            name(to)
+                        ),
+                        value: format!(
+                            "the {} offsets of both (parameters {} and {})",
+                            ['X', 'Y', 'Z'][i],
+                            param(from),
+                            param(to)
+                        ),
+                        option: "--var-file (the machine's parameter file), -D, or --zero-start"
+                            .into(),
+                    });
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// G52, G92.1, G92.2, G92.3 where the target lacks them: a `G92` (or
+    /// `G92.1`) line that gives the target the effective G92/G52 offset
+    /// LinuxCNC has after the block, computed in the target's state
+    /// before it. `None` when the block has none of them or the target
+    /// has the code; an empty line when nothing changes.
+    fn offset_sync(
+        &self,
+        b: &Block,
+        before: &Machine,
+    ) -> Result<Option<Vec<(u8, f64)>>, ErrorKind> {
+        let (code, what) = match b.non_modal {
+            Some(NonModal::LocalOffset) => (520, "G52 (local offset)"),
+            Some(NonModal::ResetG92) => (921, "G92.1"),
+            Some(NonModal::SuspendG92) => (922, "G92.2 (G92 offsets off)"),
+            Some(NonModal::RestoreG92) => (923, "G92.3 (G92 offsets back on)"),
+            _ => return Ok(None),
+        };
+        if self.p.has_g(code) {
+            return Ok(None);
+        }
+        let effective = |m: &Machine, a: usize| match m.g92_applied {
+            Some(true) => m.g92[a],
+            Some(false) => Some(0.0),
+            None => None,
+        };
+        let need = |value: String, option: &str| ErrorKind::TargetNeedsValue {
+            target: self.name(),
+            what: format!("{what}, written as the target's G92"),
+            value,
+            option: option.into(),
+        };
+        let offsets_option =
+            "--var-file (parameters 5210-5213 of the machine), -D, or --zero-start";
+        let mut changed = Vec::new();
+        let mut all_zero = true;
+        for (a, &letter) in b"XYZ".iter().enumerate() {
+            if !self.p.has_axis(letter) {
+                continue;
+            }
+            let want = effective(&self.m, a)
+                .ok_or_else(|| need("the G92 offsets".into(), offsets_option))?;
+            let had = effective(before, a)
+                .ok_or_else(|| need("the G92 offsets".into(), offsets_option))?;
+            all_zero &= want == 0.0;
+            if want != had {
+                changed.push((a, letter, had, want));
+            }
+        }
+        if changed.is_empty() {
+            return Ok(Some(Vec::new()));
+        }
+        if all_zero && self.p.has_g(921) {
+            return Ok(Some(vec![(b'G', 92.1)]));
+        }
+        // The target's G92 makes the current position read the value:
+        // its offset = machine - G5x - tool length - value, and the
+        // machine position is the work position plus G5x, the G92 offset
+        // and the tool length: value = position + offset before - offset
+        // wanted (+ the shift to the target's coordinate system).
+        let shift = if before.modes.coord == self.target_coord {
+            [0.0; 3]
+        } else {
+            self.coord_shift(before, self.target_coord)?
+        };
+        let s = before.scale();
+        let mut words = vec![(b'G', 92.0)];
+        for (a, letter, had, want) in changed {
+            let p = before.pos[a].ok_or_else(|| {
+                need(
+                    format!("the current {} position", letter as char),
+                    "--start-position (or --zero-start), or an absolute move first",
+                )
+            })?;
+            words.push((letter, (p + had - want + shift[a]) / s));
+        }
+        Ok(Some(words))
     }
 
     /// GRBL and its descendants refuse a probe move whose target is the
@@ -621,20 +841,28 @@ impl Lowering {
                 MotionMode::CancelCycle if !p.has_g(810) => Fate::Drop,
                 // Lowered into G1 segments (lower_motion).
                 MotionMode::CubicSpline | MotionMode::QuadSpline if !p.has_g(c) => Fate::Drop,
-                MotionMode::Nurbs | MotionMode::NurbsEnd if !p.has_g(c) => {
-                    problems.push(refuse(
-                        self,
-                        "NURBS blocks are not lowered yet; the target has no spline moves",
-                    ));
-                    Fate::Drop
-                }
+                // Control points collected, the curve lowered at G5.3
+                // (lower_nurbs_block).
+                MotionMode::Nurbs | MotionMode::NurbsEnd if !p.has_g(c) => Fate::Drop,
                 _ if p.has_g(c) => Fate::Keep,
                 _ => {
                     problems.push(refuse(self, "the target does not have this motion"));
                     Fate::Drop
                 }
             },
+            GCode::NonModal(NonModal::SetData) => self.g10_fate(b, w, problems),
             _ if p.has_g(c) => Fate::Keep,
+            // The target's G92 offset is set to the same effective offset
+            // after the block (offset_sync); a coordinate system the target
+            // lacks is written as coordinates in the one it is in
+            // (coord_shift).
+            GCode::NonModal(
+                NonModal::LocalOffset
+                | NonModal::ResetG92
+                | NonModal::SuspendG92
+                | NonModal::RestoreG92,
+            )
+            | GCode::Coord(_) => Fate::Drop,
             GCode::Path(PathMode::Blend) | GCode::Path(PathMode::ExactStop) => {
                 self.dropped(
                     site,
@@ -697,23 +925,65 @@ impl Lowering {
             GCode::CutterComp(CutterComp::Off) => Fate::Drop,
             // Computed into the path (comp_block).
             GCode::CutterComp(_) => Fate::Drop,
-            GCode::Coord(CoordSystem(n)) => {
-                let _ = n;
-                problems.push(refuse(self, "the target has only G54–G59"));
+            _ => {
+                problems.push(refuse(self, "the target does not have this code"));
                 Fate::Drop
             }
-            GCode::NonModal(NonModal::SetData) => {
-                let l = b.value(b'L').unwrap_or(0.0).round() as u8;
-                if matches!(l, 1 | 10 | 11) {
-                    // Tool table writes: the model keeps them for G43.
+        }
+    }
+
+    /// G10: kept when the target has its L form and the coordinate system
+    /// it writes; tool table writes (L1, L10, L11) and writes to a system
+    /// the target lacks are dropped, the model keeps them (G43 and the
+    /// coordinate rewriting read them).
+    fn g10_fate(&mut self, b: &Block, w: &Word, problems: &mut Vec<Problem>) -> Fate {
+        let l = b
+            .value(b'L')
+            .map_or(0, |l| l.round().clamp(0.0, 255.0) as u8);
+        let p = self.p;
+        let native = p.has_g(100) && p.g10_l.contains(&l);
+        match l {
+            1 | 10 | 11 if !native => Fate::Drop,
+            2 | 20 => {
+                if b.value(b'R').is_some_and(|r| r != 0.0) {
+                    problems.push(Problem {
+                        span: Some(w.span),
+                        kind: self.refuse(
+                            "G10 L2 R (coordinate system rotation)",
+                            "the target has no rotation of the coordinate system",
+                        ),
+                    });
+                    return Fate::Drop;
+                }
+                // P0 (or none) is the active system, as LinuxCNC has it.
+                let k = match b.value(b'P').map(|v| v.round()) {
+                    Some(v) if v >= 1.0 => v.min(255.0) as u8,
+                    _ => self.m.modes.coord,
+                };
+                if k > p.coord_systems {
                     Fate::Drop
+                } else if native {
+                    Fate::Keep
                 } else {
-                    problems.push(refuse(self, format!("G10 L{l} is not available").as_str()));
+                    problems.push(Problem {
+                        span: Some(w.span),
+                        kind: self.refuse(
+                            format!("G10 L{l}"),
+                            "the target does not have this form of G10",
+                        ),
+                    });
                     Fate::Drop
                 }
             }
+            _ if native => Fate::Keep,
             _ => {
-                problems.push(refuse(self, "the target does not have this code"));
+                problems.push(Problem {
+                    span: Some(w.span),
+                    kind: self.refuse(
+                        format!("G10 L{l}"),
+                        "the target does not have this form of G10",
+                    ),
+                });
                 Fate::Drop
             }
         }
@@ -867,10 +1137,13 @@ impl Lowering {
         if dropped_g(430) || dropped_g(432) {
             drop(b'H');
         }
-        if b.non_modal == Some(NonModal::SetData)
-            && matches!(b.value(b'L').map(|l| l.round() as i64), Some(1 | 10 | 11))
-        {
+        if dropped_g(100) {
             for l in *b"LPRXYZABCUVWIJQ" {
+                drop(l);
+            }
+        }
+        if dropped_g(520) {
+            for l in *b"XYZABCUVW" {
                 drop(l);
             }
         }
@@ -1018,6 +1291,14 @@ impl Lowering {
                     return Ok(None);
                 }
                 self.lower_spline(b, before, motion).map(Some)
+            }
+            MotionMode::Nurbs | MotionMode::NurbsEnd
+                if !self
+                    .p
+                    .has_g(if motion == MotionMode::Nurbs { 52 } else { 53 }) =>
+            {
+                self.cycles.end();
+                self.lower_nurbs_block(b, before, motion)
             }
             MotionMode::Rapid | MotionMode::Linear
                 if b.value(b'@').is_some() || b.value(b'^').is_some() =>
@@ -1171,6 +1452,116 @@ impl Lowering {
             lower::spline::lower_g5_1(start, ij, end, tol)
         };
         r.map_err(|e| self.lower_error(e))
+    }
+
+    /// G5.2 blocks collect control points (nothing is written for them:
+    /// LinuxCNC moves only at G5.3); G5.3 writes the curve as G1 segments
+    /// within the tolerance, with the feed in effect. The control points
+    /// are the current point (weight P of a first block without X Y, or
+    /// one) and each block's X Y (G91: from the point the curve starts at)
+    /// with its weight P; the order is 3, or an L above 3.
+    fn lower_nurbs_block(
+        &mut self,
+        b: &Block,
+        before: &Machine,
+        motion: MotionMode,
+    ) -> Result<Option<Vec<PlainLine>>, ErrorKind> {
+        let not_lowered = |s: &Self, message: &str| ErrorKind::TargetLowering {
+            target: s.name(),
+            code: "E1004",
+            message: message.into(),
+        };
+        if motion == MotionMode::NurbsEnd {
+            if b.motion != Some(MotionMode::NurbsEnd) {
+                return Ok(None);
+            }
+            let Some(curve) = self.nurbs.take() else {
+                return Err(not_lowered(self, "G5.3 without control points (G5.2)"));
+            };
+            let tol = self.opts.tolerance_mm / self.m.scale();
+            let mut lines = lower::spline::lower_nurbs(&curve.points, curve.order, tol)
+                .map_err(|e| self.lower_error(e))?;
+            if let Some(first) = lines.first_mut() {
+                // The feed the curve runs at (a G5.2 block may have set it).
+                first.words.push(lower::Word {
+                    letter: b'F',
+                    value: self.m.modes.feed,
+                });
+            }
+            if let Some(last) = curve.points.last() {
+                let s = self.m.scale();
+                self.m.pos[0] = Some(last.x * s);
+                self.m.pos[1] = Some(last.y * s);
+            }
+            return Ok(Some(lines));
+        }
+        let pending = before.modes.motion == MotionMode::Nurbs && self.nurbs.is_some();
+        if pending && b.units.is_some_and(|u| u != before.modes.units) {
+            return Err(not_lowered(
+                self,
+                "G20/G21 between G5.2 and G5.3 is not lowered (LinuxCNC keeps the points already given in the old units)",
+            ));
+        }
+        if b.motion != Some(MotionMode::Nurbs) && !b.has_axis() {
+            return Ok(None);
+        }
+        // Nothing moves until G5.3.
+        self.m.pos = before.pos;
+        if self.m.modes.plane != Plane::XY {
+            return Err(self.refuse("a NURBS outside G17", "LinuxCNC draws them only in XY"));
+        }
+        if self.feed_rewrite || self.m.modes.feed_mode != FeedMode::PerMinute {
+            return Err(not_lowered(
+                self,
+                "a NURBS (G5.2) in G93 or G95 is not lowered; the segments are written with a feed per minute",
+            ));
+        }
+        if self.m.modes.lathe == LatheMode::Diameter {
+            return Err(not_lowered(
+                self,
+                "a NURBS (G5.2) in G7 (diameter mode) is not lowered",
+            ));
+        }
+        let fresh = !pending;
+        let (x, y) = (b.value(b'X'), b.value(b'Y'));
+        if fresh {
+            let start = self.xy_known(before, "G5.2 (NURBS)")?;
+            let weight = match (x, y, b.value(b'P')) {
+                (None, None, Some(p)) if p > 0.0 => p,
+                _ => 1.0,
+            };
+            self.nurbs = Some(NurbsCurve {
+                points: vec![lower::spline::NurbsPoint {
+                    x: start[0],
+                    y: start[1],
+                    weight,
+                }],
+                order: 3,
+                start,
+            });
+        }
+        let incremental = self.m.modes.distance == Distance::Incremental;
+        if let Some(c) = self.nurbs.as_mut() {
+            if let Some(l) = b.value(b'L').map(f64::round)
+                && l > 3.0
+            {
+                c.order = l.min(1000.0) as usize;
+            }
+            if let (Some(x), Some(y)) = (x, y) {
+                let (x, y) = if incremental {
+                    (c.start[0] + x, c.start[1] + y)
+                } else {
+                    (x, y)
+                };
+                c.points.push(lower::spline::NurbsPoint {
+                    x,
+                    y,
+                    // LinuxCNC takes a missing P as -1 (refused when lowered).
+                    weight: b.value(b'P').unwrap_or(-1.0),
+                });
+            }
+        }
+        Ok(Some(Vec::new()))
     }
 
     /// G0/G1 with polar words as G0/G1 X Y (and Z).
@@ -1704,6 +2095,27 @@ impl Lowering {
         self.write_released(c, &released, lines, span)?;
         Ok(true)
     }
+}
+
+/// 0, 1, 2 for X, Y, Z.
+fn xyz_index(letter: u8) -> Option<usize> {
+    match letter {
+        b'X' => Some(0),
+        b'Y' => Some(1),
+        b'Z' => Some(2),
+        _ => None,
+    }
+}
+
+/// A lowered (absolute) line with `shift` (mm) added to its X Y Z.
+fn shift_line(l: &PlainLine, shift: [f64; 3], scale: f64) -> PlainLine {
+    let mut l = l.clone();
+    for w in &mut l.words {
+        if let Some(a) = xyz_index(w.letter) {
+            w.value += shift[a] / scale;
+        }
+    }
+    l
 }
 
 fn words_line(l: &[(u8, f64)]) -> PlainLine {

@@ -1254,3 +1254,109 @@ fn splines_end_where_rs274_ends_them() {
             .unwrap_or_else(|e| panic!("seed {seed}: {e}\n{orig}---\n{low}"));
     }
 }
+
+/// The G1 points of a written program after the line that starts with
+/// `from` (absolute X Y; a missing word keeps its value).
+fn written_points(out: &str, from: &str, to: &str) -> Vec<[f64; 2]> {
+    let mut on = false;
+    let mut at = [f64::NAN; 2];
+    let mut pts = Vec::new();
+    for l in out.lines() {
+        if l.starts_with(from) {
+            on = true;
+            continue;
+        }
+        if on && l.starts_with(to) {
+            break;
+        }
+        let word = |c: char| {
+            l.split(' ')
+                .find(|w| w.starts_with(c))
+                .and_then(|w| w[1..].parse::<f64>().ok())
+        };
+        if on && l.starts_with("G1 ") {
+            at = [word('X').unwrap_or(at[0]), word('Y').unwrap_or(at[1])];
+            pts.push(at);
+        }
+    }
+    pts
+}
+
+/// G5.2/G5.3 through the driver: the control points are taken as LinuxCNC
+/// takes them (the current point first, with the P of a first block that
+/// has no X Y; G91 points from the point the curve starts at; L above 3
+/// raises the order), and every point of the curve, evaluated here from
+/// those points, lies within the tolerance of the written segments, which
+/// end exactly at the last control point.
+#[test]
+fn nurbs_blocks_are_lowered_within_tolerance() {
+    let program = "G21 G17 G90 G0 X1 Y2 Z1\nF300\n\
+        G5.2 X0 Y10 P1 L3\nX10 Y10 P2\nX10 Y0 P1\nX20 Y0 P0.5\nG5.3\n\
+        G0 X5 Y5\n\
+        G5.2 P2 L4\nG91 X5 Y5 P1\nX10 Y0 P1\nX0 Y-5 P3\nX-5 Y-5 P1\nG5.3\n\
+        G90 G0 X0 Y0\nM2\n";
+    let dir = crate::tmp();
+    crate::put(dir.path(), "n.ngc", program);
+    for tol in [0.05, 0.001] {
+        let t = tol.to_string();
+        let (code, out, err) = crate::run(
+            dir.path(),
+            &[
+                "--target",
+                "grbl",
+                "--zero-start",
+                "--tolerance",
+                &t,
+                "n.ngc",
+            ],
+        );
+        assert_eq!(code, 0, "{err}");
+        // (segments after, until, start, control points X Y P, order)
+        type Curve = (&'static str, &'static str, [f64; 2], Vec<[f64; 3]>, usize);
+        let curves: [Curve; 2] = [
+            (
+                "F300",
+                "G0 X5 Y5",
+                [1.0, 2.0],
+                vec![
+                    [1.0, 2.0, 1.0],
+                    [0.0, 10.0, 1.0],
+                    [10.0, 10.0, 2.0],
+                    [10.0, 0.0, 1.0],
+                    [20.0, 0.0, 0.5],
+                ],
+                3,
+            ),
+            (
+                "G0 X5 Y5",
+                "G90 G0",
+                [5.0, 5.0],
+                vec![
+                    [5.0, 5.0, 2.0],
+                    [10.0, 10.0, 1.0],
+                    [15.0, 5.0, 1.0],
+                    [5.0, 0.0, 3.0],
+                    [0.0, 0.0, 1.0],
+                ],
+                4,
+            ),
+        ];
+        for (from, to, start, pts, order) in curves {
+            let mut poly = vec![start];
+            poly.extend(written_points(&out, from, to));
+            assert!(poly.len() > 3, "segments after {from}:\n{out}");
+            let last = pts[pts.len() - 1];
+            assert_eq!(poly.last(), Some(&[last[0], last[1]]), "end point\n{out}");
+            let umax = (pts.len() + 1 - order) as f64;
+            // The written numbers are rounded to 4 decimals.
+            check_curve(
+                &format!("NURBS from {from}"),
+                |u| nurbs_point(&pts, order, u),
+                umax,
+                &poly,
+                tol + 0.00008,
+            )
+            .unwrap_or_else(|e| panic!("{e}\n{out}"));
+        }
+    }
+}

@@ -93,6 +93,11 @@ impl Replay {
         std::array::from_fn(|i| p[i] + self.g5x[i] + self.g92[i] + self.tlo[i])
     }
 
+    /// The program position that is machine position `at`.
+    fn keep_machine(&mut self, at: P3) {
+        self.pos = std::array::from_fn(|i| at[i] - self.g5x[i] - self.g92[i] - self.tlo[i]);
+    }
+
     fn event(&mut self, e: String) {
         if self.dwell > 0.0 {
             let d = format!("dwell {:.3}", self.dwell);
@@ -204,9 +209,23 @@ impl Replay {
             let s = r.scale;
             match name {
                 "USE_LENGTH_UNITS" => r.scale = if args.contains("INCH") { 25.4 } else { 1.0 },
-                "SET_G5X_OFFSET" if n.len() >= 4 => r.g5x = [n[1] * s, n[2] * s, n[3] * s],
-                "SET_G92_OFFSET" if n.len() >= 3 => r.g92 = [n[0] * s, n[1] * s, n[2] * s],
-                "USE_TOOL_LENGTH_OFFSET" if n.len() >= 3 => r.tlo = [n[0] * s, n[1] * s, n[2] * s],
+                // An offset change does not move the tool: its program
+                // position changes instead.
+                "SET_G5X_OFFSET" if n.len() >= 4 => {
+                    let at = r.machine(r.pos);
+                    r.g5x = [n[1] * s, n[2] * s, n[3] * s];
+                    r.keep_machine(at);
+                }
+                "SET_G92_OFFSET" if n.len() >= 3 => {
+                    let at = r.machine(r.pos);
+                    r.g92 = [n[0] * s, n[1] * s, n[2] * s];
+                    r.keep_machine(at);
+                }
+                "USE_TOOL_LENGTH_OFFSET" if n.len() >= 3 => {
+                    let at = r.machine(r.pos);
+                    r.tlo = [n[0] * s, n[1] * s, n[2] * s];
+                    r.keep_machine(at);
+                }
                 "SELECT_PLANE" => {
                     r.plane = if args.contains("XZ") {
                         1

@@ -22,6 +22,8 @@ impl Lowering {
             || self.comp.is_some()
             || self.after_off.is_some()
             || self.feed_rewrite
+            // Positions in a coordinate system the target lacks are moved.
+            || self.m.modes.coord != self.target_coord
             || self.m.modes.lathe == LatheMode::Diameter && !self.p.has_g(70)
         {
             return false;
