@@ -343,6 +343,12 @@ impl Machine {
         for (m, w) in b.m_codes() {
             match m {
                 MCode::ToolChange => {
+                    // The spindle stops for the change (LinuxCNC's default,
+                    // [EMCIO]TOOL_CHANGE_WITH_SPINDLE_ON = 0) and stays off.
+                    if self.modes.spindle != SpindleDir::Off {
+                        self.modes.spindle = SpindleDir::Off;
+                        self.spindle_event();
+                    }
                     self.current_tool = self.selected_tool;
                     if let Some(t) = self.selected_tool {
                         self.push(Motion::ToolChange { tool: t });

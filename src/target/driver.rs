@@ -342,7 +342,15 @@ impl Lowering {
         for (i, w) in b.words.iter().enumerate() {
             let fate = match w.kind {
                 WordKind::G(g) => self.g_fate(b, w, g, &site, &mut problems),
-                WordKind::M(m) => self.m_fate(b, w, m, &site, &mut problems, &mut extra_lines),
+                WordKind::M(m) => self.m_fate(
+                    b,
+                    w,
+                    m,
+                    &site,
+                    &mut problems,
+                    &mut pre_lines,
+                    &mut extra_lines,
+                ),
                 WordKind::Value => self.value_fate(b, w, &mut problems),
             };
             fates[i] = fate;
@@ -997,12 +1005,18 @@ impl Lowering {
         m: MCode,
         site: &Option<Site>,
         problems: &mut Vec<Problem>,
+        pre_lines: &mut Vec<Vec<(u8, f64)>>,
         extra_lines: &mut Vec<Vec<(u8, f64)>>,
     ) -> Fate {
         let n = w.value.round() as u16;
         let p = self.p;
         if m == MCode::ToolChange {
             let policy = self.opts.tool_change.unwrap_or(p.tool_change);
+            if policy != ToolChange::Keep && self.m.modes.spindle != SpindleDir::Off {
+                // LinuxCNC stops the spindle for the change (and leaves it
+                // off), before the block's spindle words and motion.
+                pre_lines.push(vec![(b'M', 5.0)]);
+            }
             return match policy {
                 ToolChange::Keep => Fate::Keep,
                 ToolChange::Drop => Fate::Drop,
@@ -1021,7 +1035,9 @@ impl Lowering {
                         how: "M0: the program pauses for a manual tool change (--tool-change keep|drop to change that)".into(),
                     };
                     self.warn(site.clone(), k);
-                    extra_lines.push(vec![(b'M', 0.0)]);
+                    // The change comes before the block's spindle words,
+                    // tool length offset and motion.
+                    pre_lines.push(vec![(b'M', 0.0)]);
                     Fate::Drop
                 }
             };
