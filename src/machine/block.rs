@@ -803,7 +803,8 @@ fn skip_blanks(line: &[u8], mut i: usize) -> usize {
 /// its digits as an integer, exact below 2^53, divided by an exact power of
 /// ten. One correctly rounded division of two exact values is the correctly
 /// rounded value of the decimal, which is what `str::parse` returns too.
-/// Anything else goes through `str::parse`.
+/// Longer numbers without blanks are parsed where they are written; the
+/// rest (blanks inside) is gathered first.
 #[inline]
 fn read_number(line: &[u8], start: usize) -> Option<(f64, usize)> {
     let mut i = start;
@@ -848,9 +849,18 @@ fn read_number(line: &[u8], start: usize) -> Option<(f64, usize)> {
     let after = skip_blanks(line, i);
     let ends = !matches!(line.get(after), Some(c) if c.is_ascii_digit() || *c == b'.');
     let frac = frac.unwrap_or(0);
-    if seen && ends && digits <= 15 && frac <= 22 {
-        let v = mant as f64 / POW10[frac as usize];
-        return Some((if neg { -v } else { v }, i));
+    if seen && ends {
+        if digits <= 15 && frac <= 22 {
+            let v = mant as f64 / POW10[frac as usize];
+            return Some((if neg { -v } else { v }, i));
+        }
+        // Long, but in one piece: read where it is written.
+        if let Some(v) = std::str::from_utf8(&line[start..i])
+            .ok()
+            .and_then(|t| t.parse::<f64>().ok())
+        {
+            return Some((v, i));
+        }
     }
     read_number_slow(line, start)
 }

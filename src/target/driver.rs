@@ -87,6 +87,7 @@ pub struct Lowering {
     target_coord: u8,
     /// G5.2 control points collected until G5.3.
     nurbs: Option<NurbsCurve>,
+    codes: plain::Codes,
 }
 
 /// A NURBS being collected (G5.2 blocks), in program units.
@@ -143,6 +144,7 @@ impl Lowering {
             f_before: None,
             comp_f: None,
             plain: true,
+            codes: plain::Codes::of(p),
         }
     }
 

@@ -3,7 +3,7 @@
 //! the firmware measures it and checked for bytes it acts on in real time.
 
 use crate::diag::ErrorKind;
-use crate::machine::block::{Block, CommentKind, Units, WordKind};
+use crate::machine::block::{Block, CommentKind, Units, Word, WordKind};
 
 use super::lower::PlainLine;
 use super::profile::{Comments, LineCount, Profile};
@@ -79,6 +79,25 @@ impl LineWriter {
         self.push_word(letter, value, code);
     }
 
+    /// Appends word `w` of the line `text`: its number as written when
+    /// that is already how the target's rules write its value (see
+    /// [`written_as_is`]), otherwise as [`LineWriter::word`] does.
+    pub fn word_of(&mut self, w: &Word, text: &[u8]) {
+        let code = matches!(w.kind, WordKind::G(_) | WordKind::M(_));
+        let number = text
+            .get(w.span.start as usize + 1..w.span.end as usize)
+            .unwrap_or_default();
+        if written_as_is(number, code, self.decimals(), self.p.max_digits) {
+            if !self.buf.is_empty() {
+                self.buf.push(b' ');
+            }
+            self.buf.push(w.letter);
+            self.buf.extend_from_slice(number);
+        } else {
+            self.word(w.letter, w.value, w.kind);
+        }
+    }
+
     /// Appends the comments of `b` (read from `text`) the target keeps.
     pub fn comments(&mut self, b: &Block, text: &[u8]) {
         for c in &b.comments {
@@ -126,17 +145,18 @@ impl LineWriter {
         None
     }
 
-    /// The finished line (`None` for an empty one), or the error if it
-    /// does not fit the target's line buffer: [`LineWriter::finish_line`]
-    /// without the copy.
-    pub fn finished(&self) -> Result<Option<&[u8]>, ErrorKind> {
+    /// The finished line with its newline (`None` for an empty line), or
+    /// the error if it does not fit the target's line buffer:
+    /// [`LineWriter::finish_line`] without the copy.
+    pub fn finished_line(&mut self) -> Result<Option<&[u8]>, ErrorKind> {
         if self.buf.is_empty() {
             return Ok(None);
         }
-        match self.check() {
-            Some(k) => Err(k),
-            None => Ok(Some(&self.buf)),
+        if let Some(k) = self.check() {
+            return Err(k);
         }
+        self.buf.push(b'\n');
+        Ok(Some(&self.buf))
     }
 
     fn check(&self) -> Option<ErrorKind> {
@@ -228,6 +248,61 @@ fn write_number(out: &mut Vec<u8>, v: f64, decimals: u8, max_digits: u8) {
         s.push('0');
     }
     out.extend_from_slice(s.as_bytes());
+}
+
+/// Whether `t`, a number as written, is exactly what the target's rules
+/// write for its value (`code`: a G or M number, whole or with one
+/// decimal; otherwise [`format_number`] with `decimals` and `max_digits`).
+///
+/// So it is when `t` is in the form those rules write (`-` only before a
+/// non-zero value, no `+`, no leading zero but the one before the point, no
+/// trailing zero after the point, no point without decimals), has at most
+/// 15 significant digits, and no more decimals than the rules keep for a
+/// number with its digits before the point. Then the double read from `t`
+/// is within 2^-52 of `t` relatively; scaled by `10^d` it is within a
+/// quarter of the integer that `t` scaled is (below 10^15), so rounding
+/// gives back exactly `t`'s digits, which are written without trailing
+/// zeros: `t` itself. The digits before the point of the double are those
+/// of `t`, since `t` is at least 10^-15 relatively below the next power of
+/// ten.
+pub fn written_as_is(t: &[u8], code: bool, decimals: u8, max_digits: u8) -> bool {
+    let (neg, digits) = match t.split_first() {
+        Some((b'-', rest)) => (true, rest),
+        _ => (false, t),
+    };
+    // One pass: the digits before the point, the point, the digits after.
+    let mut int = 0;
+    let mut frac = 0;
+    let mut point = false;
+    let mut last = b'0';
+    for &c in digits {
+        match c {
+            b'0'..=b'9' if point => frac += 1,
+            b'0'..=b'9' => int += 1,
+            b'.' if !point => point = true,
+            _ => return false,
+        }
+        last = c;
+    }
+    let first = digits.first().copied().unwrap_or(b'.');
+    if int == 0 || point && (frac == 0 || last == b'0') || int > 1 && first == b'0' {
+        return false;
+    }
+    let zero_int = int == 1 && first == b'0';
+    if neg && zero_int && frac == 0 {
+        return false;
+    }
+    let m = if zero_int { 0 } else { int };
+    if m + frac > 15 {
+        return false;
+    }
+    if code {
+        return !neg && frac <= 1;
+    }
+    let d = (max_digits as usize)
+        .saturating_sub(m)
+        .min(decimals as usize);
+    frac <= d
 }
 
 /// `x.round()` (halves away from zero) for `0 <= x < 2^53`: the part
@@ -385,6 +460,55 @@ mod tests {
             w.push_word(b'G', v, true);
             assert_eq!(String::from_utf8_lossy(&w.buf), want, "{v}");
         }
+    }
+
+    proptest::proptest! {
+        /// A number written as is is what the rules write for its value.
+        #[test]
+        fn numbers_written_as_is_are_formatted_so(
+            t in "-?[0-9]{1,9}(\\.[0-9]{1,9})?",
+            code in proptest::bool::ANY,
+            decimals in 0u8..7,
+            max_digits in 1u8..12,
+        ) {
+            let v: f64 = t.parse().unwrap();
+            if written_as_is(t.as_bytes(), code, decimals, max_digits) {
+                let mut w = LineWriter::new(&crate::target::profiles::grbl::PROFILE);
+                w.push_word(b'X', v, code);
+                let want = if code {
+                    String::from_utf8_lossy(&w.buf[1..]).into_owned()
+                } else {
+                    f(v, decimals, max_digits)
+                };
+                proptest::prop_assert_eq!(t, want);
+            }
+        }
+    }
+
+    #[test]
+    fn numbers_as_written() {
+        for (t, want) in [
+            ("1.5", true),
+            ("-0.25", true),
+            ("0", true),
+            ("12", true),
+            ("1.2345", true),
+            ("1.23456", false),
+            ("1.50", false),
+            ("01.5", false),
+            ("+1.5", false),
+            ("-0", false),
+            (".5", false),
+            ("5.", false),
+            ("1234567.5", true),
+            ("12345678.5", false),
+            ("1 .5", false),
+            ("", false),
+        ] {
+            assert_eq!(written_as_is(t.as_bytes(), false, 4, 8), want, "{t}");
+        }
+        assert!(written_as_is(b"38.2", true, 4, 8));
+        assert!(!written_as_is(b"38.25", true, 4, 8));
     }
 
     #[test]

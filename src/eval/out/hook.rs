@@ -74,8 +74,12 @@ impl Interp<'_> {
         bytes: &[u8],
     ) -> Result<(), Error> {
         let mut at = 0;
-        while at < bytes.len() {
-            let end = memchr::memchr(b'\n', &bytes[at..]).map_or(bytes.len(), |p| at + p);
+        // One search over the whole range (not one call per line).
+        let ends = memchr::memchr_iter(b'\n', bytes).chain(std::iter::once(bytes.len()));
+        for end in ends {
+            if at >= bytes.len() {
+                break;
+            }
             let line = &bytes[at..end];
             let trimmed = line
                 .iter()

@@ -1,8 +1,9 @@
 //! The common line, written without the general machinery: a block whose
 //! every word the target keeps as it is (G0–G3, plane, units, distance
-//! mode, M codes the target has, axis words, F, S, I J K) while nothing
-//! is being lowered (no cutter compensation computed into the path, no G95
-//! rewritten, no G7). It is the same decoded block, run on the same
+//! mode, M codes the target has but M6, M2 and M30, axis words, F, S,
+//! I J K) while nothing is being lowered (no cutter compensation computed
+//! into the path, no G95 rewritten, no G7, the target in the program's
+//! coordinate system). It is the same decoded block, run on the same
 //! machine model and written by the same [`super::LineWriter`] calls; only
 //! the per-word decisions and the lowering steps, which keep every word and
 //! add nothing for such a block, are not gone through. The tests below run
@@ -10,9 +11,32 @@
 
 use crate::diag::Error;
 use crate::emit::Output;
-use crate::machine::block::{Block, GCode, LatheMode, MCode, MotionMode, Plane, WordKind};
+use crate::machine::block::{
+    Block, Distance, GCode, LatheMode, MCode, MotionMode, Plane, Units, WordKind,
+};
 
-use super::{Lowering, Problem, code10, io_error};
+use super::{Lowering, Problem, Profile, io_error};
+
+/// The whole G and M codes below 128 the profile has, as bits (G17 is
+/// bit 17): looked up once per line instead of searched in the lists.
+pub(super) struct Codes {
+    g: u128,
+    m: u128,
+}
+
+impl Codes {
+    pub(super) fn of(p: &Profile) -> Codes {
+        let bits = |has: &dyn Fn(u16) -> bool| {
+            (0..128u16)
+                .filter(|&n| has(n))
+                .fold(0u128, |b, n| b | 1 << n)
+        };
+        Codes {
+            g: bits(&|n| p.has_g(n * 10)),
+            m: bits(&|n| p.has_m(n)),
+        }
+    }
+}
 
 impl Lowering {
     /// Whether `b` is such a line in the current state.
@@ -39,27 +63,33 @@ impl Lowering {
         for w in &b.words {
             let ok = match w.kind {
                 WordKind::G(g) => {
-                    matches!(
-                        g,
-                        GCode::Motion(
-                            MotionMode::Rapid
-                                | MotionMode::Linear
-                                | MotionMode::ArcCw
-                                | MotionMode::ArcCcw
-                        ) | GCode::Plane(Plane::XY | Plane::XZ | Plane::YZ)
-                            | GCode::Units(_)
-                            | GCode::Distance(_)
-                    ) && self.p.has_g(code10(w))
+                    let n = match g {
+                        GCode::Motion(MotionMode::Rapid) => 0,
+                        GCode::Motion(MotionMode::Linear) => 1,
+                        GCode::Motion(MotionMode::ArcCw) => 2,
+                        GCode::Motion(MotionMode::ArcCcw) => 3,
+                        GCode::Plane(Plane::XY) => 17,
+                        GCode::Plane(Plane::XZ) => 18,
+                        GCode::Plane(Plane::YZ) => 19,
+                        GCode::Units(Units::Inch) => 20,
+                        GCode::Units(Units::Mm) => 21,
+                        GCode::Distance(Distance::Absolute) => 90,
+                        GCode::Distance(Distance::Incremental) => 91,
+                        _ => return false,
+                    };
+                    self.codes.g & (1 << n) != 0
                 }
                 WordKind::M(m) => {
-                    m != MCode::ToolChange
+                    // M2/M30 also bring the target back to G54.
+                    !matches!(m, MCode::ToolChange | MCode::End { .. })
                         && w.value.fract() == 0.0
-                        && self.p.has_m(w.value.round() as u16)
+                        && (0.0..128.0).contains(&w.value)
+                        && self.codes.m & (1 << (w.value as u32)) != 0
                 }
                 WordKind::Value => match w.letter {
                     b'X' | b'Y' | b'Z' => {
                         axis = true;
-                        self.p.has_word(w.letter)
+                        self.p.has_axis(w.letter) && self.p.has_word(w.letter)
                     }
                     b'I' | b'J' | b'K' => {
                         ijk = true;
@@ -102,11 +132,11 @@ impl Lowering {
         }
         self.w.begin(b, self.m.modes.units);
         for w in &b.words {
-            self.w.word(w.letter, w.value, w.kind);
+            self.w.word_of(w, text);
         }
         self.w.comments(b, text);
-        match self.w.finished() {
-            Ok(Some(line)) => out.line(line).map_err(io_error)?,
+        match self.w.finished_line() {
+            Ok(Some(line)) => out.write(line).map_err(io_error)?,
             Ok(None) => {}
             Err(kind) => return Ok(vec![Problem { span: None, kind }]),
         }
@@ -244,6 +274,18 @@ mod tests {
             "G2 X2 Y1 R0.4",
             "G38.2 Z-5",
             "G5 X3 Y3 I1 J0 P1 Q1",
+            "G59.1",
+            "G55",
+            "G54",
+            "G10 L2 P7 X5 Y-1",
+            "G10 L20 P2 X1",
+            "G52 X2 Y1",
+            "G92 X0 Y0",
+            "G92.2",
+            "G92.3",
+            "G92.1",
+            "G5.2 X1 Y1 P1 L3",
+            "G5.3",
         ])
         .prop_map(str::to_string);
         prop_oneof![4 => codes, 10 => values, 1 => blocks]
@@ -315,6 +357,7 @@ mod tests {
             ("G64 P0.01", false),
             ("G2 X1 Y2 R5", false),
             ("M6 T1", false),
+            ("M2", false),
         ] {
             b.decode_into(text.as_bytes()).expect("decodes");
             l.m.modes.motion = crate::machine::block::MotionMode::Linear;
