@@ -93,8 +93,20 @@ pub fn flatten_with<'s>(
                 .unwrap_or_else(|| PathBuf::from(".")),
         )
     };
-    let index = Rc::new(FileIndex::build(Arc::new(source)));
     let loader = Loader::new(search.clone(), main_dir);
+    run_with(source, settings, loader, dest, consumer)
+}
+
+/// The run behind every flattening entry: `loader` finds the subroutine
+/// files, `dest` takes the output.
+fn run_with<'s>(
+    source: SourceFile,
+    settings: &'s Settings,
+    loader: Loader,
+    dest: Destination,
+    consumer: Option<Box<dyn eval::LineConsumer + 's>>,
+) -> (Vec<Diagnostic>, Option<Error>) {
+    let index = Rc::new(FileIndex::build(Arc::new(source)));
     let sink = Sink::new(dest.clone()).map_err(|e| {
         let path = match &dest {
             Destination::File(p) => p.clone(),
@@ -121,32 +133,39 @@ pub fn flatten_with<'s>(
     }
 }
 
-/// Flattens a string (for tests and tools); returns the output text.
-pub fn flatten_str(text: &str, settings: &Settings) -> Result<String, Error> {
-    let io_error = |e: std::io::Error| {
-        Diagnostic::error(
-            ErrorKind::Io {
-                path: PathBuf::from("<temporary folder>"),
-                message: e.to_string(),
-            },
-            None,
-        )
-    };
-    let dir = tempfile::tempdir().map_err(io_error)?;
-    let out = dir.path().join("out.ngc");
-    let src = SourceFile::new(
-        PathBuf::from("<string>"),
-        "<string>".into(),
-        text.as_bytes().to_vec(),
-    );
-    let r = flatten(
+/// Flattens a program held in memory, named `<string>` in diagnostics:
+/// no file is read or written. `files` are its subroutine files (`name` →
+/// text, found by `o<name> call`); no folder is searched. The evaluation is
+/// the command's, with the output released into memory instead of a file.
+/// Returns every diagnostic, and the output or the error that stopped the
+/// run.
+pub fn flatten_memory<'s>(
+    text: Vec<u8>,
+    files: std::collections::HashMap<String, Vec<u8>>,
+    settings: &'s Settings,
+    consumer: Option<Box<dyn eval::LineConsumer + 's>>,
+) -> (Vec<Diagnostic>, Result<Vec<u8>, Error>) {
+    let src = SourceFile::new(PathBuf::from("<string>"), "<string>".into(), text);
+    let loader = Loader::new(SearchPath::default(), None).with_files(files);
+    let out = emit::MemoryOut::default();
+    let (diags, err) = run_with(
         src,
         settings,
-        &SearchPath::default(),
-        Destination::File(out.clone()),
+        loader,
+        Destination::Memory(out.clone()),
+        consumer,
     );
+    match err {
+        Some(e) => (diags, Err(e)),
+        None => (diags, Ok(out.take())),
+    }
+}
+
+/// Flattens a string (for tests and tools); returns the output text.
+pub fn flatten_str(text: &str, settings: &Settings) -> Result<String, Error> {
+    let (_, r) = flatten_memory(text.as_bytes().to_vec(), Default::default(), settings, None);
     // Comments may carry bytes that are not UTF-8: keep them visible.
-    r.map(|_| String::from_utf8_lossy(&std::fs::read(&out).unwrap_or_default()).into_owned())
+    r.map(|out| String::from_utf8_lossy(&out).into_owned())
 }
 
 /// The consumer that writes for a target, if one is chosen.

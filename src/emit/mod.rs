@@ -11,4 +11,4 @@ mod sink;
 pub use edit::{Edit, max_edited_len, write_edited};
 pub use number::{max_len, number_string, write_number};
 pub use output::Output;
-pub use sink::{Destination, OutputTooLarge, Sink};
+pub use sink::{Destination, MemoryOut, OutputTooLarge, Sink};

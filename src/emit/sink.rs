@@ -17,7 +17,7 @@
 use std::fs::File;
 use std::io::{self, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use crate::program::SourceFile;
 
@@ -114,6 +114,31 @@ pub enum Destination {
     /// A FIFO, device or socket named by `-o` (after links): opened for
     /// writing on release, not replaced.
     Special(PathBuf),
+    /// Memory (library use, tests, fuzzing): the output is put into the
+    /// buffer on release; nothing is spilled to a file, the byte limit
+    /// bounds it.
+    Memory(MemoryOut),
+}
+
+/// The buffer a [`Destination::Memory`] output is released into.
+#[derive(Debug, Clone, Default)]
+pub struct MemoryOut(Arc<Mutex<Vec<u8>>>);
+
+impl MemoryOut {
+    /// The released output (empty until then), taken out of the buffer.
+    pub fn take(&self) -> Vec<u8> {
+        match self.0.lock() {
+            Ok(mut v) => std::mem::take(&mut *v),
+            Err(poisoned) => std::mem::take(&mut *poisoned.into_inner()),
+        }
+    }
+
+    fn put(&self, bytes: Vec<u8>) {
+        match self.0.lock() {
+            Ok(mut v) => *v = bytes,
+            Err(poisoned) => *poisoned.into_inner() = bytes,
+        }
+    }
 }
 
 /// Where `-o PATH` really writes: the file a chain of symbolic links ends
@@ -353,7 +378,7 @@ impl Sink {
             Some(Part::Spooled(n)) => *n += len,
             Some(Part::Input { .. }) => self.parts.push(Part::Spooled(len)),
         }
-        if self.mem.len() >= SPILL_AT {
+        if self.mem.len() >= SPILL_AT && !matches!(self.dest, Destination::Memory(_)) {
             self.spill_now()?;
         }
         Ok(())
@@ -457,6 +482,11 @@ impl Sink {
     pub fn finish(mut self) -> io::Result<()> {
         match self.dest.clone() {
             Destination::Discard => Ok(()),
+            Destination::Memory(buf) => {
+                self.check_unchanged()?;
+                buf.put(std::mem::take(&mut self.mem));
+                Ok(())
+            }
             Destination::File(target) => {
                 self.spill_now()?;
                 let mut t = self

@@ -26,6 +26,9 @@ pub struct Loader {
     main_dir: Option<PathBuf>,
     by_path: HashMap<PathBuf, Rc<FileIndex>>,
     by_name: HashMap<String, Option<Rc<FileIndex>>>,
+    /// Subroutine files held in memory (`name` without `.ngc` → text),
+    /// found before any folder is searched.
+    memory: HashMap<String, Vec<u8>>,
     pub warnings: Vec<Diagnostic>,
 }
 
@@ -55,8 +58,16 @@ impl Loader {
             main_dir,
             by_path: HashMap::new(),
             by_name: HashMap::new(),
+            memory: HashMap::new(),
             warnings: Vec::new(),
         }
+    }
+
+    /// Subroutine files held in memory (`name` → text), found by
+    /// `o<name> call` before the search path; no file is read for them.
+    pub fn with_files(mut self, files: HashMap<String, Vec<u8>>) -> Loader {
+        self.memory = files;
+        self
     }
 
     /// Folders searched, in order.
@@ -110,6 +121,12 @@ impl Loader {
         }
         check_name(name)?;
         let file_name = format!("{name}.ngc");
+        if let Some(data) = self.memory.remove(name) {
+            let file = Arc::new(SourceFile::new(PathBuf::from(&file_name), file_name, data));
+            let index = Some(Rc::new(FileIndex::build(file)));
+            self.by_name.insert(name.to_string(), index.clone());
+            return Ok(index);
+        }
         let found = self.candidates(&file_name);
         let result = match found.first() {
             None => None,

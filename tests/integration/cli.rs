@@ -550,3 +550,65 @@ fn user_m_codes_on_other_targets() {
     assert_eq!(code, 1);
     assert!(err.contains("E0805"), "{err}");
 }
+
+/// The in-memory entry (`flatten_memory`, used by the fuzz targets) gives
+/// the command's output and diagnostics: every fixture with a `subs`
+/// folder, its subroutine files handed over as a map, and a long output
+/// (more than the 1 MB a file output holds before spilling, through the
+/// output thread).
+#[test]
+fn memory_entry_matches_the_command() {
+    use std::collections::HashMap;
+    let dir = crate::root().join("fixtures/ok/filesubs");
+    let subs: HashMap<String, Vec<u8>> = std::fs::read_dir(dir.join("subs"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "ngc"))
+        .map(|p| {
+            let name = p.file_stem().unwrap().to_string_lossy().into_owned();
+            (name, std::fs::read(&p).unwrap())
+        })
+        .collect();
+    let settings = ngcflat::eval::Settings::default();
+    let mut seen = 0;
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_none_or(|x| x != "ngc") {
+            continue;
+        }
+        let text = std::fs::read(&p).unwrap();
+        let name = p.file_name().unwrap().to_string_lossy().into_owned();
+        let (code, want, err) = crate::run(&dir, &["-I", "subs", &name]);
+        assert_eq!(code, 0, "{name}: {err}");
+        let (_, got) = ngcflat::flatten_memory(text.clone(), subs.clone(), &settings, None);
+        assert_eq!(String::from_utf8_lossy(&got.unwrap()), want, "{name}");
+        // Without the files, a call of one is the command's error (the
+        // message differs only in the folders searched).
+        let (_, got) = ngcflat::flatten_memory(text, HashMap::new(), &settings, None);
+        let (code, _, err) = crate::run(&dir, &["--message-format", "short", &name]);
+        assert_eq!(code, 1, "{name}");
+        let msg = ngcflat::diag::render(
+            &got.unwrap_err(),
+            ngcflat::diag::MessageFormat::Short,
+            false,
+        );
+        let code_of = |m: &str| m.find(" [E").map(|i| m[i..i + 8].to_string());
+        let line_of = |m: &str| m.split(':').nth(1).map(str::to_string);
+        assert_eq!(
+            code_of(&msg),
+            code_of(err.lines().next().unwrap_or("")),
+            "{name}: {msg} vs {err}"
+        );
+        assert_eq!(line_of(&msg), line_of(&err), "{name}: {msg} vs {err}");
+        seen += 1;
+    }
+    assert!(seen >= 10, "{seen} fixtures");
+    let d = tmp();
+    let prog = "G0 X0\no1 repeat [60000]\nG1 X[#5420+0.123456] Y1.5 F100 (a comment to make it long)\no1 endrepeat\nM2\n";
+    std::fs::write(d.path().join("long.ngc"), prog).unwrap();
+    let (code, want, err) = crate::run(d.path(), &["long.ngc"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(want.len() > 2 << 20, "{}", want.len());
+    let (_, got) = ngcflat::flatten_memory(prog.into(), HashMap::new(), &settings, None);
+    assert!(got.unwrap() == want.as_bytes());
+}
