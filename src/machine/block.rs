@@ -201,7 +201,7 @@ pub enum GCode {
 impl GCode {
     /// Decodes a G number (`value` as written, e.g. 59.1).
     pub fn decode(value: f64) -> Option<GCode> {
-        let t = (value * 10.0).round();
+        let t = round(value * 10.0);
         if !(0.0..=1000.0).contains(&t) || (t - value * 10.0).abs() > 1e-6 {
             return None;
         }
@@ -788,6 +788,19 @@ impl Block {
     }
 }
 
+/// `x.round()` (halves away from zero) without a call into libm for the
+/// values codes have: from 0 to 2^53 the part after the point is exact, so
+/// comparing it with one half decides.
+#[inline]
+pub(crate) fn round(x: f64) -> f64 {
+    if (0.0..9.0e15).contains(&x) && x.is_sign_positive() {
+        let i = x as u64;
+        (i + u64::from(x - i as f64 >= 0.5)) as f64
+    } else {
+        x.round()
+    }
+}
+
 fn skip_blanks(line: &[u8], mut i: usize) -> usize {
     while i < line.len() && matches!(line[i], b' ' | b'\t' | b'\r') {
         i += 1;
@@ -914,6 +927,19 @@ fn read_number_slow(line: &[u8], start: usize) -> Option<(f64, usize)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    proptest::proptest! {
+        #[test]
+        fn round_is_f64_round(
+            x in proptest::num::f64::ANY,
+            y in -100.0f64..2000.0,
+            k in 0u64..100_000,
+        ) {
+            for v in [x, y, k as f64 / 2.0, k as f64 / 20.0 + 0.05] {
+                proptest::prop_assert_eq!(round(v).to_bits(), v.round().to_bits(), "{}", v);
+            }
+        }
+    }
 
     proptest::proptest! {
         /// The one-pass number reader gives what the general one gives

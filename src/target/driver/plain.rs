@@ -17,11 +17,15 @@ use crate::machine::block::{
 
 use super::{Lowering, Problem, Profile, io_error};
 
-/// The whole G and M codes below 128 the profile has, as bits (G17 is
-/// bit 17): looked up once per line instead of searched in the lists.
+/// The whole G and M codes below 128 the profile has, and its word and
+/// axis letters, as bits (G17 is bit 17, X bit 88): looked up once per word
+/// instead of searched in the profile's lists.
 pub(super) struct Codes {
     g: u128,
     m: u128,
+    /// Value word letters and axis letters, by their byte.
+    words: u128,
+    axes: u128,
 }
 
 impl Codes {
@@ -34,6 +38,8 @@ impl Codes {
         Codes {
             g: bits(&|n| p.has_g(n * 10)),
             m: bits(&|n| p.has_m(n)),
+            words: bits(&|n| p.has_word(n as u8)),
+            axes: bits(&|n| p.has_axis(n as u8)),
         }
     }
 }
@@ -86,18 +92,22 @@ impl Lowering {
                         && (0.0..128.0).contains(&w.value)
                         && self.codes.m & (1 << (w.value as u32)) != 0
                 }
-                WordKind::Value => match w.letter {
-                    b'X' | b'Y' | b'Z' => {
-                        axis = true;
-                        self.p.has_axis(w.letter) && self.p.has_word(w.letter)
+                WordKind::Value => {
+                    let bit = 1u128 << (w.letter & 0x7f);
+                    let word = self.codes.words & bit != 0;
+                    match w.letter {
+                        b'X' | b'Y' | b'Z' => {
+                            axis = true;
+                            word && self.codes.axes & bit != 0
+                        }
+                        b'I' | b'J' | b'K' => {
+                            ijk = true;
+                            word
+                        }
+                        b'F' | b'S' => word,
+                        _ => false,
                     }
-                    b'I' | b'J' | b'K' => {
-                        ijk = true;
-                        self.p.has_word(w.letter)
-                    }
-                    b'F' | b'S' => self.p.has_word(w.letter),
-                    _ => false,
-                },
+                }
             };
             if !ok {
                 return false;
