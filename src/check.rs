@@ -105,9 +105,8 @@ fn sub_file_name(index: &FileIndex) -> Option<String> {
         .file_stem()?
         .to_string_lossy()
         .to_ascii_lowercase();
-    first
-        .key
-        .as_ref()
+    index
+        .key(0)
         .filter(|k| AsRef::<str>::as_ref(&***k) == stem.as_str())
         .map(|k| k.to_string())
 }

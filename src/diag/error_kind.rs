@@ -186,6 +186,9 @@ pub enum ErrorKind {
     },
     /// A value that cannot be written as a G-code number.
     Unprintable { value: f64 },
+    /// An O-line read again when it runs is no longer the O-line the index
+    /// found (the file changed during the run).
+    ProgramChanged { line: u32 },
     // ------------------------------------------------------------ files and setup
     /// A file that cannot be read.
     Io { path: PathBuf, message: String },
@@ -363,6 +366,7 @@ impl ErrorKind {
             StepLimit { .. } => "E0402",
             OutputLimit { .. } => "E0403",
             Unprintable { .. } => "E0404",
+            ProgramChanged { .. } => "E0405",
             Io { .. } => "E0501",
             UnsafeSubName { .. } => "E0502",
             VarFileOrder { .. } => "E0503",
@@ -565,6 +569,10 @@ impl ErrorKind {
             Unprintable { value } => {
                 write!(f, "value {value} cannot be written as a G-code number")
             }
+            ProgramChanged { line } => write!(
+                f,
+                "the program changed while it was run: line {line} is no longer the O-word line it was when the file was read"
+            ),
             ProbeResultUnknown { index, line } => write!(
                 f,
                 "#{index} is the result of the probe at line {line}, known only on the machine; a program that uses it cannot be flattened ahead of time (--zero-start assumes the probe does not trip and reads its target, as LinuxCNC's standalone interpreter does)"

@@ -17,15 +17,15 @@ use std::sync::Arc;
 
 use crate::program::SourceFile;
 
-/// A place in a source file: byte offsets from the start of the file, and
-/// the line and column they are at, worked out when the site is made (so
-/// that rendering reads no file).
+/// A place in a source file: byte offsets from the start of the file. The
+/// line and column they are at are worked out when the diagnostic is
+/// rendered (a site is small: a program with a million warnings holds a
+/// million of them, not a copy of each line).
 #[derive(Debug, Clone)]
 pub struct Site {
     pub file: Arc<SourceFile>,
     pub start: u32,
     pub end: u32,
-    loc: Located,
 }
 
 /// A site's line and column (1-based, columns in characters), its end, and
@@ -46,7 +46,22 @@ pub(crate) struct Located {
 
 impl Site {
     pub fn new(file: &Arc<SourceFile>, start: u32, end: u32) -> Site {
-        let end = end.max(start);
+        Site {
+            file: Arc::clone(file),
+            start,
+            end: end.max(start),
+        }
+    }
+
+    /// 1-based line and column of the start.
+    pub fn line_col(&self) -> (u32, u32) {
+        let here = self.file.locate(self.start);
+        (here.line, here.col)
+    }
+
+    /// Line, column, end and line text of the site, read from its file.
+    pub(crate) fn located(&self) -> Located {
+        let (file, start, end) = (&self.file, self.start, self.end);
         let here = file.locate(start);
         let (end_line, end_col) = if end == start {
             (here.line, here.col)
@@ -55,29 +70,15 @@ impl Site {
             (there.line, there.col)
         };
         let (text, lead) = render::shown_line(&here.text, here.col);
-        Site {
-            file: Arc::clone(file),
-            start,
-            end,
-            loc: Located {
-                file: render::shown(&file.display_name()).into_owned(),
-                line: here.line,
-                col: here.col,
-                end_line,
-                end_col,
-                text,
-                lead,
-            },
+        Located {
+            file: render::shown(&file.display_name()).into_owned(),
+            line: here.line,
+            col: here.col,
+            end_line,
+            end_col,
+            text,
+            lead,
         }
-    }
-
-    /// 1-based line and column of the start.
-    pub fn line_col(&self) -> (u32, u32) {
-        (self.loc.line, self.loc.col)
-    }
-
-    pub(crate) fn located(&self) -> &Located {
-        &self.loc
     }
 }
 

@@ -235,7 +235,7 @@ pub fn render(d: &Diagnostic, format: MessageFormat, color: bool) -> String {
     let code = d.code();
     let message = shown(&d.message()).into_owned();
     let here = d.site.as_ref().map(|s| s.located());
-    let stack: Vec<&Located> = d.stack.iter().map(|s| s.located()).collect();
+    let stack: Vec<Located> = d.stack.iter().map(|s| s.located()).collect();
     let mut out = String::new();
     match format {
         MessageFormat::Short => {
@@ -280,7 +280,8 @@ pub fn render(d: &Diagnostic, format: MessageFormat, color: bool) -> String {
             }
         }
         MessageFormat::Json => {
-            out = json_line(d, here, &stack);
+            let stack: Vec<&Located> = stack.iter().collect();
+            out = json_line(d, here.as_ref(), &stack);
         }
         MessageFormat::Human => {
             let (lvl, bold, blue, reset) = if color {

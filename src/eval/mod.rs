@@ -270,22 +270,24 @@ impl<'s> Interp<'s> {
     fn finish_warnings(&mut self) {
         let main = self.main.clone();
         self.warn_unreachable(&main);
-        // Subs defined in the main file and never called.
-        for (i, o) in main.olines.iter().enumerate() {
-            if o.kind() == Some(OKind::Sub)
-                && let Some(k) = &o.key
+        // Subs defined in the main file and never called: one warning per
+        // definition, given here only (no record of sites warned needed).
+        if !self.s.warnings {
+            return;
+        }
+        let stack = self.stack();
+        for d in main.defs() {
+            let o = &main.olines[d.oidx as usize];
+            if let Some(k) = main.key(d.oidx)
                 && !self.flow.called.contains(k)
-                && main.defs.contains_key(&(i as u32))
             {
                 let end = o.start + o.line_len();
-                self.warn(
-                    WarningKind::UnusedSub {
-                        name: k.to_string(),
-                    },
-                    &main,
-                    o.start,
-                    end,
-                );
+                let kind = WarningKind::UnusedSub {
+                    name: k.to_string(),
+                };
+                let mut w = Diagnostic::warning(kind, Some(Site::new(&main.file, o.start, end)));
+                w.stack.clone_from(&stack);
+                self.diags.warnings.push(w);
             }
         }
     }
@@ -305,10 +307,10 @@ impl<'s> Interp<'s> {
         // starting at or before it reaches it (a search, not a scan: a
         // million definitions after the end stay linear).
         let mut inside: Vec<(u32, u32)> = Vec::new();
-        for (&s, d) in &main.defs {
-            let a = main.olines[s as usize].line_idx;
+        for d in main.defs() {
+            let a = main.olines[d.oidx as usize].line_idx;
             let b = d
-                .end
+                .end()
                 .map(|e| main.olines[e as usize].line_idx)
                 .unwrap_or(u32::MAX);
             inside.push((a, b));
@@ -506,6 +508,11 @@ impl<'s> Interp<'s> {
                 None => {
                     let l = Rc::new(self.parse_line(file, start, raw, terminated)?);
                     let end = start + raw.len() as u32;
+                    if self.flow.cache.len() >= flow::LINES_KEPT {
+                        // Bounded: a program of a million bodies run once
+                        // each does not keep them all.
+                        self.flow.cache.clear();
+                    }
                     self.flow.cache.insert(key, (l.clone(), end, next));
                     l
                 }
@@ -634,12 +641,5 @@ impl<'s> Interp<'s> {
             at,
             at,
         )
-    }
-}
-
-impl crate::program::OInfo {
-    /// Length of the line text without its terminator.
-    pub fn line_len(&self) -> u32 {
-        (self.next - self.start).saturating_sub(1)
     }
 }

@@ -1,46 +1,89 @@
-//! The O-word structure of one file, resolved once: every O-line parsed, its
-//! scope (the subroutine definition it lies in), the occurrences of each label
-//! in order, sub definitions and their ends, and the errors the reference
-//! reports even on lines it skips.
+//! The O-word structure of one file, resolved once: every O-line's kind,
+//! label key and scope (the subroutine definition it lies in), the
+//! occurrences of each label in order, sub definitions and their ends, and
+//! the errors the reference reports even on lines it skips.
+//!
+//! Kept compact, since a program may hold a million labels: an O-line is a
+//! record of a few integers; its label key is an index into the file's
+//! table of distinct keys; the occurrences of all keys are one array cut
+//! into runs; the parsed line itself is not kept but parsed again when it
+//! is run (a bounded number of parsed O-lines are kept for loops).
 
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 use std::sync::Arc;
 
 use crate::diag::ErrorKind;
 use crate::fx_hasher::FxMap;
-use crate::parse::ast::{Label, Line, LineKind, OKind, OLine};
+use crate::parse::ast::{Label, Line, LineKind, OKind, OLine, Span};
 use crate::parse::{LineError, LineParser, Name};
 
 use super::SourceFile;
 use super::marked_lines::{Marked, is_mark};
 
+/// No key (a computed label, an M98 line) or no scope (outside any sub
+/// definition).
+const NONE: u32 = u32::MAX;
+
+/// Parsed O-lines kept per file before the kept ones are dropped and
+/// parsing starts to fill again (loops run from what is kept).
+const PARSED_KEPT: usize = 1 << 14;
+
+/// Bytes of a streamed file read at a time for parsing O-lines again.
+const AHEAD: usize = 1 << 13;
+
 /// One O-line (or M98 line) of a file.
-#[derive(Debug)]
+#[derive(Debug, Clone, Copy)]
 pub struct OInfo {
     /// 0-based line index.
     pub line_idx: u32,
     /// Byte offset of the line start and of the next line's start.
     pub start: u32,
     pub next: u32,
-    pub line: Rc<Line>,
-    /// Name of the sub definition the line lies in ("" outside).
-    pub scope: Name,
-    /// Internal key of a static label: `scope#label` for control labels,
-    /// `label` for sub/endsub/return/call/bare.
-    pub key: Option<Name>,
+    /// Index of the label key in the file's key table (`NONE`: computed
+    /// label or M98 line).
+    key: u32,
+    /// Key index of the sub definition the line lies in (`NONE`: outside).
+    scope: u32,
+    /// `None` for an M98 line.
+    kind: Option<OKind>,
+    /// The line ends with a newline.
+    terminated: bool,
+    /// An O-line with a fixed label and nothing else to run (no value,
+    /// arguments, error, active comment, block delete or line number): it
+    /// is made from the index when run, not parsed again.
+    plain: bool,
 }
 
 impl OInfo {
-    pub fn o(&self) -> Option<&OLine> {
-        match &self.line.kind {
-            LineKind::O(o) => Some(o),
-            _ => None,
-        }
+    pub fn kind(&self) -> Option<OKind> {
+        self.kind
     }
 
-    pub fn kind(&self) -> Option<OKind> {
-        self.o().map(|o| o.kind)
+    /// Length of the line text without its terminator.
+    pub fn line_len(&self) -> u32 {
+        (self.next - self.start).saturating_sub(1)
+    }
+}
+
+/// A parsed O-line (a line whose kind the index checked is `O`).
+#[derive(Clone)]
+pub struct ParsedO(Rc<Line>);
+
+impl ParsedO {
+    pub fn line(&self) -> &Rc<Line> {
+        &self.0
+    }
+}
+
+impl std::ops::Deref for ParsedO {
+    type Target = OLine;
+    fn deref(&self) -> &OLine {
+        match &self.0.kind {
+            LineKind::O(o) => o,
+            // `FileIndex::oline` makes a `ParsedO` only of an O-line.
+            _ => unreachable!("a ParsedO holds an O-line"),
+        }
     }
 }
 
@@ -57,7 +100,25 @@ pub struct SubDefInfo {
     pub valued: Vec<u32>,
 }
 
-#[derive(Debug)]
+/// A sub definition as stored: O-line indices (`NONE`: absent) and a run
+/// of [`FileIndex::valued`].
+#[derive(Debug, Clone, Copy)]
+pub struct SubDef {
+    /// O-line index of the `sub` line.
+    pub oidx: u32,
+    end: u32,
+    nested: u32,
+    valued_at: u32,
+    valued_len: u32,
+}
+
+impl SubDef {
+    /// O-line index of the matching `endsub`, if any.
+    pub fn end(&self) -> Option<u32> {
+        (self.end != NONE).then_some(self.end)
+    }
+}
+
 pub struct FileIndex {
     pub file: Arc<SourceFile>,
     /// The file could not be read to its end.
@@ -65,8 +126,16 @@ pub struct FileIndex {
     /// Offset of the line after the first non-blank one.
     pub first_nonblank_next: u32,
     pub olines: Vec<OInfo>,
-    /// Static label key → O-line indices in file order.
-    pub occ: FxMap<Name, Vec<u32>>,
+    /// The distinct static label keys (`scope#label` for control labels,
+    /// `label` for sub/endsub/return/call/bare).
+    keys: Vec<Name>,
+    /// Key indices sorted by the key's interned address (a search finds a
+    /// key's index without a map).
+    keys_by_addr: Vec<u32>,
+    /// `occ[occ_at[k]..occ_at[k + 1]]`: the O-lines with key `k`, in file
+    /// order.
+    occ_at: Vec<u32>,
+    occ: Vec<u32>,
     /// O-lines whose label is computed when read.
     pub dynamic: Vec<u32>,
     /// Errors raised even on skipped lines: (line index, line start, error).
@@ -76,8 +145,10 @@ pub struct FileIndex {
     /// Line indices of lines starting with `M99` (the reference reads them
     /// while seeking a subroutine, which clears `#<_value>`).
     pub m99_lines: Vec<u32>,
-    /// Sub definition details, by O-line index of the `sub` line.
-    pub defs: FxMap<u32, SubDefInfo>,
+    /// Sub definitions by O-line index of their `sub` line (ascending).
+    defs: Vec<SubDef>,
+    /// Runs of valued `return`/`endsub` O-lines of the definitions.
+    valued: Vec<u32>,
     /// Found targets of control-label searches, by the O-line searched
     /// from (`u32::MAX`: not searched yet); see `Interp::seek`.
     pub seek_memo: Vec<Cell<u32>>,
@@ -89,6 +160,24 @@ pub struct FileIndex {
     /// Index of the first non-blank line, if any.
     pub first_nonblank: Option<u32>,
     pub line_count: u32,
+    /// The empty scope.
+    no_scope: Name,
+    /// Parsed O-lines kept (at most [`PARSED_KEPT`]), by O-line index.
+    parsed: RefCell<FxMap<u32, Rc<Line>>>,
+    parser: RefCell<LineParser>,
+    /// Bytes of a streamed file read ahead for parsing O-lines again:
+    /// (offset, bytes).
+    ahead: RefCell<(u32, Vec<u8>)>,
+}
+
+impl std::fmt::Debug for FileIndex {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FileIndex")
+            .field("file", &self.file.name)
+            .field("olines", &self.olines.len())
+            .field("keys", &self.keys.len())
+            .finish_non_exhaustive()
+    }
 }
 
 pub fn control_key(scope: &str, label: &str) -> Name {
@@ -105,6 +194,11 @@ pub use super::source_file::next_line;
 #[derive(Default)]
 struct Scan {
     olines: Vec<OInfo>,
+    keys: Vec<Name>,
+    key_ids: FxMap<Name, u32>,
+    dynamic: Vec<u32>,
+    /// Key index of the sub definition being read.
+    current_def: Option<u32>,
     skip_errors: Vec<(u32, u32, LineError)>,
     percent_lines: Vec<u32>,
     m99_lines: Vec<u32>,
@@ -131,16 +225,30 @@ impl Scan {
                         }
                         self.percent_lines.push(idx);
                     }
-                    LineKind::O(_) | LineKind::M98(_) => {
-                        self.olines.push(OInfo {
-                            line_idx: idx,
-                            start: pos,
-                            next,
-                            line: Rc::new(line),
-                            scope: Name::new(""),
-                            key: None,
-                        });
+                    LineKind::O(o) => {
+                        let label = match &o.label {
+                            Label::Static(s) => Some(s),
+                            Label::Dynamic(_) => None,
+                        };
+                        let plain = label.is_some()
+                            && o.expr.is_none()
+                            && o.args.is_empty()
+                            && !o.active_comment
+                            && o.exec_error.is_none()
+                            && !line.block_delete
+                            && line.line_number.is_none();
+                        self.oline(idx, pos, (next, terminated, plain), o.kind, label);
                     }
+                    LineKind::M98(_) => self.olines.push(OInfo {
+                        line_idx: idx,
+                        start: pos,
+                        next,
+                        key: NONE,
+                        scope: NONE,
+                        kind: None,
+                        terminated,
+                        plain: false,
+                    }),
                 },
                 Err(e) => {
                     if e.when_skipped {
@@ -158,122 +266,157 @@ impl Scan {
             self.first_nonblank_next = next;
         }
     }
+
+    /// The index of a key (made if new).
+    fn key_id(&mut self, key: Name) -> u32 {
+        let n = self.keys.len() as u32;
+        let id = *self.key_ids.entry(key.clone()).or_insert(n);
+        if id == n {
+            self.keys.push(key);
+        }
+        id
+    }
+
+    /// Records an O-line with its scope and key: lines are handed on in
+    /// file order, so the definition being read is known.
+    fn oline(
+        &mut self,
+        idx: u32,
+        pos: u32,
+        (next, terminated, plain): (u32, bool, bool),
+        kind: OKind,
+        label: Option<&Name>,
+    ) {
+        let i = self.olines.len() as u32;
+        let label_id = label.map(|l| self.key_id(l.clone()));
+        let mut scope = NONE;
+        if kind == OKind::Sub {
+            if self.current_def.is_none() {
+                self.current_def = label_id;
+            }
+        } else if kind == OKind::EndSub
+            && self.current_def.is_some()
+            && self.current_def == label_id
+        {
+            scope = self.current_def.take().unwrap_or(NONE);
+        }
+        if let Some(d) = self.current_def
+            && (kind != OKind::Sub || label_id != Some(d))
+        {
+            scope = d;
+        }
+        let key = match label {
+            Some(l) if kind.is_control() => {
+                let scope_text = if scope == NONE {
+                    ""
+                } else {
+                    self.keys[scope as usize].as_str()
+                };
+                let k = control_key(scope_text, l);
+                self.key_id(k)
+            }
+            Some(_) => label_id.unwrap_or(NONE),
+            None => {
+                self.dynamic.push(i);
+                NONE
+            }
+        };
+        self.olines.push(OInfo {
+            line_idx: idx,
+            start: pos,
+            next,
+            key,
+            scope,
+            kind: Some(kind),
+            terminated,
+            plain,
+        });
+    }
 }
 
-/// Gives each O-line its scope and key; returns the occurrences of each
-/// static key and the O-lines with computed labels.
-fn assign_scopes(olines: &mut [OInfo]) -> (FxMap<Name, Vec<u32>>, Vec<u32>) {
-    let mut current_def: Option<Name> = None;
-    let mut occ: FxMap<Name, Vec<u32>> = FxMap::default();
-    let mut dynamic = Vec::new();
-    for (i, info) in olines.iter_mut().enumerate() {
-        let Some(o) = (match &info.line.kind {
-            LineKind::O(o) => Some(o),
-            _ => None,
-        }) else {
-            continue;
-        };
-        let label = match &o.label {
-            Label::Static(s) => Some(s.clone()),
-            Label::Dynamic(_) => None,
-        };
-        if o.kind == OKind::Sub {
-            if current_def.is_none() {
-                current_def = label.clone();
-            }
-        } else if o.kind == OKind::EndSub && current_def.is_some() && current_def == label {
-            info.scope = current_def.clone().unwrap_or_else(|| Name::new(""));
-            current_def = None;
-        }
-        if let Some(d) = &current_def
-            && (o.kind != OKind::Sub || label.as_ref() != Some(d))
-        {
-            info.scope = d.clone();
-        }
-        match label {
-            Some(l) => {
-                let key = if o.kind.is_control() {
-                    control_key(&info.scope, &l)
-                } else {
-                    l
-                };
-                occ.entry(key.clone()).or_default().push(i as u32);
-                info.key = Some(key);
-            }
-            None => dynamic.push(i as u32),
-        }
+/// The occurrences of each key in file order, as runs of one array:
+/// `(occ_at, occ)`.
+fn occurrences(olines: &[OInfo], keys: usize) -> (Vec<u32>, Vec<u32>) {
+    let mut occ_at = vec![0u32; keys + 1];
+    for o in olines.iter().filter(|o| o.key != NONE) {
+        occ_at[o.key as usize + 1] += 1;
     }
-    (occ, dynamic)
+    for k in 0..keys {
+        occ_at[k + 1] += occ_at[k];
+    }
+    let mut fill = occ_at.clone();
+    let mut occ = vec![0u32; occ_at[keys] as usize];
+    for (i, o) in olines.iter().enumerate().filter(|(_, o)| o.key != NONE) {
+        let at = &mut fill[o.key as usize];
+        occ[*at as usize] = i as u32;
+        *at += 1;
+    }
+    (occ_at, occ)
 }
 
 /// Sub definitions: each is matched through its own label's occurrences,
 /// so the work is linear in the number of O-lines. Each definition's line
 /// range is pushed onto `keep`.
-fn sub_defs(
-    olines: &[OInfo],
-    occ: &FxMap<Name, Vec<u32>>,
-    line_count: u32,
-    keep: &mut Vec<(u32, u32)>,
-) -> FxMap<u32, SubDefInfo> {
-    let mut defs = FxMap::default();
+fn sub_defs(index: &FileIndex, keep: &mut Vec<(u32, u32)>) -> (Vec<SubDef>, Vec<u32>) {
+    let olines = &index.olines;
+    let mut defs = Vec::new();
+    let mut valued = Vec::new();
     let sub_lines: Vec<u32> = olines
         .iter()
         .enumerate()
-        .filter(|(_, o)| matches!(o.kind(), Some(OKind::Sub | OKind::Bare)))
+        .filter(|(_, o)| matches!(o.kind, Some(OKind::Sub | OKind::Bare)))
         .map(|(j, _)| j as u32)
         .collect();
     for (i, info) in olines.iter().enumerate() {
-        let (Some(OKind::Sub), Some(key)) = (info.kind(), &info.key) else {
+        if info.kind != Some(OKind::Sub) || info.key == NONE {
             continue;
+        }
+        let mut def = SubDef {
+            oidx: i as u32,
+            end: NONE,
+            nested: NONE,
+            valued_at: valued.len() as u32,
+            valued_len: 0,
         };
-        let mut def = SubDefInfo {
-            end: None,
-            nested: None,
-            valued: Vec::new(),
-        };
-        if let Some(list) = occ.get(key) {
-            let p = list.partition_point(|&j| j as usize <= i);
-            for &j in &list[p..] {
-                match olines[j as usize].kind() {
-                    Some(OKind::EndSub) => {
-                        def.valued.push(j);
-                        def.end = Some(j);
-                        break;
-                    }
-                    Some(OKind::Return) => def.valued.push(j),
-                    Some(OKind::Sub | OKind::Bare) => break,
-                    _ => {}
+        let list = index.occ_of(info.key);
+        let p = list.partition_point(|&j| j as usize <= i);
+        for &j in &list[p..] {
+            match olines[j as usize].kind {
+                Some(OKind::EndSub) => {
+                    valued.push(j);
+                    def.end = j;
+                    break;
                 }
+                Some(OKind::Return) => valued.push(j),
+                Some(OKind::Sub | OKind::Bare) => break,
+                _ => {}
             }
         }
+        def.valued_len = valued.len() as u32 - def.valued_at;
         let q = sub_lines.partition_point(|&j| j as usize <= i);
         if let Some(&j) = sub_lines.get(q)
-            && def.end.is_none_or(|e| j < e)
+            && def.end().is_none_or(|e| j < e)
         {
-            let name = olines[j as usize]
-                .key
-                .clone()
-                .unwrap_or_else(|| Name::new("?"));
-            def.nested = Some((j, name));
+            def.nested = j;
         }
-        if let Some(e) = def.end {
-            keep.push((info.line_idx, olines[e as usize].line_idx));
-        } else {
-            keep.push((info.line_idx, line_count));
+        match def.end() {
+            Some(e) => keep.push((info.line_idx, olines[e as usize].line_idx)),
+            None => keep.push((info.line_idx, index.line_count)),
         }
-        defs.insert(i as u32, def);
+        defs.push(def);
     }
-    defs
+    (defs, valued)
 }
 
 /// Loop bodies: one backward pass per label finds each opener's closer;
 /// each body's line range is pushed onto `keep`.
-fn loop_bodies(olines: &[OInfo], occ: &FxMap<Name, Vec<u32>>, keep: &mut Vec<(u32, u32)>) {
-    for list in occ.values() {
+fn loop_bodies(index: &FileIndex, keep: &mut Vec<(u32, u32)>) {
+    let olines = &index.olines;
+    for k in 0..index.keys.len() as u32 {
         let (mut next_endwhile, mut next_while, mut next_endrepeat) = (None, None, None);
-        for &j in list.iter().rev() {
+        for &j in index.occ_of(k).iter().rev() {
             let info = &olines[j as usize];
-            let closer = match info.kind() {
+            let closer = match info.kind {
                 Some(OKind::While) => next_endwhile,
                 Some(OKind::Do) => next_while,
                 Some(OKind::Repeat) => next_endrepeat,
@@ -283,7 +426,7 @@ fn loop_bodies(olines: &[OInfo], occ: &FxMap<Name, Vec<u32>>, keep: &mut Vec<(u3
                 let c: u32 = c;
                 keep.push((info.line_idx, olines[c as usize].line_idx));
             }
-            match info.kind() {
+            match info.kind {
                 Some(OKind::EndWhile) => next_endwhile = Some(j),
                 Some(OKind::While) => next_while = Some(j),
                 Some(OKind::EndRepeat) => next_endrepeat = Some(j),
@@ -303,7 +446,13 @@ fn merge_ranges(mut keep: Vec<(u32, u32)>) -> Vec<(u32, u32)> {
             _ => merged.push((a, b)),
         }
     }
+    merged.shrink_to_fit();
     merged
+}
+
+/// Address of a name's interned text (what `Name` equality compares).
+fn addr(n: &Name) -> usize {
+    n.as_str().as_ptr() as usize
 }
 
 impl FileIndex {
@@ -319,33 +468,289 @@ impl FileIndex {
         };
         let Scan {
             mut olines,
-            skip_errors,
-            percent_lines,
-            m99_lines,
+            mut keys,
+            key_ids,
+            mut dynamic,
+            mut skip_errors,
+            mut percent_lines,
+            mut m99_lines,
             first_nonblank,
             first_nonblank_next,
             percent_start,
+            ..
         } = scan;
-        let (occ, dynamic) = assign_scopes(&mut olines);
-        let mut keep = Vec::new();
-        let defs = sub_defs(&olines, &occ, line_count, &mut keep);
-        loop_bodies(&olines, &occ, &mut keep);
-        FileIndex {
+        drop(key_ids);
+        olines.shrink_to_fit();
+        keys.shrink_to_fit();
+        dynamic.shrink_to_fit();
+        skip_errors.shrink_to_fit();
+        percent_lines.shrink_to_fit();
+        m99_lines.shrink_to_fit();
+        let (occ_at, occ) = occurrences(&olines, keys.len());
+        let mut keys_by_addr: Vec<u32> = (0..keys.len() as u32).collect();
+        keys_by_addr.sort_unstable_by_key(|&k| addr(&keys[k as usize]));
+        let mut index = FileIndex {
             file,
             read_error,
             first_nonblank_next,
             seek_memo: vec![Cell::new(u32::MAX); olines.len()],
             olines,
+            keys,
+            keys_by_addr,
+            occ_at,
             occ,
             dynamic,
             skip_errors,
             percent_lines,
             m99_lines,
-            defs,
-            keep: merge_ranges(keep),
+            defs: Vec::new(),
+            valued: Vec::new(),
+            keep: Vec::new(),
             percent_start,
             first_nonblank,
             line_count,
+            no_scope: Name::new(""),
+            parsed: RefCell::new(FxMap::default()),
+            parser: RefCell::new(parser),
+            ahead: RefCell::default(),
+        };
+        let mut keep = Vec::new();
+        let (mut defs, mut valued) = sub_defs(&index, &mut keep);
+        defs.shrink_to_fit();
+        valued.shrink_to_fit();
+        (index.defs, index.valued) = (defs, valued);
+        loop_bodies(&index, &mut keep);
+        index.keep = merge_ranges(keep);
+        index
+    }
+
+    /// The O-lines with key index `k`, in file order.
+    fn occ_of(&self, k: u32) -> &[u32] {
+        let k = k as usize;
+        match (self.occ_at.get(k), self.occ_at.get(k + 1)) {
+            (Some(&a), Some(&b)) => &self.occ[a as usize..b as usize],
+            _ => &[],
+        }
+    }
+
+    /// Index of a static key in this file, if it occurs.
+    fn key_index(&self, key: &Name) -> Option<u32> {
+        let a = addr(key);
+        let p = self
+            .keys_by_addr
+            .partition_point(|&k| addr(&self.keys[k as usize]) < a);
+        self.keys_by_addr
+            .get(p)
+            .copied()
+            .filter(|&k| self.keys[k as usize] == *key)
+    }
+
+    /// The O-lines with this static key, in file order.
+    pub fn occ(&self, key: &Name) -> &[u32] {
+        self.key_index(key).map_or(&[], |k| self.occ_of(k))
+    }
+
+    /// The O-lines with the same static key as O-line `oidx`, if `key` is
+    /// that key (no search), else those with `key`.
+    pub fn occ_like(&self, oidx: u32, key: &Name) -> &[u32] {
+        match self.olines.get(oidx as usize) {
+            Some(o) if o.key != NONE && self.keys[o.key as usize] == *key => self.occ_of(o.key),
+            _ => self.occ(key),
+        }
+    }
+
+    /// The static label key of O-line `oidx` (`None`: computed label or
+    /// M98 line).
+    pub fn key(&self, oidx: u32) -> Option<&Name> {
+        let k = self.olines.get(oidx as usize)?.key;
+        self.keys.get(k as usize)
+    }
+
+    /// Name of the sub definition O-line `oidx` lies in ("" outside).
+    pub fn scope(&self, oidx: u32) -> &Name {
+        self.olines
+            .get(oidx as usize)
+            .and_then(|o| self.keys.get(o.scope as usize))
+            .unwrap_or(&self.no_scope)
+    }
+
+    /// Whether two O-lines lie in the same sub definition (or both outside).
+    pub fn same_scope(&self, a: u32, b: u32) -> bool {
+        let scope = |i: u32| self.olines.get(i as usize).map(|o| o.scope);
+        scope(a) == scope(b)
+    }
+
+    /// The sub definition whose `sub` line is O-line `oidx`.
+    pub fn def(&self, oidx: u32) -> Option<SubDefInfo> {
+        let d = self.def_at(oidx)?;
+        let nested = (d.nested != NONE).then(|| {
+            let name = self
+                .key(d.nested)
+                .cloned()
+                .unwrap_or_else(|| Name::new("?"));
+            (d.nested, name)
+        });
+        let (a, n) = (d.valued_at as usize, d.valued_len as usize);
+        Some(SubDefInfo {
+            end: d.end(),
+            nested,
+            valued: self.valued.get(a..a + n).unwrap_or(&[]).to_vec(),
+        })
+    }
+
+    fn def_at(&self, oidx: u32) -> Option<&SubDef> {
+        let p = self.defs.partition_point(|d| d.oidx < oidx);
+        self.defs.get(p).filter(|d| d.oidx == oidx)
+    }
+
+    /// Whether O-line `oidx` opens a sub definition (one indexed by its
+    /// fixed label).
+    pub fn is_def(&self, oidx: u32) -> bool {
+        self.def_at(oidx).is_some()
+    }
+
+    /// The sub definitions, by their `sub` line.
+    pub fn defs(&self) -> &[SubDef] {
+        &self.defs
+    }
+
+    /// O-line `oidx` parsed (again: the index keeps its kind and key, not
+    /// the line; up to [`PARSED_KEPT`] parsed lines are kept). An error
+    /// when the line cannot be read again or is no longer the O-line the
+    /// index found (the file changed during the run).
+    pub fn oline(&self, oidx: u32) -> Result<ParsedO, ErrorKind> {
+        if let Some(l) = self.parsed.borrow().get(&oidx) {
+            return Ok(ParsedO(l.clone()));
+        }
+        let info = self
+            .olines
+            .get(oidx as usize)
+            .copied()
+            .ok_or_else(|| changed(0))?;
+        let line = Rc::new(if info.plain {
+            self.made_again(&info)?
+        } else {
+            self.parse_again(&info)?
+        });
+        let mut kept = self.parsed.borrow_mut();
+        if kept.len() >= PARSED_KEPT {
+            kept.clear();
+        }
+        kept.insert(oidx, line.clone());
+        Ok(ParsedO(line))
+    }
+
+    /// O-line `oidx` as a whole line (O or M98), parsed again.
+    pub fn line(&self, oidx: u32) -> Result<Rc<Line>, ErrorKind> {
+        match self.olines.get(oidx as usize) {
+            Some(o) if o.kind.is_some() => self.oline(oidx).map(|p| p.0),
+            Some(o) => self.parse_again(o).map(Rc::new),
+            None => Err(changed(0)),
+        }
+    }
+
+    /// A plain O-line as parsing it gives it.
+    fn made_again(&self, info: &OInfo) -> Result<Line, ErrorKind> {
+        let (Some(kind), Some(key)) = (info.kind, self.keys.get(info.key as usize)) else {
+            return Err(changed(info.line_idx));
+        };
+        let label = if kind.is_control() {
+            let scope = self.keys.get(info.scope as usize).map_or(0, |n| n.len());
+            Name::new(key.get(scope + 1..).unwrap_or(""))
+        } else {
+            key.clone()
+        };
+        Ok(Line {
+            kind: LineKind::O(OLine {
+                label: Label::Static(label),
+                label_span: Span::default(),
+                kind,
+                expr: None,
+                args: Vec::new(),
+                active_comment: false,
+                exec_error: None,
+            }),
+            block_delete: false,
+            line_number: None,
+        })
+    }
+
+    fn parse_again(&self, info: &OInfo) -> Result<Line, ErrorKind> {
+        let len = (info.next - info.start).saturating_sub(info.terminated as u32) as usize;
+        if len > crate::parse::MAX_LINE + 1 {
+            // Longer than a line that parses.
+            return Err(changed(info.line_idx));
+        }
+        let ahead;
+        let raw: &[u8] = match self.file.memory() {
+            Some(d) => d
+                .get(info.start as usize..info.start as usize + len)
+                .ok_or_else(|| changed(info.line_idx))?,
+            None => {
+                ahead = self
+                    .read_ahead(info.start, len)
+                    .ok_or_else(|| changed(info.line_idx))?;
+                let from = (info.start - ahead.0) as usize;
+                ahead
+                    .1
+                    .get(from..from + len)
+                    .ok_or_else(|| changed(info.line_idx))?
+            }
+        };
+        let line = self
+            .parser
+            .borrow_mut()
+            .parse(raw, info.terminated)
+            .map_err(|_| changed(info.line_idx))?;
+        let same = match (&line.kind, info.kind) {
+            (LineKind::O(o), Some(kind)) => {
+                o.kind == kind
+                    && match &o.label {
+                        Label::Static(s) => self.key_label_is(info, s),
+                        Label::Dynamic(_) => info.key == NONE,
+                    }
+            }
+            (LineKind::M98(_), None) => true,
+            _ => false,
+        };
+        if same {
+            Ok(line)
+        } else {
+            Err(changed(info.line_idx))
+        }
+    }
+
+    /// The read-ahead block of a streamed file holding `len` bytes from
+    /// `start` (read from `start` on if it does not).
+    fn read_ahead(&self, start: u32, len: usize) -> Option<std::cell::Ref<'_, (u32, Vec<u8>)>> {
+        let holds = |b: &(u32, Vec<u8>)| start >= b.0 && (start - b.0) as usize + len <= b.1.len();
+        if !holds(&self.ahead.borrow()) {
+            let mut b = self.ahead.borrow_mut();
+            b.1.resize(AHEAD.max(len), 0);
+            let got = self.file.read_at(&mut b.1, start as u64).unwrap_or(0);
+            b.1.truncate(got);
+            b.0 = start;
+        }
+        let b = self.ahead.borrow();
+        holds(&b).then_some(b)
+    }
+
+    /// Whether the static label `s` read again gives the line's key.
+    fn key_label_is(&self, info: &OInfo, s: &Name) -> bool {
+        let Some(key) = self.keys.get(info.key as usize) else {
+            return false;
+        };
+        match info.kind {
+            Some(k) if k.is_control() => {
+                let scope = self
+                    .keys
+                    .get(info.scope as usize)
+                    .map_or("", |n| n.as_str());
+                key.len() == scope.len() + 1 + s.len()
+                    && key.starts_with(scope)
+                    && key.ends_with(s.as_str())
+            }
+            _ => key == s,
         }
     }
 
@@ -378,8 +783,13 @@ impl FileIndex {
     }
 
     pub fn kind_of(&self, oidx: u32) -> Option<OKind> {
-        self.olines[oidx as usize].kind()
+        self.olines[oidx as usize].kind
     }
+}
+
+/// The error for an O-line that is not what the index found.
+fn changed(line_idx: u32) -> ErrorKind {
+    ErrorKind::ProgramChanged { line: line_idx + 1 }
 }
 
 /// Whether the index looks at a line handed on after the leading blank lines
@@ -496,5 +906,121 @@ pub fn not_in_file(name: &str, file: &SourceFile) -> ErrorKind {
     ErrorKind::SubNotInFile {
         name: name.to_string(),
         file: file.path.clone(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    fn index_of(text: &str) -> FileIndex {
+        let file = SourceFile::new(PathBuf::from("t.ngc"), "t.ngc".into(), text.into());
+        FileIndex::build(Arc::new(file))
+    }
+
+    /// What a program of a million labels keeps per O-line and per sub
+    /// definition stays a few integers.
+    #[test]
+    fn records_stay_small() {
+        assert!(std::mem::size_of::<OInfo>() <= 24);
+        assert!(std::mem::size_of::<SubDef>() <= 20);
+        assert!(std::mem::size_of::<crate::diag::Site>() <= 16);
+        assert!(std::mem::size_of::<crate::diag::Diagnostic>() <= 128);
+    }
+
+    /// Every O-line run again (parsed, or made from the index when it holds
+    /// nothing but its label) is the line parsing it gives.
+    #[test]
+    fn lines_read_again_are_the_lines_parsed() {
+        let text = "o<a> sub\n  O100 IF [#1 GT 2]\n  o100 endif (done)\n  o101 do\n  \
+                    o101 break\n  o101 while [#2]\n/o102 repeat [3]\n  o102 endrepeat\n\
+                    o<a> return [4]\no<a> endsub\nN10 o<a> call [1] [2]\no103 if [1]\n\
+                    o103 elseif [2]\no103 else\no103 endif;x\no[1+2] if [0]\no3 endif\n\
+                    M98 P5 L2\no<b> sub\no<b> endsub [7]\nM2";
+        let index = index_of(text);
+        let lines: Vec<&str> = text.lines().collect();
+        let mut parser = LineParser::default();
+        assert_eq!(index.olines.len(), 20);
+        for (i, o) in index.olines.iter().enumerate() {
+            let raw = lines[o.line_idx as usize];
+            let mut want = parser.parse(raw.as_bytes(), o.terminated).expect("parses");
+            let got = index.line(i as u32).expect("read again");
+            if o.plain
+                && let LineKind::O(o) = &mut want.kind
+            {
+                // Only a computed label's span is ever used.
+                o.label_span = Span::default();
+            }
+            assert_eq!(*got, want, "line {raw:?}");
+        }
+        // Plain lines (no value, arguments, block delete or line number)
+        // are made from the index.
+        let plain: Vec<bool> = index.olines.iter().map(|o| o.plain).collect();
+        assert!(plain[0] && plain[2] && plain[3] && plain[4] && plain[9]);
+        assert!(!plain[1] && !plain[5] && !plain[6] && !plain[10] && !plain[19]);
+    }
+
+    /// Keys, scopes, occurrences and definitions as the file has them.
+    #[test]
+    fn keys_scopes_and_definitions() {
+        let index = index_of(
+            "o<a> sub\no1 if [1]\no1 endif\no<a> endsub\no1 if [1]\no1 endif\n\
+             o<a> call\no<b> sub\no<b> endsub\nM2\n",
+        );
+        let key = |i: u32| index.key(i).map(|k| k.to_string());
+        assert_eq!(key(0).as_deref(), Some("a"));
+        assert_eq!(key(1).as_deref(), Some("a#1"));
+        assert_eq!(key(4).as_deref(), Some("#1"));
+        assert_eq!(index.scope(1).as_str(), "a");
+        assert_eq!(index.scope(3).as_str(), "a");
+        assert_eq!(index.scope(4).as_str(), "");
+        assert!(index.same_scope(1, 2) && !index.same_scope(2, 4));
+        assert_eq!(index.occ(&Name::new("a")), &[0, 3, 6]);
+        assert_eq!(index.occ(&Name::new("a#1")), &[1, 2]);
+        assert_eq!(index.occ(&Name::new("#1")), &[4, 5]);
+        assert!(index.occ(&Name::new("zz")).is_empty());
+        let defs: Vec<(u32, Option<u32>)> =
+            index.defs().iter().map(|d| (d.oidx, d.end())).collect();
+        assert_eq!(defs, [(0, Some(3)), (7, Some(8))]);
+        let a = index.def(0).expect("def");
+        assert_eq!(
+            (a.end, a.nested.is_none(), a.valued),
+            (Some(3), true, vec![3])
+        );
+        assert!(index.is_def(7) && !index.is_def(1));
+    }
+
+    /// A streamed file changed during the run: an O-line read again that is
+    /// no longer the line indexed is an error, not run.
+    #[test]
+    fn an_oline_changed_during_the_run_is_an_error() {
+        let d = tempfile::tempdir().expect("tmp");
+        let p = d.path().join("p.ngc");
+        std::fs::write(&p, "G0 X1\no100 if [1]\n  G1 X2\no100 endif\nM2\n").expect("write");
+        let file = SourceFile::open_streamed(&p).expect("open");
+        let index = FileIndex::build(Arc::new(file));
+        assert_eq!(index.oline(0).expect("unchanged").kind, OKind::If);
+        let forget = || {
+            index.parsed.borrow_mut().clear();
+            index.ahead.borrow_mut().1.clear();
+        };
+        // The same length, another label: a plain line is made from the
+        // index, not read again.
+        std::fs::write(&p, "G0 X1\no100 if [1]\n  G1 X2\no200 endif\nM2\n").expect("write");
+        forget();
+        assert!(index.oline(1).is_ok(), "plain lines come from the index");
+        std::fs::write(&p, "G0 X1\no200 if [1]\n  G1 X2\no100 endif\nM2\n").expect("write");
+        forget();
+        assert!(matches!(
+            index.oline(0),
+            Err(ErrorKind::ProgramChanged { line: 2 })
+        ));
+        std::fs::write(&p, "G0 X1\n").expect("truncate");
+        forget();
+        assert!(matches!(
+            index.oline(0),
+            Err(ErrorKind::ProgramChanged { line: 2 })
+        ));
     }
 }

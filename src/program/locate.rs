@@ -138,6 +138,50 @@ pub fn file_pieces(file: &File) -> impl FnMut(u64, &mut Vec<u8>) -> bool + '_ {
     }
 }
 
+/// Bytes of a file read at once for diagnostics.
+const BLOCK: usize = 1 << 16;
+
+/// A block of a file on disk kept between diagnostics: (offset, bytes).
+#[derive(Debug, Default)]
+pub struct Block {
+    at: u64,
+    bytes: Vec<u8>,
+}
+
+/// Pieces of a file on disk for [`LineSamples::locate`], from the kept
+/// block when it holds them (diagnostics near each other read the file
+/// once), else read as a new block from the piece's offset.
+pub fn block_pieces<'a>(
+    file: &'a File,
+    block: &'a mut Block,
+) -> impl FnMut(u64, &mut Vec<u8>) -> bool + 'a {
+    use std::os::unix::fs::FileExt;
+    move |at, out| {
+        let inside = |b: &Block| at >= b.at && at - b.at < b.bytes.len() as u64;
+        if !inside(block) {
+            block.bytes.resize(BLOCK, 0);
+            let mut got = 0;
+            while got < BLOCK {
+                match file.read_at(&mut block.bytes[got..], at + got as u64) {
+                    Ok(0) => break,
+                    Ok(n) => got += n,
+                    Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                    Err(_) => {
+                        block.bytes.clear();
+                        return false;
+                    }
+                }
+            }
+            block.bytes.truncate(got);
+            block.at = at;
+        }
+        let from = (at - block.at) as usize;
+        let to = (from + PIECE).min(block.bytes.len());
+        out.extend_from_slice(block.bytes.get(from..to).unwrap_or(&[]));
+        true
+    }
+}
+
 /// Pieces of bytes in memory for [`LineSamples::locate`].
 pub fn memory_pieces(data: &[u8]) -> impl FnMut(u64, &mut Vec<u8>) -> bool + '_ {
     move |at, out| {

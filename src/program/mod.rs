@@ -8,6 +8,8 @@ mod locate;
 mod marked_lines;
 mod source_file;
 
-pub use file_index::{FileIndex, OInfo, SubDefInfo, control_key, next_line, not_in_file};
+pub use file_index::{
+    FileIndex, OInfo, ParsedO, SubDef, SubDefInfo, control_key, next_line, not_in_file,
+};
 pub use loader::{Loader, SearchPath, check_name};
 pub use source_file::{IN_MEMORY_LIMIT, InputLimits, SourceFile, Window, WindowLine};

@@ -7,9 +7,9 @@ use std::fs::File;
 use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};
 
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 
-use super::locate::{LineCol, LineSamples, file_pieces, memory_pieces};
+use super::locate::{Block, LineCol, LineSamples, block_pieces, file_pieces, memory_pieces};
 use super::marked_lines::{Marked, MarkedLines};
 
 /// Bounds on reading a program.
@@ -97,6 +97,10 @@ pub struct SourceFile {
     modified: Option<std::time::SystemTime>,
     /// Sampled line starts, made on the first diagnostic that needs them.
     samples: OnceLock<LineSamples>,
+    /// The block of a streamed file read last for a diagnostic (diagnostics
+    /// come mostly in file order: a million warnings read the file about
+    /// once, not a piece each).
+    block: Mutex<Block>,
 }
 
 /// Reads a file from an offset on without moving a shared cursor, so that
@@ -126,6 +130,7 @@ impl SourceFile {
             len,
             modified: None,
             samples: OnceLock::new(),
+            block: Mutex::default(),
         }
     }
 
@@ -180,6 +185,24 @@ impl SourceFile {
             len: meta.len(),
             modified: meta.modified().ok(),
             samples: OnceLock::new(),
+            block: Mutex::default(),
+        })
+    }
+
+    /// A file read from disk on demand whatever its size (tests of the
+    /// streamed path with small files).
+    #[cfg(test)]
+    pub fn open_streamed(path: &Path) -> io::Result<SourceFile> {
+        let file = File::open(path)?;
+        let meta = file.metadata()?;
+        Ok(SourceFile {
+            path: path.to_path_buf(),
+            name: path.display().to_string(),
+            text: Text::Disk(file),
+            len: meta.len(),
+            modified: meta.modified().ok(),
+            samples: OnceLock::new(),
+            block: Mutex::default(),
         })
     }
 
@@ -291,6 +314,7 @@ impl SourceFile {
             len: total,
             modified,
             samples: OnceLock::new(),
+            block: Mutex::default(),
         })
     }
 
@@ -365,7 +389,10 @@ impl SourceFile {
                     LineSamples::read(io::BufReader::new(At { file: f, pos: 0 }))
                         .unwrap_or_default()
                 });
-                samples.locate(offset, &mut file_pieces(f))
+                match self.block.lock() {
+                    Ok(mut block) => samples.locate(offset, &mut block_pieces(f, &mut block)),
+                    Err(_) => samples.locate(offset, &mut file_pieces(f)),
+                }
             }
         }
     }
@@ -658,6 +685,11 @@ pub struct Window {
     buf: Vec<u8>,
     /// File offset of `buf[0]`.
     start: u64,
+    /// The window before the last refill, and its offset: a call and its
+    /// return go back and forth between two places of a file, each read
+    /// once instead of at every jump.
+    other: Vec<u8>,
+    other_start: u64,
 }
 
 /// One line read through a window: bytes are `buf[a..b]`.
@@ -671,6 +703,17 @@ pub struct WindowLine {
 impl Window {
     pub fn bytes(&self, l: &WindowLine) -> &[u8] {
         &self.buf[l.a..l.b]
+    }
+
+    /// Makes the window hold `at`: the previous window if it does, else a
+    /// read from `at` (the current window becomes the previous one).
+    fn hold(&mut self, src: &SourceFile, at: u64) -> io::Result<()> {
+        std::mem::swap(&mut self.buf, &mut self.other);
+        std::mem::swap(&mut self.start, &mut self.other_start);
+        if at >= self.start && at < self.start + self.buf.len() as u64 {
+            return Ok(());
+        }
+        self.fill(src, at)
     }
 
     fn fill(&mut self, src: &SourceFile, at: u64) -> io::Result<()> {
@@ -687,7 +730,7 @@ impl Window {
     pub fn from(&mut self, src: &SourceFile, pos: u32) -> io::Result<&[u8]> {
         let pos64 = pos as u64;
         if pos64 < self.start || pos64 >= self.start + self.buf.len() as u64 {
-            self.fill(src, pos64)?;
+            self.hold(src, pos64)?;
         }
         Ok(&self.buf[(pos64 - self.start) as usize..])
     }
@@ -698,7 +741,7 @@ impl Window {
         let len = src.len();
         let inside = pos64 >= self.start && pos64 < self.start + self.buf.len() as u64;
         if !inside {
-            self.fill(src, pos64)?;
+            self.hold(src, pos64)?;
         }
         let mut a = (pos64 - self.start) as usize;
         if let Some(i) = memchr::memchr(b'\n', &self.buf[a..]) {
@@ -795,6 +838,7 @@ mod tests {
             len: data.len() as u64,
             modified: None,
             samples: OnceLock::new(),
+            block: Mutex::default(),
         }
     }
 

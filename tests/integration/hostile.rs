@@ -622,3 +622,86 @@ fn the_output_byte_bound_stops_a_runaway_loop() {
     assert_eq!(code, 0);
     assert_eq!(out.lines().count(), 100_002);
 }
+
+/// A program of `n` subroutines (each with `pad` comment lines) and `n`
+/// numbered blocks, every third subroutine called; returns the text and the
+/// (line, name) of each never-called one, in file order.
+fn many_subs(n: usize, pad: usize) -> (String, Vec<(usize, String)>) {
+    let mut text = String::from("F100\n#1 = 0\n");
+    let mut line = 2;
+    let mut unused = Vec::new();
+    let filler = format!("({})\n", "x".repeat(200));
+    for k in 0..n {
+        line += 1;
+        text.push_str(&format!("o<s{k}> sub\n"));
+        if k % 3 != 0 {
+            unused.push((line, format!("s{k}")));
+        }
+        for _ in 0..pad {
+            text.push_str(&filler);
+        }
+        text.push_str(&format!("  G1 X#1\no<s{k}> endsub\n"));
+        line += pad + 2;
+    }
+    for k in 0..n {
+        if k % 3 == 0 {
+            text.push_str(&format!("o<s{k}> call [{}]\n", k % 10));
+        }
+        text.push_str(&format!(
+            "o{} if [#1 GT {}]\nG1 Y1\no{0} endif\n",
+            1000 + k,
+            k % 7
+        ));
+    }
+    text.push_str("M2\n");
+    (text, unused)
+}
+
+/// The never-called warnings of `stderr` (short format): (line, name).
+fn unused_warnings(stderr: &str) -> Vec<(usize, String)> {
+    stderr
+        .lines()
+        .filter(|l| l.contains("[W0002]"))
+        .map(|l| {
+            let line = l
+                .split(':')
+                .nth(1)
+                .and_then(|n| n.parse().ok())
+                .unwrap_or(0);
+            let name = l
+                .split("o<")
+                .nth(1)
+                .and_then(|r| r.split('>').next())
+                .unwrap_or("")
+                .to_string();
+            (line, name)
+        })
+        .collect()
+}
+
+#[test]
+fn every_never_called_subroutine_is_warned_in_order() {
+    let d = tmp();
+    // Held in memory, and streamed from disk (over 8 MB).
+    for (name, pad) in [("small.ngc", 0), ("big.ngc", 15)] {
+        let (text, want) = many_subs(3000, pad);
+        assert_eq!(text.len() > 8 << 20, pad > 0);
+        put(d.path(), name, &text);
+        for args in [
+            vec!["--message-format", "short", name],
+            vec!["--message-format", "short", "--oword-warn-only", name],
+            vec!["check", "--message-format", "short", name],
+        ] {
+            let (code, _, err) = run(d.path(), &args);
+            assert_eq!(code, 0, "{args:?}");
+            let got = unused_warnings(&err);
+            assert_eq!(got.len(), 2000, "{args:?}");
+            assert!(got == want, "{args:?}: warnings not all given in order");
+            let columns_ok = err
+                .lines()
+                .filter(|l| l.contains("[W0002]"))
+                .all(|l| l.starts_with(&format!("{name}:")) && l.split(':').nth(2) == Some("1"));
+            assert!(columns_ok, "{args:?}");
+        }
+    }
+}

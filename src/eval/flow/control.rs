@@ -7,7 +7,7 @@ use std::rc::Rc;
 use crate::diag::{Diagnostic, Error, ErrorKind, WarningKind};
 use crate::parse::ast::{Label, LineKind, OKind, OLine};
 use crate::parse::{Name, integer_value};
-use crate::program::{FileIndex, control_key};
+use crate::program::{FileIndex, ParsedO, control_key};
 
 use crate::eval::Interp;
 use crate::eval::expr::round_half_even_int;
@@ -20,11 +20,10 @@ enum Seek {
 }
 
 impl Interp<'_> {
-    fn oline<'f>(&self, file: &'f Rc<FileIndex>, oidx: u32) -> &'f OLine {
-        match &file.olines[oidx as usize].line.kind {
-            LineKind::O(o) => o,
-            _ => unreachable!("not an O-line"),
-        }
+    /// O-line `oidx` of `file`, parsed (an error if the file changed so
+    /// that it is no longer the O-line the index found).
+    fn oline(&self, file: &Rc<FileIndex>, oidx: u32) -> Result<ParsedO, Error> {
+        file.oline(oidx).map_err(|k| self.oerr(k, file, oidx))
     }
 
     pub(in crate::eval) fn osite(&self, file: &Rc<FileIndex>, oidx: u32) -> (u32, u32) {
@@ -73,7 +72,7 @@ impl Interp<'_> {
 
     /// The label text of an O-line (computed labels are evaluated).
     fn label_text(&mut self, file: &Rc<FileIndex>, oidx: u32) -> Result<Name, Error> {
-        let o = self.oline(file, oidx);
+        let o = self.oline(file, oidx)?;
         match &o.label {
             Label::Static(s) => Ok(s.clone()),
             Label::Dynamic(e) => {
@@ -90,14 +89,13 @@ impl Interp<'_> {
 
     /// Internal key of the O-line's label.
     fn key_of(&mut self, file: &Rc<FileIndex>, oidx: u32) -> Result<Name, Error> {
-        if let Some(k) = &file.olines[oidx as usize].key {
+        if let Some(k) = file.key(oidx) {
             return Ok(k.clone());
         }
         let label = self.label_text(file, oidx)?;
-        let info = &file.olines[oidx as usize];
-        let kind = info.kind().unwrap_or(OKind::Bare);
+        let kind = file.kind_of(oidx).unwrap_or(OKind::Bare);
         Ok(if kind.is_control() {
-            control_key(&info.scope, &label)
+            control_key(file.scope(oidx), &label)
         } else {
             label
         })
@@ -119,7 +117,7 @@ impl Interp<'_> {
         let memo = matches!(what, Seek::Control)
             && only.is_empty()
             && file.dynamic.is_empty()
-            && file.olines[from as usize].key.as_ref() == Some(key);
+            && file.key(from) == Some(key);
         if memo {
             let t = file.seek_memo[from as usize].get();
             if t != u32::MAX {
@@ -127,14 +125,12 @@ impl Interp<'_> {
             }
         }
         let from_line = file.olines[from as usize].line_idx;
-        let mut best: Option<u32> = None;
-        if let Some(list) = file.occ.get(key) {
-            let p = list.partition_point(|&j| j <= from);
-            best = list[p..]
-                .iter()
-                .copied()
-                .find(|&j| only.is_empty() || file.kind_of(j).is_some_and(|k| only.contains(&k)));
-        }
+        let list = file.occ_like(from, key);
+        let p = list.partition_point(|&j| j <= from);
+        let mut best = list[p..]
+            .iter()
+            .copied()
+            .find(|&j| only.is_empty() || file.kind_of(j).is_some_and(|k| only.contains(&k)));
         if !file.dynamic.is_empty() {
             let p = file.dynamic.partition_point(|&j| j <= from);
             for &j in &file.dynamic[p..] {
@@ -144,9 +140,7 @@ impl Interp<'_> {
                 if !only.is_empty() && !file.kind_of(j).is_some_and(|k| only.contains(&k)) {
                     continue;
                 }
-                if file.olines[j as usize].scope != file.olines[from as usize].scope
-                    && matches!(what, Seek::Control)
-                {
+                if !file.same_scope(j, from) && matches!(what, Seek::Control) {
                     continue;
                 }
                 if self.key_of(file, j)? == *key {
@@ -263,7 +257,7 @@ impl Interp<'_> {
             Some(rec) => Err(self.oerr(
                 ErrorKind::LabelMismatch {
                     label: label(),
-                    here: self.oline(file, oidx).kind.name(),
+                    here: file.kind_of(oidx).map_or("M98", OKind::name),
                     opened: rec.kind.name(),
                     line: rec.line + 1,
                 },
@@ -295,13 +289,13 @@ impl Interp<'_> {
         file: &Rc<FileIndex>,
         t: u32,
     ) -> Result<crate::parse::ast::Expr, Error> {
-        if let Some(b) = &self.oline(file, t).exec_error {
+        let o = self.oline(file, t)?;
+        if let Some(b) = &o.exec_error {
             let (k, span) = &**b;
             let start = file.olines[t as usize].start;
             return Err(self.error_in_line(k.clone(), file, start, *span));
         }
-        let o = self.oline(file, t);
-        match Self::expr_of(o, "condition") {
+        match Self::expr_of(&o, "condition") {
             Ok(e) => Ok(e.clone()),
             Err(e) => {
                 let (a, b) = self.osite(file, t);
@@ -314,7 +308,8 @@ impl Interp<'_> {
     }
 
     fn probe_condition(&mut self, file: &Rc<FileIndex>, oidx: u32) {
-        if let Some(e) = self.oline(file, oidx).expr.clone()
+        if let Ok(o) = self.oline(file, oidx)
+            && let Some(e) = o.expr.clone()
             && let Err(f) = self.eval(&e)
         {
             let (a, b) = self.osite(file, oidx);
@@ -339,7 +334,8 @@ impl Interp<'_> {
             file.olines[oidx as usize].start,
             file.olines[oidx as usize].line_idx,
         );
-        let o = match &file.olines[oidx as usize].line.kind {
+        let line = file.line(oidx).map_err(|k| self.oerr(k, file, oidx))?;
+        let o = match &line.kind {
             LineKind::O(o) => o,
             LineKind::M98(m) => return self.exec_m98(file, oidx, m),
             _ => return Ok(()),
@@ -354,7 +350,7 @@ impl Interp<'_> {
             self.warn(WarningKind::CommentOnOLine, file, a, b);
         }
         let computed;
-        let key = match &file.olines[oidx as usize].key {
+        let key = match file.key(oidx) {
             Some(k) => k,
             None => {
                 computed = self.key_of(file, oidx)?;
@@ -840,7 +836,7 @@ impl Interp<'_> {
                 oidx,
             },
         );
-        let Some(def) = file.defs.get(&oidx).cloned() else {
+        let Some(def) = file.def(oidx) else {
             // Definitions are indexed by their fixed label only.
             return Err(self.oerr(ErrorKind::ComputedSubLabel, file, oidx));
         };
@@ -870,7 +866,14 @@ impl Interp<'_> {
                 file.olines[j as usize].start,
                 file.olines[j as usize].line_idx,
             );
-            match self.oline(file, j).expr.clone() {
+            let expr = match self.oline(file, j) {
+                Ok(o) => o.expr.clone(),
+                Err(e) => {
+                    self.flow.defining = false;
+                    return Err(e);
+                }
+            };
+            match expr {
                 Some(e) => match self.o_eval(file, j, &e) {
                     Ok(v) => {
                         self.flow.value = v;
@@ -920,11 +923,11 @@ impl Interp<'_> {
             .find(name)
             .map_err(|k| self.oerr(k, file, oidx))?;
         if let Some(sub_file) = found {
-            let target = sub_file.occ.get(base).and_then(|l| {
-                l.iter()
-                    .copied()
-                    .find(|&j| matches!(sub_file.kind_of(j), Some(OKind::Sub | OKind::Bare)))
-            });
+            let target = sub_file
+                .occ(base)
+                .iter()
+                .copied()
+                .find(|&j| matches!(sub_file.kind_of(j), Some(OKind::Sub | OKind::Bare)));
             let Some(t) = target else {
                 let k = crate::program::not_in_file(base, &sub_file.file);
                 return Err(self.oerr(k, file, oidx));
@@ -1016,10 +1019,7 @@ impl Interp<'_> {
     }
 
     fn call(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) -> Result<(), Error> {
-        let line = file.olines[oidx as usize].line.clone();
-        let LineKind::O(o) = &line.kind else {
-            unreachable!("call on a non-O line")
-        };
+        let o = self.oline(file, oidx)?;
         let mut argv = [0f64; 30];
         let nargs = o.args.len().min(30);
         for (slot, a) in argv.iter_mut().zip(&o.args) {

@@ -15,6 +15,10 @@ use crate::program::FileIndex;
 /// Deepest nesting of active calls (the tenth nested call fails).
 pub const MAX_CALL_LEVEL: usize = 9;
 
+/// Parsed body lines kept (see `Flow::cache`); past this, the kept lines
+/// are dropped and the cache fills again.
+pub const LINES_KEPT: usize = 1 << 16;
+
 /// Where reading continues.
 #[derive(Clone)]
 pub struct Cursor {
@@ -165,6 +169,7 @@ pub(super) struct Flow {
     pub(super) last_loop: Option<(Name, u32, Rc<FileIndex>)>,
     /// Parsed lines of loop and sub bodies, with their end and the start of
     /// the next line.
+    /// At most [`LINES_KEPT`] lines.
     pub(super) cache: FxMap<(usize, u32), (Rc<Line>, u32, u32)>,
     /// The repeat line (O-line index) an endrepeat just jumped back to.
     pub(super) repeat_again: Option<u32>,

@@ -216,11 +216,9 @@ impl Interp<'_> {
             Some(f) => (f, 0),
             None => (file.clone(), self.reader.line_idx),
         };
-        let target = sub_file.occ.get(label).and_then(|l| {
-            l.iter().copied().find(|&j| {
-                sub_file.kind_of(j) == Some(crate::parse::ast::OKind::Sub)
-                    && sub_file.olines[j as usize].line_idx >= from
-            })
+        let target = sub_file.occ(label).iter().copied().find(|&j| {
+            sub_file.kind_of(j) == Some(crate::parse::ast::OKind::Sub)
+                && sub_file.olines[j as usize].line_idx >= from
         });
         match target {
             Some(t) => Ok(SubRec {
