@@ -593,16 +593,17 @@ impl Lowering {
     }
 
     /// Whether the axis words of `b` are positions in the active work
-    /// coordinates (motion, G28/G30 intermediate points, G92) in absolute
-    /// distance mode: those are rewritten when the program's coordinate
-    /// system is not the target's.
+    /// coordinates: G92 values, and in absolute distance mode motion and
+    /// G28/G30 intermediate points. Those are rewritten when the
+    /// program's coordinate system is not the target's.
     fn positions_in_work(b: &Block, m: &Machine) -> bool {
-        m.modes.distance == Distance::Absolute
-            && b.tool_length != Some(ToolLength::Dynamic)
-            && matches!(
-                b.non_modal,
-                None | Some(NonModal::Dwell | NonModal::Home | NonModal::Home2 | NonModal::SetG92)
-            )
+        b.non_modal == Some(NonModal::SetG92)
+            || m.modes.distance == Distance::Absolute
+                && b.tool_length != Some(ToolLength::Dynamic)
+                && matches!(
+                    b.non_modal,
+                    None | Some(NonModal::Dwell | NonModal::Home | NonModal::Home2)
+                )
     }
 
     /// What to add (mm, X Y Z) to a position in `m`'s work coordinates to

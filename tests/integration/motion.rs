@@ -486,3 +486,97 @@ fn the_comparison_sees_a_different_path() {
     d[1] = "2 N..... SET_FEED_RATE(200.0000)".into();
     assert!(compare(&Replay::run(&a), &Replay::run(&d), 0.002).is_err());
 }
+
+/// A random program of offset changes and moves: G52, G92, G92.1, G92.2,
+/// G92.3, G10 L2/L20 on any of the nine systems, G54–G59.3, units and
+/// distance mode, G0/G1 with some axes.
+fn offsets_program(seed: u64) -> String {
+    use std::fmt::Write;
+    let mut rng = crate::rng::Rng::new(seed);
+    let mut p = String::from("G21 G90 G17 F500\nG0 X1 Y2 Z3\n");
+    let mut incremental = false;
+    let axes = |rng: &mut crate::rng::Rng, lo: f64, hi: f64| {
+        let mut s = String::new();
+        let mask = 1 + rng.below(7);
+        for (i, l) in ['X', 'Y', 'Z'].into_iter().enumerate() {
+            if mask & (1 << i) != 0 {
+                let _ = write!(s, " {l}{}", rng.milli(lo, hi));
+            }
+        }
+        s
+    };
+    let systems = [
+        "G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3",
+    ];
+    for _ in 0..rng.int(10, 24) {
+        let line = match rng.below(12) {
+            0 | 1 | 2 => {
+                let g = if rng.chance(0.5) { "G0" } else { "G1" };
+                let (lo, hi) = if incremental {
+                    (-3.0, 3.0)
+                } else {
+                    (-20.0, 20.0)
+                };
+                format!("{g}{}", axes(&mut rng, lo, hi))
+            }
+            3 => format!("G52{}", axes(&mut rng, -5.0, 5.0)),
+            4 => format!("G92{}", axes(&mut rng, -5.0, 5.0)),
+            5 => rng.pick(&["G92.1", "G92.2", "G92.3"]).to_string(),
+            6 => format!("G10 L2 P{}{}", rng.int(1, 9), axes(&mut rng, -10.0, 10.0)),
+            7 => format!("G10 L20 P{}{}", rng.int(0, 9), axes(&mut rng, -10.0, 10.0)),
+            8 | 9 => rng.pick(&systems).to_string(),
+            10 => rng.pick(&["G20", "G21"]).to_string(),
+            _ => {
+                incremental = !incremental;
+                if incremental { "G91" } else { "G90" }.to_string()
+            }
+        };
+        p.push_str(&line);
+        p.push('\n');
+    }
+    p.push_str("G90 G0 X0 Y0 Z0\nM2\n");
+    p
+}
+
+/// G52, G92.1/G92.2/G92.3 and G59.1–G59.3 lowered for targets that lack
+/// them move as the originals under rs274 (random programs;
+/// `NGCFLAT_OFFSETS_CASES`, `NGCFLAT_OFFSETS_SEED`).
+#[test]
+fn lowered_offsets_move_as_rs274() {
+    if !oracle::available("lowered_offsets_move_as_rs274") {
+        return;
+    }
+    let seeds = oracle::suite_seeds("NGCFLAT_OFFSETS", 30);
+    let results = oracle::on_threads(seeds, 1, |seed| {
+        let program = offsets_program(seed);
+        let target = ["grbl", "grblhal", "fluidnc"][(seed % 3) as usize];
+        let dir = crate::tmp();
+        crate::put(dir.path(), "p.ngc", &program);
+        let (code, out, err) =
+            crate::run(dir.path(), &["--target", target, "--zero-start", "p.ngc"]);
+        if code != 0 {
+            return Err(format!("{target}: ngcflat refuses it: {err}"));
+        }
+        let a =
+            rs274(program.as_bytes(), None).map_err(|e| format!("rs274 on the original: {e}"))?;
+        let b = rs274(out.as_bytes(), None)
+            .map_err(|e| format!("{target}: rs274 rejects the output: {e}\n{out}"))?;
+        // rs274 prints offsets and positions with 4 decimals in the
+        // current units: 0.00254 mm in inches.
+        let tol = if program.contains("G20") {
+            0.004
+        } else {
+            0.002
+        };
+        compare(&Replay::run(&a), &Replay::run(&b), tol)
+            .map_err(|e| format!("{target}: {e}\n--- lowered:\n{out}"))
+    });
+    let failures: Vec<String> = results
+        .into_iter()
+        .filter_map(|(seed, r)| {
+            r.err()
+                .map(|e| format!("seed {seed}: {e}\n--- program:\n{}", offsets_program(seed)))
+        })
+        .collect();
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
