@@ -510,7 +510,7 @@ fn offsets_program(seed: u64) -> String {
     ];
     for _ in 0..rng.int(10, 24) {
         let line = match rng.below(12) {
-            0 | 1 | 2 => {
+            0..=2 => {
                 let g = if rng.chance(0.5) { "G0" } else { "G1" };
                 let (lo, hi) = if incremental {
                     (-3.0, 3.0)
