@@ -10,11 +10,11 @@
 
 use std::io;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender, SyncSender};
 use std::thread::JoinHandle;
 
-use super::edit::{Edit, EditRef, write_edited, write_edits};
+use super::edit::{Edit, EditRef, max_edited_len, write_edited, write_edits};
 use super::sink::Sink;
 use crate::parse::ast::Span;
 use crate::program::SourceFile;
@@ -136,8 +136,42 @@ impl Output {
         if ok { Ok(()) } else { Err(self.stop()) }
     }
 
+    /// While on the thread: counts `bound` more bytes (at least those the
+    /// next write adds) against the room the sink had left. When they may
+    /// not fit, the sink comes back to this thread first, so that a write
+    /// past `--max-output-bytes` fails in the call that makes it (the
+    /// evaluator knows that line) and never later on the thread.
+    #[inline]
+    fn make_room(&mut self, bound: u64) -> io::Result<()> {
+        if let Mode::Threaded(w) = &mut self.mode
+            && !w.reserve(bound)
+        {
+            return self.come_back();
+        }
+        Ok(())
+    }
+
+    /// Takes the sink back from the thread (everything sent so far
+    /// written), to go on here.
+    #[cold]
+    fn come_back(&mut self) -> io::Result<()> {
+        match std::mem::replace(&mut self.mode, Mode::Stopped) {
+            Mode::Threaded(mut w) => {
+                // If the chunk cannot be sent, closing gives the reason.
+                w.send();
+                self.mode = Mode::Direct(w.close()?);
+                Ok(())
+            }
+            other => {
+                self.mode = other;
+                Ok(())
+            }
+        }
+    }
+
     /// Appends bytes (whole lines).
     pub fn write(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.make_room(bytes.len() as u64)?;
         match &mut self.mode {
             Mode::Direct(sink) => sink.write(bytes),
             Mode::Threaded(w) => {
@@ -150,6 +184,7 @@ impl Output {
 
     /// Appends a finished line and its newline.
     pub fn line(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.make_room(bytes.len() as u64 + 1)?;
         match &mut self.mode {
             Mode::Direct(sink) => sink.write(bytes).and_then(|_| sink.write(b"\n")),
             Mode::Threaded(w) => {
@@ -168,6 +203,7 @@ impl Output {
         start: u64,
         bytes: &[u8],
     ) -> io::Result<()> {
+        self.make_room(bytes.len() as u64)?;
         match &mut self.mode {
             Mode::Direct(sink) => sink.write_input(file, start, bytes),
             Mode::Threaded(w) => {
@@ -187,6 +223,11 @@ impl Output {
         self.lines += 1;
         if self.lines >= self.thread_after {
             self.start_thread();
+        }
+        if matches!(self.mode, Mode::Threaded(_)) {
+            let bound =
+                max_edited_len(raw.len(), edits, self.precision).map_or(u64::MAX, |n| n as u64 + 1);
+            self.make_room(bound)?;
         }
         match &mut self.mode {
             Mode::Direct(_) if self.discard => Ok(()),
@@ -234,8 +275,9 @@ struct Writer {
     /// Start of the bytes of the chunk's last command if that is text still
     /// open for more bytes (its length is written when it closes).
     open: Option<usize>,
-    /// Full chunks to the thread; `None` once closed.
-    queue: Option<SyncSender<Vec<u8>>>,
+    /// Full chunks to the thread, each with a bound of the bytes it
+    /// writes; `None` once closed.
+    queue: Option<SyncSender<(Vec<u8>, u64)>>,
     /// Emptied chunks back from the thread.
     spent: Receiver<Vec<u8>>,
     /// The thread failed and stopped.
@@ -246,6 +288,14 @@ struct Writer {
     /// Ranges the sink is sure to record; later input bytes are sent as
     /// text (the sink could not copy them otherwise).
     ranges_left: usize,
+    /// Bytes the sink surely has room for: its room when the thread
+    /// started, less a bound of every command since, plus `slack` as the
+    /// thread hands it over.
+    room: u64,
+    /// Bound of the chunk being filled.
+    chunk_bound: u64,
+    /// What the thread found its chunks to write less than their bounds.
+    slack: Arc<AtomicU64>,
 }
 
 impl Writer {
@@ -254,6 +304,9 @@ impl Writer {
     fn start(sink: Sink, precision: Option<u8>) -> Mode {
         let input = sink.input().cloned();
         let ranges_left = sink.range_room();
+        let room = sink.room();
+        let slack = Arc::new(AtomicU64::new(0));
+        let slack_there = slack.clone();
         let (queue, chunks) = mpsc::sync_channel(QUEUE);
         let (give_back, spent) = mpsc::channel();
         // The sink goes over a channel of its own once the thread runs: a
@@ -263,7 +316,7 @@ impl Writer {
         let flag = failed.clone();
         let spawned = std::thread::Builder::new()
             .name("ngcflat-output".into())
-            .spawn(move || serve(take_sink, chunks, give_back, &flag, precision));
+            .spawn(move || serve(take_sink, chunks, give_back, &flag, &slack_there, precision));
         let Ok(thread) = spawned else {
             return Mode::Direct(sink);
         };
@@ -280,7 +333,27 @@ impl Writer {
             thread: Some(thread),
             input,
             ranges_left,
+            room,
+            chunk_bound: 0,
+            slack,
         })
+    }
+
+    /// Counts `bound` bytes against the room; false when they may not
+    /// fit.
+    #[inline]
+    fn reserve(&mut self, bound: u64) -> bool {
+        if bound > self.room {
+            self.room = self
+                .room
+                .saturating_add(self.slack.swap(0, Ordering::AcqRel));
+            if bound > self.room {
+                return false;
+            }
+        }
+        self.room -= bound;
+        self.chunk_bound += bound;
+        true
     }
 
     /// Appends text, to the open text command if there is one.
@@ -394,7 +467,10 @@ impl Writer {
             .try_recv()
             .unwrap_or_else(|_| Vec::with_capacity(2 * CHUNK));
         let full = std::mem::replace(&mut self.chunk, next);
-        self.queue.as_ref().is_some_and(|q| q.send(full).is_ok())
+        let bound = std::mem::take(&mut self.chunk_bound);
+        self.queue
+            .as_ref()
+            .is_some_and(|q| q.send((full, bound)).is_ok())
     }
 
     /// Closes the queue and waits for the thread; the sink with everything
@@ -424,20 +500,23 @@ impl Drop for Writer {
 /// At the first error it sets `failed` and stops.
 fn serve(
     sink: Receiver<Sink>,
-    chunks: Receiver<Vec<u8>>,
+    chunks: Receiver<(Vec<u8>, u64)>,
     give_back: Sender<Vec<u8>>,
     failed: &AtomicBool,
+    slack: &AtomicU64,
     precision: Option<u8>,
 ) -> io::Result<Sink> {
     let mut sink = sink
         .recv()
         .map_err(|_| io::Error::other("the output thread was given no sink"))?;
     let mut text = Vec::with_capacity(2 * CHUNK);
-    for mut chunk in chunks {
+    for (mut chunk, bound) in chunks {
+        let before = sink.used();
         if let Err(e) = apply(&mut sink, &chunk, &mut text, precision) {
             failed.store(true, Ordering::Release);
             return Err(e);
         }
+        slack.fetch_add(bound.saturating_sub(sink.used() - before), Ordering::AcqRel);
         chunk.clear();
         // The evaluator may be gone already (it is closing).
         let _ = give_back.send(chunk);
@@ -554,7 +633,7 @@ mod tests {
     use std::path::Path;
 
     use super::*;
-    use crate::emit::Destination;
+    use crate::emit::{Destination, MemoryOut, OutputTooLarge};
 
     /// One step of a test's output.
     enum Op {
@@ -771,5 +850,63 @@ mod tests {
             .unwrap();
         assert!(!threaded(&out));
         out.finish().unwrap();
+    }
+
+    /// With output on the thread, the write that takes the output past
+    /// the byte limit is the one that fails, whatever its kind, and the
+    /// bytes before it all fit: the sink comes back to this thread in time.
+    #[test]
+    fn the_byte_limit_fails_the_write_that_crosses_it() {
+        let data = b"G0 X1\n".repeat(1000);
+        let src = Arc::new(SourceFile::new(
+            "m.ngc".into(),
+            "m.ngc".into(),
+            data.clone(),
+        ));
+        let ops = ops(3000, data.len());
+        // The bytes each op writes.
+        let mut sizes = Vec::new();
+        for op in &ops {
+            let buf = MemoryOut::default();
+            let sink = Sink::new(Destination::Memory(buf.clone())).unwrap();
+            let mut o = Output::new(sink, None, usize::MAX);
+            run(&mut o, std::slice::from_ref(op), &src, &data);
+            o.finish().unwrap();
+            sizes.push(buf.take().len() as u64);
+        }
+        let total: u64 = sizes.iter().sum();
+        for limit in [total / 3, total / 2 + 7, total - 1] {
+            // The first op whose bytes do not fit.
+            let (mut sum, mut cross) = (0, None);
+            for (i, n) in sizes.iter().enumerate() {
+                sum += n;
+                if sum > limit {
+                    cross = Some(i);
+                    break;
+                }
+            }
+            let cross = cross.unwrap();
+            let mut sink = Sink::new(Destination::Memory(MemoryOut::default())).unwrap();
+            sink.limit_bytes(limit, 0);
+            let mut out = Output::new(sink, None, 0);
+            assert!(threaded(&out));
+            for (i, op) in ops.iter().enumerate() {
+                let r = match op {
+                    Op::Edited(raw, edits) => out.edited_line(raw.as_bytes(), edits),
+                    Op::Line(l) => out.line(l),
+                    Op::Write(b) => out.write(b),
+                    Op::Input(a, b) => out.write_input(&src, *a as u64, &data[*a..*b]),
+                };
+                if i < cross {
+                    r.unwrap();
+                } else {
+                    let e = r.unwrap_err();
+                    let t = e.get_ref().and_then(|x| x.downcast_ref::<OutputTooLarge>());
+                    let sum: u64 = sizes[..i].iter().sum();
+                    assert_eq!(t.map(|t| t.room), Some(limit - sum), "{e}");
+                    break;
+                }
+            }
+        }
     }
 }

@@ -192,6 +192,9 @@ pub struct Sink {
 #[derive(Debug)]
 pub struct OutputTooLarge {
     pub limit: u64,
+    /// How many bytes of the refused write still fit: the write's byte
+    /// at this index is the first past the limit.
+    pub room: u64,
 }
 
 impl std::fmt::Display for OutputTooLarge {
@@ -295,7 +298,18 @@ impl Sink {
     fn too_large(&self) -> io::Error {
         io::Error::other(OutputTooLarge {
             limit: self.byte_budget,
+            room: self.room(),
         })
+    }
+
+    /// Bytes written so far (spooled and recorded as ranges).
+    pub fn used(&self) -> u64 {
+        self.spooled + self.ranged
+    }
+
+    /// Bytes that may still be written before `--max-output-bytes`.
+    pub fn room(&self) -> u64 {
+        self.byte_budget.saturating_sub(self.used())
     }
 
     /// The file output may refer to, if any.

@@ -21,12 +21,13 @@ use state::Machine;
 use std::collections::HashSet;
 
 use std::rc::Rc;
+use std::sync::Arc;
 
 use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};
 use crate::emit::Sink;
 use crate::parse::ast::{Line, LineKind, OKind, Span};
 use crate::parse::{LineParser, Name};
-use crate::program::{FileIndex, Loader, Window, next_line};
+use crate::program::{FileIndex, Loader, SourceFile, Window, next_line};
 
 pub use out::hook::{LineConsumer, Origin};
 pub use settings::{Define, Settings};
@@ -67,12 +68,17 @@ impl Diags {
     }
 }
 
-/// An error writing the output.
-fn output_error(e: std::io::Error) -> Error {
-    if let Some(t) = e
-        .get_ref()
+/// The output grew past `--max-output-bytes`: the sink's account of it.
+fn too_large(e: &std::io::Error) -> Option<&crate::emit::OutputTooLarge> {
+    e.get_ref()
         .and_then(|i| i.downcast_ref::<crate::emit::OutputTooLarge>())
-    {
+}
+
+/// An error writing the output (without a place: see
+/// [`Interp::output_error_at`]; a consumer's output error is placed at the
+/// line it was given).
+pub(crate) fn output_error(e: std::io::Error) -> Error {
+    if let Some(t) = too_large(&e) {
         return Diagnostic::error(ErrorKind::OutputBytesLimit { limit: t.limit }, None);
     }
     Diagnostic::error(
@@ -82,6 +88,26 @@ fn output_error(e: std::io::Error) -> Error {
         },
         None,
     )
+}
+
+/// `e` placed at the line starting at `at` in `file` with the calls
+/// `stack`, if it is the output byte limit without a place.
+fn place_limit(
+    mut e: Error,
+    file: &Arc<SourceFile>,
+    at: u32,
+    stack: impl FnOnce() -> Vec<Site>,
+) -> Error {
+    if e.site.is_none()
+        && matches!(
+            e.kind,
+            crate::diag::Kind::Error(ErrorKind::OutputBytesLimit { .. })
+        )
+    {
+        e.site = Some(Site::new(file, at, at));
+        e.stack = stack();
+    }
+    e
 }
 
 /// An error reading a streamed program file.
@@ -143,6 +169,46 @@ impl<'s> Interp<'s> {
     /// The call stack as sites, innermost caller first.
     fn stack(&self) -> Vec<Site> {
         self.flow.stack()
+    }
+
+    /// An error writing the output line that starts at `at` in `file`;
+    /// the byte limit is placed at that line.
+    #[cold]
+    pub(crate) fn output_error_at(
+        &self,
+        e: std::io::Error,
+        file: &Arc<SourceFile>,
+        at: u32,
+    ) -> Error {
+        self.placed(output_error(e), file, at)
+    }
+
+    /// An error writing `bytes`, the bytes of `file` from `start` on
+    /// (whole lines); the byte limit is placed at the line holding the
+    /// first byte past it.
+    #[cold]
+    pub(crate) fn output_error_in(
+        &self,
+        e: std::io::Error,
+        file: &Arc<SourceFile>,
+        start: u64,
+        bytes: &[u8],
+    ) -> Error {
+        let room = too_large(&e).map_or(0, |t| t.room);
+        let past = usize::try_from(room)
+            .unwrap_or(usize::MAX)
+            .min(bytes.len().saturating_sub(1));
+        let line =
+            memchr::memrchr(b'\n', bytes.get(..past).unwrap_or_default()).map_or(0, |i| i + 1);
+        let at = u32::try_from(start + line as u64).unwrap_or(u32::MAX);
+        self.placed(output_error(e), file, at)
+    }
+
+    /// `e` placed at the line starting at `at` in `file` with the calls
+    /// that led there, if it is the output byte limit without a place.
+    #[cold]
+    pub(crate) fn placed(&self, e: Error, file: &Arc<SourceFile>, at: u32) -> Error {
+        place_limit(e, file, at, || self.stack())
     }
 
     pub(crate) fn error(
@@ -209,6 +275,11 @@ impl<'s> Interp<'s> {
         if r.is_ok() {
             self.finish_warnings();
         }
+        // Where an output error past the end of the run is placed: the last
+        // line run.
+        let (last, at) = (self.flow.cur.file.file.clone(), self.reader.line_start);
+        let stack = self.stack();
+        let place = |e: Error| place_limit(e, &last, at, || stack.clone());
         let Interp {
             out:
                 Writer {
@@ -226,7 +297,7 @@ impl<'s> Interp<'s> {
             match c.finish(&mut output) {
                 Ok(d) => warnings.extend(d),
                 Err(e) => {
-                    err.get_or_insert(e);
+                    err.get_or_insert(place(e));
                 }
             }
         }
@@ -235,7 +306,7 @@ impl<'s> Interp<'s> {
                 .iter()
                 .any(|d| d.level() == crate::diag::Level::Error);
         if !failed && let Err(e) = output.finish() {
-            err = Some(output_error(e));
+            err = Some(place(output_error(e)));
         }
         (warnings, err)
     }
@@ -589,7 +660,10 @@ impl<'s> Interp<'s> {
             let file = self.flow.cur.file.file.clone();
             return self.consume(&file, self.reader.line_start, bytes, false);
         }
-        self.out.output.line(bytes).map_err(output_error)
+        self.out.output.line(bytes).map_err(|e| {
+            let file = &self.flow.cur.file.file;
+            self.output_error_at(e, file, self.reader.line_start)
+        })
     }
 
     /// Writes a source line as it is (`bytes`: its text without trailing
@@ -600,7 +674,10 @@ impl<'s> Interp<'s> {
             let file = file.file.clone();
             return self.consume(&file, start, bytes, true);
         }
-        self.out.output.line(bytes).map_err(output_error)
+        self.out
+            .output
+            .line(bytes)
+            .map_err(|e| self.output_error_at(e, &file.file, start))
     }
 
     /// Counts an output line about to be written, against the limit.

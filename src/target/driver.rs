@@ -291,13 +291,7 @@ impl LineConsumer for Lowering {
 }
 
 fn io_error(e: std::io::Error) -> Error {
-    Diagnostic::error(
-        ErrorKind::Io {
-            path: "<output>".into(),
-            message: e.to_string(),
-        },
-        None,
-    )
+    crate::eval::output_error(e)
 }
 
 impl Lowering {

@@ -123,12 +123,12 @@ impl LineConsumer for ViewConsumer<'_> {
                     self.buf.clear();
                     self.buf.extend_from_slice(text);
                     self.buf.extend_from_slice(note.as_bytes());
-                    return out.line(&self.buf).map_err(|e| io_error("<output>", e));
+                    return out.line(&self.buf).map_err(crate::eval::output_error);
                 }
             }
         }
         if self.pass_through {
-            out.line(text).map_err(|e| io_error("<output>", e))?;
+            out.line(text).map_err(crate::eval::output_error)?;
         }
         Ok(())
     }

@@ -61,7 +61,7 @@ impl Interp<'_> {
         };
         let r = c.line(text, &origin, &mut self.out.output);
         self.out.consumer = Some(c);
-        r
+        r.map_err(|e| self.placed(e, file, line_start))
     }
 
     /// Hands each line of `bytes` (the file's bytes from offset `start`,

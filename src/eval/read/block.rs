@@ -10,9 +10,9 @@ use crate::parse::MAX_LINE;
 use crate::parse::ast::{Assign, Comment, CommentKind, ExprKind, Item, ParamRef, Span, Word};
 use crate::program::FileIndex;
 
+use crate::eval::Interp;
 use crate::eval::expr::message::{is_stable, stabilize};
 use crate::eval::expr::params::is_read_only;
-use crate::eval::{Interp, output_error};
 
 /// Evaluated words of the line: (letter, value).
 pub type Words = Vec<(u8, f64)>;
@@ -440,7 +440,11 @@ impl Interp<'_> {
             && max_edited_len(raw.len(), repl, self.s.precision).is_some_and(|n| n <= MAX_LINE)
         {
             self.count_line()?;
-            return self.out.output.edited_line(raw, repl).map_err(output_error);
+            return self
+                .out
+                .output
+                .edited_line(raw, repl)
+                .map_err(|e| self.output_error_at(e, &file.file, start));
         }
         let mut out = std::mem::take(&mut self.out.buf);
         out.clear();

@@ -12,9 +12,9 @@ use std::rc::Rc;
 use crate::diag::Error;
 use crate::program::FileIndex;
 
+use crate::eval::Interp;
 use crate::eval::read::fast::POW10;
 use crate::eval::read::scan_ahead::{Ahead, InPlace, Lines, Read, Shared};
-use crate::eval::{Interp, output_error};
 
 /// Word slots: G, X, Y, Z, A, B, C, F, S (the fast set), then I, J, K, R, P
 /// (lines with these take the block checks).
@@ -438,10 +438,11 @@ impl Interp<'_> {
                         let start = base + *i as u32;
                         self.consume(&file.file, start, &buf[*i..p.text_end], true)?;
                     } else {
+                        let at = base + *i as u32;
                         self.out
                             .output
                             .line(&buf[*i..p.text_end])
-                            .map_err(output_error)?;
+                            .map_err(|e| self.output_error_at(e, &file.file, at))?;
                     }
                     *batch_start = p.next;
                 } else if p.next - *batch_start >= BATCH {
@@ -585,7 +586,7 @@ impl Interp<'_> {
         self.out
             .output
             .write_input(&file.file, start, bytes)
-            .map_err(output_error)
+            .map_err(|e| self.output_error_in(e, &file.file, start, bytes))
     }
 }
 
