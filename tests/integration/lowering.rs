@@ -1360,3 +1360,94 @@ fn nurbs_blocks_are_lowered_within_tolerance() {
         }
     }
 }
+
+/// Random G5.2/G5.3 programs through the driver (G90 or G91 points, a
+/// first block with only P, orders 3 to 5, inches or millimetres): the
+/// written segments follow the curve evaluated here from the control
+/// points LinuxCNC takes, within the tolerance, ending exactly at the last
+/// point; the move after the curve starts there.
+#[test]
+fn random_nurbs_programs_are_lowered_within_tolerance() {
+    let dir = crate::tmp();
+    for seed in first_seed()..first_seed() + cases() {
+        let mut rng = Rng::new(seed);
+        let inch = rng.chance(0.3);
+        let tol_mm = *rng.pick(&[0.001, 0.01, 0.05]);
+        let tol = if inch { tol_mm / 25.4 } else { tol_mm };
+        let start = [rng.milli(-10.0, 10.0), rng.milli(-10.0, 10.0)];
+        let order = rng.int(3, 5);
+        let count = order + rng.int(0, 4);
+        let incremental = rng.chance(0.4);
+        let first_weight = rng.chance(0.3).then(|| rng.milli(0.5, 2.0));
+        let mut prog = format!(
+            "{} G17 G90 G0 X{} Y{} Z1\nF100\n",
+            if inch { "G20" } else { "G21" },
+            num(start[0]),
+            num(start[1])
+        );
+        let mut pts = vec![[start[0], start[1], first_weight.unwrap_or(1.0)]];
+        if let Some(w) = first_weight {
+            prog.push_str(&format!("G5.2 P{} L{order}\n", num(w)));
+        }
+        if incremental {
+            prog.push_str("G91\n");
+        }
+        for i in 1..count {
+            let p = [
+                rng.milli(-10.0, 10.0),
+                rng.milli(-10.0, 10.0),
+                rng.milli(0.3, 3.0),
+            ];
+            let head = if i == 1 && first_weight.is_none() {
+                format!("G5.2 L{order} ")
+            } else {
+                String::new()
+            };
+            prog.push_str(&format!(
+                "{head}X{} Y{} P{}\n",
+                num(p[0]),
+                num(p[1]),
+                num(p[2])
+            ));
+            let at = if incremental {
+                [start[0] + p[0], start[1] + p[1], p[2]]
+            } else {
+                p
+            };
+            pts.push(at);
+        }
+        prog.push_str("G5.3\nG90 G0 Z2\nM2\n");
+        crate::put(dir.path(), "r.ngc", &prog);
+        let t = tol_mm.to_string();
+        let (code, out, err) = crate::run(
+            dir.path(),
+            &[
+                "--target",
+                "grbl",
+                "--zero-start",
+                "--tolerance",
+                &t,
+                "r.ngc",
+            ],
+        );
+        assert_eq!(code, 0, "seed {seed}: {err}\n{prog}");
+        let mut poly = vec![start];
+        poly.extend(written_points(&out, "F100", "G90 G0 Z2"));
+        let last = pts[pts.len() - 1];
+        let end = poly.last().copied().unwrap_or(start);
+        let quantum = if inch { 0.000005 } else { 0.00005 };
+        assert!(
+            (end[0] - last[0]).abs() <= quantum && (end[1] - last[1]).abs() <= quantum,
+            "seed {seed}: ends at {end:?}, not {last:?}\n{prog}---\n{out}"
+        );
+        let umax = (pts.len() + 1 - order) as f64;
+        check_curve(
+            &format!("seed {seed}"),
+            |u| nurbs_point(&pts, order, u),
+            umax,
+            &poly,
+            tol + 2.0 * quantum,
+        )
+        .unwrap_or_else(|e| panic!("{e}\n{prog}---\n{out}"));
+    }
+}
