@@ -440,6 +440,8 @@ pub struct Block {
     /// Index into `words` of each letter's value word (A = 0 … Z = 25),
     /// and of `@` (26) and `^` (27).
     value_at: [u8; 28],
+    /// The slots of `value_at` that hold a word, as bits.
+    present: u32,
     pub motion: Option<MotionMode>,
     pub plane: Option<Plane>,
     pub distance: Option<Distance>,
@@ -491,12 +493,24 @@ impl Block {
 
     /// Axis words by axis index (X Y Z A B C U V W).
     pub fn axes(&self) -> [Option<f64>; 9] {
+        if !self.has_axis() {
+            return [None; 9];
+        }
         std::array::from_fn(|i| self.value(AXIS_LETTERS[i]))
     }
 
     /// Whether any axis word is present.
     pub fn has_axis(&self) -> bool {
-        AXIS_LETTERS.iter().any(|&l| self.word(l).is_some())
+        const AXES: u32 = {
+            let mut bits = 0;
+            let mut i = 0;
+            while i < AXIS_LETTERS.len() {
+                bits |= 1 << (AXIS_LETTERS[i] - b'A');
+                i += 1;
+            }
+            bits
+        };
+        self.present & AXES != 0
     }
 
     /// The M codes of the line in order.
@@ -598,6 +612,7 @@ impl Block {
         self.words.clear();
         self.comments.clear();
         self.value_at = [NO_WORD; 28];
+        self.present = 0;
         self.motion = None;
         self.plane = None;
         self.distance = None;
@@ -775,6 +790,7 @@ impl Block {
                     });
                 }
                 self.value_at[s] = self.words.len().min(NO_WORD as usize - 1) as u8;
+                self.present |= 1 << s;
                 WordKind::Value
             }
         };
@@ -794,8 +810,9 @@ impl Block {
 #[inline]
 pub(crate) fn round(x: f64) -> f64 {
     if (0.0..9.0e15).contains(&x) && x.is_sign_positive() {
-        let i = x as u64;
-        (i + u64::from(x - i as f64 >= 0.5)) as f64
+        // Through i64: one instruction each way on x86-64, unlike u64.
+        let i = x as i64;
+        (i + i64::from(x - i as f64 >= 0.5)) as f64
     } else {
         x.round()
     }
@@ -864,7 +881,8 @@ fn read_number(line: &[u8], start: usize) -> Option<(f64, usize)> {
     let frac = frac.unwrap_or(0);
     if seen && ends {
         if digits <= 15 && frac <= 22 {
-            let v = mant as f64 / POW10[frac as usize];
+            // Below 10^15: exact through i64 (one instruction, unlike u64).
+            let v = mant as i64 as f64 / POW10[frac as usize];
             return Some((if neg { -v } else { v }, i));
         }
         // Long, but in one piece: read where it is written.
@@ -1004,6 +1022,12 @@ mod tests {
         assert_eq!(b.comments.len(), 2);
         assert_eq!(b.comments[0].kind, CommentKind::Message);
         assert_eq!(b.words.len(), 7);
+        assert!(b.has_axis());
+        assert_eq!(b.axes()[..3], [Some(1.5), Some(-2.0), None]);
+        let f = Block::decode(b"G1 F300 I2 J1").unwrap();
+        assert!(!f.has_axis());
+        assert_eq!(f.axes(), [None; 9]);
+        assert!(Block::decode(b"G1 W-1").unwrap().has_axis());
     }
 
     #[test]

@@ -220,7 +220,7 @@ pub fn format_number(out: &mut String, v: f64, decimals: u8, max_digits: u8) {
 fn write_number(out: &mut Vec<u8>, v: f64, decimals: u8, max_digits: u8) {
     let a = v.abs();
     if v.fract() == 0.0 && a < 1e15 {
-        write_fixed(out, v < 0.0, a as u64, 0);
+        write_fixed(out, v < 0.0, a as i64 as u64, 0);
         return;
     }
     let int_digits = int_digits(a);
@@ -309,8 +309,9 @@ pub fn written_as_is(t: &[u8], code: bool, decimals: u8, max_digits: u8) -> bool
 /// after the point is exact, so comparing it with one half decides.
 #[inline]
 fn round_u64(x: f64) -> u64 {
-    let i = x as u64;
-    i + u64::from(x - i as f64 >= 0.5)
+    // Through i64: one instruction each way on x86-64, unlike u64.
+    let i = x as i64;
+    (i + i64::from(x - i as f64 >= 0.5)) as u64
 }
 
 /// `n / 10^d` written with `d` decimals, trailing zeros (and a point left
