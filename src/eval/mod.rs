@@ -68,6 +68,33 @@ impl Diags {
     }
 }
 
+/// Subroutines defined in the main file and never called: (name, start,
+/// end of the `sub` line), with the file and the call stack at the end.
+#[derive(Default)]
+struct Unused {
+    file: Option<std::sync::Arc<crate::program::SourceFile>>,
+    stack: Vec<Site>,
+    subs: Vec<(Name, u32, u32)>,
+}
+
+impl Unused {
+    /// Appends their warnings.
+    fn give(self, warnings: &mut Vec<Diagnostic>) {
+        let Some(file) = self.file else {
+            return;
+        };
+        warnings.reserve_exact(self.subs.len());
+        for (name, start, end) in self.subs {
+            let kind = WarningKind::UnusedSub {
+                name: name.to_string(),
+            };
+            let mut w = Diagnostic::warning(kind, Some(Site::new(&file, start, end)));
+            w.stack.clone_from(&self.stack);
+            warnings.push(w);
+        }
+    }
+}
+
 /// The output grew past `--max-output-bytes`: the sink's account of it.
 fn too_large(e: &std::io::Error) -> Option<&crate::emit::OutputTooLarge> {
     e.get_ref()
@@ -272,9 +299,11 @@ impl<'s> Interp<'s> {
         if let Some(p) = &self.out.progress {
             p.clear();
         }
-        if r.is_ok() {
-            self.finish_warnings();
-        }
+        let unused = if r.is_ok() {
+            self.finish_warnings()
+        } else {
+            Unused::default()
+        };
         // Where an output error past the end of the run is placed: the last
         // line run.
         let (last, at) = (self.flow.cur.file.file.clone(), self.reader.line_start);
@@ -288,10 +317,21 @@ impl<'s> Interp<'s> {
                     ..
                 },
             diags: Diags { mut warnings, .. },
-            loader,
+            mut loader,
+            main,
+            mach,
+            flow,
+            params,
+            reader,
             ..
         } = self;
-        warnings.extend(loader.warnings);
+        // The run's state (the file index, the subroutine records, the
+        // loaded files) goes before the never-called warnings are made: a
+        // program of a million subroutines holds one or the other, not both.
+        let loader_warnings = std::mem::take(&mut loader.warnings);
+        drop((main, mach, flow, params, reader, loader));
+        unused.give(&mut warnings);
+        warnings.extend(loader_warnings);
         let mut err = r.err();
         if let Some(mut c) = consumer {
             match c.finish(&mut output) {
@@ -338,28 +378,29 @@ impl<'s> Interp<'s> {
         Ok(())
     }
 
-    fn finish_warnings(&mut self) {
+    /// Warns of code after the end that never runs; returns the subs
+    /// defined in the main file and never called, whose warnings come next.
+    fn finish_warnings(&mut self) -> Unused {
         let main = self.main.clone();
         self.warn_unreachable(&main);
-        // Subs defined in the main file and never called: one warning per
-        // definition, given here only (no record of sites warned needed).
         if !self.s.warnings {
-            return;
+            return Unused::default();
         }
-        let stack = self.stack();
+        // One warning per definition, given here only (no record of sites
+        // warned needed).
+        let mut subs = Vec::new();
         for d in main.defs() {
             let o = &main.olines[d.oidx as usize];
             if let Some(k) = main.key(d.oidx)
                 && !self.flow.called.contains(k)
             {
-                let end = o.start + o.line_len();
-                let kind = WarningKind::UnusedSub {
-                    name: k.to_string(),
-                };
-                let mut w = Diagnostic::warning(kind, Some(Site::new(&main.file, o.start, end)));
-                w.stack.clone_from(&stack);
-                self.diags.warnings.push(w);
+                subs.push((k.clone(), o.start, o.start + o.line_len()));
             }
+        }
+        Unused {
+            file: Some(main.file.clone()),
+            stack: self.stack(),
+            subs,
         }
     }
 

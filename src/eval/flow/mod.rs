@@ -17,7 +17,7 @@ pub const MAX_CALL_LEVEL: usize = 9;
 
 /// Parsed body lines kept (see `Flow::cache`); past this, the kept lines
 /// are dropped and the cache fills again.
-pub const LINES_KEPT: usize = 1 << 16;
+pub const LINES_KEPT: usize = 1 << 14;
 
 /// Where reading continues.
 #[derive(Clone)]
