@@ -31,6 +31,15 @@ enum Item {
 /// rs274's canon lines for `program` (with tool table `tbl`, and the folder
 /// of the program as its working folder).
 fn rs274(program: &[u8], tbl: Option<&Path>) -> Result<Vec<String>, String> {
+    rs274_with(program, tbl, None)
+}
+
+/// As [`rs274`], with a parameter file (a fresh copy: rs274 rewrites it).
+fn rs274_with(
+    program: &[u8],
+    tbl: Option<&Path>,
+    var: Option<&Path>,
+) -> Result<Vec<String>, String> {
     let dir = tempfile::tempdir().map_err(|e| e.to_string())?;
     let prog = dir.path().join("prog.ngc");
     std::fs::write(&prog, program).map_err(|e| e.to_string())?;
@@ -41,6 +50,11 @@ fn rs274(program: &[u8], tbl: Option<&Path>) -> Result<Vec<String>, String> {
     cmd.arg("-g").arg("-i").arg(&ini);
     if let Some(t) = tbl {
         cmd.arg("-t").arg(t);
+    }
+    if let Some(v) = var {
+        let copy = dir.path().join("params.var");
+        std::fs::copy(v, &copy).map_err(|e| e.to_string())?;
+        cmd.arg("-v").arg(copy);
     }
     let out = cmd
         .arg(&prog)
@@ -404,7 +418,10 @@ fn motion_check(path: &Path) -> Result<(), String> {
         .position(|a| a == "--tool-table")
         .and_then(|i| args.get(i + 1))
         .map(|t| dir.join(t));
-    let zero: &[&str] = if args.iter().any(|a| a == "--zero-start") {
+    let zero: &[&str] = if args
+        .iter()
+        .any(|a| a == "--zero-start" || a == "--var-file")
+    {
         &[]
     } else {
         &["--zero-start"]
@@ -427,8 +444,14 @@ fn motion_check(path: &Path) -> Result<(), String> {
             .collect::<String>()
             .into_bytes();
     }
-    let a = rs274(&original, tbl.as_deref()).map_err(|e| format!("rs274 on the original: {e}"))?;
-    let b = rs274(stdout.as_bytes(), tbl.as_deref())
+    let var = args
+        .iter()
+        .position(|a| a == "--var-file")
+        .and_then(|i| args.get(i + 1))
+        .map(|v| dir.join(v));
+    let a = rs274_with(&original, tbl.as_deref(), var.as_deref())
+        .map_err(|e| format!("rs274 on the original: {e}"))?;
+    let b = rs274_with(stdout.as_bytes(), tbl.as_deref(), var.as_deref())
         .map_err(|e| format!("rs274 rejects the lowered output: {e}\n{stdout}"))?;
     compare(&Replay::run(&a), &Replay::run(&b), 0.002)
 }
