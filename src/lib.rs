@@ -13,8 +13,10 @@ mod fx_hasher;
 pub mod geom;
 mod library;
 pub mod machine;
+mod number;
 pub mod parse;
 pub mod program;
+pub mod source;
 pub mod target;
 pub mod view;
 

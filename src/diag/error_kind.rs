@@ -751,9 +751,9 @@ impl ErrorKind {
                 write!(
                     f,
                     "this move takes {axis} to {} {unit} (machine coordinates), {} the travel limit {} {unit} from {source}",
-                    crate::emit::number_string(*value, Some(4)),
+                    crate::number::number_string(*value, Some(4)),
                     if *above { "above" } else { "below" },
-                    crate::emit::number_string(*bound, Some(4)),
+                    crate::number::number_string(*bound, Some(4)),
                 )
             }
             LimitNeedsOffsets => write!(

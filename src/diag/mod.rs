@@ -15,7 +15,7 @@ pub use warning_kind::WarningKind;
 use std::fmt;
 use std::sync::Arc;
 
-use crate::program::SourceFile;
+use crate::source::SourceFile;
 
 /// A place in a source file: byte offsets from the start of the file. The
 /// line and column they are at are worked out when the diagnostic is

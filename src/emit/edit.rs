@@ -4,8 +4,8 @@
 //! source line and its edits to the output otherwise (see
 //! [`super::Output::edited_line`]); both go through [`write_edits`].
 
-use super::number::{max_len, write_number};
-use crate::parse::ast::Span;
+use crate::number::{max_len, write_number};
+use crate::source::Span;
 
 /// How a span of a source line is rewritten.
 #[derive(Debug, Clone, PartialEq)]

@@ -4,11 +4,10 @@
 
 mod edit;
 pub mod interrupt;
-mod number;
 mod output;
 mod sink;
 
+pub use crate::number::{max_len, number_string, write_number};
 pub use edit::{Edit, max_edited_len, write_edited};
-pub use number::{max_len, number_string, write_number};
 pub use output::Output;
 pub use sink::{Destination, MemoryOut, OutputTooLarge, Sink};

@@ -16,8 +16,8 @@ use std::thread::JoinHandle;
 
 use super::edit::{Edit, EditRef, max_edited_len, write_edited, write_edits};
 use super::sink::Sink;
-use crate::parse::ast::Span;
-use crate::program::SourceFile;
+use crate::source::SourceFile;
+use crate::source::Span;
 
 /// Chunk length at which the commands go to the thread.
 const CHUNK: usize = 1 << 16;

@@ -19,7 +19,7 @@ use std::io::{self, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
-use crate::program::SourceFile;
+use crate::source::SourceFile;
 
 /// Most ranges recorded; past this, input bytes are spooled like others.
 const MAX_PARTS: usize = 1 << 14;

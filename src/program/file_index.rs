@@ -19,7 +19,7 @@ use crate::parse::ast::{Label, Line, LineKind, OKind, OLine, Span};
 use crate::parse::{LineError, LineParser, Name};
 
 use super::SourceFile;
-use super::marked_lines::{Marked, is_mark};
+use crate::source::{Marked, is_mark};
 
 /// No key (a computed label, an M98 line) or no scope (outside any sub
 /// definition).
@@ -188,7 +188,7 @@ pub fn control_key(scope: &str, label: &str) -> Name {
     Name::new(&s)
 }
 
-pub use super::source_file::next_line;
+pub use crate::source::next_line;
 
 /// What one pass over the file's marked lines finds.
 #[derive(Default)]

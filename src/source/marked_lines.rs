@@ -6,7 +6,7 @@
 
 /// `o`, `O`, `m`, `M` or `%`: every O-line, `%` line, M98 and M99 holds one.
 #[inline(always)]
-pub(super) fn is_mark(b: u8) -> bool {
+pub(crate) fn is_mark(b: u8) -> bool {
     matches!(b | 0x20, b'o' | b'm') || b == b'%'
 }
 
