@@ -124,7 +124,7 @@ fn observed(
 /// Checks one program; returns its diagnostics.
 pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
     let opened = if path.as_os_str() == "-" {
-        crate::read_source_limited(None, cfg.settings.input)
+        crate::flatten::read_source_limited(None, cfg.settings.input)
     } else {
         crate::program::SourceFile::open_regular(path, cfg.settings.input).map_err(|e| {
             Diagnostic::error(
@@ -136,7 +136,7 @@ pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
             )
         })
     };
-    let source = match opened.and_then(|s| crate::refuse_binary(&s).map(|()| s)) {
+    let source = match opened.and_then(|s| crate::flatten::refuse_binary(&s).map(|()| s)) {
         Ok(s) => s,
         Err(e) => return vec![*e],
     };
@@ -156,7 +156,7 @@ pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
         t
     });
     let result = match std::sync::Arc::try_unwrap(source) {
-        Ok(source) => match crate::lowering(&settings, target) {
+        Ok(source) => match crate::flatten::lowering(&settings, target) {
             Some(consumer) => crate::view::run::flatten_chained(
                 source,
                 &settings,
@@ -297,7 +297,7 @@ pub fn run(paths: &[PathBuf], exts: &[String], deny_warnings: bool, cfg: &Config
     } else {
         0
     };
-    crate::report(&all, cfg.format);
-    crate::report_summary(files.len(), errors, warnings, code, cfg.format, true);
+    crate::diag::report(&all, cfg.format);
+    crate::diag::report_summary(files.len(), errors, warnings, code, cfg.format, true);
     ExitCode::from(code)
 }

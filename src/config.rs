@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::diag::{Diagnostic, ErrorKind, MessageFormat, WarningKind};
-use crate::eval::{Define, Settings};
+use crate::eval::{Settings, parse_axis_word, parse_define, read_tool_table, read_var_file};
 use crate::program::SearchPath;
 use crate::program::ini::Ini;
 
@@ -332,7 +332,7 @@ pub struct Config {
     /// naming missing folders, a SUBROUTINE_PATH cut to 10 folders).
     pub warnings: Vec<Diagnostic>,
     /// Travel limits, velocities and accelerations of the machine's axes.
-    pub machine: crate::view::axes::MachineAxes,
+    pub machine: crate::machine::axes::MachineAxes,
     /// Whether travel limits are checked (limits given and not --no-limits).
     pub check_limits: bool,
     /// A target other than linuxcnc (none: the flattened program as it is).
@@ -358,63 +358,6 @@ fn expand_tilde(p: &str) -> PathBuf {
 fn resolve_in(base: &Path, p: &str) -> PathBuf {
     let e = expand_tilde(p);
     if e.is_absolute() { e } else { base.join(e) }
-}
-
-/// Parses a `-D` argument.
-pub fn parse_define(text: &str) -> Result<Define, ErrorKind> {
-    let bad = || ErrorKind::BadDefine {
-        text: text.to_string(),
-    };
-    let (k, v) = text.split_once('=').ok_or_else(bad)?;
-    let k = k.trim().trim_start_matches('#');
-    let k = k.trim_start_matches('<').trim_end_matches('>');
-    let v: f64 = v.trim().parse().map_err(|_| bad())?;
-    if !v.is_finite() {
-        return Err(bad());
-    }
-    if !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()) {
-        let i: usize = k.parse().map_err(|_| bad())?;
-        if !(1..crate::eval::params::MAX_PARAM).contains(&i) {
-            return Err(ErrorKind::ParamOutOfRange { index: i as i64 });
-        }
-        return Ok(Define::Numbered(i, v));
-    }
-    if k.starts_with(|c: char| c.is_ascii_digit() || c == '.') {
-        return Err(bad());
-    }
-    let name: String = k
-        .chars()
-        .filter(|c| !c.is_whitespace())
-        .flat_map(|c| c.to_lowercase())
-        .collect();
-    if name.is_empty() || name.contains('>') {
-        return Err(bad());
-    }
-    Ok(Define::Named(name, v))
-}
-
-/// Parses one `--start-position` word: an axis letter and a number in mm
-/// (degrees for A, B, C), or in inches with an `in` suffix (`mm` is
-/// accepted too). Returns the axis index and the value in mm.
-pub fn parse_axis_word(word: &str) -> Option<(usize, f64)> {
-    let mut chars = word.chars();
-    let letter = chars.next()?.to_ascii_lowercase();
-    let axis = crate::eval::state::AXES
-        .iter()
-        .position(|&c| c as char == letter)?;
-    let rest = chars.as_str();
-    let lower = rest.to_ascii_lowercase();
-    let linear = !matches!(letter, 'a' | 'b' | 'c');
-    let (num, scale) = if let Some(n) = lower.strip_suffix("in").filter(|_| linear) {
-        (n, 25.4)
-    } else if let Some(n) = lower.strip_suffix("mm").filter(|_| linear) {
-        (n, 1.0)
-    } else {
-        (lower.as_str(), 1.0)
-    };
-    let v: f64 = num.trim().parse().ok()?;
-    let v = v * scale;
-    v.is_finite().then_some((axis, v))
 }
 
 /// Whether a command-line word is a `--start-position` value (axis words
@@ -537,42 +480,6 @@ fn user_m_files(ini: &Ini, base: &Path) -> u128 {
     bits
 }
 
-/// Reads a LinuxCNC .var file: `number value` lines in ascending order.
-pub fn read_var_file(path: &Path) -> Result<Vec<Define>, ErrorKind> {
-    let text = std::fs::read_to_string(path).map_err(|e| ErrorKind::Io {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    })?;
-    let mut out = Vec::new();
-    let mut last = 0i64;
-    for line in text.lines() {
-        let t = line.trim();
-        if t.is_empty() || t.starts_with('#') || t.starts_with(';') {
-            continue;
-        }
-        let mut it = t.split_whitespace();
-        let (Some(a), Some(b)) = (it.next(), it.next()) else {
-            return Err(ErrorKind::VarFileSyntax {
-                text: t.to_string(),
-            });
-        };
-        let (Ok(i), Ok(v)) = (a.parse::<i64>(), b.parse::<f64>()) else {
-            return Err(ErrorKind::VarFileSyntax {
-                text: t.to_string(),
-            });
-        };
-        if !(1..crate::eval::params::MAX_PARAM as i64).contains(&i) {
-            return Err(ErrorKind::ParamOutOfRange { index: i });
-        }
-        if i <= last {
-            return Err(ErrorKind::VarFileOrder { index: i });
-        }
-        last = i;
-        out.push(Define::Numbered(i as usize, v));
-    }
-    Ok(out)
-}
-
 impl CommonArgs {
     /// The requested diagnostic format.
     pub fn format(&self) -> MessageFormat {
@@ -648,7 +555,7 @@ impl CommonArgs {
             dirs.extend(env.split(':').filter(|s| !s.is_empty()).map(expand_tilde));
         }
         let mut var_file = self.var_file.clone();
-        let mut machine = crate::view::axes::MachineAxes::default();
+        let mut machine = crate::machine::axes::MachineAxes::default();
         if let Some(ini_path) = &self.ini {
             let text = std::fs::read_to_string(ini_path).map_err(|e| ErrorKind::Io {
                 path: ini_path.clone(),
@@ -766,15 +673,7 @@ impl CommonArgs {
             settings.defines.extend(read_var_file(v)?);
         }
         if let Some(t) = &self.tool_table {
-            let text = std::fs::read_to_string(t).map_err(|e| ErrorKind::Io {
-                path: t.clone(),
-                message: e.to_string(),
-            })?;
-            settings.tool_table =
-                crate::eval::tools::parse_tool_table(&text).map_err(|m| ErrorKind::Io {
-                    path: t.clone(),
-                    message: m,
-                })?;
+            settings.tool_table = read_tool_table(t)?;
         }
         for d in &self.define {
             settings.defines.push(parse_define(d)?);
@@ -801,8 +700,8 @@ impl CommonArgs {
                 message: e.to_string(),
             })?;
             let env = match self.machine.grbl_envelope {
-                GrblEnvelopeArg::Negative => crate::view::axes::GrblEnvelope::Negative,
-                GrblEnvelopeArg::Positive => crate::view::axes::GrblEnvelope::Positive,
+                GrblEnvelopeArg::Negative => crate::machine::axes::GrblEnvelope::Negative,
+                GrblEnvelopeArg::Positive => crate::machine::axes::GrblEnvelope::Positive,
             };
             machine.add_grbl(&text, env)?;
         }
@@ -848,24 +747,5 @@ mod tests {
     #[test]
     fn cli_is_consistent() {
         Cli::command().debug_assert();
-    }
-
-    #[test]
-    fn defines() {
-        assert_eq!(
-            parse_define("5063=-1.25").unwrap(),
-            Define::Numbered(5063, -1.25)
-        );
-        assert_eq!(
-            parse_define("Depth=3").unwrap(),
-            Define::Named("depth".into(), 3.0)
-        );
-        assert_eq!(
-            parse_define("_g=1").unwrap(),
-            Define::Named("_g".into(), 1.0)
-        );
-        assert!(parse_define("nothing").is_err());
-        assert!(parse_define("0=1").is_err());
-        assert!(parse_define("x=inf").is_err());
     }
 }

@@ -4,12 +4,14 @@ mod block_error;
 mod error_kind;
 mod lathe_error;
 mod render;
+mod report;
 mod warning_kind;
 
 pub use block_error::BlockError;
 pub use error_kind::ErrorKind;
 pub use lathe_error::LatheError;
 pub use render::{MessageFormat, render, render_summary, use_color};
+pub use report::{report, report_summary, write_stderr};
 pub use warning_kind::WarningKind;
 
 use std::fmt;

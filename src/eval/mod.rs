@@ -30,7 +30,9 @@ use crate::parse::{LineParser, Name};
 use crate::program::{FileIndex, Loader, SourceFile, Window, next_line};
 
 pub use out::hook::{LineConsumer, Origin};
-pub use settings::{Define, Settings};
+pub use settings::{
+    Define, Settings, parse_axis_word, parse_define, read_tool_table, read_var_file,
+};
 
 use expr::params::Params;
 

@@ -1,7 +1,12 @@
 //! Everything the evaluator needs to know from the command line and the INI,
 //! as plain data.
 
+use std::path::Path;
+
+use crate::diag::ErrorKind;
 use crate::program::ini::Ini;
+
+use super::tools::{ToolData, parse_tool_table};
 
 /// A parameter given before the run (`-D`, var file).
 #[derive(Debug, Clone, PartialEq)]
@@ -115,5 +120,132 @@ impl Default for Settings {
             user_m: 0,
             progress: None,
         }
+    }
+}
+
+/// Parses a `-D` argument.
+pub fn parse_define(text: &str) -> Result<Define, ErrorKind> {
+    let bad = || ErrorKind::BadDefine {
+        text: text.to_string(),
+    };
+    let (k, v) = text.split_once('=').ok_or_else(bad)?;
+    let k = k.trim().trim_start_matches('#');
+    let k = k.trim_start_matches('<').trim_end_matches('>');
+    let v: f64 = v.trim().parse().map_err(|_| bad())?;
+    if !v.is_finite() {
+        return Err(bad());
+    }
+    if !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()) {
+        let i: usize = k.parse().map_err(|_| bad())?;
+        if !(1..super::params::MAX_PARAM).contains(&i) {
+            return Err(ErrorKind::ParamOutOfRange { index: i as i64 });
+        }
+        return Ok(Define::Numbered(i, v));
+    }
+    if k.starts_with(|c: char| c.is_ascii_digit() || c == '.') {
+        return Err(bad());
+    }
+    let name: String = k
+        .chars()
+        .filter(|c| !c.is_whitespace())
+        .flat_map(|c| c.to_lowercase())
+        .collect();
+    if name.is_empty() || name.contains('>') {
+        return Err(bad());
+    }
+    Ok(Define::Named(name, v))
+}
+
+/// Parses one `--start-position` word: an axis letter and a number in mm
+/// (degrees for A, B, C), or in inches with an `in` suffix (`mm` is
+/// accepted too). Returns the axis index and the value in mm.
+pub fn parse_axis_word(word: &str) -> Option<(usize, f64)> {
+    let mut chars = word.chars();
+    let letter = chars.next()?.to_ascii_lowercase();
+    let axis = super::state::AXES
+        .iter()
+        .position(|&c| c as char == letter)?;
+    let rest = chars.as_str();
+    let lower = rest.to_ascii_lowercase();
+    let linear = !matches!(letter, 'a' | 'b' | 'c');
+    let (num, scale) = if let Some(n) = lower.strip_suffix("in").filter(|_| linear) {
+        (n, 25.4)
+    } else if let Some(n) = lower.strip_suffix("mm").filter(|_| linear) {
+        (n, 1.0)
+    } else {
+        (lower.as_str(), 1.0)
+    };
+    let v: f64 = num.trim().parse().ok()?;
+    let v = v * scale;
+    v.is_finite().then_some((axis, v))
+}
+
+/// Reads a LinuxCNC .var file: `number value` lines in ascending order.
+pub fn read_var_file(path: &Path) -> Result<Vec<Define>, ErrorKind> {
+    let text = std::fs::read_to_string(path).map_err(|e| ErrorKind::Io {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let mut out = Vec::new();
+    let mut last = 0i64;
+    for line in text.lines() {
+        let t = line.trim();
+        if t.is_empty() || t.starts_with('#') || t.starts_with(';') {
+            continue;
+        }
+        let mut it = t.split_whitespace();
+        let (Some(a), Some(b)) = (it.next(), it.next()) else {
+            return Err(ErrorKind::VarFileSyntax {
+                text: t.to_string(),
+            });
+        };
+        let (Ok(i), Ok(v)) = (a.parse::<i64>(), b.parse::<f64>()) else {
+            return Err(ErrorKind::VarFileSyntax {
+                text: t.to_string(),
+            });
+        };
+        if !(1..super::params::MAX_PARAM as i64).contains(&i) {
+            return Err(ErrorKind::ParamOutOfRange { index: i });
+        }
+        if i <= last {
+            return Err(ErrorKind::VarFileOrder { index: i });
+        }
+        last = i;
+        out.push(Define::Numbered(i as usize, v));
+    }
+    Ok(out)
+}
+
+/// Reads a LinuxCNC tool table file.
+pub fn read_tool_table(path: &Path) -> Result<Vec<(i64, ToolData)>, ErrorKind> {
+    let io = |message: String| ErrorKind::Io {
+        path: path.to_path_buf(),
+        message,
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| io(e.to_string()))?;
+    parse_tool_table(&text).map_err(io)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defines() {
+        assert_eq!(
+            parse_define("5063=-1.25").unwrap(),
+            Define::Numbered(5063, -1.25)
+        );
+        assert_eq!(
+            parse_define("Depth=3").unwrap(),
+            Define::Named("depth".into(), 3.0)
+        );
+        assert_eq!(
+            parse_define("_g=1").unwrap(),
+            Define::Named("_g".into(), 1.0)
+        );
+        assert!(parse_define("nothing").is_err());
+        assert!(parse_define("0=1").is_err());
+        assert!(parse_define("x=inf").is_err());
     }
 }

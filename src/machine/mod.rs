@@ -1,7 +1,9 @@
 //! The machine model for what follows evaluation: typed blocks of executed
-//! lines ([`block`]), the state they put the machine in ([`model`]), and the
-//! motion they make ([`motion`]).
+//! lines ([`block`]), the state they put the machine in ([`model`]), the
+//! motion they make ([`motion`]), and the machine's axes: travel limits,
+//! velocities and accelerations ([`axes`]).
 
+pub mod axes;
 pub mod block;
 pub mod model;
 pub mod motion;

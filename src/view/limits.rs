@@ -2,9 +2,9 @@
 //! extreme points must stay inside the machine's envelope (machine
 //! coordinates).
 
-use super::axes::{LETTERS, MachineAxes};
 use super::geom::{ArcGeom, arc_point};
 use crate::diag::ErrorKind;
+use crate::machine::axes::{LETTERS, MachineAxes};
 use crate::machine::motion::{Axes, Motion};
 
 /// Checks moves against a machine envelope.

@@ -3,7 +3,6 @@
 //! the motion stream of [`crate::machine::motion`]; nothing runs unless asked
 //! for.
 
-pub mod axes;
 pub mod consumer;
 pub mod geom;
 pub mod html;

@@ -1,11 +1,11 @@
 //! The `stats` and `plot` commands and the per-move consumer that flattening
 //! and `check` use for travel limits.
 
-use super::axes::MachineAxes;
 use super::limits::LimitCheck;
 use super::plot::{Plot, View};
 use super::stats::Stats;
 use crate::diag::ErrorKind;
+use crate::machine::axes::MachineAxes;
 use crate::machine::motion::Motion;
 
 /// Everything that looks at the motion stream of one run. Only what was
@@ -82,7 +82,7 @@ pub fn observe(
     observer: &mut Observer,
 ) -> Result<Vec<crate::diag::Diagnostic>, crate::diag::Error> {
     let consumer = super::consumer::ViewConsumer::new(&cfg.settings, observer, false, None, false);
-    match crate::flatten_with(
+    match crate::flatten::flatten_with(
         source,
         &cfg.settings,
         &cfg.search,
@@ -108,16 +108,16 @@ fn run_for_view(
     cfg: &crate::config::Config,
     mut observer: Observer,
 ) -> Result<Observer, std::process::ExitCode> {
-    let source = match crate::read_source(file) {
+    let source = match crate::flatten::read_source(file) {
         Ok(s) => s,
         Err(e) => {
-            crate::report(&[*e], cfg.format);
+            crate::diag::report(&[*e], cfg.format);
             return Err(std::process::ExitCode::from(2));
         }
     };
     match observe(source, cfg, &mut observer) {
         Ok(warnings) => {
-            crate::report(&warnings, cfg.format);
+            crate::diag::report(&warnings, cfg.format);
             Ok(observer)
         }
         Err(e) => {
@@ -125,7 +125,7 @@ fn run_for_view(
                 Some(ErrorKind::Io { .. }) => 2,
                 _ => 1,
             };
-            crate::report(&[*e], cfg.format);
+            crate::diag::report(&[*e], cfg.format);
             Err(std::process::ExitCode::from(code))
         }
     }
@@ -165,8 +165,8 @@ pub fn plot_command(
     view: View,
     cfg: &crate::config::Config,
 ) -> std::process::ExitCode {
-    if crate::same_file(output, file) {
-        crate::report(
+    if crate::flatten::same_file(output, file) {
+        crate::diag::report(
             &[*crate::diag::Diagnostic::error(
                 ErrorKind::OutputIsInput {
                     output: output.to_path_buf(),
@@ -195,7 +195,7 @@ pub fn plot_command(
         svg
     };
     if let Err(e) = write_atomic(output, data.as_bytes()) {
-        crate::report(
+        crate::diag::report(
             &[*crate::diag::Diagnostic::error(
                 ErrorKind::Io {
                     path: output.to_path_buf(),
@@ -219,9 +219,9 @@ pub struct Extras {
     pub annotate: bool,
 }
 
-/// Flattens like [`crate::flatten`], checking travel limits when the
+/// Flattens like [`crate::flatten::flatten`], checking travel limits when the
 /// configuration has them and writing the source map and annotations when
-/// asked. Without any of these it is exactly [`crate::flatten`].
+/// asked. Without any of these it is exactly [`crate::flatten::flatten`].
 pub fn flatten_observed(
     source: crate::program::SourceFile,
     settings: &crate::eval::Settings,
@@ -239,7 +239,7 @@ pub fn flatten_observed(
 /// [`flatten_observed`] in front of `next`, the consumer that writes the
 /// output for a target controller (it sees every line after the limit
 /// check). Returns every diagnostic and the error that stopped the run, as
-/// [`crate::flatten_with`]. The source map and annotations are only for
+/// [`crate::flatten::flatten_with`]. The source map and annotations are only for
 /// output written line for line (no `next`).
 pub fn flatten_chained<'s>(
     source: crate::program::SourceFile,
@@ -251,7 +251,7 @@ pub fn flatten_chained<'s>(
     next: Option<Box<dyn crate::eval::LineConsumer + 's>>,
 ) -> (Vec<crate::diag::Diagnostic>, Option<crate::diag::Error>) {
     if !cfg.check_limits && extras.source_map.is_none() && !extras.annotate {
-        return crate::flatten_with(source, settings, search, dest, next);
+        return crate::flatten::flatten_with(source, settings, search, dest, next);
     }
     let extras = if next.is_some() {
         &Extras::default()
@@ -301,7 +301,7 @@ pub fn flatten_chained<'s>(
         super::consumer::ViewConsumer::new(settings, &mut observer, true, map, extras.annotate)
             .then(next);
     let (w, mut err) =
-        crate::flatten_with(source, settings, search, dest, Some(Box::new(consumer)));
+        crate::flatten::flatten_with(source, settings, search, dest, Some(Box::new(consumer)));
     if let Some((target, tmp)) = &map_tmp {
         if err.is_none() {
             if let Err(e) = std::fs::rename(tmp, target) {

@@ -6,8 +6,8 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
-use super::axes::{LETTERS, MachineAxes, is_rotary};
 use super::geom::{ArcGeom, arc_length, extreme_points, line_length};
+use crate::machine::axes::{LETTERS, MachineAxes, is_rotary};
 use crate::machine::motion::{Axes, FeedMode, Motion, MoveKind};
 
 /// How the run time is estimated, printed with every estimate.
@@ -150,7 +150,7 @@ impl Stats {
                 let g = ArcGeom::new(&from.work, &to.work, *center, *plane, *ccw, *turns);
                 let len = finite(arc_length(&g, &from.work, &to.work));
                 self.feed_length += len;
-                let cap = |f: fn(&super::axes::AxisData) -> Option<f64>| {
+                let cap = |f: fn(&crate::machine::axes::AxisData) -> Option<f64>| {
                     [g.a, g.b]
                         .iter()
                         .filter_map(|&i| f(&self.axes.axes[i]))

@@ -121,7 +121,7 @@ mod tests {
         let dir = tempfile::tempdir().expect("dir");
         let out = dir.path().join("out");
         let src = SourceFile::new("<t>".into(), "<t>".into(), text.as_bytes().to_vec());
-        let (_, e) = crate::flatten_with(
+        let (_, e) = crate::flatten::flatten_with(
             src,
             settings,
             &SearchPath::default(),
