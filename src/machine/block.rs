@@ -370,6 +370,23 @@ pub struct Word {
     pub value: f64,
     pub kind: WordKind,
     pub span: Span,
+    /// How its number is written.
+    pub shape: Shape,
+}
+
+/// How a word's number is written, for a writer that may copy it as is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Shape {
+    /// Written `[-]digits[.digits]` with no blank, no `+`, no leading zero
+    /// but the lone one before the point, a point only before digits, no
+    /// trailing zero after it, not `-0`, and at most 15 digits besides a
+    /// lone leading zero.
+    pub plain: bool,
+    pub neg: bool,
+    /// Digits before the point (0 for a lone zero).
+    pub int: u8,
+    /// Digits after the point.
+    pub frac: u8,
 }
 
 /// What a comment is.
@@ -593,11 +610,11 @@ impl Block {
                             what: DecodeProblem::BadCharacter(c),
                         });
                     }
-                    let (value, end) = read_number(line, i + 1).ok_or(DecodeError {
+                    let (value, end, shape) = read_number(line, i + 1).ok_or(DecodeError {
                         span: span(i, i + 1),
                         what: DecodeProblem::BadNumber,
                     })?;
-                    self.push_word(letter, value, span(i, end))?;
+                    self.push_word(letter, value, span(i, end), shape)?;
                     i = end;
                 }
             }
@@ -696,7 +713,13 @@ impl Block {
         });
     }
 
-    fn push_word(&mut self, letter: u8, value: f64, span: Span) -> Result<(), DecodeError> {
+    fn push_word(
+        &mut self,
+        letter: u8,
+        value: f64,
+        span: Span,
+        shape: Shape,
+    ) -> Result<(), DecodeError> {
         let kind = match letter {
             b'N' if self.words.is_empty() && self.line_number.is_none() => {
                 self.line_number = Some((value, span));
@@ -799,6 +822,7 @@ impl Block {
             value,
             kind,
             span,
+            shape,
         });
         Ok(())
     }
@@ -836,64 +860,81 @@ fn skip_blanks(line: &[u8], mut i: usize) -> usize {
 /// Longer numbers without blanks are parsed where they are written; the
 /// rest (blanks inside) is gathered first.
 #[inline]
-fn read_number(line: &[u8], start: usize) -> Option<(f64, usize)> {
+fn read_number(line: &[u8], start: usize) -> Option<(f64, usize, Shape)> {
     let mut i = start;
-    let neg = match line.get(i) {
+    let (neg, plus) = match line.get(i) {
         Some(b'-') => {
             i += 1;
-            true
+            (true, false)
         }
         Some(b'+') => {
             i += 1;
-            false
+            (false, true)
         }
-        _ => false,
+        _ => (false, false),
     };
+    let first = line.get(i).copied().unwrap_or(b' ');
     let mut mant: u64 = 0;
-    // Significant digits (leading zeros not counted), digits seen at all,
-    // digits after the point.
+    // Significant digits (leading zeros not counted), digits before the
+    // point, digits after it, the last character.
     let mut digits = 0u32;
-    let mut seen = false;
+    let mut int = 0u32;
     let mut frac: Option<u32> = None;
+    let mut last = b' ';
     while let Some(&c) = line.get(i) {
         if c.is_ascii_digit() {
-            seen = true;
             if digits < 19 {
                 mant = mant * 10 + u64::from(c - b'0');
             }
             if mant != 0 {
                 digits += 1;
             }
-            if let Some(f) = frac.as_mut() {
-                *f += 1;
+            match frac.as_mut() {
+                Some(f) => *f += 1,
+                None => int += 1,
             }
         } else if c == b'.' && frac.is_none() {
             frac = Some(0);
         } else {
             break;
         }
+        last = c;
         i += 1;
     }
+    let point = frac.is_some();
+    let frac = frac.unwrap_or(0);
     // What follows must end the number for certain: not a second point,
     // not blanks before more of it.
     let after = skip_blanks(line, i);
     let ends = !matches!(line.get(after), Some(c) if c.is_ascii_digit() || *c == b'.');
-    let frac = frac.unwrap_or(0);
-    if seen && ends {
+    if int + frac > 0 && ends {
         if digits <= 15 && frac <= 22 {
             // Below 10^15: exact through i64 (one instruction, unlike u64).
             let v = mant as i64 as f64 / POW10[frac as usize];
-            return Some((if neg { -v } else { v }, i));
+            let lone_zero = int == 1 && first == b'0';
+            let int_digits = if lone_zero { 0 } else { int };
+            let shape = Shape {
+                plain: !plus
+                    && int > 0
+                    && (int == 1 || first != b'0')
+                    && (!point || frac > 0 && last != b'0')
+                    && !(neg && lone_zero && frac == 0)
+                    && int_digits + frac <= 15,
+                neg,
+                int: int_digits.min(255) as u8,
+                frac: frac.min(255) as u8,
+            };
+            return Some((if neg { -v } else { v }, i, shape));
         }
         // Long, but in one piece: read where it is written.
         if let Some(v) = std::str::from_utf8(&line[start..i])
             .ok()
             .and_then(|t| t.parse::<f64>().ok())
         {
-            return Some((v, i));
+            return Some((v, i, Shape::default()));
         }
     }
-    read_number_slow(line, start)
+    read_number_slow(line, start).map(|(v, e)| (v, e, Shape::default()))
 }
 
 /// Exact powers of ten (every one up to 1e22 is a double).
@@ -969,7 +1010,7 @@ mod tests {
         ) {
             let line = format!("X{text}");
             let start = at.min(line.len());
-            let fast = read_number(line.as_bytes(), start);
+            let fast = read_number(line.as_bytes(), start).map(|(v, e, _)| (v, e));
             let slow = read_number_slow(line.as_bytes(), start);
             proptest::prop_assert_eq!(
                 fast.map(|(v, e)| (v.to_bits(), e)),
@@ -989,7 +1030,7 @@ mod tests {
                 "X{}{int}.{frac:0width$} Y1",
                 if neg { "-" } else { "" },
             );
-            let got = read_number(line.as_bytes(), 1);
+            let got = read_number(line.as_bytes(), 1).map(|(v, e, _)| (v, e));
             let want: f64 = line[1..line.len() - 3].parse().unwrap();
             proptest::prop_assert_eq!(got.map(|g| g.0.to_bits()), Some(want.to_bits()));
             proptest::prop_assert_eq!(got.map(|g| g.1), Some(line.len() - 3));

@@ -3,7 +3,7 @@
 //! the firmware measures it and checked for bytes it acts on in real time.
 
 use crate::diag::ErrorKind;
-use crate::machine::block::{Block, CommentKind, Units, Word, WordKind};
+use crate::machine::block::{Block, CommentKind, Shape, Units, Word, WordKind};
 
 use super::lower::PlainLine;
 use super::profile::{Comments, LineCount, Profile};
@@ -87,7 +87,7 @@ impl LineWriter {
         let number = text
             .get(w.span.start as usize + 1..w.span.end as usize)
             .unwrap_or_default();
-        if written_as_is(number, code, self.decimals(), self.p.max_digits) {
+        if written_as_is(w.shape, code, self.decimals(), self.p.max_digits) {
             if !self.buf.is_empty() {
                 self.buf.push(b' ');
             }
@@ -250,59 +250,27 @@ fn write_number(out: &mut Vec<u8>, v: f64, decimals: u8, max_digits: u8) {
     out.extend_from_slice(s.as_bytes());
 }
 
-/// Whether `t`, a number as written, is exactly what the target's rules
-/// write for its value (`code`: a G or M number, whole or with one
+/// Whether a number written with `shape` is exactly what the target's
+/// rules write for its value (`code`: a G or M number, whole or with one
 /// decimal; otherwise [`format_number`] with `decimals` and `max_digits`).
 ///
-/// So it is when `t` is in the form those rules write (`-` only before a
-/// non-zero value, no `+`, no leading zero but the one before the point, no
-/// trailing zero after the point, no point without decimals), has at most
-/// 15 significant digits, and no more decimals than the rules keep for a
-/// number with its digits before the point. Then the double read from `t`
-/// is within 2^-52 of `t` relatively; scaled by `10^d` it is within a
-/// quarter of the integer that `t` scaled is (below 10^15), so rounding
-/// gives back exactly `t`'s digits, which are written without trailing
-/// zeros: `t` itself. The digits before the point of the double are those
-/// of `t`, since `t` is at least 10^-15 relatively below the next power of
-/// ten.
-pub fn written_as_is(t: &[u8], code: bool, decimals: u8, max_digits: u8) -> bool {
-    let (neg, digits) = match t.split_first() {
-        Some((b'-', rest)) => (true, rest),
-        _ => (false, t),
-    };
-    // One pass: the digits before the point, the point, the digits after.
-    let mut int = 0;
-    let mut frac = 0;
-    let mut point = false;
-    let mut last = b'0';
-    for &c in digits {
-        match c {
-            b'0'..=b'9' if point => frac += 1,
-            b'0'..=b'9' => int += 1,
-            b'.' if !point => point = true,
-            _ => return false,
-        }
-        last = c;
-    }
-    let first = digits.first().copied().unwrap_or(b'.');
-    if int == 0 || point && (frac == 0 || last == b'0') || int > 1 && first == b'0' {
-        return false;
-    }
-    let zero_int = int == 1 && first == b'0';
-    if neg && zero_int && frac == 0 {
-        return false;
-    }
-    let m = if zero_int { 0 } else { int };
-    if m + frac > 15 {
+/// So it is when it is written plainly (see [`Shape::plain`]: the form
+/// those rules write, at most 15 significant digits) with no more decimals
+/// than the rules keep for a number with its digits before the point. Then
+/// the double read from it is within 2^-52 of it relatively; scaled by
+/// `10^d` it is within a quarter of the integer the number scaled is
+/// (below 10^15), so rounding gives back exactly its digits, which are
+/// written without trailing zeros: the number as written. The digits
+/// before the point of the double are those written, since the number is
+/// at least 10^-15 relatively below the next power of ten.
+pub fn written_as_is(shape: Shape, code: bool, decimals: u8, max_digits: u8) -> bool {
+    if !shape.plain {
         return false;
     }
     if code {
-        return !neg && frac <= 1;
+        return !shape.neg && shape.frac <= 1;
     }
-    let d = (max_digits as usize)
-        .saturating_sub(m)
-        .min(decimals as usize);
-    frac <= d
+    shape.frac <= max_digits.saturating_sub(shape.int).min(decimals)
 }
 
 /// `x.round()` (halves away from zero) for `0 <= x < 2^53`: the part
@@ -463,17 +431,26 @@ mod tests {
         }
     }
 
+    /// The shape the decoder gives the number `t` (written after an X).
+    fn shape(t: &str) -> Option<Shape> {
+        let b = Block::decode(format!("X{t}").as_bytes()).ok()?;
+        let w = b.words.first()?;
+        (w.span.end as usize == t.len() + 1).then_some(w.shape)
+    }
+
     proptest::proptest! {
         /// A number written as is is what the rules write for its value.
         #[test]
         fn numbers_written_as_is_are_formatted_so(
-            t in "-?[0-9]{1,9}(\\.[0-9]{1,9})?",
+            t in "[-+]?[0-9]{0,9}(\\.[0-9]{0,9})?",
             code in proptest::bool::ANY,
             decimals in 0u8..7,
             max_digits in 1u8..12,
         ) {
-            let v: f64 = t.parse().unwrap();
-            if written_as_is(t.as_bytes(), code, decimals, max_digits) {
+            if let Some(s) = shape(&t)
+                && written_as_is(s, code, decimals, max_digits)
+            {
+                let v: f64 = t.parse().unwrap();
                 let mut w = LineWriter::new(&crate::target::profiles::grbl::PROFILE);
                 w.push_word(b'X', v, code);
                 let want = if code {
@@ -503,13 +480,16 @@ mod tests {
             ("5.", false),
             ("1234567.5", true),
             ("12345678.5", false),
-            ("1 .5", false),
-            ("", false),
+            ("0.0001", true),
+            ("0.00001", false),
         ] {
-            assert_eq!(written_as_is(t.as_bytes(), false, 4, 8), want, "{t}");
+            let s = shape(t).unwrap();
+            assert_eq!(written_as_is(s, false, 4, 8), want, "{t}");
         }
-        assert!(written_as_is(b"38.2", true, 4, 8));
-        assert!(!written_as_is(b"38.25", true, 4, 8));
+        assert_eq!(shape("1 .5").map(|s| s.plain), Some(false));
+        assert!(written_as_is(shape("38.2").unwrap(), true, 4, 8));
+        assert!(!written_as_is(shape("38.25").unwrap(), true, 4, 8));
+        assert!(!written_as_is(shape("-1").unwrap(), true, 4, 8));
     }
 
     #[test]
