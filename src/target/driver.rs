@@ -1009,9 +1009,11 @@ impl Lowering {
         let p = self.p;
         if m == MCode::ToolChange {
             let policy = self.opts.tool_change.unwrap_or(p.tool_change);
-            if policy != ToolChange::Keep && self.m.modes.spindle != SpindleDir::Off {
+            if self.m.modes.spindle != SpindleDir::Off {
                 // LinuxCNC stops the spindle for the change (and leaves it
-                // off), before the block's spindle words and motion.
+                // off), before the block's spindle words and motion. Also
+                // where M6 is kept: grblHAL ignores M6 by default, and
+                // what FluidNC's does depends on its spindle.
                 pre_lines.push(vec![(b'M', 5.0)]);
             }
             return match policy {
