@@ -11,6 +11,8 @@ use std::rc::Rc;
 thread_local! {
     /// Every name made on this thread (names never cross threads: `Rc`).
     static NAMES: RefCell<HashSet<Rc<str>>> = RefCell::new(HashSet::new());
+    /// Names kept after the last [`Name::forget_unused`].
+    static KEPT: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
 }
 
 /// A parameter name or label key, interned per thread.
@@ -33,6 +35,24 @@ impl Name {
 
     pub fn as_str(&self) -> &str {
         &self.0
+    }
+
+    /// Drops the names nothing but the table holds (labels read while
+    /// indexing a file and not kept, for example): a file of a million
+    /// labels does not keep a million names it no longer uses. Such a name
+    /// made again is a new one, equal to every live one with its text, since
+    /// no live one has it. Only when the table has at least doubled since
+    /// the last time, so that the work stays linear in the names made.
+    pub fn forget_unused() {
+        NAMES.with(|set| {
+            let mut set = set.borrow_mut();
+            if set.len() < 2 * KEPT.get() + 4096 {
+                return;
+            }
+            set.retain(|rc| Rc::strong_count(rc) > 1);
+            set.shrink_to_fit();
+            KEPT.set(set.len());
+        })
     }
 }
 
@@ -87,5 +107,22 @@ mod tests {
         m.insert(a, 1.5);
         assert_eq!(m.get(&b), Some(&1.5));
         assert_eq!(m.get(&Name::new("Depth")), None);
+    }
+
+    #[test]
+    fn forgetting_unused_names_keeps_the_live_ones() {
+        let live: Vec<Name> = (0..3000).map(|k| Name::new(&format!("live{k}"))).collect();
+        for k in 0..20_000 {
+            Name::new(&format!("gone{k}"));
+        }
+        let count = || super::NAMES.with(|s| s.borrow().len());
+        let before = count();
+        Name::forget_unused();
+        assert!(count() <= before - 20_000, "{} of {before}", count());
+        for (k, n) in live.iter().enumerate() {
+            assert_eq!(*n, Name::new(&format!("live{k}")));
+        }
+        assert_eq!(Name::new("gone7").as_str(), "gone7");
+        assert_eq!(Name::new("gone7"), Name::new("gone7"));
     }
 }

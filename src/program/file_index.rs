@@ -215,7 +215,10 @@ impl Scan {
         if starts_with_m99(raw) {
             self.m99_lines.push(idx);
         }
-        if quick_is_candidate(raw) {
+        if let Some((kind, label)) = plain_oline(raw) {
+            let label = Name::new(label);
+            self.oline(idx, pos, (next, terminated, true), kind, Some(&label));
+        } else if quick_is_candidate(raw) {
             match parser.parse(raw, terminated) {
                 Ok(line) => match &line.kind {
                     LineKind::Blank | LineKind::Items(_) => {}
@@ -521,6 +524,9 @@ impl FileIndex {
         (index.defs, index.valued) = (defs, valued);
         loop_bodies(&index, &mut keep);
         index.keep = merge_ranges(keep);
+        // The labels of the lines parsed (a control label's key is kept,
+        // its bare label not).
+        Name::forget_unused();
         index
     }
 
@@ -792,6 +798,71 @@ fn changed(line_idx: u32) -> ErrorKind {
     ErrorKind::ProgramChanged { line: line_idx + 1 }
 }
 
+/// The kind and label of a plain O-line in its simplest spelling, read
+/// without the parser (most O-lines of a large program): `o<name> sub`,
+/// `o100 endif`, ... with a lowercase keyword, a label of lowercase letters,
+/// digits and `_` or a number without leading zero, blanks only around
+/// them, nothing else on the line. `None` for anything else (the parser
+/// reads it).
+fn plain_oline(raw: &[u8]) -> Option<(OKind, &str)> {
+    if raw.len() > crate::parse::MAX_LINE || crate::parse::named2007::enabled() {
+        return None;
+    }
+    let blank = |b: &u8| matches!(b, b' ' | b'\t');
+    let mut i = raw.iter().take_while(|b| blank(b)).count();
+    if !matches!(raw.get(i), Some(b'o' | b'O')) {
+        return None;
+    }
+    i += 1;
+    let label = match raw.get(i) {
+        Some(b'<') => {
+            let n = raw[i + 1..]
+                .iter()
+                .take_while(|b| b.is_ascii_lowercase() || b.is_ascii_digit() || **b == b'_')
+                .count();
+            if n == 0 || raw.get(i + 1 + n) != Some(&b'>') {
+                return None;
+            }
+            let l = &raw[i + 1..i + 1 + n];
+            i += n + 2;
+            l
+        }
+        Some(b'1'..=b'9') => {
+            let n = raw[i..].iter().take_while(|b| b.is_ascii_digit()).count();
+            if n > 9 {
+                return None;
+            }
+            let l = &raw[i..i + n];
+            i += n;
+            l
+        }
+        _ => return None,
+    };
+    i += raw[i..].iter().take_while(|b| blank(b)).count();
+    let n = raw[i..]
+        .iter()
+        .take_while(|b| b.is_ascii_lowercase())
+        .count();
+    let kind = match &raw[i..i + n] {
+        b"sub" => OKind::Sub,
+        b"endsub" => OKind::EndSub,
+        b"do" => OKind::Do,
+        b"else" => OKind::Else,
+        b"endif" => OKind::EndIf,
+        b"break" => OKind::Break,
+        b"continue" => OKind::Continue,
+        b"endwhile" => OKind::EndWhile,
+        b"endrepeat" => OKind::EndRepeat,
+        b"return" => OKind::Return,
+        _ => return None,
+    };
+    let rest = &raw[i + n..];
+    if !rest.iter().all(|b| matches!(b, b' ' | b'\t' | b'\r')) {
+        return None;
+    }
+    Some((kind, std::str::from_utf8(label).ok()?))
+}
+
 /// Whether the index looks at a line handed on after the leading blank lines
 /// (the closure in `FileIndex::build` does nothing with the others).
 fn matters(raw: &[u8], terminated: bool) -> bool {
@@ -959,6 +1030,70 @@ mod tests {
         let plain: Vec<bool> = index.olines.iter().map(|o| o.plain).collect();
         assert!(plain[0] && plain[2] && plain[3] && plain[4] && plain[9]);
         assert!(!plain[1] && !plain[5] && !plain[6] && !plain[10] && !plain[19]);
+    }
+
+    /// The lines read without the parser are read as the parser reads them;
+    /// others are left to it.
+    #[test]
+    fn plain_olines_read_as_parsed() {
+        let mut parser = LineParser::default();
+        let mut plain = 0;
+        for line in [
+            "o<a> sub",
+            "O<a_1> endsub",
+            "  o100 endif",
+            "\to7 else\r",
+            "o100endif",
+            "o<s12> return ",
+            "o1 do",
+            "o1 break",
+            "o1 continue",
+            "o1 endwhile",
+            "o123456789 endrepeat",
+            "o0100 endif",
+            "o<A> sub",
+            "o< a> sub",
+            "o<a> SUB",
+            "o100 endif (c)",
+            "o100 endif;",
+            "/o100 endif",
+            "n1 o100 endif",
+            "o100 if [1]",
+            "o100 endif x",
+            "o<a> endsub [1]",
+            "o1234567890 endif",
+            "o<> sub",
+            "o100 end if",
+            "o<a>sub",
+            "o<a-b> sub",
+            "o#1 endif",
+            "o100 elseif [1]",
+            "o100 while [1]",
+        ] {
+            let parsed = parser.parse(line.as_bytes(), true);
+            match plain_oline(line.as_bytes()) {
+                Some((kind, label)) => {
+                    plain += 1;
+                    let Ok(Line {
+                        kind: LineKind::O(o),
+                        block_delete: false,
+                        line_number: None,
+                    }) = &parsed
+                    else {
+                        panic!("{line:?}: {parsed:?}");
+                    };
+                    assert_eq!(o.kind, kind, "{line:?}");
+                    assert_eq!(o.label, Label::Static(Name::new(label)), "{line:?}");
+                    assert!(o.expr.is_none() && o.args.is_empty() && !o.active_comment);
+                    assert!(o.exec_error.is_none(), "{line:?}");
+                }
+                None => assert!(
+                    !matches!(line, "o<a> sub" | "o100endif" | "o1 do" | "o<a>sub"),
+                    "{line:?} not read"
+                ),
+            }
+        }
+        assert_eq!(plain, 12);
     }
 
     /// Keys, scopes, occurrences and definitions as the file has them.
