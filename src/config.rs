@@ -522,10 +522,6 @@ impl CommonArgs {
     }
 
     /// Builds the configuration; `env_path` is $NGCFLAT_SUBROUTINE_PATH.
-    #[expect(
-        clippy::too_many_lines,
-        reason = "not split yet: its file is being changed"
-    )]
     pub fn to_config(&self, env_path: Option<String>) -> Result<Config, ErrorKind> {
         let mut settings = Settings {
             precision: self.precision,
@@ -541,7 +537,6 @@ impl CommonArgs {
             ..Settings::default()
         };
         let mut warnings = Vec::new();
-        let mut warn = |kind| warnings.push(Diagnostic::warning(kind, None));
         let mut search = SearchPath {
             program_dir: !self.no_program_dir,
             ..SearchPath::default()
@@ -557,119 +552,50 @@ impl CommonArgs {
         let mut var_file = self.var_file.clone();
         let mut machine = crate::machine::axes::MachineAxes::default();
         if let Some(ini_path) = &self.ini {
-            let text = std::fs::read_to_string(ini_path).map_err(|e| ErrorKind::Io {
-                path: ini_path.clone(),
-                message: e.to_string(),
-            })?;
-            let ini = Ini::parse(&text);
-            let base = ini_path.parent().map(Path::to_path_buf).unwrap_or_default();
-            let base = if base.as_os_str().is_empty() {
-                PathBuf::from(".")
-            } else {
-                base
-            };
-            if self.program_prefix.is_none()
-                && let Some(p) = ini.get("DISPLAY", "PROGRAM_PREFIX")
-            {
-                prefixes.push(resolve_in(&base, p));
+            let (ini, base) = read_ini(ini_path)?;
+            let mut warn = |kind| warnings.push(Diagnostic::warning(kind, None));
+            let paths = IniPaths::read(&ini, &base, var_file.is_none(), &mut warn);
+            if self.program_prefix.is_none() {
+                prefixes.extend(paths.program_prefix);
             }
-            if let Some(sp) = ini.get("RS274NGC", "SUBROUTINE_PATH") {
-                // LinuxCNC keeps the first 10 entries that exist and stops
-                // reading there; entries that do not exist do not count.
-                let mut existing: Vec<PathBuf> = Vec::new();
-                let mut ignored: Vec<PathBuf> = Vec::new();
-                for p in sp
-                    .split(':')
-                    .map(str::trim)
-                    .filter(|s| !s.is_empty())
-                    .map(|s| resolve_in(&base, s))
-                {
-                    if !p.is_dir() {
-                        warn(WarningKind::ConfigPathMissing {
-                            key: "[RS274NGC]SUBROUTINE_PATH",
-                            path: p,
-                        });
-                    } else if existing.len() < MAX_SUB_DIRS {
-                        existing.push(p);
-                    } else {
-                        ignored.push(p);
-                    }
-                }
-                if !ignored.is_empty() {
-                    warn(WarningKind::SubroutinePathTruncated { ignored });
-                }
-                dirs.extend(existing);
-            }
-            if let Some(w) = ini.get("WIZARD", "WIZARD_ROOT") {
-                search.recursive.push(resolve_in(&base, w));
-            }
-            if var_file.is_none()
-                && let Some(v) = ini.get("RS274NGC", "PARAMETER_FILE")
-            {
-                let p = resolve_in(&base, v);
-                if p.is_file() {
-                    var_file = Some(p);
-                } else {
-                    warn(WarningKind::ConfigPathMissing {
-                        key: "[RS274NGC]PARAMETER_FILE",
-                        path: p,
-                    });
-                }
-            }
-            settings.fanuc_disabled = ini.flag("RS274NGC", "DISABLE_FANUC_STYLE_SUB");
-            // The interpreter's switches; an INI written for LinuxCNC before
-            // 2.8 has them as bits of one FEATURES mask, honoured when the
-            // separate switch is absent.
-            let features = ini.integer("RS274NGC", "FEATURES");
-            let switch = |name: &str, bit: i64, default: bool| {
-                ini.boolean("RS274NGC", name)
-                    .or(features.map(|m| m & bit != 0))
-                    .unwrap_or(default)
-            };
-            settings.retain_g43 = switch("RETAIN_G43", 0x1, false);
-            settings.oword_nargs = switch("OWORD_NARGS", 0x2, false);
-            settings.ini_vars = switch("INI_VARS", 0x4, true);
-            settings.hal_pin_vars = switch("HAL_PIN_VARS", 0x8, true);
-            settings.no_downcase_oword = switch("NO_DOWNCASE_OWORD", 0x10, false);
-            settings.oword_warn_only = switch("OWORD_WARNONLY", 0x20, false);
-            if let Some(mask) = features {
-                let names = [
-                    (0x1, "RETAIN_G43"),
-                    (0x2, "OWORD_NARGS"),
-                    (0x4, "INI_VARS"),
-                    (0x8, "HAL_PIN_VARS"),
-                    (0x10, "NO_DOWNCASE_OWORD"),
-                    (0x20, "OWORD_WARNONLY"),
-                ];
-                let on: Vec<&str> = names
-                    .iter()
-                    .filter(|(bit, _)| mask & bit != 0)
-                    .map(|(_, n)| *n)
-                    .collect();
-                let switches = if on.is_empty() {
-                    "all switches off".to_string()
-                } else {
-                    format!("on: {}", on.join(", "))
-                };
-                warn(WarningKind::FeaturesMask { mask, switches });
-            }
-            settings.machine_metric = ini.get("TRAJ", "LINEAR_UNITS").is_some_and(|u| {
-                matches!(
-                    u.to_ascii_lowercase().as_str(),
-                    "mm" | "metric" | "millimeter" | "millimetre"
-                )
-            });
-            settings.uvw_axes = ini.get("TRAJ", "COORDINATES").is_some_and(|c| {
-                c.chars()
-                    .any(|ch| matches!(ch.to_ascii_uppercase(), 'U' | 'V' | 'W'))
-            });
+            dirs.extend(paths.subroutine_dirs);
+            search.recursive.extend(paths.wizard_root);
+            var_file = var_file.or(paths.parameter_file);
+            ini_switches(&ini, &mut settings, &mut warn);
             machine.add_ini(&ini, settings.machine_metric)?;
             settings.user_m |= user_m_files(&ini, &base);
             settings.ini = Some(ini);
         }
         settings.oword_warn_only |= self.oword_warn_only;
         search.dirs = prefixes.into_iter().chain(dirs).collect();
-        if let Some(v) = &var_file {
+        self.add_values(&mut settings, var_file.as_deref())?;
+        let check_limits = self.add_machine_axes(&mut machine)?;
+        let target = self.target_options()?;
+        if target.is_some() {
+            // A target other than linuxcnc has no user M-codes: they pass the
+            // block checks so that the target refuses them with its reason
+            // (rather than E0805 suggesting --user-m, which cannot help).
+            settings.user_m = (1u128 << 100) - 1;
+        }
+        Ok(Config {
+            settings,
+            search,
+            format: self.format(),
+            warnings,
+            machine,
+            check_limits,
+            target,
+        })
+    }
+
+    /// The values given on the command line (and the var file): parameters,
+    /// tool table, user M-codes, start position.
+    fn add_values(
+        &self,
+        settings: &mut Settings,
+        var_file: Option<&Path>,
+    ) -> Result<(), ErrorKind> {
+        if let Some(v) = var_file {
             settings.defines.extend(read_var_file(v)?);
         }
         if let Some(t) = &self.tool_table {
@@ -686,14 +612,20 @@ impl CommonArgs {
             .iter()
             .flat_map(|s| s.split_whitespace())
         {
-            settings
-                .start_position
-                .push(
-                    parse_axis_word(word).ok_or_else(|| ErrorKind::BadStartPosition {
-                        text: word.to_string(),
-                    })?,
-                );
+            let axis = parse_axis_word(word).ok_or_else(|| ErrorKind::BadStartPosition {
+                text: word.to_string(),
+            })?;
+            settings.start_position.push(axis);
         }
+        Ok(())
+    }
+
+    /// Adds the GRBL listing and `--limits` to the axes (which hold the
+    /// INI's); returns whether travel limits are checked.
+    fn add_machine_axes(
+        &self,
+        machine: &mut crate::machine::axes::MachineAxes,
+    ) -> Result<bool, ErrorKind> {
         if let Some(g) = &self.machine.grbl_settings {
             let text = std::fs::read_to_string(g).map_err(|e| ErrorKind::Io {
                 path: g.clone(),
@@ -713,30 +645,142 @@ impl CommonArgs {
         let asked = self.machine.limits.is_some()
             || self.machine.grbl_settings.is_some()
             || self.machine.ini_limits;
-        let check_limits = !self.machine.no_limits && asked && machine.has_limits();
-        let format = match self.message_format {
-            FormatArg::Human => MessageFormat::Human,
-            FormatArg::Short => MessageFormat::Short,
-            FormatArg::Json => MessageFormat::Json,
-            FormatArg::Github => MessageFormat::Github,
-        };
-        let target = self.target_options()?;
-        if target.is_some() {
-            // A target other than linuxcnc has no user M-codes: they pass the
-            // block checks so that the target refuses them with its reason
-            // (rather than E0805 suggesting --user-m, which cannot help).
-            settings.user_m = (1u128 << 100) - 1;
-        }
-        Ok(Config {
-            settings,
-            search,
-            format,
-            warnings,
-            machine,
-            check_limits,
-            target,
-        })
+        Ok(!self.machine.no_limits && asked && machine.has_limits())
     }
+}
+
+/// Reads an INI file; returns it with the folder its relative paths are
+/// resolved in.
+fn read_ini(ini_path: &Path) -> Result<(Ini, PathBuf), ErrorKind> {
+    let text = std::fs::read_to_string(ini_path).map_err(|e| ErrorKind::Io {
+        path: ini_path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let base = ini_path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let base = if base.as_os_str().is_empty() {
+        PathBuf::from(".")
+    } else {
+        base
+    };
+    Ok((Ini::parse(&text), base))
+}
+
+/// The folders and files an INI names for finding programs and parameters.
+struct IniPaths {
+    program_prefix: Option<PathBuf>,
+    subroutine_dirs: Vec<PathBuf>,
+    wizard_root: Option<PathBuf>,
+    parameter_file: Option<PathBuf>,
+}
+
+impl IniPaths {
+    /// `want_parameters`: whether the parameter file is looked at (no
+    /// --var-file was given).
+    fn read(
+        ini: &Ini,
+        base: &Path,
+        want_parameters: bool,
+        warn: &mut impl FnMut(WarningKind),
+    ) -> IniPaths {
+        let mut subroutine_dirs = Vec::new();
+        if let Some(sp) = ini.get("RS274NGC", "SUBROUTINE_PATH") {
+            // LinuxCNC keeps the first 10 entries that exist and stops
+            // reading there; entries that do not exist do not count.
+            let mut ignored: Vec<PathBuf> = Vec::new();
+            for p in sp
+                .split(':')
+                .map(str::trim)
+                .filter(|s| !s.is_empty())
+                .map(|s| resolve_in(base, s))
+            {
+                if !p.is_dir() {
+                    warn(WarningKind::ConfigPathMissing {
+                        key: "[RS274NGC]SUBROUTINE_PATH",
+                        path: p,
+                    });
+                } else if subroutine_dirs.len() < MAX_SUB_DIRS {
+                    subroutine_dirs.push(p);
+                } else {
+                    ignored.push(p);
+                }
+            }
+            if !ignored.is_empty() {
+                warn(WarningKind::SubroutinePathTruncated { ignored });
+            }
+        }
+        let mut parameter_file = None;
+        if want_parameters && let Some(v) = ini.get("RS274NGC", "PARAMETER_FILE") {
+            let p = resolve_in(base, v);
+            if p.is_file() {
+                parameter_file = Some(p);
+            } else {
+                warn(WarningKind::ConfigPathMissing {
+                    key: "[RS274NGC]PARAMETER_FILE",
+                    path: p,
+                });
+            }
+        }
+        IniPaths {
+            program_prefix: ini
+                .get("DISPLAY", "PROGRAM_PREFIX")
+                .map(|p| resolve_in(base, p)),
+            subroutine_dirs,
+            wizard_root: ini
+                .get("WIZARD", "WIZARD_ROOT")
+                .map(|w| resolve_in(base, w)),
+            parameter_file,
+        }
+    }
+}
+
+/// The interpreter's switches and the machine's units and axes from an
+/// INI. One written for LinuxCNC before 2.8 has the switches as bits of one
+/// FEATURES mask, honoured when the separate switch is absent.
+fn ini_switches(ini: &Ini, settings: &mut Settings, warn: &mut impl FnMut(WarningKind)) {
+    settings.fanuc_disabled = ini.flag("RS274NGC", "DISABLE_FANUC_STYLE_SUB");
+    let features = ini.integer("RS274NGC", "FEATURES");
+    let switch = |name: &str, bit: i64, default: bool| {
+        ini.boolean("RS274NGC", name)
+            .or(features.map(|m| m & bit != 0))
+            .unwrap_or(default)
+    };
+    settings.retain_g43 = switch("RETAIN_G43", 0x1, false);
+    settings.oword_nargs = switch("OWORD_NARGS", 0x2, false);
+    settings.ini_vars = switch("INI_VARS", 0x4, true);
+    settings.hal_pin_vars = switch("HAL_PIN_VARS", 0x8, true);
+    settings.no_downcase_oword = switch("NO_DOWNCASE_OWORD", 0x10, false);
+    settings.oword_warn_only = switch("OWORD_WARNONLY", 0x20, false);
+    if let Some(mask) = features {
+        let names = [
+            (0x1, "RETAIN_G43"),
+            (0x2, "OWORD_NARGS"),
+            (0x4, "INI_VARS"),
+            (0x8, "HAL_PIN_VARS"),
+            (0x10, "NO_DOWNCASE_OWORD"),
+            (0x20, "OWORD_WARNONLY"),
+        ];
+        let on: Vec<&str> = names
+            .iter()
+            .filter(|(bit, _)| mask & bit != 0)
+            .map(|(_, n)| *n)
+            .collect();
+        let switches = if on.is_empty() {
+            "all switches off".to_string()
+        } else {
+            format!("on: {}", on.join(", "))
+        };
+        warn(WarningKind::FeaturesMask { mask, switches });
+    }
+    settings.machine_metric = ini.get("TRAJ", "LINEAR_UNITS").is_some_and(|u| {
+        matches!(
+            u.to_ascii_lowercase().as_str(),
+            "mm" | "metric" | "millimeter" | "millimetre"
+        )
+    });
+    settings.uvw_axes = ini.get("TRAJ", "COORDINATES").is_some_and(|c| {
+        c.chars()
+            .any(|ch| matches!(ch.to_ascii_uppercase(), 'U' | 'V' | 'W'))
+    });
 }
 
 #[cfg(test)]

@@ -97,10 +97,6 @@ fn finish_flatten(diags: &[Diagnostic], code: u8, format: MessageFormat) -> Exit
 
 /// The CLI edge: configuration problems become `anyhow` errors with context;
 /// program problems are diagnostics.
-#[expect(
-    clippy::too_many_lines,
-    reason = "not split yet: its file is being changed"
-)]
 fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
     let env_path = std::env::var("NGCFLAT_SUBROUTINE_PATH").ok();
     let common = match &cli.command {
@@ -120,112 +116,106 @@ fn run_cli(cli: config::Cli) -> anyhow::Result<ExitCode> {
         None if list(cli.flatten.common.target_name()) => return Ok(print_targets()),
         _ => {}
     }
-    match cli.command {
-        Some(config::Command::Targets) => Ok(print_targets()),
+    Ok(match cli.command {
+        Some(config::Command::Targets) => print_targets(),
         Some(cmd @ (config::Command::Completions { .. } | config::Command::Man)) => {
-            let mut out = std::io::stdout().lock();
-            match config::write_generated(&cmd, &mut out) {
-                Ok(_) => Ok(ExitCode::SUCCESS),
-                Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(ExitCode::SUCCESS),
-                Err(e) => {
-                    write_stderr(&format!("ngcflat: writing to stdout: {e}\n"));
-                    Ok(ExitCode::from(2))
-                }
-            }
+            write_generated(&cmd)
         }
-        Some(config::Command::Check(args)) => {
-            let cfg = match args.common.to_config(env_path) {
-                Ok(c) => c,
-                Err(k) => return Ok(setup_error(k, args.common.format(), true)),
-            };
-            Ok(check::run(&args.paths, &args.ext, args.deny_warnings, &cfg))
-        }
-        Some(config::Command::Stats(args)) => {
-            let cfg = match args.common.to_config(env_path) {
-                Ok(c) => c,
-                Err(k) => return Ok(setup_error(k, args.common.format(), false)),
-            };
-            Ok(view::run::stats_command(
-                args.file.as_deref(),
-                args.json,
-                &cfg,
-            ))
-        }
-        Some(config::Command::Plot(args)) => {
-            let cfg = match args.common.to_config(env_path) {
-                Ok(c) => c,
-                Err(k) => return Ok(setup_error(k, args.common.format(), false)),
-            };
-            let view = match args.view {
-                config::ViewArg::Xy => view::plot::View::Xy,
-                config::ViewArg::Xz => view::plot::View::Xz,
-                config::ViewArg::Yz => view::plot::View::Yz,
-                config::ViewArg::Iso => view::plot::View::Iso,
-            };
-            Ok(view::run::plot_command(
-                args.file.as_deref(),
-                &args.output,
-                view,
-                &cfg,
-            ))
-        }
+        Some(config::Command::Check(args)) => match args.common.to_config(env_path) {
+            Ok(cfg) => check::run(&args.paths, &args.ext, args.deny_warnings, &cfg),
+            Err(k) => setup_error(k, args.common.format(), true),
+        },
+        Some(config::Command::Stats(args)) => match args.common.to_config(env_path) {
+            Ok(cfg) => view::run::stats_command(args.file.as_deref(), args.json, &cfg),
+            Err(k) => setup_error(k, args.common.format(), false),
+        },
+        Some(config::Command::Plot(args)) => match args.common.to_config(env_path) {
+            Ok(cfg) => plot_command(&args, &cfg),
+            Err(k) => setup_error(k, args.common.format(), false),
+        },
         None => {
             let args = cli.flatten;
-            let mut cfg = match args.common.to_config(env_path) {
-                Ok(c) => c,
-                Err(k) => return Ok(setup_error(k, args.common.format(), false)),
-            };
-            // Configuration warnings come first, counted in the summary.
-            let with_config = |mut d: Vec<Diagnostic>| {
-                let mut all = cfg.warnings.clone();
-                all.append(&mut d);
-                all
-            };
-            let source = match read_source_limited(args.file.as_deref(), cfg.settings.input)
-                .and_then(|s| refuse_binary(&s).map(|()| s))
-            {
-                Ok(s) => s,
-                Err(e) => return Ok(finish_flatten(&with_config(vec![*e]), 2, cfg.format)),
-            };
-            cfg.settings.progress = progress_delay();
-            let dest = match args.output {
-                Some(p) => {
-                    if flatten::same_file(&p, args.file.as_deref()) {
-                        let k = ErrorKind::OutputIsInput { output: p };
-                        return Ok(setup_error(k, cfg.format, false));
-                    }
-                    Destination::File(p)
-                }
-                None => Destination::Stdout,
-            };
-            let consumer = lowering(&cfg.settings, cfg.target.clone());
-            if consumer.is_some() && (args.source_map.is_some() || args.annotate) {
-                let k = ErrorKind::SourceMapNeedsLinuxcnc;
-                return Ok(setup_error(k, cfg.format, false));
+            match args.common.to_config(env_path) {
+                Ok(cfg) => flatten_command(args, cfg),
+                Err(k) => setup_error(k, args.common.format(), false),
             }
-            let extras = view::run::Extras {
-                source_map: args.source_map,
-                annotate: args.annotate,
-            };
-            let r = match view::run::flatten_chained(
-                source,
-                &cfg.settings,
-                &cfg.search,
-                dest,
-                &cfg,
-                &extras,
-                consumer,
-            ) {
-                (w, None) => Ok(w),
-                (_, Some(e)) => Err(e),
-            };
-            match r {
-                Ok(warnings) => Ok(finish_flatten(&with_config(warnings), 0, cfg.format)),
-                Err(e) => {
-                    let code = exit_for(&e);
-                    Ok(finish_flatten(&with_config(vec![*e]), code, cfg.format))
-                }
+        }
+    })
+}
+
+/// `ngcflat completions SHELL` and `ngcflat man`: the generated text on
+/// stdout.
+fn write_generated(cmd: &config::Command) -> ExitCode {
+    let mut out = std::io::stdout().lock();
+    match config::write_generated(cmd, &mut out) {
+        Ok(_) => ExitCode::SUCCESS,
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => ExitCode::SUCCESS,
+        Err(e) => {
+            write_stderr(&format!("ngcflat: writing to stdout: {e}\n"));
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// `ngcflat plot`.
+fn plot_command(args: &config::PlotArgs, cfg: &config::Config) -> ExitCode {
+    let view = match args.view {
+        config::ViewArg::Xy => view::plot::View::Xy,
+        config::ViewArg::Xz => view::plot::View::Xz,
+        config::ViewArg::Yz => view::plot::View::Yz,
+        config::ViewArg::Iso => view::plot::View::Iso,
+    };
+    view::run::plot_command(args.file.as_deref(), &args.output, view, cfg)
+}
+
+/// Flattening one program (the command without a subcommand).
+fn flatten_command(args: config::FlattenArgs, mut cfg: config::Config) -> ExitCode {
+    // Configuration warnings come first, counted in the summary.
+    let with_config = |mut d: Vec<Diagnostic>| {
+        let mut all = cfg.warnings.clone();
+        all.append(&mut d);
+        all
+    };
+    let source = match read_source_limited(args.file.as_deref(), cfg.settings.input)
+        .and_then(|s| refuse_binary(&s).map(|()| s))
+    {
+        Ok(s) => s,
+        Err(e) => return finish_flatten(&with_config(vec![*e]), 2, cfg.format),
+    };
+    cfg.settings.progress = progress_delay();
+    let dest = match args.output {
+        Some(p) => {
+            if flatten::same_file(&p, args.file.as_deref()) {
+                let k = ErrorKind::OutputIsInput { output: p };
+                return setup_error(k, cfg.format, false);
             }
+            Destination::File(p)
+        }
+        None => Destination::Stdout,
+    };
+    let consumer = lowering(&cfg.settings, cfg.target.clone());
+    if consumer.is_some() && (args.source_map.is_some() || args.annotate) {
+        let k = ErrorKind::SourceMapNeedsLinuxcnc;
+        return setup_error(k, cfg.format, false);
+    }
+    let extras = view::run::Extras {
+        source_map: args.source_map,
+        annotate: args.annotate,
+    };
+    let r = view::run::flatten_chained(
+        source,
+        &cfg.settings,
+        &cfg.search,
+        dest,
+        &cfg,
+        &extras,
+        consumer,
+    );
+    match r {
+        (warnings, None) => finish_flatten(&with_config(warnings), 0, cfg.format),
+        (_, Some(e)) => {
+            let code = exit_for(&e);
+            finish_flatten(&with_config(vec![*e]), code, cfg.format)
         }
     }
 }
