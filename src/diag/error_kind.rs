@@ -847,3 +847,77 @@ impl ErrorKind {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    /// The variant names of `ErrorKind`, read from its definition.
+    fn variants(src: &str) -> Vec<&str> {
+        let body = src
+            .split_once("pub enum ErrorKind {")
+            .and_then(|(_, rest)| rest.split_once("\n}\n"))
+            .map(|(body, _)| body)
+            .expect("the ErrorKind definition");
+        body.lines()
+            .filter_map(|l| l.strip_prefix("    "))
+            .filter(|l| l.starts_with(|c: char| c.is_ascii_uppercase()))
+            .map(|l| {
+                l.split(|c: char| !c.is_ascii_alphanumeric())
+                    .next()
+                    .unwrap_or("")
+            })
+            .collect()
+    }
+
+    /// The variants the match arms of one `fmt_*` group function name (an
+    /// arm starts a line: `Name =>`, `Name {`, `Name(`, or `| Name`).
+    fn arms(body: &str) -> Vec<&str> {
+        body.lines()
+            .map(|l| l.trim_start().trim_start_matches("| "))
+            .filter(|l| l.starts_with(|c: char| c.is_ascii_uppercase()))
+            .filter_map(|l| {
+                let name = l.split(|c: char| !c.is_ascii_alphanumeric()).next()?;
+                let rest = l[name.len()..].trim_start();
+                (rest.starts_with("=>")
+                    || rest.starts_with('{')
+                    || rest.starts_with('(')
+                    || rest.starts_with('|'))
+                .then_some(name)
+            })
+            .collect()
+    }
+
+    /// Display falls back to Debug for a variant no group function names:
+    /// every variant must be in exactly one group, so that each has a real
+    /// message.
+    #[test]
+    fn every_variant_has_a_message() {
+        let src = include_str!("error_kind.rs");
+        let variants = variants(src);
+        assert!(variants.len() > 100, "variants found: {}", variants.len());
+        let groups: Vec<(&str, Vec<&str>)> = src
+            .split("\n    fn fmt_")
+            .skip(1)
+            .map(|g| {
+                let name = g.split('(').next().unwrap_or("");
+                let body = g.split_once("\n    }\n").map_or(g, |(b, _)| b);
+                (name, arms(body))
+            })
+            .collect();
+        assert!(groups.len() >= 6, "groups found: {}", groups.len());
+        let mut problems = Vec::new();
+        for v in &variants {
+            let in_groups: Vec<&str> = groups
+                .iter()
+                .filter(|(_, arms)| arms.contains(v))
+                .map(|(g, _)| *g)
+                .collect();
+            if in_groups.len() != 1 {
+                problems.push(format!("{v}: in {in_groups:?}"));
+            }
+        }
+        assert!(
+            problems.is_empty(),
+            "ErrorKind variants not in exactly one fmt_* group (their message would be Debug output): {problems:#?}"
+        );
+    }
+}
