@@ -32,6 +32,18 @@ struct Problem {
     kind: ErrorKind,
 }
 
+/// What deciding a block's words leaves for writing it.
+struct Decided {
+    /// One per word of the block.
+    fates: Vec<Fate>,
+    /// Words written after the line's own (G43.1 Z for G43, M0 for M6).
+    extra: Vec<(u8, f64)>,
+    /// Lines written after the line.
+    extra_lines: Vec<Vec<(u8, f64)>>,
+    /// Lines written before the line (G43.1 Z: an axis command of its own).
+    pre_lines: Vec<Vec<(u8, f64)>>,
+}
+
 /// Why G90.1 is refused where the target lacks it.
 const ABSOLUTE_ARC_CENTRES: &str = "absolute arc centres (G90.1) are not lowered; the target reads I J K as offsets from the start";
 
@@ -298,10 +310,6 @@ impl Lowering {
     /// Decides every word of `b`, runs it on the machine model and writes
     /// the target's lines. Returns the problems (the line is not written
     /// when there are any).
-    #[expect(
-        clippy::too_many_lines,
-        reason = "not split yet: its file is being changed"
-    )]
     fn lower_block(
         &mut self,
         b: &Block,
@@ -309,8 +317,6 @@ impl Lowering {
         origin: &Origin<'_>,
         out: &mut Output,
     ) -> Result<Vec<Problem>, Error> {
-        // The line's site is worked out only for a warning (see `warn`).
-        let site: Option<Site> = None;
         if b.percent && !self.p.percent {
             // A program ended by `%` alone ends there: the target gets M2
             // (the opening `%` is simply dropped).
@@ -327,14 +333,39 @@ impl Lowering {
             // The switch is on: LinuxCNC skips the line.
             return Ok(Vec::new());
         }
-        let mut problems = Vec::new();
-        let mut fates = vec![Fate::Keep; b.words.len()];
-        // Words written after the line's own (G43.1 Z for G43, M0 for M6).
-        let mut extra: Vec<(u8, f64)> = Vec::new();
-        let mut extra_lines: Vec<Vec<(u8, f64)>> = Vec::new();
-        // Lines written before the line (G43.1 Z: an axis command of its own).
-        let mut pre_lines: Vec<Vec<(u8, f64)>> = Vec::new();
         let before = self.m.snapshot();
+        let mut d = match self.decide_words(b, text, origin) {
+            Ok(d) => d,
+            Err(problems) => return Ok(problems),
+        };
+        match self.block_lines(b, text, &before, &mut d) {
+            Ok(lines) => {
+                for l in &lines {
+                    out.line(l).map_err(io_error)?;
+                }
+                Ok(Vec::new())
+            }
+            Err(p) => Ok(vec![p]),
+        }
+    }
+
+    /// Decides the fate of each word of `b` and runs the block on the
+    /// machine model; the problems found, if any.
+    fn decide_words(
+        &mut self,
+        b: &Block,
+        text: &[u8],
+        origin: &Origin<'_>,
+    ) -> Result<Decided, Vec<Problem>> {
+        // The line's site is worked out only for a warning (see `warn`).
+        let site: Option<Site> = None;
+        let mut problems = Vec::new();
+        let mut d = Decided {
+            fates: vec![Fate::Keep; b.words.len()],
+            extra: Vec::new(),
+            extra_lines: Vec::new(),
+            pre_lines: Vec::new(),
+        };
         for (i, w) in b.words.iter().enumerate() {
             let fate = match w.kind {
                 WordKind::G(g) => self.g_fate(b, w, g, &site, &mut problems),
@@ -344,12 +375,12 @@ impl Lowering {
                     m,
                     &site,
                     &mut problems,
-                    &mut pre_lines,
-                    &mut extra_lines,
+                    &mut d.pre_lines,
+                    &mut d.extra_lines,
                 ),
                 WordKind::Value => self.value_fate(b, w, &mut problems),
             };
-            fates[i] = fate;
+            d.fates[i] = fate;
         }
         if !self.pending.is_empty() {
             let at = site_of(origin, text, None);
@@ -359,27 +390,94 @@ impl Lowering {
             }
         }
         // Words that belong to a dropped code go with it.
-        self.drop_owned(b, &mut fates);
+        self.drop_owned(b, &mut d.fates);
         self.m.apply(b);
         let _ = self.m.take_events();
-        if !problems.is_empty() {
-            return Ok(problems);
+        if problems.is_empty() {
+            Ok(d)
+        } else {
+            Err(problems)
         }
+    }
+
+    /// The target's lines for a block whose words are decided and which
+    /// ran on the machine model (`before`: the model before it).
+    fn block_lines(
+        &mut self,
+        b: &Block,
+        text: &[u8],
+        before: &Machine,
+        d: &mut Decided,
+    ) -> Result<Vec<Vec<u8>>, Problem> {
+        self.state_lines(b, before, d)?;
+        // Compensated moves, or lowered motion, replace the line's motion
+        // words.
+        let lowered = self.motion_lines(b, before, &mut d.fates)?;
+        self.feed_words(b, before, &mut d.fates, &mut d.extra);
+        // The line itself.
+        let incremental_lowered = self.incremental_lowered(lowered.as_deref());
+        let shift = self.target_shift(b, &d.fates, lowered.as_deref())?;
+        let written = self.own_line(b, text, before, d, lowered.as_deref(), shift)?;
+        let mut lines: Vec<Vec<u8>> = Vec::new();
+        for l in &d.pre_lines {
+            lines.push(self.plain_bytes(&words_line(l))?);
+        }
+        if !written.is_empty() {
+            lines.push(written);
+        }
+        if let Some(lowered) = lowered {
+            if incremental_lowered {
+                lines.push(b"G90".to_vec());
+            }
+            for l in &lowered {
+                let shifted;
+                let l = match shift {
+                    Some(sh) => {
+                        shifted = shift_line(l, sh, self.m.scale());
+                        &shifted
+                    }
+                    None => l,
+                };
+                lines.push(self.plain_bytes(l)?);
+            }
+            if incremental_lowered {
+                lines.push(b"G91".to_vec());
+            }
+        }
+        for l in &d.extra_lines {
+            lines.push(self.plain_bytes(&words_line(l))?);
+        }
+        Ok(lines)
+    }
+
+    /// A plain line written for the target.
+    fn plain_bytes(&mut self, l: &PlainLine) -> Result<Vec<u8>, Problem> {
+        let mut buf = Vec::new();
+        match self.plain_line(l, &mut buf) {
+            Some(kind) => Err(Problem { span: None, kind }),
+            None => Ok(buf),
+        }
+    }
+
+    /// Rewrites that need the state after the block: the target's G92
+    /// offset and coordinate system, refused probes and arcs, G5 words,
+    /// tool length offsets the target lacks.
+    fn state_lines(&mut self, b: &Block, before: &Machine, d: &mut Decided) -> Result<(), Problem> {
         // The target's G92 offset follows LinuxCNC's effective G92/G52
         // offset (a line before the block's own, in the target's state
         // before it); then the target takes the block's coordinate system
         // if it has it.
-        match self.offset_sync(b, &before) {
-            Ok(Some(ws)) if !ws.is_empty() => pre_lines.push(ws),
+        match self.offset_sync(b, before) {
+            Ok(Some(ws)) if !ws.is_empty() => d.pre_lines.push(ws),
             Ok(_) => {}
             Err(k) => {
-                return Ok(vec![Problem {
+                return Err(Problem {
                     span: b
                         .g_codes()
                         .find(|(g, _)| matches!(g, GCode::NonModal(_)))
                         .map(|(_, w)| w.span),
                     kind: k,
-                }]);
+                });
             }
         }
         if let Some(c) = b.coord
@@ -391,23 +489,22 @@ impl Lowering {
             // M2/M30 select G54 on LinuxCNC and on the GRBL family.
             self.target_coord = self.m.modes.coord;
         }
-        if let Some(k) = self.probe_in_place(b, &before) {
-            return Ok(vec![Problem {
+        if let Some(k) = self.probe_in_place(b, before) {
+            return Err(Problem {
                 span: b
                     .g_codes()
                     .find(|(g, _)| matches!(g, GCode::Motion(MotionMode::Probe(_))))
                     .map(|(_, w)| w.span),
                 kind: k,
-            }]);
+            });
         }
-        if let Some(k) = self.arc_radius_short(b, &before) {
-            return Ok(vec![Problem {
+        if let Some(k) = self.arc_radius_short(b, before) {
+            return Err(Problem {
                 span: b.words.iter().find(|w| w.letter == b'R').map(|w| w.span),
                 kind: k,
-            }]);
+            });
         }
-        self.native_g5_words(b, &before, &mut extra);
-        // Rewrites that need the state after the block.
+        self.native_g5_words(b, before, &mut d.extra);
         if b.tool_length
             .is_some_and(|t| matches!(t, ToolLength::Apply | ToolLength::Add))
             && !self.p.has_g(if b.tool_length == Some(ToolLength::Apply) {
@@ -416,41 +513,43 @@ impl Lowering {
                 432
             })
         {
-            match self.tool_length_words(b, &before) {
-                Ok(ws) => pre_lines.push(ws),
+            match self.tool_length_words(b, before) {
+                Ok(ws) => d.pre_lines.push(ws),
                 Err(k) => {
-                    return Ok(vec![Problem {
+                    return Err(Problem {
                         span: g_span(b, 430, 432),
                         kind: k,
-                    }]);
+                    });
                 }
             }
         }
-        // Compensated moves, or lowered motion, replace the line's motion
-        // words.
+        Ok(())
+    }
+
+    /// The lines of compensated or lowered motion, if the block's motion
+    /// is replaced (its motion words are then dropped).
+    fn motion_lines(
+        &mut self,
+        b: &Block,
+        before: &Machine,
+        fates: &mut [Fate],
+    ) -> Result<Option<Vec<PlainLine>>, Problem> {
         self.f_before = self.last_f;
         if let Some(f) = b.value(b'F') {
             self.last_f = Some(f);
         }
-        let compensated = match self.comp_block(b, &before, &mut fates) {
-            Ok(c) => c,
-            Err(p) => return Ok(vec![p]),
-        };
-        let lowered =
-            match compensated.map_or_else(|| self.lower_motion(b, &before), |c| Ok(Some(c))) {
-                Ok(l) => l,
-                Err(k) => {
-                    return Ok(vec![Problem {
-                        span: b.motion.and_then(|_| {
-                            b.g_codes()
-                                .find(|(g, _)| matches!(g, GCode::Motion(_)))
-                                .map(|(_, w)| w.span)
-                        }),
-                        kind: k,
-                    }]);
-                }
-            };
-        if let Some(lines) = &lowered {
+        let compensated = self.comp_block(b, before, fates)?;
+        let lowered = compensated
+            .map_or_else(|| self.lower_motion(b, before), |c| Ok(Some(c)))
+            .map_err(|k| Problem {
+                span: b.motion.and_then(|_| {
+                    b.g_codes()
+                        .find(|(g, _)| matches!(g, GCode::Motion(_)))
+                        .map(|(_, w)| w.span)
+                }),
+                kind: k,
+            })?;
+        if lowered.is_some() {
             for (i, w) in b.words.iter().enumerate() {
                 let motion_word = matches!(w.kind, WordKind::G(GCode::Motion(_)))
                     || matches!(w.kind, WordKind::Value) && b"XYZIJKRPLQ@^".contains(&w.letter);
@@ -458,58 +557,77 @@ impl Lowering {
                     fates[i] = Fate::Drop;
                 }
             }
-            let _ = lines;
         }
-        self.feed_words(b, &before, &mut fates, &mut extra);
-        // The line itself.
-        let incremental_lowered = lowered.as_ref().is_some_and(|l| !l.is_empty())
-            && self.m.modes.distance == Distance::Incremental;
-        let mut after_lowered: Vec<(u8, f64)> = Vec::new();
+        Ok(lowered)
+    }
+
+    /// Positions in a coordinate system the target lacks are written in
+    /// the one it is in: the shift to add, when the block writes any.
+    fn target_shift(
+        &self,
+        b: &Block,
+        fates: &[Fate],
+        lowered: Option<&[PlainLine]>,
+    ) -> Result<Option<[f64; 3]>, Problem> {
+        if self.m.modes.coord == self.target_coord {
+            return Ok(None);
+        }
+        let needed = Self::positions_in_work(b, &self.m)
+            && b.words.iter().zip(fates).any(|(w, f)| {
+                *f == Fate::Keep
+                    && matches!(w.kind, WordKind::Value)
+                    && matches!(w.letter, b'X' | b'Y' | b'Z')
+            })
+            || lowered.is_some_and(|l| !l.is_empty());
+        if !needed {
+            return Ok(None);
+        }
+        self.coord_shift(&self.m, self.target_coord)
+            .map(Some)
+            .map_err(|k| Problem {
+                span: b.coord.and(g_span(b, 591, 593)),
+                kind: k,
+            })
+    }
+
+    /// Lowered motion in G91: the lowered lines are absolute, with G90
+    /// before them and G91 after.
+    fn incremental_lowered(&self, lowered: Option<&[PlainLine]>) -> bool {
+        lowered.is_some_and(|l| !l.is_empty()) && self.m.modes.distance == Distance::Incremental
+    }
+
+    /// The block's own line: its kept words, the extra words, its
+    /// comments; empty when nothing is left. Pauses and program ends
+    /// of a line with lowered motion go after the motion, as lines of
+    /// their own.
+    fn own_line(
+        &mut self,
+        b: &Block,
+        text: &[u8],
+        before: &Machine,
+        d: &mut Decided,
+        lowered: Option<&[PlainLine]>,
+        shift: Option<[f64; 3]>,
+    ) -> Result<Vec<u8>, Problem> {
+        let incremental_lowered = self.incremental_lowered(lowered);
+        let lowered = lowered.is_some();
         let mut written = Vec::new();
-        // Positions in a coordinate system the target lacks: written in
-        // the one it is in.
-        let shift = if self.m.modes.coord == self.target_coord {
-            None
-        } else {
-            let needed = Self::positions_in_work(b, &self.m)
-                && b.words.iter().zip(&fates).any(|(w, f)| {
-                    *f == Fate::Keep
-                        && matches!(w.kind, WordKind::Value)
-                        && matches!(w.letter, b'X' | b'Y' | b'Z')
-                })
-                || lowered.as_ref().is_some_and(|l| !l.is_empty());
-            if needed {
-                match self.coord_shift(&self.m, self.target_coord) {
-                    Ok(s) => Some(s),
-                    Err(k) => {
-                        return Ok(vec![Problem {
-                            span: b.coord.and(g_span(b, 591, 593)),
-                            kind: k,
-                        }]);
-                    }
-                }
-            } else {
-                None
-            }
-        };
         let word_shift = shift.filter(|_| Self::positions_in_work(b, &self.m));
         self.w.begin(b, self.m.modes.units);
         for (i, w) in b.words.iter().enumerate() {
-            if fates[i] != Fate::Keep {
+            if d.fates[i] != Fate::Keep {
                 continue;
             }
             if incremental_lowered && matches!(w.kind, WordKind::G(GCode::Distance(_))) {
                 // The lowered blocks are absolute; G91 comes after them.
                 continue;
             }
-            if lowered.is_some()
-                && matches!(w.kind, WordKind::M(MCode::Pause { .. } | MCode::End { .. }))
-            {
+            if lowered && matches!(w.kind, WordKind::M(MCode::Pause { .. } | MCode::End { .. })) {
                 // Stops act after the motion.
-                after_lowered.push((b'M', w.value));
+                d.extra_lines.push(vec![(b'M', w.value)]);
                 continue;
             }
-            let mut v = self.out_value(w, &before);
+            let mut v = self.out_value(w, before);
             if let (Some(sh), WordKind::Value) = (word_shift, w.kind)
                 && let Some(a) = xyz_index(w.letter)
             {
@@ -517,73 +635,14 @@ impl Lowering {
             }
             self.w.word(w.letter, v, w.kind);
         }
-        for &(l, v) in &extra {
+        for &(l, v) in &d.extra {
             self.w.word(l, v, WordKind::Value);
         }
         self.w.comments(b, text);
-        if let Some(p) = self.w.finish_line(&mut written) {
-            return Ok(vec![Problem {
-                span: None,
-                kind: p,
-            }]);
+        if let Some(kind) = self.w.finish_line(&mut written) {
+            return Err(Problem { span: None, kind });
         }
-        let mut lines: Vec<Vec<u8>> = Vec::new();
-        for l in &pre_lines {
-            let mut buf = Vec::new();
-            if let Some(k) = self.plain_line(&words_line(l), &mut buf) {
-                return Ok(vec![Problem {
-                    span: None,
-                    kind: k,
-                }]);
-            }
-            lines.push(buf);
-        }
-        if !written.is_empty() {
-            lines.push(written);
-        }
-        if let Some(lowered) = lowered {
-            if incremental_lowered {
-                lines.push(b"G90".to_vec());
-            }
-            for l in &lowered {
-                let mut buf = Vec::new();
-                let shifted;
-                let l = match shift {
-                    Some(sh) => {
-                        shifted = shift_line(l, sh, self.m.scale());
-                        &shifted
-                    }
-                    None => l,
-                };
-                if let Some(k) = self.plain_line(l, &mut buf) {
-                    return Ok(vec![Problem {
-                        span: None,
-                        kind: k,
-                    }]);
-                }
-                lines.push(buf);
-            }
-            if incremental_lowered {
-                lines.push(b"G91".to_vec());
-            }
-            for w in after_lowered {
-                extra_lines.push(vec![w]);
-            }
-        }
-        for l in &extra_lines {
-            let mut buf = Vec::new();
-            if let Some(k) = self.plain_line(&words_line(l), &mut buf) {
-                return Ok(vec![Problem {
-                    span: None,
-                    kind: k,
-                }]);
-            }
-            lines.push(buf);
-        }
-        for l in &lines {
-            out.line(l).map_err(io_error)?;
-        }
-        Ok(Vec::new())
+        Ok(written)
     }
 
     /// Whether the axis words of `b` are positions in the active work
