@@ -84,6 +84,10 @@ fuzz_target!(|data: &[u8]| {
             t.block_delete = more & 16 != 0;
             t
         });
+    // Bit 5: a small output byte bound, so that it is met often.
+    if more & 32 != 0 {
+        settings.max_output_bytes = 500 + u64::from(more >> 6) * 4000;
+    }
     if target.is_some() {
         // As the command line sets it for a target.
         settings.user_m = (1u128 << 100) - 1;
