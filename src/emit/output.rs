@@ -283,11 +283,8 @@ struct Writer {
     /// The thread failed and stopped.
     failed: Arc<AtomicBool>,
     thread: Option<JoinHandle<io::Result<Sink>>>,
-    /// The file the sink records ranges of, if any.
+    /// The input file the sink checks, if any.
     input: Option<Arc<SourceFile>>,
-    /// Ranges the sink is sure to record; later input bytes are sent as
-    /// text (the sink could not copy them otherwise).
-    ranges_left: usize,
     /// Bytes the sink surely has room for: its room when the thread
     /// started, less a bound of every command since, plus `slack` as the
     /// thread hands it over.
@@ -303,7 +300,6 @@ impl Writer {
     /// thread can be started.
     fn start(sink: Sink, precision: Option<u8>) -> Mode {
         let input = sink.input().cloned();
-        let ranges_left = sink.range_room();
         let room = sink.room();
         let slack = Arc::new(AtomicU64::new(0));
         let slack_there = slack.clone();
@@ -332,7 +328,6 @@ impl Writer {
             failed,
             thread: Some(thread),
             input,
-            ranges_left,
             room,
             chunk_bound: 0,
             slack,
@@ -425,26 +420,26 @@ impl Writer {
         self.send_if_full()
     }
 
-    /// Appends input bytes: as a range when the sink will record it, else
-    /// as text. False: the thread stopped.
+    /// Appends input bytes: with their offset when they are bytes of the
+    /// file the sink checks (their CRC is taken on the thread), else as
+    /// text. False: the thread stopped.
     fn write_input(&mut self, file: &Arc<SourceFile>, start: u64, bytes: &[u8]) -> bool {
-        if bytes.is_empty() {
-            return true;
-        }
-        let ranges = matches!(&self.input, Some(f) if Arc::ptr_eq(f, file));
-        if !ranges || self.ranges_left == 0 {
+        if !matches!(&self.input, Some(f) if Arc::ptr_eq(f, file)) {
             return self.write(bytes);
         }
-        self.ranges_left -= 1;
-        self.close_text();
-        self.chunk.push(RANGE);
-        self.chunk.extend_from_slice(&start.to_le_bytes());
-        self.chunk
-            .extend_from_slice(&(bytes.len() as u64).to_le_bytes());
-        // The CRC of the bytes as evaluated, checked again on release.
-        self.chunk
-            .extend_from_slice(&crc32fast::hash(bytes).to_le_bytes());
-        self.send_if_full()
+        let mut at = start;
+        for piece in bytes.chunks(CHUNK) {
+            self.close_text();
+            self.chunk.push(RANGE);
+            self.chunk.extend_from_slice(&at.to_le_bytes());
+            self.chunk.extend_from_slice(&short(piece.len()));
+            self.chunk.extend_from_slice(piece);
+            at += piece.len() as u64;
+            if !self.send_if_full() {
+                return false;
+            }
+        }
+        true
     }
 
     #[inline]
@@ -609,14 +604,12 @@ fn apply(
                 text.push(b'\n');
             }
             RANGE => {
-                let (start, len, crc) = (r.u64(), r.u64(), r.u32());
+                let (start, len) = (r.u64(), r.u32());
                 if !text.is_empty() {
                     sink.write(text)?;
                     text.clear();
                 }
-                if !sink.record_input(start, len, crc as u32) {
-                    return Err(sink.not_recorded(len));
-                }
+                sink.write_checked(start, r.bytes(len))?;
             }
             tag => unreachable!("output command {tag}"),
         }
@@ -769,14 +762,14 @@ mod tests {
         }
     }
 
-    /// On a thread, input bytes go as ranges while the sink is sure to
-    /// record them and as bytes after that; released, they are the bytes
-    /// written directly.
+    /// On a thread, input bytes go with their offsets, checked by the sink
+    /// until its list is full; released, they are the bytes written
+    /// directly.
     #[test]
-    fn input_ranges_past_the_sinks_room_are_sent_as_bytes() {
+    fn input_ranges_on_the_thread_are_the_bytes_written_directly() {
         let dir = tempfile::tempdir().unwrap();
         let (src, data) = streamed(dir.path());
-        let ops = ops(30_000, data.len());
+        let ops = ops(40_000, data.len());
         let mut outs = Vec::new();
         for after in [usize::MAX, 0] {
             let mut sink = Sink::new(Destination::Stdout).unwrap();
@@ -784,7 +777,7 @@ mod tests {
             let mut out = Output::new(sink, None, after);
             run(&mut out, &ops, &src, &data);
             let mut sink = out.into_sink().unwrap();
-            assert!(sink.range_room() < 10, "ranges were recorded until full");
+            assert_eq!(sink.check_room(), 0, "ranges were checked until full");
             let mut released = Vec::new();
             sink.release(&mut released).unwrap();
             outs.push(released);
@@ -823,19 +816,23 @@ mod tests {
     /// write after it fails, and nothing is released.
     #[test]
     fn a_failure_on_the_thread_stops_the_output() {
-        let (dir, src, data, mut out) = threaded_to_file();
-        // A range the sink cannot record (it refers to no file) fails the
-        // thread.
+        let (dir, src, data, out) = threaded_to_file();
+        drop(out);
+        let mut sink = Sink::new(Destination::File(dir.path().join("out.ngc"))).unwrap();
+        sink.limit_bytes(100_000, 0);
+        let mut out = Output::new(sink, None, 0);
+        // Taking the output past the sink's byte bound fails the thread
+        // once the evaluator no longer counts it (it would take the sink
+        // back before).
         let Mode::Threaded(w) = &mut out.mode else {
             panic!("no output thread")
         };
-        w.input = Some(src.clone());
-        w.ranges_left = 1;
+        w.room = u64::MAX;
         out.write_input(&src, 0, &data[..6]).unwrap();
-        let e = (0..1000)
+        let e = (0..10_000)
             .find_map(|_| out.write(&[b'x'; 1000]).err())
             .expect("the failure reaches the evaluator");
-        assert!(e.to_string().contains("could not be recorded"), "{e}");
+        assert!(e.to_string().contains("the output grew past"), "{e}");
         assert!(matches!(out.mode, Mode::Stopped));
         assert!(out.line(b"G0").is_err());
         assert!(out.finish().is_err());

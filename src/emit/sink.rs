@@ -1,18 +1,19 @@
 //! Where flattened lines go before they are released: memory while small, a
 //! temporary file once large. Nothing reaches the destination until the whole
-//! program has been flattened without error. For stdout, output copied
-//! unchanged from a streamed input file is recorded as a range of that file
-//! instead of being spooled, and copied from it on release.
+//! program has been flattened without error.
 //!
-//! Released bytes are the bytes that were evaluated: each recorded range
-//! carries the CRC-32 of the bytes the evaluator read (adjacent ranges merge
-//! and their CRCs combine). On release every range is read again and checked
-//! before anything is written, keeping a CRC per 1 MB block; the copy then
-//! checks each block again before writing it. A file changed during the run
-//! (rewritten, truncated, even with its modification time restored) is an
-//! error and nothing is written. A change in the moment between the check
-//! and the copy stops the copy before the first changed block, with an error
-//! (the reader gets a cut output and exit status 2, never an unchecked byte).
+//! Released bytes are the bytes that were evaluated: every byte of the
+//! output, the lines copied unchanged from the input included, is written
+//! into the spool as the evaluator had it, and the release copies the spool;
+//! the input file is never read for the output. A streamed input is also
+//! checked for changes before anything is released: each range of it copied
+//! to the output carries the CRC-32 of its bytes as evaluated (adjacent
+//! ranges merge and their CRCs combine), and the release reads every range
+//! again and compares, after comparing size and modification time. A file
+//! changed during the run (rewritten, truncated, even with its modification
+//! time restored) is an error and nothing is written. A change after that
+//! check cannot reach the output, which no longer depends on the file: the
+//! release goes on whole.
 
 use std::fs::File;
 use std::io::{self, BufWriter, Read, Seek, SeekFrom, Write};
@@ -21,18 +22,19 @@ use std::sync::{Arc, Mutex};
 
 use crate::source::SourceFile;
 
-/// Most ranges recorded; past this, input bytes are spooled like others.
-const MAX_PARTS: usize = 1 << 14;
+/// Most separate ranges checked; bytes copied past this are still the
+/// evaluated bytes, and the size and modification time are still checked.
+const MAX_CHECKS: usize = 1 << 14;
 /// Block size of the release check.
 const BLOCK: u64 = 1 << 20;
 
-/// A piece of the output, in order.
+/// A range of the input file copied to the output, and the CRC-32 of its
+/// bytes as evaluated.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Part {
-    /// The next bytes of the spooled stream.
-    Spooled(u64),
-    /// A range of the input file and the CRC-32 of its bytes as evaluated.
-    Input { start: u64, len: u64, crc: u32 },
+struct Check {
+    start: u64,
+    len: u64,
+    crc: u32,
 }
 
 /// Bytes kept in memory before spilling to a temporary file.
@@ -174,15 +176,12 @@ pub struct Sink {
     mem: Vec<u8>,
     spill: Option<Spool>,
     dest: Destination,
-    /// The file output may refer to.
-    input: Option<Arc<SourceFile>>,
-    /// A streamed input file, watched for changes until the release.
+    /// A streamed input file, checked for changes before the release.
     watch: Option<Arc<SourceFile>>,
-    /// Output as pieces; empty while no range was recorded (all spooled).
-    parts: Vec<Part>,
-    spooled: u64,
-    /// Bytes recorded as input ranges.
-    ranged: u64,
+    /// Ranges of `watch` copied to the output.
+    checks: Vec<Check>,
+    /// Bytes written.
+    written: u64,
     /// Most bytes of output (`--max-output-bytes` plus the input's size).
     byte_budget: u64,
 }
@@ -258,40 +257,24 @@ impl Sink {
             mem: Vec::with_capacity(1 << 16),
             spill,
             dest,
-            input: None,
             watch: None,
-            parts: Vec::new(),
-            spooled: 0,
-            ranged: 0,
+            checks: Vec::new(),
+            written: 0,
             byte_budget: u64::MAX,
         })
     }
 
-    /// Lets output refer to ranges of `input` (a streamed file) when it goes
-    /// to stdout; a streamed input is watched for changes in any case.
+    /// Watches `input` (a streamed file) for changes until the release:
+    /// ranges of it copied to the output are checked against it again.
     pub fn refer_to(&mut self, input: Arc<SourceFile>) {
-        if input.memory().is_some() {
-            return;
+        if input.memory().is_none() {
+            self.watch = Some(input);
         }
-        if matches!(self.dest, Destination::Stdout) {
-            self.input = Some(input.clone());
-        }
-        self.watch = Some(input);
     }
 
     /// Bounds the output to `extra` bytes beyond the input's `input_len`.
     pub fn limit_bytes(&mut self, extra: u64, input_len: u64) {
         self.byte_budget = extra.saturating_add(input_len);
-    }
-
-    /// Why [`Sink::record_input`] refused `len` bytes.
-    #[cold]
-    pub fn not_recorded(&self, len: u64) -> io::Error {
-        if self.spooled + self.ranged + len > self.byte_budget {
-            self.too_large()
-        } else {
-            io::Error::other("an input range could not be recorded")
-        }
     }
 
     #[cold]
@@ -302,9 +285,9 @@ impl Sink {
         })
     }
 
-    /// Bytes written so far (spooled and recorded as ranges).
+    /// Bytes written so far.
     pub fn used(&self) -> u64 {
-        self.spooled + self.ranged
+        self.written
     }
 
     /// Bytes that may still be written before `--max-output-bytes`.
@@ -312,9 +295,9 @@ impl Sink {
         self.byte_budget.saturating_sub(self.used())
     }
 
-    /// The file output may refer to, if any.
+    /// The watched input file, if any.
     pub fn input(&self) -> Option<&Arc<SourceFile>> {
-        self.input.as_ref()
+        self.watch.as_ref()
     }
 
     /// Output is thrown away (check mode).
@@ -322,57 +305,45 @@ impl Sink {
         matches!(self.dest, Destination::Discard)
     }
 
-    /// How many more ranges [`Sink::record_input`] is sure to accept,
-    /// whatever is written between them: each range adds at most one part
-    /// and the bytes written after it one more, and the first range may add
-    /// a part for the bytes before it.
-    pub fn range_room(&self) -> usize {
-        MAX_PARTS.saturating_sub(self.parts.len() + 3) / 2
+    /// How many more ranges [`Sink::write_checked`] is sure to check (each
+    /// adds at most one).
+    pub fn check_room(&self) -> usize {
+        MAX_CHECKS.saturating_sub(self.checks.len())
     }
 
-    /// Appends bytes that are `file`'s bytes from offset `start` on.
+    /// Appends bytes that are `file`'s bytes from offset `start` on (whole
+    /// lines), checked on release if `file` is the watched input.
     pub fn write_input(
         &mut self,
         file: &Arc<SourceFile>,
         start: u64,
         bytes: &[u8],
     ) -> io::Result<()> {
-        let ours = self.input.as_ref().is_some_and(|f| Arc::ptr_eq(f, file));
-        if ours && self.record_input(start, bytes.len() as u64, crc32fast::hash(bytes)) {
-            Ok(())
+        if self.watch.as_ref().is_some_and(|f| Arc::ptr_eq(f, file)) {
+            self.write_checked(start, bytes)
         } else {
             self.write(bytes)
         }
     }
 
-    /// Appends `len` bytes of the input file from offset `start` on as a
-    /// range of it; `crc` is the CRC-32 of those bytes as they were read.
-    /// False when there is no input file to refer to or no room for another
-    /// range: nothing was appended, the bytes must be written.
-    pub fn record_input(&mut self, start: u64, len: u64, crc: u32) -> bool {
-        if self.input.is_none() || self.parts.len() >= MAX_PARTS {
-            return false;
+    /// Appends bytes of the watched input from offset `start` on, and
+    /// notes their range and CRC to check on release.
+    pub fn write_checked(&mut self, start: u64, bytes: &[u8]) -> io::Result<()> {
+        self.write(bytes)?;
+        if matches!(self.dest, Destination::Discard) || bytes.is_empty() {
+            return Ok(());
         }
-        if self.spooled + self.ranged + len > self.byte_budget {
-            // Written instead, and refused there.
-            return false;
-        }
-        self.ranged += len;
-        if self.parts.is_empty() && self.spooled > 0 {
-            self.parts.push(Part::Spooled(self.spooled));
-        }
-        match self.parts.last_mut() {
-            Some(Part::Input {
-                start: s,
-                len: l,
-                crc: c,
-            }) if *s + *l == start => {
-                *c = crc_concat(*c, crc, len);
-                *l += len;
+        let (len, crc) = (bytes.len() as u64, crc32fast::hash(bytes));
+        let room = self.checks.len() < MAX_CHECKS;
+        match self.checks.last_mut() {
+            Some(c) if c.start + c.len == start => {
+                c.crc = crc_concat(c.crc, crc, len);
+                c.len += len;
             }
-            _ => self.parts.push(Part::Input { start, len, crc }),
+            _ if room => self.checks.push(Check { start, len, crc }),
+            _ => {}
         }
-        true
+        Ok(())
     }
 
     /// Appends bytes (whole lines).
@@ -382,16 +353,11 @@ impl Sink {
             return Ok(());
         }
         let len = bytes.len() as u64;
-        if self.spooled + self.ranged + len > self.byte_budget {
+        if self.written + len > self.byte_budget {
             return Err(self.too_large());
         }
         self.mem.extend_from_slice(bytes);
-        self.spooled += len;
-        match self.parts.last_mut() {
-            None => {}
-            Some(Part::Spooled(n)) => *n += len,
-            Some(Part::Input { .. }) => self.parts.push(Part::Spooled(len)),
-        }
+        self.written += len;
         if self.mem.len() >= SPILL_AT && !matches!(self.dest, Destination::Memory(_)) {
             self.spill_now()?;
         }
@@ -408,91 +374,36 @@ impl Sink {
         Ok(())
     }
 
-    /// The watched input still has its size and modification time.
+    /// The watched input still has its size and modification time, and
+    /// every checked range its bytes as evaluated.
     fn check_unchanged(&self) -> io::Result<()> {
-        match &self.watch {
-            Some(w) if !w.unchanged()? => Err(changed(w)),
-            _ => Ok(()),
+        let Some(input) = &self.watch else {
+            return Ok(());
+        };
+        if !input.unchanged()? {
+            return Err(changed(input));
         }
-    }
-
-    /// Reads every recorded range of the input again and checks it against
-    /// the CRC taken when it was evaluated; returns a CRC per block.
-    fn verify_ranges(&self, input: &SourceFile, buf: &mut [u8]) -> io::Result<Vec<u32>> {
-        let mut blocks = Vec::new();
-        for part in &self.parts {
-            let Part::Input { start, len, crc } = *part else {
-                continue;
-            };
-            let (mut off, end, mut all) = (start, start + len, 0u32);
+        let mut buf =
+            vec![0u8; BLOCK.min(self.checks.iter().map(|c| c.len).max().unwrap_or(0)) as usize];
+        for c in &self.checks {
+            let (mut off, end, mut all) = (c.start, c.start + c.len, 0u32);
             while off < end {
                 let n = (end - off).min(BLOCK) as usize;
                 if input.read_at(&mut buf[..n], off)? != n {
                     return Err(changed(input));
                 }
-                let b = crc32fast::hash(&buf[..n]);
-                blocks.push(b);
-                all = crc_concat(all, b, n as u64);
+                all = crc_concat(all, crc32fast::hash(&buf[..n]), n as u64);
                 off += n as u64;
             }
-            if all != crc {
+            if all != c.crc {
                 return Err(changed(input));
             }
         }
-        Ok(blocks)
+        Ok(())
     }
 
-    /// Writes the pieces in order: spooled bytes from the spool, ranges from
-    /// the input file, each block checked before it is written.
-    fn release_parts(&mut self, out: &mut impl Write) -> io::Result<()> {
-        let input = self
-            .input
-            .clone()
-            .ok_or_else(|| io::Error::other("no input file to copy from"))?;
-        test_pause("verify");
-        self.check_unchanged()?;
-        let mut buf = vec![0u8; BLOCK as usize];
-        let blocks = self.verify_ranges(&input, &mut buf)?;
-        test_pause("copy");
-        let mut blocks = blocks.into_iter();
-        let mut spool: Box<dyn Read + '_> = match self.spill.as_mut() {
-            Some(t) => {
-                t.file.flush()?;
-                let f = t.file.get_mut();
-                f.seek(SeekFrom::Start(0))?;
-                Box::new(f.chain(&self.mem[..]))
-            }
-            None => Box::new(&self.mem[..]),
-        };
-        for part in &self.parts {
-            match *part {
-                Part::Spooled(n) => {
-                    if io::copy(&mut (&mut spool).take(n), out)? != n {
-                        return Err(io::Error::other("the spool file was cut short"));
-                    }
-                }
-                Part::Input { start, len, .. } => {
-                    let (mut off, end) = (start, start + len);
-                    while off < end {
-                        let n = (end - off).min(BLOCK) as usize;
-                        let got = input.read_at(&mut buf[..n], off)?;
-                        if got != n || blocks.next() != Some(crc32fast::hash(&buf[..n])) {
-                            return Err(io::Error::other(format!(
-                                "{} changed while it was being copied to the output; the output is incomplete",
-                                input.display_name()
-                            )));
-                        }
-                        out.write_all(&buf[..n])?;
-                        off += n as u64;
-                    }
-                }
-            }
-        }
-        out.flush()
-    }
-
-    /// Releases everything to the destination. A closed pipe on stdout counts
-    /// as success.
+    /// Releases everything to the destination, after checking the input.
+    /// A closed pipe on stdout counts as success.
     pub fn finish(mut self) -> io::Result<()> {
         match self.dest.clone() {
             Destination::Discard => Ok(()),
@@ -518,11 +429,15 @@ impl Sink {
                 crate::emit::interrupt::persist(path, &target)
             }
             Destination::Special(target) => {
+                test_pause("verify");
+                self.check_unchanged()?;
                 let f = File::options().write(true).open(&target)?;
                 let mut out = BufWriter::with_capacity(1 << 16, f);
                 self.release(&mut out)
             }
             Destination::Stdout => {
+                test_pause("verify");
+                self.check_unchanged()?;
                 let stdout = io::stdout();
                 let mut out = BufWriter::with_capacity(1 << 16, stdout.lock());
                 match self.release(&mut out) {
@@ -533,16 +448,18 @@ impl Sink {
         }
     }
 
-    /// Writes the whole output to `out` (the release to stdout).
+    /// Writes the whole output to `out`: the spool, then what is still in
+    /// memory. Reads nothing but the spool.
     pub(super) fn release(&mut self, out: &mut impl Write) -> io::Result<()> {
-        if !self.parts.is_empty() {
-            return self.release_parts(out);
-        }
-        self.check_unchanged()?;
+        test_pause("copy");
         if let Some(t) = self.spill.as_mut() {
             t.file.flush()?;
             let f = t.file.get_mut();
             f.seek(SeekFrom::Start(0))?;
+            // The first block, then a test may change the input mid-copy.
+            io::copy(&mut Read::by_ref(f).take(BLOCK), out)?;
+            out.flush()?;
+            test_pause("copying");
             io::copy(f, out)?;
         }
         out.write_all(&self.mem)?;
@@ -567,8 +484,10 @@ mod tests {
         Arc::new(f)
     }
 
+    /// Input bytes and other bytes come back in order, from the spool
+    /// (spilled to its file) and memory; adjacent ranges merge.
     #[test]
-    fn ranges_of_the_input_come_back_in_order() {
+    fn input_bytes_come_back_in_order() {
         let dir = tempfile::tempdir().unwrap();
         let src = big_source(dir.path(), 800_000);
         let data = std::fs::read(&src.path).unwrap();
@@ -577,7 +496,6 @@ mod tests {
         let mut want = Vec::new();
         sink.write(b"%\n").unwrap();
         want.extend_from_slice(b"%\n");
-        // Adjacent ranges merge; literal bytes in between stay in place.
         for (a, b, lit) in [(0, 100, false), (100, 5000, true), (9000, 9100, true)] {
             sink.write_input(&src, a as u64, &data[a..b]).unwrap();
             want.extend_from_slice(&data[a..b]);
@@ -586,45 +504,92 @@ mod tests {
                 want.extend_from_slice(b"G0 Z1\n");
             }
         }
-        // Enough literal bytes to spill to the temporary file.
         let filler = vec![b'x'; SPILL_AT + 10];
         sink.write(&filler).unwrap();
         want.extend_from_slice(&filler);
         sink.write_input(&src, 20, &data[20..30]).unwrap();
         want.extend_from_slice(&data[20..30]);
-        assert_eq!(sink.parts.len(), 6);
+        assert_eq!(sink.checks.len(), 3);
+        sink.check_unchanged().unwrap();
         let mut out = Vec::new();
-        sink.release_parts(&mut out).unwrap();
+        sink.release(&mut out).unwrap();
         assert!(out == want);
     }
 
+    /// A range rewritten with its size and modification time kept is seen
+    /// by the check.
     #[test]
-    fn a_changed_input_is_not_released() {
+    fn a_changed_range_is_seen() {
         let dir = tempfile::tempdir().unwrap();
         let src = big_source(dir.path(), 800_000);
+        let data = std::fs::read(&src.path).unwrap();
         let mut sink = Sink::new(Destination::Stdout).unwrap();
         sink.refer_to(src.clone());
-        sink.write_input(&src, 0, b"G1 X0 Y0\n").unwrap();
-        std::fs::OpenOptions::new()
-            .append(true)
+        sink.write_input(&src, 0, &data[..3 << 20]).unwrap();
+        sink.check_unchanged().unwrap();
+        let mtime = std::fs::metadata(&src.path).unwrap().modified().unwrap();
+        let mut f = std::fs::OpenOptions::new()
+            .write(true)
             .open(&src.path)
-            .unwrap()
-            .write_all(b"G1 X9\n")
             .unwrap();
-        let mut out = Vec::new();
-        let e = sink.release_parts(&mut out).unwrap_err();
+        f.seek(SeekFrom::Start(2 << 20)).unwrap();
+        f.write_all(b"G1 X[1/0]").unwrap();
+        f.set_modified(mtime).unwrap();
+        assert!(src.unchanged().unwrap());
+        let e = sink.check_unchanged().unwrap_err();
         assert!(
             e.to_string()
                 .contains("changed while it was being flattened"),
             "{e}"
         );
-        assert!(out.is_empty());
     }
 
+    /// Once the input was checked the release reads only the spool: the
+    /// input truncated then changes nothing.
     #[test]
-    fn other_files_and_memory_files_are_spooled() {
+    fn the_release_never_reads_the_input() {
         let dir = tempfile::tempdir().unwrap();
         let src = big_source(dir.path(), 800_000);
+        let data = std::fs::read(&src.path).unwrap();
+        let mut sink = Sink::new(Destination::Stdout).unwrap();
+        sink.refer_to(src.clone());
+        sink.write_input(&src, 0, &data).unwrap();
+        sink.check_unchanged().unwrap();
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(&src.path)
+            .unwrap()
+            .set_len(10)
+            .unwrap();
+        let mut out = Vec::new();
+        sink.release(&mut out).unwrap();
+        assert!(out == data);
+    }
+
+    /// Past the most ranges checked, bytes are still written (unchecked).
+    #[test]
+    fn ranges_past_the_list_are_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let src = big_source(dir.path(), 800_000);
+        let data = std::fs::read(&src.path).unwrap();
+        let mut sink = Sink::new(Destination::Memory(MemoryOut::default())).unwrap();
+        sink.refer_to(src.clone());
+        let mut want = Vec::new();
+        for i in 0..MAX_CHECKS + 10 {
+            // Every range apart from the one before.
+            let a = 3 * i;
+            sink.write_input(&src, a as u64, &data[a..a + 2]).unwrap();
+            want.extend_from_slice(&data[a..a + 2]);
+        }
+        assert_eq!(sink.check_room(), 0);
+        let mut out = Vec::new();
+        sink.release(&mut out).unwrap();
+        assert!(out == want);
+    }
+
+    /// A file held in memory is not watched.
+    #[test]
+    fn memory_files_are_not_watched() {
         let small = Arc::new(SourceFile::new(
             "s.ngc".into(),
             "s.ngc".into(),
@@ -632,10 +597,9 @@ mod tests {
         ));
         let mut sink = Sink::new(Destination::Stdout).unwrap();
         sink.refer_to(small.clone());
-        assert!(sink.input.is_none());
-        sink.refer_to(src.clone());
+        assert!(sink.watch.is_none());
         sink.write_input(&small, 0, b"G0 X1\n").unwrap();
-        assert!(sink.parts.is_empty());
+        assert!(sink.checks.is_empty());
         assert_eq!(sink.mem, b"G0 X1\n");
     }
 }
