@@ -1,18 +1,10 @@
-//! One raw line, any bytes, with and without a terminating newline: the line
-//! parser must return `Ok` or `Err`, never panic.
+//! The `parse_line` fuzz target: see `harness::parse_line` (`fuzz/harness.rs`, shared
+//! with the bounded run of the test suite).
 #![no_main]
 
-use libfuzzer_sys::fuzz_target;
-use ngcflat::parse::LineParser;
+// Each target uses one of the harness functions.
+#[allow(dead_code)]
+#[path = "../harness.rs"]
+mod harness;
 
-fuzz_target!(|data: &[u8]| {
-    let mut parser = LineParser::default();
-    let _ = parser.parse(data, false);
-    // Reuse the same scratch space, as the file index does.
-    let _ = parser.parse(data, true);
-    // A line never contains its terminator; feed the part before the first
-    // newline as well so long multi-line inputs still reach the grammar.
-    if let Some(i) = data.iter().position(|&b| b == b'\n') {
-        let _ = parser.parse(&data[..i], true);
-    }
-});
+libfuzzer_sys::fuzz_target!(|data: &[u8]| harness::parse_line(data));

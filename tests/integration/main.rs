@@ -6,6 +6,7 @@ mod cli;
 mod comp;
 mod config;
 mod fixtures;
+mod fuzz;
 mod generated;
 mod hostile;
 mod lathe;
