@@ -1,8 +1,11 @@
 //! ngcflat: LinuxCNC-dialect G-code in, straight-line G-code out.
 //!
-//! Pipeline: `grammar/ngc.pest` → [`parse`] (typed line AST) → [`program`]
-//! (file index, subroutine loader) → [`eval`] (parameters, expressions,
-//! control flow) → [`emit`] (numbers, output sink) → [`diag`] (rendering).
+//! Pipeline: [`source`] (program text) → [`parse`] (typed line AST) →
+//! [`program`] (file index, subroutine loader) → [`eval`] (machine state,
+//! control flow, parameters and expressions) → [`emit`] (numbers, output
+//! sink), or a consumer: [`target`] lowering, [`view`]. The `flatten` module ties
+//! them together; [`diag`] holds every error and warning. The modules form
+//! layers without cycles, listed in the README's Design section.
 
 pub mod check;
 pub mod config;

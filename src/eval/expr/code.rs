@@ -47,7 +47,7 @@ impl Interp<'_> {
     fn leaf(&self, op: &Op) -> Option<Option<f64>> {
         match op {
             Op::Num(v) => Some(Some(*v)),
-            Op::Slot(i) => Some(self.stored(*i as usize)),
+            Op::Slot(i) => Some(self.params.stored(*i as usize)),
             Op::Named(name) => Some(self.named(name)),
             _ => None,
         }
@@ -59,7 +59,7 @@ impl Interp<'_> {
     fn binary(&self, a: f64, op: &Op) -> Option<f64> {
         let (op, checked, c) = match op {
             Op::BinK(op, checked, k) => (*op, *checked, *k),
-            Op::BinS(op, checked, i) => (*op, *checked, self.stored(*i as usize)?),
+            Op::BinS(op, checked, i) => (*op, *checked, self.params.stored(*i as usize)?),
             Op::BinN(op, checked, name) => (*op, *checked, self.named(name)?),
             _ => return None,
         };
@@ -96,7 +96,7 @@ impl Interp<'_> {
                     n += 1;
                 }
                 Op::Slot(i) => {
-                    stack[n & MASK] = self.stored(*i as usize)?;
+                    stack[n & MASK] = self.params.stored(*i as usize)?;
                     n += 1;
                 }
                 Op::Named(name) => {
@@ -109,7 +109,7 @@ impl Interp<'_> {
                     if i < 1 || i >= MAX_PARAM as i64 {
                         return None;
                     }
-                    *top = self.stored(i as usize)?;
+                    *top = self.params.stored(i as usize)?;
                 }
                 Op::Neg => {
                     let top = &mut stack[n.wrapping_sub(1) & MASK];
@@ -149,17 +149,5 @@ impl Interp<'_> {
             }
         }
         if n == 1 { Some(stack[0]) } else { None }
-    }
-
-    /// A plain parameter the program has set, if finite.
-    #[inline]
-    fn stored(&self, i: usize) -> Option<f64> {
-        if i < 5000 && self.params.set[i] {
-            let v = self.params.values[i];
-            if v.is_finite() {
-                return Some(v);
-            }
-        }
-        None
     }
 }

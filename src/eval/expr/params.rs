@@ -94,6 +94,24 @@ impl Params {
         }
     }
 
+    /// Whether the G92 offsets are applied (#5210 not known to be 0).
+    pub fn g92_applied(&self) -> bool {
+        !(self.known[5210] && self.values[5210] == 0.0)
+    }
+
+    /// A plain parameter (below 5000) the program or a -D set, if its
+    /// value is finite.
+    #[inline]
+    pub fn stored(&self, i: usize) -> Option<f64> {
+        if i < 5000 && self.set[i] {
+            let v = self.values[i];
+            if v.is_finite() {
+                return Some(v);
+            }
+        }
+        None
+    }
+
     pub fn assign(&mut self, i: usize, v: f64) {
         self.values[i] = v;
         self.known[i] = true;

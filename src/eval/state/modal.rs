@@ -60,7 +60,7 @@ impl Interp<'_> {
     /// keep the offsets in effect, which are none after G92.2 (whose
     /// parameters still hold the old values).
     fn keep_active_g92(&mut self) {
-        if !self.g92_applied() {
+        if !self.params.g92_applied() {
             for a in 0..9 {
                 self.params.assign(5211 + a, 0.0);
             }
@@ -72,14 +72,9 @@ impl Interp<'_> {
         self.param_prog(5221 + 20 * (cs as usize - 1) + axis, axis)
     }
 
-    /// G92 offsets are applied (#5210 is not known to be 0).
-    pub(in crate::eval) fn g92_applied(&self) -> bool {
-        !(self.params.known[5210] && self.params.values[5210] == 0.0)
-    }
-
     /// Applied G92 offset, program units.
     fn g92_offset(&self, axis: usize) -> Option<f64> {
-        if !self.g92_applied() {
+        if !self.params.g92_applied() {
             return Some(0.0);
         }
         self.param_prog(5211 + axis, axis)

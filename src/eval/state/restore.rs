@@ -31,7 +31,7 @@ impl Interp<'_> {
             70 | 73 => {
                 let m = Saved {
                     modal: self.mach.modal.clone(),
-                    g92_applied: self.g92_applied(),
+                    g92_applied: self.params.g92_applied(),
                 };
                 let nested = self.flow.frames.len() > 1;
                 let f = self.flow.frames.last_mut().expect("frame");
@@ -149,7 +149,7 @@ impl Interp<'_> {
             let line = words.join(" ");
             self.emit_raw(line.as_bytes())?;
         }
-        let g92_now = self.g92_applied();
+        let g92_now = self.params.g92_applied();
         if *g92_applied != g92_now {
             self.emit_raw(if *g92_applied { b"G92.3" } else { b"G92.2" })?;
         }
