@@ -10,6 +10,7 @@ mod fuzz;
 mod generated;
 mod hostile;
 mod lathe;
+mod layers;
 mod lowering;
 mod motion;
 mod named2007;
