@@ -426,6 +426,13 @@ impl<T: Clone> Comp<T> {
         !self.queue.is_empty()
     }
 
+    /// The tag of the first move held back (the oldest).
+    pub fn first_held(&self) -> Option<&T> {
+        self.queue.first().map(|h| match h {
+            Held::Line { tag, .. } | Held::Arc { tag, .. } => tag,
+        })
+    }
+
     /// The side and radius in effect (radius made positive).
     pub fn side(&self) -> Option<(Side, f64)> {
         self.side.map(|s| (s, self.radius))

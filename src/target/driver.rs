@@ -91,6 +91,19 @@ pub struct Lowering {
     f_before: Option<f64>,
     /// The F value the target has after compensated moves were written.
     comp_f: Option<f64>,
+    /// Compensated moves given to the compensation so far (each move's
+    /// number in its [`MoveTag`]).
+    comp_seq: u64,
+    /// The number of each line of the block's released moves (parallel to
+    /// them; `u64::MAX` for a line after G40).
+    released_seqs: Vec<u64>,
+    /// Lines of blocks run while moves were held back: LinuxCNC runs them
+    /// after those moves, so each waits until the moves up to its number
+    /// are written.
+    deferred: Vec<(u64, Vec<u8>)>,
+    /// The block being lowered is deferred: its line waits (the number of
+    /// the last move before it).
+    defer_block: Option<u64>,
     /// Lines every word of which is kept as it is take the short way
     /// (plain.rs); off only to compare both ways in tests.
     plain: bool,
@@ -111,9 +124,13 @@ struct NurbsCurve {
     start: [f64; 2],
 }
 
+/// What a compensated move carries through the compensation: the feed of
+/// its block and its number in the program's order of moves.
+type MoveTag = (Option<f64>, u64);
+
 /// Cutter compensation on, on a target without it.
 struct CompPath {
-    comp: Comp<Option<f64>>,
+    comp: Comp<MoveTag>,
     plane: lower::Plane,
     /// Where the tool is (X Y Z, program units): the end of the last
     /// compensated move written.
@@ -155,6 +172,10 @@ impl Lowering {
             last_f: None,
             f_before: None,
             comp_f: None,
+            comp_seq: 0,
+            released_seqs: Vec::new(),
+            deferred: Vec::new(),
+            defer_block: None,
             plain: true,
             codes: plain::Codes::of(p),
         }
@@ -333,6 +354,8 @@ impl Lowering {
             // The switch is on: LinuxCNC skips the line.
             return Ok(Vec::new());
         }
+        self.released_seqs.clear();
+        self.defer_block = None;
         let before = self.m.snapshot();
         let mut d = match self.decide_words(b, text, origin) {
             Ok(d) => d,
@@ -417,6 +440,7 @@ impl Lowering {
         // The line itself.
         let incremental_lowered = self.incremental_lowered(lowered.as_deref());
         let shift = self.target_shift(b, &d.fates, lowered.as_deref())?;
+        let waiting = self.waiting_words(b, before, &mut d.fates);
         let written = self.own_line(b, text, before, d, lowered.as_deref(), shift)?;
         let mut lines: Vec<Vec<u8>> = Vec::new();
         for l in &d.pre_lines {
@@ -425,11 +449,22 @@ impl Lowering {
         if !written.is_empty() {
             lines.push(written);
         }
+        if let Some(after) = self.defer_block.take()
+            && !waiting.is_empty()
+        {
+            // Runs after the held moves (see `comp_block`).
+            let l = self.plain_bytes(&words_line(&waiting))?;
+            self.deferred.push((after, l));
+        }
+        let seqs = std::mem::take(&mut self.released_seqs);
         if let Some(lowered) = lowered {
             if incremental_lowered {
                 lines.push(b"G90".to_vec());
             }
-            for l in &lowered {
+            for (i, l) in lowered.iter().enumerate() {
+                if let Some(&seq) = seqs.get(i) {
+                    self.flush_deferred(Some(seq), &mut lines);
+                }
                 let shifted;
                 let l = match shift {
                     Some(sh) => {
@@ -443,6 +478,14 @@ impl Lowering {
             if incremental_lowered {
                 lines.push(b"G91".to_vec());
             }
+        }
+        if !self.deferred.is_empty() {
+            let first_held = self
+                .comp
+                .as_ref()
+                .and_then(|c| c.comp.first_held())
+                .map(|t| t.1);
+            self.flush_deferred(first_held, &mut lines);
         }
         for l in &d.extra_lines {
             lines.push(self.plain_bytes(&words_line(l))?);
@@ -643,6 +686,37 @@ impl Lowering {
             return Err(Problem { span: None, kind });
         }
         Ok(written)
+    }
+
+    /// The action words of a block run while compensated moves are held
+    /// back (and a dwell's P), taken out of its own line: they wait for the
+    /// held moves, while its modal words (G90/G91, ...) are written at once,
+    /// as the moves written after them are read in those modes.
+    fn waiting_words(&self, b: &Block, before: &Machine, fates: &mut [Fate]) -> Vec<(u8, f64)> {
+        if self.defer_block.is_none() {
+            return Vec::new();
+        }
+        let dwell = b.non_modal == Some(NonModal::Dwell);
+        let mut words = Vec::new();
+        for (i, w) in b.words.iter().enumerate() {
+            let dwell_p = dwell && w.letter == b'P' && matches!(w.kind, WordKind::Value);
+            if fates[i] == Fate::Keep && (Self::is_action(w) || dwell_p) {
+                words.push((w.letter, self.out_value(w, before)));
+                fates[i] = Fate::Drop;
+            }
+        }
+        words
+    }
+
+    /// Moves the waiting lines whose held moves are all written (number
+    /// below `before`; all of them for `None`) into `lines`.
+    fn flush_deferred(&mut self, before: Option<u64>, lines: &mut Vec<Vec<u8>>) {
+        let n = self
+            .deferred
+            .iter()
+            .take_while(|(after, _)| before.is_none_or(|b| *after < b))
+            .count();
+        lines.extend(self.deferred.drain(..n).map(|(_, l)| l));
     }
 
     /// Whether the axis words of `b` are positions in the active work
@@ -1758,7 +1832,13 @@ impl Lowering {
     /// move back (spindle, coolant, dwell, tools, units, offsets, ...):
     /// the reference runs it only after the held move.
     fn held_action(b: &Block) -> Option<&Word> {
-        b.words.iter().find(|w| match w.kind {
+        b.words.iter().find(|w| Self::is_action(w))
+    }
+
+    /// Whether `w` acts (or changes how later moves are read) rather than
+    /// being part of a compensated move.
+    fn is_action(w: &Word) -> bool {
+        match w.kind {
             WordKind::G(g) => !matches!(
                 g,
                 GCode::Motion(
@@ -1772,7 +1852,21 @@ impl Lowering {
             ),
             WordKind::M(m) => !matches!(m, MCode::Pause { .. } | MCode::End { .. }),
             WordKind::Value => !b"XYZIJKRPFN".contains(&w.letter),
-        })
+        }
+    }
+
+    /// Actions written after the held moves, in the program's order, with
+    /// the same effect: spindle, coolant, dwell and tool selection (none of
+    /// them changes how a later move's words are read).
+    fn deferrable(w: &Word) -> bool {
+        match w.kind {
+            WordKind::G(g) => matches!(g, GCode::NonModal(NonModal::Dwell)),
+            WordKind::M(m) => matches!(
+                m,
+                MCode::Spindle(_) | MCode::Mist | MCode::Flood | MCode::CoolantOff
+            ),
+            WordKind::Value => matches!(w.letter, b'S' | b'T'),
+        }
     }
 
     /// Cutter compensation on a target without it: the programmed moves
@@ -1805,18 +1899,29 @@ impl Lowering {
         if self.comp.as_ref().is_some_and(|c| c.comp.holding())
             && let Some(w) = Self::held_action(b)
         {
-            return Err(self.comp_refusal(
-                Some(w.span),
-                "E1180",
-                "while cutter compensation holds a move back (until the next move is known), LinuxCNC runs this only after that move; it is not lowered: put it before G41/G42 or after G40",
-            ));
+            // LinuxCNC runs the block's actions after the held moves: the
+            // line waits for them. What would change how later moves are
+            // read (units, offsets, tools) is not lowered.
+            if let Some(w) = b
+                .words
+                .iter()
+                .find(|w| Self::is_action(w) && !Self::deferrable(w))
+            {
+                return Err(self.comp_refusal(
+                    Some(w.span),
+                    "E1180",
+                    "while cutter compensation holds a move back (until the next move is known), LinuxCNC runs this only after that move; only spindle, coolant, dwell and tool selection are lowered there: put it before G41/G42 or after G40",
+                ));
+            }
+            let _ = w;
+            self.defer_block = Some(self.comp_seq);
         }
         for (i, w) in b.words.iter().enumerate() {
             if matches!(w.kind, WordKind::G(GCode::CutterComp(_))) {
                 fates[i] = Fate::Drop;
             }
         }
-        let mut released: Vec<Out<Option<f64>>> = Vec::new();
+        let mut released: Vec<Out<MoveTag>> = Vec::new();
         let mut lines: Vec<PlainLine> = Vec::new();
         let mut handled = false;
         // G40 comes before the block's motion.
@@ -1856,6 +1961,7 @@ impl Lowering {
             }
         } else if self.after_off.is_some() && (moves || other_axis_use) {
             lines.push(self.after_off_move(motion, other_axis_use, motion_span)?);
+            self.released_seqs.push(u64::MAX);
             handled = true;
         }
         // Program stops release the held moves (an end also turns
@@ -1949,7 +2055,7 @@ impl Lowering {
     fn write_released(
         &mut self,
         c: &mut CompPath,
-        released: &[Out<Option<f64>>],
+        released: &[Out<MoveTag>],
         lines: &mut Vec<PlainLine>,
         span: Option<crate::machine::block::Span>,
     ) -> Result<[f64; 3], Problem> {
@@ -1958,7 +2064,8 @@ impl Lowering {
                 span,
                 kind: self.lower_error(e),
             })?;
-        for (mut l, feed) in out {
+        for (mut l, (feed, seq)) in out {
+            self.released_seqs.push(*seq);
             let feeds = l
                 .words
                 .first()
@@ -2135,7 +2242,8 @@ impl Lowering {
         };
         let xz = c.plane == lower::Plane::XZ;
         let end = if xz { [z, x, y] } else { [x, y, z] };
-        let feed = self.last_f;
+        self.comp_seq += 1;
+        let feed = (self.last_f, self.comp_seq);
         let mut released = Vec::new();
         let r = if arc {
             let center = match b.value(b'R') {
