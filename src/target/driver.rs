@@ -1896,6 +1896,19 @@ impl Lowering {
         let other_axis_use = b.non_modal.is_some_and(|n| !matches!(n, NonModal::Dwell))
             || b.tool_length == Some(ToolLength::Dynamic);
         let motion = self.m.modes.motion;
+        if !moves
+            && b.m_codes().any(|(m, _)| matches!(m, MCode::ToolChange))
+            && let Some(at) = self.after_off.take()
+        {
+            // After a tool change the reference reads the position back
+            // from the machine: the tool is where the compensated path
+            // left it, and later moves start from there.
+            let s = self.m.scale();
+            for (p, v) in self.m.pos.iter_mut().zip(at) {
+                *p = Some(v * s);
+            }
+            return Ok(None);
+        }
         if self.comp.as_ref().is_some_and(|c| c.comp.holding())
             && let Some(w) = Self::held_action(b)
         {
@@ -1960,6 +1973,21 @@ impl Lowering {
                 handled = true;
             }
         } else if self.after_off.is_some() && (moves || other_axis_use) {
+            // A G53 move goes to a machine point: written in work
+            // coordinates, every axis, where they are known.
+            let g53 = b.non_modal == Some(NonModal::MachineCoords)
+                && self.prog_pos(&self.m).iter().all(Option::is_some);
+            if g53 {
+                for (i, w) in b.words.iter().enumerate() {
+                    if matches!(
+                        w.kind,
+                        WordKind::G(GCode::NonModal(NonModal::MachineCoords))
+                    ) {
+                        fates[i] = Fate::Drop;
+                    }
+                }
+            }
+            let other_axis_use = other_axis_use && !g53;
             lines.push(self.after_off_move(motion, other_axis_use, motion_span)?);
             self.released_seqs.push(u64::MAX);
             handled = true;
@@ -2059,11 +2087,16 @@ impl Lowering {
         lines: &mut Vec<PlainLine>,
         span: Option<crate::machine::block::Span>,
     ) -> Result<[f64; 3], Problem> {
-        let (out, at) =
-            lower::comp::lower_comp_moves(c.plane, c.at, released).map_err(|e| Problem {
-                span,
-                kind: self.lower_error(e),
-            })?;
+        let (out, at) = lower::comp::lower_comp_moves(
+            c.plane,
+            c.at,
+            released,
+            lower::comp::arc_radius_tolerance(self.m.modes.units == Units::Mm),
+        )
+        .map_err(|e| Problem {
+            span,
+            kind: self.lower_error(e),
+        })?;
         for (mut l, (feed, seq)) in out {
             self.released_seqs.push(*seq);
             let feeds = l

@@ -715,7 +715,8 @@ fn lowered_matches(case: &Case, original: &[String]) -> Result<bool, String> {
     use ngcflat::target::lower::comp::lower_comp_moves;
     let (_, out) = model_moves(case);
     let plane = if case.xz { Plane::XZ } else { Plane::XY };
-    let lines = match lower_comp_moves(plane, [0.0; 3], &out) {
+    let tolerance = ngcflat::target::lower::comp::arc_radius_tolerance(case.mm);
+    let lines = match lower_comp_moves(plane, [0.0; 3], &out, tolerance) {
         Ok((lines, _)) => lines,
         // An arc released off its circle (a stop in a concave corner):
         // refused for controllers without compensation.

@@ -14,10 +14,13 @@
 //!
 //! Arcs go through [`super::arc::lower_arc`] (parts of less than half a
 //! turn, P turns unrolled). Lathe tools are already shifted to their tip by
-//! the `Comp`. An arc that does not start on its circle (the reference
-//! releases one when a program stop, M0/M1, falls inside a concave corner
-//! and the next move is an arc) cannot be written and is refused
-//! ([`LowerError::BadArc`]).
+//! the `Comp`. An arc whose start and end radius differ by more than a
+//! controller reads as one circle (the reference releases one when a
+//! program stop, M0/M1, falls inside a concave corner and the next move is
+//! an arc) cannot be written and is refused ([`LowerError::BadArc`]); one
+//! within [`arc_radius_tolerance`] is written as it is (the same centre and
+//! end as LinuxCNC's canon). An arc of no radius (a helix milled with a
+//! tool as wide as the hole) is the straight move it is.
 
 use super::arc::{ArcInput, lower_arc};
 use super::{LowerError, PlainLine, Plane, push};
@@ -32,6 +35,13 @@ fn axes(plane: Plane) -> [usize; 3] {
     }
 }
 
+/// The largest difference between the start and end radius of an arc
+/// written as one (program units): 0.005 mm, which GRBL takes whatever the
+/// radius, and below LinuxCNC's own arc tolerance.
+pub fn arc_radius_tolerance(mm: bool) -> f64 {
+    if mm { 0.005 } else { 0.005 / 25.4 }
+}
+
 /// Blocks with the tag of the move each comes from, and the position after
 /// the last move.
 pub type Lowered<'a, T> = (Vec<(PlainLine, &'a T)>, [f64; 3]);
@@ -43,6 +53,7 @@ pub fn lower_comp_moves<T>(
     plane: Plane,
     start: [f64; 3],
     moves: &[Out<T>],
+    radius_tolerance: f64,
 ) -> Result<Lowered<'_, T>, LowerError> {
     let [a, b, c] = axes(plane);
     let xyz = |p: [f64; 3]| {
@@ -81,8 +92,16 @@ pub fn lower_comp_moves<T>(
                 // tool is (its canon is not a circle): no G2/G3 expresses it.
                 let r0 = (at[a] - center[0]).hypot(at[b] - center[1]);
                 let r1 = (end[0] - center[0]).hypot(end[1] - center[1]);
-                if (r0 - r1).abs() > 1e-6 * r0.max(1.0) {
+                if (r0 - r1).abs() > radius_tolerance {
                     return Err(LowerError::BadArc);
+                }
+                if r0 <= radius_tolerance && r1 <= radius_tolerance {
+                    // No radius: the tool moves straight.
+                    lines.clear();
+                    push(&mut lines, PlainLine::motion(1.0, p))?;
+                    out.extend(lines.drain(..).map(|l| (l, tag)));
+                    at = p;
+                    continue;
                 }
                 let input = ArcInput {
                     plane,
@@ -133,7 +152,7 @@ mod tests {
                 tag: 2,
             },
         ];
-        let (lines, end) = lower_comp_moves(Plane::XZ, [0.0, 0.0, 0.0], &moves).unwrap();
+        let (lines, end) = lower_comp_moves(Plane::XZ, [0.0, 0.0, 0.0], &moves, 0.005).unwrap();
         assert_eq!(end, [15.0, 0.0, -10.0]);
         assert_eq!(
             letters(&lines[0].0),
@@ -154,6 +173,45 @@ mod tests {
     }
 
     #[test]
+    fn arcs_within_the_radius_tolerance_are_written_and_others_refused() {
+        let arc = |end: [f64; 2]| Out::Arc {
+            end,
+            center: [0.0, 0.0],
+            turn: 1,
+            end3: 0.0,
+            tag: (),
+        };
+        // Start radius 10, end radius 10.004: one arc about the same centre.
+        let near = [arc([0.0, 10.004])];
+        let (lines, _) = lower_comp_moves(Plane::XY, [10.0, 0.0, 0.0], &near, 0.005).unwrap();
+        assert_eq!(letters(&lines[0].0)[0], ('G', 3.0));
+        let far = [arc([0.0, 10.01])];
+        assert!(matches!(
+            lower_comp_moves(Plane::XY, [10.0, 0.0, 0.0], &far, 0.005),
+            Err(LowerError::BadArc)
+        ));
+    }
+
+    #[test]
+    fn an_arc_of_no_radius_is_a_straight_move() {
+        // A helix about the point the tool is at (hole as wide as the tool).
+        let moves = [Out::Arc {
+            end: [2.0, 3.0],
+            center: [2.0, 3.0],
+            turn: 1,
+            end3: -1.5,
+            tag: (),
+        }];
+        let (lines, end) = lower_comp_moves(Plane::XY, [2.0, 3.0, 0.0], &moves, 0.005).unwrap();
+        assert_eq!(lines.len(), 1);
+        assert_eq!(
+            letters(&lines[0].0),
+            vec![('G', 1.0), ('X', 2.0), ('Y', 3.0), ('Z', -1.5)]
+        );
+        assert_eq!(end, [2.0, 3.0, -1.5]);
+    }
+
+    #[test]
     fn full_turns_are_split() {
         let moves = vec![Out::Arc {
             end: [1.0, 0.0],
@@ -162,7 +220,7 @@ mod tests {
             end3: -1.0,
             tag: (),
         }];
-        let (lines, end) = lower_comp_moves(Plane::XY, [1.0, 0.0, 0.0], &moves).unwrap();
+        let (lines, end) = lower_comp_moves(Plane::XY, [1.0, 0.0, 0.0], &moves, 0.005).unwrap();
         // Two whole turns: more than four parts of under half a turn.
         assert!(lines.len() > 4, "{}", lines.len());
         assert_eq!(end, [1.0, 0.0, -1.0]);
