@@ -1896,17 +1896,7 @@ impl Lowering {
         let other_axis_use = b.non_modal.is_some_and(|n| !matches!(n, NonModal::Dwell))
             || b.tool_length == Some(ToolLength::Dynamic);
         let motion = self.m.modes.motion;
-        if !moves
-            && b.m_codes().any(|(m, _)| matches!(m, MCode::ToolChange))
-            && let Some(at) = self.after_off.take()
-        {
-            // After a tool change the reference reads the position back
-            // from the machine: the tool is where the compensated path
-            // left it, and later moves start from there.
-            let s = self.m.scale();
-            for (p, v) in self.m.pos.iter_mut().zip(at) {
-                *p = Some(v * s);
-            }
+        if !moves && self.tool_change_after_off(b) {
             return Ok(None);
         }
         if self.comp.as_ref().is_some_and(|c| c.comp.holding())
@@ -1973,21 +1963,7 @@ impl Lowering {
                 handled = true;
             }
         } else if self.after_off.is_some() && (moves || other_axis_use) {
-            // A G53 move goes to a machine point: written in work
-            // coordinates, every axis, where they are known.
-            let g53 = b.non_modal == Some(NonModal::MachineCoords)
-                && self.prog_pos(&self.m).iter().all(Option::is_some);
-            if g53 {
-                for (i, w) in b.words.iter().enumerate() {
-                    if matches!(
-                        w.kind,
-                        WordKind::G(GCode::NonModal(NonModal::MachineCoords))
-                    ) {
-                        fates[i] = Fate::Drop;
-                    }
-                }
-            }
-            let other_axis_use = other_axis_use && !g53;
+            let other_axis_use = other_axis_use && !self.g53_after_off(b, fates);
             lines.push(self.after_off_move(motion, other_axis_use, motion_span)?);
             self.released_seqs.push(u64::MAX);
             handled = true;
@@ -2023,6 +1999,42 @@ impl Lowering {
             }
         }
         Ok(handled.then_some(lines))
+    }
+
+    /// A tool change after G40: the reference reads the position back
+    /// from the machine, so the tool is where the compensated path left it
+    /// and later moves start from there. Whether `b` was one.
+    fn tool_change_after_off(&mut self, b: &Block) -> bool {
+        if !b.m_codes().any(|(m, _)| matches!(m, MCode::ToolChange)) {
+            return false;
+        }
+        let Some(at) = self.after_off.take() else {
+            return false;
+        };
+        let s = self.m.scale();
+        for (p, v) in self.m.pos.iter_mut().zip(at) {
+            *p = Some(v * s);
+        }
+        true
+    }
+
+    /// A G53 move as the first move after G40 goes to a machine point: it
+    /// is written in work coordinates with every axis, when they are all
+    /// known (its G53 dropped). Whether it is.
+    fn g53_after_off(&self, b: &Block, fates: &mut [Fate]) -> bool {
+        let g53 = b.non_modal == Some(NonModal::MachineCoords)
+            && self.prog_pos(&self.m).iter().all(Option::is_some);
+        if g53 {
+            for (i, w) in b.words.iter().enumerate() {
+                if matches!(
+                    w.kind,
+                    WordKind::G(GCode::NonModal(NonModal::MachineCoords))
+                ) {
+                    fates[i] = Fate::Drop;
+                }
+            }
+        }
+        g53
     }
 
     /// The first move after G40: from where the compensated path ended to
