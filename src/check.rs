@@ -14,7 +14,7 @@ use crate::program::FileIndex;
 /// Programs to check: files given directly, and files with a matching
 /// extension under given folders (hidden folders skipped, symlink loops
 /// reported by walkdir and skipped).
-pub fn collect(paths: &[PathBuf], exts: &[String]) -> (Vec<PathBuf>, Vec<Diagnostic>) {
+pub(crate) fn collect(paths: &[PathBuf], exts: &[String]) -> (Vec<PathBuf>, Vec<Diagnostic>) {
     let mut files = Vec::new();
     let mut problems = Vec::new();
     for p in paths {
@@ -122,7 +122,7 @@ fn observed(
 }
 
 /// Checks one program; returns its diagnostics.
-pub fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
+pub(crate) fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
     let opened = if path.as_os_str() == "-" {
         crate::flatten::read_source_limited(None, cfg.settings.input)
     } else {
@@ -237,7 +237,12 @@ fn with_quiet_panics<T>(f: impl FnOnce() -> T) -> T {
     r
 }
 
-pub fn run(paths: &[PathBuf], exts: &[String], deny_warnings: bool, cfg: &Config) -> ExitCode {
+pub(crate) fn run(
+    paths: &[PathBuf],
+    exts: &[String],
+    deny_warnings: bool,
+    cfg: &Config,
+) -> ExitCode {
     let (files, mut problems) = collect(paths, exts);
     let results: Mutex<Vec<(usize, Vec<Diagnostic>)>> = Mutex::new(Vec::new());
     let next = AtomicUsize::new(0);

@@ -7,7 +7,9 @@
 //! them together; [`diag`] holds every error and warning. The modules form
 //! layers without cycles, listed in the README's Design section.
 
-pub mod check;
+#![deny(unreachable_pub)]
+
+mod check;
 pub mod config;
 pub mod diag;
 pub mod emit;
@@ -20,9 +22,9 @@ pub mod machine;
 mod number;
 pub mod parse;
 pub mod program;
-pub mod source;
+mod source;
 pub mod target;
-pub mod view;
+mod view;
 
 use std::io::IsTerminal;
 

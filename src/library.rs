@@ -219,7 +219,7 @@ fn closer_of(kind: OKind) -> &'static str {
 }
 
 /// Checks a subroutine library file; returns its diagnostics.
-pub fn check_library(
+pub(crate) fn check_library(
     source: Arc<SourceFile>,
     settings: &Settings,
     search: &SearchPath,

@@ -19,19 +19,19 @@ fn files() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
 }
 
 /// Removes `path` if the run is interrupted.
-pub fn register(path: &Path) {
+pub(crate) fn register(path: &Path) {
     files().push(path.to_path_buf());
 }
 
 /// `path` is no longer to be removed.
-pub fn unregister(path: &Path) {
+pub(crate) fn unregister(path: &Path) {
     files().retain(|p| p != path);
 }
 
 /// Renames the registered `path` onto `target`; an interruption waits until
 /// the rename is done (the output is then complete) or happens before it
 /// (the temporary file is removed).
-pub fn persist(path: tempfile::TempPath, target: &Path) -> std::io::Result<()> {
+pub(crate) fn persist(path: tempfile::TempPath, target: &Path) -> std::io::Result<()> {
     let mut list = files();
     let from = path.to_path_buf();
     let r = path.persist(target).map_err(|e| e.error);
@@ -40,7 +40,7 @@ pub fn persist(path: tempfile::TempPath, target: &Path) -> std::io::Result<()> {
 }
 
 /// Installs the signal thread (command-line use; once).
-pub fn install() {
+pub(crate) fn install() {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {

@@ -3,7 +3,7 @@
 //! on a second thread for long evaluated programs.
 
 mod edit;
-pub mod interrupt;
+pub(crate) mod interrupt;
 mod output;
 mod sink;
 

@@ -146,7 +146,7 @@ impl MemoryOut {
 /// Where `-o PATH` really writes: the file a chain of symbolic links ends
 /// at (the link is kept, its target replaced), and whether that is a FIFO,
 /// device or socket, written in place rather than replaced.
-pub fn resolve_output(path: &Path) -> io::Result<(PathBuf, bool)> {
+pub(super) fn resolve_output(path: &Path) -> io::Result<(PathBuf, bool)> {
     let mut p = path.to_path_buf();
     for _ in 0..40 {
         match std::fs::symlink_metadata(&p) {

@@ -7,7 +7,7 @@ mod flow;
 mod out;
 mod read;
 mod settings;
-pub mod state;
+pub(crate) mod state;
 
 pub use expr::params;
 pub use state::tools;

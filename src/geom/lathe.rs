@@ -13,13 +13,13 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 
 /// A point (or vector) of the XZ plane: `re` is Z, `im` is X.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct C {
+pub(crate) struct C {
     pub re: f64,
     pub im: f64,
 }
 
 impl C {
-    pub const fn new(re: f64, im: f64) -> C {
+    pub(crate) const fn new(re: f64, im: f64) -> C {
         C { re, im }
     }
     fn conj(self) -> C {
@@ -90,18 +90,18 @@ impl Div for C {
 const TOL: f64 = 1e-6;
 
 /// Most moves one cycle may make (a runaway bound: tiny depths of cut).
-pub const MAX_MOVES: usize = 2_000_000;
+pub(crate) const MAX_MOVES: usize = 2_000_000;
 
 /// A move of the cycle, in program coordinates (Z real, X imaginary).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Move {
+pub(crate) enum Move {
     Rapid(C),
     Feed(C),
     Arc { ccw: bool, center: C, end: C },
 }
 
 impl Move {
-    pub fn end(&self) -> C {
+    pub(crate) fn end(&self) -> C {
         match *self {
             Move::Rapid(e) | Move::Feed(e) | Move::Arc { end: e, .. } => e,
         }
@@ -617,42 +617,35 @@ fn pick(near: C, pc: C, pe: C, rot: C, origin: C) -> C {
 
 /// A contour as the subroutine draws it, from the cycle's start point.
 #[derive(Debug, Clone)]
-pub struct Contour {
+pub(crate) struct Contour {
     segs: Vec<Seg>,
     last: C,
 }
 
 impl Contour {
     /// An empty contour starting at the cycle's start point.
-    pub fn new(start: C) -> Contour {
+    pub(crate) fn new(start: C) -> Contour {
         Contour {
             segs: Vec::new(),
             last: start,
         }
     }
     /// Number of elements (lines, arcs, corner finishes).
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.segs.len()
     }
-    pub fn is_empty(&self) -> bool {
-        self.segs.is_empty()
-    }
-    /// Where the contour ends.
-    pub fn last(&self) -> C {
-        self.last
-    }
     /// A straight line (G0 or G1) to `end`.
-    pub fn line(&mut self, end: C) {
+    pub(crate) fn line(&mut self, end: C) {
         self.segs.push(Seg::line(self.last, end));
         self.last = end;
     }
     /// An arc to `end` about `center`.
-    pub fn arc(&mut self, ccw: bool, center: C, end: C) {
+    pub(crate) fn arc(&mut self, ccw: bool, center: C, end: C) {
         self.segs.push(Seg::round(ccw, self.last, center, end));
         self.last = end;
     }
     /// A fillet of radius `r` (A word) at the contour's end.
-    pub fn fillet(&mut self, r: f64) {
+    pub(crate) fn fillet(&mut self, r: f64) {
         let l = self.last;
         self.segs.push(Seg {
             s: l,
@@ -663,7 +656,7 @@ impl Contour {
         });
     }
     /// A chamfer of size `c` (C word) at the contour's end.
-    pub fn chamfer(&mut self, c: f64) {
+    pub(crate) fn chamfer(&mut self, c: f64) {
         let l = self.last;
         self.segs.push(Seg {
             s: l,
@@ -677,7 +670,7 @@ impl Contour {
 
 /// The cycle and its words.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Cycle {
+pub(crate) enum Cycle {
     /// G70: `passes` (P) finishing passes from distance `d` (D) to `e` (E).
     Finish { d: f64, e: f64, passes: f64 },
     /// G71 (`face` false) or G72 (`face` true); `mode` 0 full, 1 (.1) no
@@ -695,7 +688,7 @@ pub enum Cycle {
 }
 
 /// Most passes G70 makes (P is a count).
-pub const MAX_PASSES: f64 = 10_000.0;
+pub(crate) const MAX_PASSES: f64 = 10_000.0;
 
 struct Path {
     segs: Vec<Seg>,
@@ -1090,9 +1083,10 @@ impl Path {
     }
 }
 
+#[cfg(test)]
 /// The moves of a lathe cycle over `contour`, from the start point
 /// `start` (the cycle's X and Z), in program coordinates.
-pub fn cut(contour: &Contour, start: C, cycle: &Cycle) -> Result<Vec<Move>, LatheError> {
+pub(crate) fn cut(contour: &Contour, start: C, cycle: &Cycle) -> Result<Vec<Move>, LatheError> {
     match cut_partial(contour, start, cycle) {
         (moves, None) => Ok(moves),
         (_, Some(e)) => Err(e),
@@ -1101,7 +1095,11 @@ pub fn cut(contour: &Contour, start: C, cycle: &Cycle) -> Result<Vec<Move>, Lath
 
 /// As [`cut`], with the moves made before an error (the reference makes
 /// them, one by one, before it stops; a move it refuses comes first).
-pub fn cut_partial(contour: &Contour, start: C, cycle: &Cycle) -> (Vec<Move>, Option<LatheError>) {
+pub(crate) fn cut_partial(
+    contour: &Contour,
+    start: C,
+    cycle: &Cycle,
+) -> (Vec<Move>, Option<LatheError>) {
     let mut out = Out {
         flip: 0,
         moves: Vec::new(),

@@ -2,4 +2,4 @@
 //! moves of lathe cycles.
 
 pub mod comp;
-pub mod lathe;
+pub(crate) mod lathe;

@@ -10,10 +10,10 @@ use crate::diag::ErrorKind;
 use crate::program::ini::Ini;
 
 /// Axis letters in parameter order.
-pub const LETTERS: [char; 9] = ['X', 'Y', 'Z', 'A', 'B', 'C', 'U', 'V', 'W'];
+pub(crate) const LETTERS: [char; 9] = ['X', 'Y', 'Z', 'A', 'B', 'C', 'U', 'V', 'W'];
 
 /// Whether axis `i` is rotary (A, B, C).
-pub fn is_rotary(i: usize) -> bool {
+pub(crate) fn is_rotary(i: usize) -> bool {
     (3..6).contains(&i)
 }
 

@@ -3,10 +3,10 @@
 //! motion they make ([`motion`]), and the machine's axes: travel limits,
 //! velocities and accelerations ([`axes`]).
 
-pub mod axes;
+pub(crate) mod axes;
 pub mod block;
-pub mod model;
-pub mod motion;
+pub(crate) mod model;
+pub(crate) mod motion;
 
 pub use block::Block;
 pub use model::Machine;

@@ -19,12 +19,12 @@ use super::block::{
     ArcDistance, Block, CutterComp, Distance, FeedMode as BFeedMode, LatheMode, MCode, MotionMode,
     NonModal, PathMode, Plane as BPlane, Retract, SpindleMode, ToolLength, Units,
 };
-use super::motion::{Axes, Feed, FeedMode, Motion, MoveKind, Plane, Point, SpindleDir};
+use super::motion::{Feed, FeedMode, Motion, MoveKind, Plane, Point, SpindleDir};
 
 const MM_PER_INCH: f64 = 25.4;
 
 /// Per-axis values that may be unknown.
-pub type MaybeAxes = [Option<f64>; 9];
+pub(crate) type MaybeAxes = [Option<f64>; 9];
 
 const UNKNOWN: MaybeAxes = [None; 9];
 const ZERO: MaybeAxes = [Some(0.0); 9];
@@ -883,15 +883,6 @@ fn radius_center(a: [f64; 2], b: [f64; 2], r: f64, ccw: bool) -> [f64; 2] {
     let (nx, ny) = (-dy / d, dx / d);
     let side = if (r > 0.0) != ccw { -1.0 } else { 1.0 };
     [mid[0] + side * h * nx, mid[1] + side * h * ny]
-}
-
-/// Axes as a plain array (for callers that know every axis).
-pub fn known(a: &MaybeAxes) -> Option<Axes> {
-    if a.iter().all(Option::is_some) {
-        Some(a.map(|v| v.unwrap_or(0.0)))
-    } else {
-        None
-    }
 }
 
 #[cfg(test)]

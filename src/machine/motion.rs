@@ -7,7 +7,7 @@
 //! the program was written in.
 
 /// Axis values in parameter order: X Y Z A B C U V W.
-pub type Axes = [f64; 9];
+pub(crate) type Axes = [f64; 9];
 
 /// A tool-tip position in the active work coordinate system (G5x, G92 and
 /// G52 offsets in effect), and the offset that takes it to the machine's

@@ -3,7 +3,7 @@
 
 use super::Name;
 
-pub use crate::source::Span;
+pub(crate) use crate::source::Span;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BinOp {

@@ -7,7 +7,7 @@ use super::Name;
 use super::ast::{BinOp, Expr, ExprKind, Func, ParamRef};
 
 /// Deepest stack a compiled expression may use.
-pub const STACK: usize = 8;
+pub(crate) const STACK: usize = 8;
 
 /// One stack operation. Reads push a value and give up unless it is finite.
 /// A binary operation whose right operand is a read takes it directly
@@ -47,7 +47,7 @@ pub struct Code {
 /// The value expression `e`, wrapped with its compiled form when it has
 /// operations to gain from (plain numbers and single reads stay as they are,
 /// and so does anything the stack machine does not cover).
-pub fn compile(e: Expr) -> Expr {
+pub(crate) fn compile(e: Expr) -> Expr {
     let worth = match &e.kind {
         ExprKind::Bin(..) | ExprKind::Neg(_) | ExprKind::Func(..) | ExprKind::Atan(_) => true,
         ExprKind::Param(p) => matches!(**p, ParamRef::Numbered(_)),

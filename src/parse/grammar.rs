@@ -2,4 +2,4 @@
 
 #[derive(pest_derive::Parser)]
 #[grammar = "../grammar/ngc.pest"]
-pub struct NgcParser;
+pub(super) struct NgcParser;

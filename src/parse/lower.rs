@@ -10,9 +10,9 @@ use super::normalize::Normalized;
 use crate::diag::ErrorKind;
 
 /// Error while lowering: kind and span in raw-line offsets.
-pub type LowerError = (ErrorKind, Span);
+pub(super) type LowerError = (ErrorKind, Span);
 
-pub struct Lowerer<'n> {
+pub(super) struct Lowerer<'n> {
     pub norm: &'n Normalized,
 }
 
@@ -32,7 +32,7 @@ impl Lowerer<'_> {
         Span::new(self.norm.raw_offset(s.start()), self.raw_end(pair))
     }
 
-    pub fn lower_line(&self, pair: Pair<'_, Rule>) -> Result<Line, LowerError> {
+    pub(super) fn lower_line(&self, pair: Pair<'_, Rule>) -> Result<Line, LowerError> {
         let mut block_delete = false;
         let mut line_number = None;
         let mut kind = LineKind::Blank;
@@ -170,7 +170,7 @@ impl Lowerer<'_> {
         Ok(ParamRef::Numbered(self.lower_value(p)?))
     }
 
-    pub fn lower_value(&self, p: Pair<'_, Rule>) -> Result<Expr, LowerError> {
+    pub(super) fn lower_value(&self, p: Pair<'_, Rule>) -> Result<Expr, LowerError> {
         let span = self.tight_span(&p);
         let kind = match p.as_rule() {
             Rule::number => ExprKind::Num(self.lower_number(&p)?),

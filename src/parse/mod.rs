@@ -1,12 +1,12 @@
 //! Line parsing: raw bytes → processed line → pest pairs → typed AST.
 
-pub mod ast;
-pub mod code;
+pub(crate) mod ast;
+pub(crate) mod code;
 mod grammar;
 mod lower;
 mod name;
-pub mod named2007;
-pub mod normalize;
+pub(crate) mod named2007;
+pub(crate) mod normalize;
 
 use pest::Parser as _;
 

@@ -18,11 +18,11 @@ static ENABLED: AtomicBool = AtomicBool::new(false);
 
 /// Turns the syntax on for every line parsed from now on in this process
 /// (a command-line switch for the whole run).
-pub fn enable(on: bool) {
+pub(crate) fn enable(on: bool) {
     ENABLED.store(on, Ordering::Relaxed);
 }
 
-pub fn enabled() -> bool {
+pub(crate) fn enabled() -> bool {
     ENABLED.load(Ordering::Relaxed)
 }
 
@@ -97,7 +97,7 @@ fn named_form(t: &[u8], i: usize) -> Option<(usize, usize, bool)> {
 
 /// Rewrites a processed line (`map`: raw offset of each byte, plus one for
 /// the end); `None` when nothing in it uses the syntax.
-pub fn rewrite(text: &str, map: &[u32]) -> Option<(String, Vec<u32>)> {
+pub(crate) fn rewrite(text: &str, map: &[u32]) -> Option<(String, Vec<u32>)> {
     let t = text.as_bytes();
     if !t.iter().any(|&b| b == b'#' || b == b'$') {
         return None;

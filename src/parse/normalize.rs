@@ -6,23 +6,23 @@ use crate::diag::ErrorKind;
 /// A processed line and, for each of its bytes, the byte offset of that byte in
 /// the raw line (plus one final entry for the end of the line).
 #[derive(Debug, Default)]
-pub struct Normalized {
+pub(crate) struct Normalized {
     pub text: String,
     pub map: Vec<u32>,
 }
 
 impl Normalized {
     /// Offset in the raw line of processed byte `i` (`i == len` is the end).
-    pub fn raw_offset(&self, i: usize) -> u32 {
+    pub(crate) fn raw_offset(&self, i: usize) -> u32 {
         self.map[i.min(self.map.len() - 1)]
     }
 }
 
 /// Lexical error found while processing: kind and raw byte offset in the line.
-pub type LexError = (ErrorKind, u32);
+pub(crate) type LexError = (ErrorKind, u32);
 
 /// Processes a raw line (without its line terminator; trailing blanks allowed).
-pub fn normalize(raw: &[u8], out: &mut Normalized) -> Result<(), LexError> {
+pub(crate) fn normalize(raw: &[u8], out: &mut Normalized) -> Result<(), LexError> {
     out.text.clear();
     out.map.clear();
     let mut bytes: Vec<u8> = std::mem::take(&mut out.text).into_bytes();

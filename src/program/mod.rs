@@ -2,7 +2,7 @@
 //! finds subroutine files.
 
 mod file_index;
-pub mod ini;
+pub(crate) mod ini;
 mod loader;
 
 pub use crate::source::{IN_MEMORY_LIMIT, InputLimits, SourceFile, Window, WindowLine};

@@ -19,7 +19,7 @@ const SHOWN: usize = 1024;
 /// Sampled line starts: `starts[k]` is the offset of line `k * STRIDE`
 /// (0-based).
 #[derive(Debug, Default)]
-pub struct LineSamples {
+pub(super) struct LineSamples {
     starts: Vec<u64>,
 }
 
@@ -34,7 +34,7 @@ pub struct LineCol {
 
 impl LineSamples {
     /// Samples the line starts of bytes read from `input`.
-    pub fn read(mut input: impl Read) -> io::Result<LineSamples> {
+    pub(super) fn read(mut input: impl Read) -> io::Result<LineSamples> {
         let mut starts = vec![0u64];
         let mut buf = vec![0u8; 1 << 16];
         let (mut pos, mut line) = (0u64, 0usize);
@@ -62,7 +62,11 @@ impl LineSamples {
 
     /// Locates `offset` in bytes available as `read_at(from)` (the bytes
     /// from an offset on, in pieces).
-    pub fn locate(&self, offset: u64, text: &mut dyn FnMut(u64, &mut Vec<u8>) -> bool) -> LineCol {
+    pub(super) fn locate(
+        &self,
+        offset: u64,
+        text: &mut dyn FnMut(u64, &mut Vec<u8>) -> bool,
+    ) -> LineCol {
         let (mut line, mut start) = self.before(offset);
         let mut chunk = Vec::new();
         let mut pos = start;
@@ -124,7 +128,7 @@ fn is_char_boundary(b: &[u8], i: usize) -> bool {
 
 /// Reads pieces of a file on disk for [`LineSamples::locate`] (positional
 /// reads: the handle's cursor is not moved).
-pub fn file_pieces(file: &File) -> impl FnMut(u64, &mut Vec<u8>) -> bool + '_ {
+pub(super) fn file_pieces(file: &File) -> impl FnMut(u64, &mut Vec<u8>) -> bool + '_ {
     use std::os::unix::fs::FileExt;
     move |at, out| {
         out.resize(PIECE, 0);
@@ -143,7 +147,7 @@ const BLOCK: usize = 1 << 16;
 
 /// A block of a file on disk kept between diagnostics: (offset, bytes).
 #[derive(Debug, Default)]
-pub struct Block {
+pub(super) struct Block {
     at: u64,
     bytes: Vec<u8>,
 }
@@ -151,7 +155,7 @@ pub struct Block {
 /// Pieces of a file on disk for [`LineSamples::locate`], from the kept
 /// block when it holds them (diagnostics near each other read the file
 /// once), else read as a new block from the piece's offset.
-pub fn block_pieces<'a>(
+pub(super) fn block_pieces<'a>(
     file: &'a File,
     block: &'a mut Block,
 ) -> impl FnMut(u64, &mut Vec<u8>) -> bool + 'a {
@@ -183,7 +187,7 @@ pub fn block_pieces<'a>(
 }
 
 /// Pieces of bytes in memory for [`LineSamples::locate`].
-pub fn memory_pieces(data: &[u8]) -> impl FnMut(u64, &mut Vec<u8>) -> bool + '_ {
+pub(super) fn memory_pieces(data: &[u8]) -> impl FnMut(u64, &mut Vec<u8>) -> bool + '_ {
     move |at, out| {
         let at = (at as usize).min(data.len());
         let end = (at + PIECE).min(data.len());

@@ -21,7 +21,7 @@ pub struct Marked {
 }
 
 /// Scanner state carried from one chunk of a file to the next.
-pub struct MarkedLines {
+pub(super) struct MarkedLines {
     idx: u32,
     line_start: u64,
     marked: bool,
@@ -33,7 +33,7 @@ pub struct MarkedLines {
 }
 
 impl MarkedLines {
-    pub fn new(long: usize) -> MarkedLines {
+    pub(super) fn new(long: usize) -> MarkedLines {
         MarkedLines {
             idx: 0,
             line_start: 0,
@@ -46,7 +46,7 @@ impl MarkedLines {
 
     /// A scanner starting at the line start `start` of a file whose leading
     /// blank lines lie before it (line indices count from `start`).
-    pub fn after_leading(long: usize, start: u64) -> MarkedLines {
+    pub(super) fn after_leading(long: usize, start: u64) -> MarkedLines {
         MarkedLines {
             line_start: start,
             leading: false,
@@ -55,17 +55,17 @@ impl MarkedLines {
     }
 
     /// Still in the leading blank lines.
-    pub fn leading(&self) -> bool {
+    pub(super) fn leading(&self) -> bool {
         self.leading
     }
 
     /// Start of the line being read (it may continue in the next chunk).
-    pub fn line_start(&self) -> u64 {
+    pub(super) fn line_start(&self) -> u64 {
         self.line_start
     }
 
     /// Reads the next chunk of the file, which starts at offset `base`.
-    pub fn feed(&mut self, chunk: &[u8], base: u64, hit: &mut impl FnMut(Marked)) {
+    pub(super) fn feed(&mut self, chunk: &[u8], base: u64, hit: &mut impl FnMut(Marked)) {
         let mut k = 0;
         // The leading blank lines, a byte at a time (they are all handed on).
         while self.leading && k < chunk.len() {
@@ -126,7 +126,7 @@ impl MarkedLines {
 
     /// Ends the file at offset `len`: a last line without a newline is
     /// always handed on. Returns the number of lines.
-    pub fn finish(&mut self, len: u64, hit: &mut impl FnMut(Marked)) -> u32 {
+    pub(super) fn finish(&mut self, len: u64, hit: &mut impl FnMut(Marked)) -> u32 {
         if self.line_start < len {
             hit(Marked {
                 idx: self.idx,

@@ -9,7 +9,7 @@ use super::lower::PlainLine;
 use super::profile::{Comments, LineCount, Profile};
 
 /// Puts one target line together.
-pub struct LineWriter {
+pub(super) struct LineWriter {
     p: &'static Profile,
     buf: Vec<u8>,
     units: Units,
@@ -17,7 +17,7 @@ pub struct LineWriter {
 }
 
 impl LineWriter {
-    pub fn new(p: &'static Profile) -> LineWriter {
+    pub(super) fn new(p: &'static Profile) -> LineWriter {
         LineWriter {
             p,
             buf: Vec::with_capacity(128),
@@ -27,7 +27,7 @@ impl LineWriter {
     }
 
     /// Starts a line for block `b` (its units decide the decimals).
-    pub fn begin(&mut self, b: &Block, units: Units) {
+    pub(super) fn begin(&mut self, b: &Block, units: Units) {
         self.buf.clear();
         self.units = units;
         if let Some((n, _)) = b.line_number
@@ -74,7 +74,7 @@ impl LineWriter {
     }
 
     /// Appends a word.
-    pub fn word(&mut self, letter: u8, value: f64, kind: WordKind) {
+    pub(super) fn word(&mut self, letter: u8, value: f64, kind: WordKind) {
         let code = matches!(kind, WordKind::G(_) | WordKind::M(_)) || matches!(letter, b'G' | b'M');
         self.push_word(letter, value, code);
     }
@@ -82,7 +82,7 @@ impl LineWriter {
     /// Appends word `w` of the line `text`: its number as written when
     /// that is already how the target's rules write its value (see
     /// [`written_as_is`]), otherwise as [`LineWriter::word`] does.
-    pub fn word_of(&mut self, w: &Word, text: &[u8]) {
+    pub(super) fn word_of(&mut self, w: &Word, text: &[u8]) {
         let code = matches!(w.kind, WordKind::G(_) | WordKind::M(_));
         let number = text
             .get(w.span.start as usize + 1..w.span.end as usize)
@@ -99,7 +99,7 @@ impl LineWriter {
     }
 
     /// Appends the comments of `b` (read from `text`) the target keeps.
-    pub fn comments(&mut self, b: &Block, text: &[u8]) {
+    pub(super) fn comments(&mut self, b: &Block, text: &[u8]) {
         for c in &b.comments {
             let keep = match self.p.comments {
                 Comments::Keep => true,
@@ -133,7 +133,7 @@ impl LineWriter {
 
     /// Finishes the line into `out` (nothing for an empty line); an error
     /// if it does not fit the target's line buffer.
-    pub fn finish_line(&mut self, out: &mut Vec<u8>) -> Option<ErrorKind> {
+    pub(super) fn finish_line(&mut self, out: &mut Vec<u8>) -> Option<ErrorKind> {
         if self.buf.is_empty() {
             return None;
         }
@@ -148,7 +148,7 @@ impl LineWriter {
     /// The finished line with its newline (`None` for an empty line), or
     /// the error if it does not fit the target's line buffer:
     /// [`LineWriter::finish_line`] without the copy.
-    pub fn finished_line(&mut self) -> Result<Option<&[u8]>, ErrorKind> {
+    pub(super) fn finished_line(&mut self) -> Result<Option<&[u8]>, ErrorKind> {
         if self.buf.is_empty() {
             return Ok(None);
         }
@@ -178,7 +178,12 @@ impl LineWriter {
     }
 
     /// Writes a lowered block into `out`.
-    pub fn plain(&mut self, l: &PlainLine, units: Units, out: &mut Vec<u8>) -> Option<ErrorKind> {
+    pub(super) fn plain(
+        &mut self,
+        l: &PlainLine,
+        units: Units,
+        out: &mut Vec<u8>,
+    ) -> Option<ErrorKind> {
         self.buf.clear();
         self.units = units;
         for w in &l.words {
@@ -263,7 +268,7 @@ fn write_number(out: &mut Vec<u8>, v: f64, decimals: u8, max_digits: u8) {
 /// written without trailing zeros: the number as written. The digits
 /// before the point of the double are those written, since the number is
 /// at least 10^-15 relatively below the next power of ten.
-pub fn written_as_is(shape: Shape, code: bool, decimals: u8, max_digits: u8) -> bool {
+pub(super) fn written_as_is(shape: Shape, code: bool, decimals: u8, max_digits: u8) -> bool {
     if !shape.plain {
         return false;
     }

@@ -10,7 +10,7 @@ mod driver;
 mod format;
 pub mod lower;
 mod profile;
-pub mod profiles;
+pub(crate) mod profiles;
 
 pub use driver::Lowering;
 pub use format::{format_number, significant_len};

@@ -13,9 +13,9 @@ use crate::machine::block::Block;
 use crate::machine::model::Machine;
 
 /// Where the source map goes.
-pub type MapSink = SourceMap<std::io::BufWriter<std::fs::File>>;
+pub(crate) type MapSink = SourceMap<std::io::BufWriter<std::fs::File>>;
 
-pub struct ViewConsumer<'a> {
+pub(crate) struct ViewConsumer<'a> {
     machine: Option<Machine>,
     block: Block,
     pub observer: &'a mut Observer,
@@ -32,7 +32,7 @@ pub struct ViewConsumer<'a> {
 impl<'a> ViewConsumer<'a> {
     /// `observer` sees the motion of every line; `pass_through` writes the
     /// lines to the output; `annotate` appends their origin as a comment.
-    pub fn new(
+    pub(crate) fn new(
         settings: &Settings,
         observer: &'a mut Observer,
         pass_through: bool,
@@ -53,7 +53,7 @@ impl<'a> ViewConsumer<'a> {
 
     /// Hands every line on to `next` (which writes the output) after
     /// looking at it.
-    pub fn then(mut self, next: Option<Box<dyn LineConsumer + 'a>>) -> ViewConsumer<'a> {
+    pub(crate) fn then(mut self, next: Option<Box<dyn LineConsumer + 'a>>) -> ViewConsumer<'a> {
         self.next = next;
         self
     }
@@ -177,7 +177,7 @@ fn io_error(what: &str, e: std::io::Error) -> Error {
 
 impl<W: Write> SourceMap<W> {
     /// Flushes what was written so far.
-    pub fn flush(&mut self) -> std::io::Result<()> {
+    pub(crate) fn flush(&mut self) -> std::io::Result<()> {
         self.out_mut().flush()
     }
 }

@@ -1,14 +1,14 @@
 //! Geometry of moves: arc sweeps, extreme points, path lengths and sampled
 //! points, shared by the statistics, the travel-limit check and the plot.
 
-use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::f64::consts::{FRAC_PI_2, TAU};
 
-use crate::machine::motion::{Axes, Motion, Plane, Point};
+use crate::machine::motion::{Axes, Motion, Plane};
 
 /// The axis indices (into [`Axes`]) of an arc plane: the first and second
 /// in-plane axes in the order that makes counter-clockwise positive (as
 /// LinuxCNC orders them: XY, ZX, YZ) and the helix axis.
-pub fn plane_axes(plane: Plane) -> (usize, usize, usize) {
+pub(crate) fn plane_axes(plane: Plane) -> (usize, usize, usize) {
     match plane {
         Plane::XY => (0, 1, 2),
         Plane::XZ => (2, 0, 1),
@@ -18,7 +18,7 @@ pub fn plane_axes(plane: Plane) -> (usize, usize, usize) {
 
 /// An arc or helix in its plane, ready for measuring.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ArcGeom {
+pub(crate) struct ArcGeom {
     /// In-plane axes and helix axis (see [`plane_axes`]).
     pub a: usize,
     pub b: usize,
@@ -38,7 +38,7 @@ pub struct ArcGeom {
 impl ArcGeom {
     /// `center` holds the centre's coordinates on the plane's axes in
     /// ascending axis order (X before Y before Z).
-    pub fn new(
+    pub(crate) fn new(
         from: &Axes,
         to: &Axes,
         center: [f64; 2],
@@ -86,7 +86,7 @@ impl ArcGeom {
     }
 
     /// The in-plane point at fraction `t` (0..1) of the sweep.
-    pub fn at(&self, t: f64) -> (f64, f64) {
+    pub(crate) fn at(&self, t: f64) -> (f64, f64) {
         let ang = self.start + self.sweep * t;
         let r = self.r0 + (self.r1 - self.r0) * t;
         (self.ca + r * ang.cos(), self.cb + r * ang.sin())
@@ -94,7 +94,7 @@ impl ArcGeom {
 
     /// Fractions of the sweep (strictly inside it) where the arc crosses an
     /// axis direction of its plane: its in-plane extreme points.
-    pub fn quadrant_crossings(&self) -> Vec<f64> {
+    pub(crate) fn quadrant_crossings(&self) -> Vec<f64> {
         let mut out = Vec::new();
         let total = self.sweep.abs();
         if total <= 0.0 || !total.is_finite() {
@@ -127,14 +127,14 @@ impl ArcGeom {
     }
 
     /// Length of the path in the plane (spiral approximated by the mean radius).
-    pub fn plane_length(&self) -> f64 {
+    pub(crate) fn plane_length(&self) -> f64 {
         0.5 * (self.r0 + self.r1) * self.sweep.abs()
     }
 }
 
 /// Length of a straight move over X, Y and Z (rotary and UVW axes do not
 /// count).
-pub fn line_length(from: &Axes, to: &Axes) -> f64 {
+pub(crate) fn line_length(from: &Axes, to: &Axes) -> f64 {
     let dx = to[0] - from[0];
     let dy = to[1] - from[1];
     let dz = to[2] - from[2];
@@ -142,7 +142,7 @@ pub fn line_length(from: &Axes, to: &Axes) -> f64 {
 }
 
 /// Length of an arc or helix over X, Y and Z.
-pub fn arc_length(g: &ArcGeom, from: &Axes, to: &Axes) -> f64 {
+pub(crate) fn arc_length(g: &ArcGeom, from: &Axes, to: &Axes) -> f64 {
     let p = g.plane_length();
     let dh = to[g.h] - from[g.h];
     (p * p + dh * dh).sqrt()
@@ -151,7 +151,7 @@ pub fn arc_length(g: &ArcGeom, from: &Axes, to: &Axes) -> f64 {
 /// The points of a move where an axis can take its extreme value: the end
 /// points, and for an arc the quadrant crossings (work coordinates). Calls
 /// `f` with each point; the start point is included.
-pub fn extreme_points(m: &Motion, mut f: impl FnMut(&Axes)) {
+pub(crate) fn extreme_points(m: &Motion, mut f: impl FnMut(&Axes)) {
     match m {
         Motion::Line { from, to, .. } => {
             f(&from.work);
@@ -179,31 +179,12 @@ pub fn extreme_points(m: &Motion, mut f: impl FnMut(&Axes)) {
 
 /// The full position at fraction `t` of an arc: in-plane from the circle,
 /// every other axis linearly between the end points.
-pub fn arc_point(g: &ArcGeom, from: &Axes, to: &Axes, t: f64) -> Axes {
+pub(crate) fn arc_point(g: &ArcGeom, from: &Axes, to: &Axes, t: f64) -> Axes {
     let (pa, pb) = g.at(t);
     let mut p: Axes = std::array::from_fn(|i| from[i] + (to[i] - from[i]) * t);
     p[g.a] = pa;
     p[g.b] = pb;
     p
-}
-
-/// The end points of a move that has them.
-pub fn ends(m: &Motion) -> Option<(&Point, &Point)> {
-    match m {
-        Motion::Line { from, to, .. } | Motion::Arc { from, to, .. } => Some((from, to)),
-        _ => None,
-    }
-}
-
-/// Normalises an angle to (-pi, pi].
-pub fn norm_angle(a: f64) -> f64 {
-    let mut x = a % TAU;
-    if x <= -PI {
-        x += TAU;
-    } else if x > PI {
-        x -= TAU;
-    }
-    x
 }
 
 #[cfg(test)]

@@ -5,7 +5,7 @@ use super::stats::{Report, hms};
 
 /// A page holding `svg` inline and the statistics of `report`; no external
 /// resources.
-pub fn page(svg: &str, report: &Report) -> String {
+pub(crate) fn page(svg: &str, report: &Report) -> String {
     let mut s = String::with_capacity(svg.len() + 8192);
     let title = xml_escape(&report.program);
     s.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");

@@ -9,18 +9,18 @@ use crate::machine::motion::{Axes, Motion};
 
 /// Checks moves against a machine envelope.
 #[derive(Debug, Clone)]
-pub struct LimitCheck {
+pub(crate) struct LimitCheck {
     axes: MachineAxes,
 }
 
 impl LimitCheck {
     /// `None` when no axis has a limit.
-    pub fn new(axes: &MachineAxes) -> Option<LimitCheck> {
+    pub(crate) fn new(axes: &MachineAxes) -> Option<LimitCheck> {
         axes.has_limits().then(|| LimitCheck { axes: axes.clone() })
     }
 
     /// The first violation of one motion event, if any.
-    pub fn check(&self, m: &Motion) -> Result<(), ErrorKind> {
+    pub(crate) fn check(&self, m: &Motion) -> Result<(), ErrorKind> {
         let (from, to) = match m {
             Motion::Line { from, to, .. } | Motion::Arc { from, to, .. } => (from, to),
             _ => return Ok(()),

@@ -3,11 +3,11 @@
 //! the motion stream of [`crate::machine::motion`]; nothing runs unless asked
 //! for.
 
-pub mod consumer;
-pub mod geom;
-pub mod html;
-pub mod limits;
-pub mod plot;
-pub mod run;
-pub mod source_map;
-pub mod stats;
+pub(crate) mod consumer;
+pub(crate) mod geom;
+pub(crate) mod html;
+pub(crate) mod limits;
+pub(crate) mod plot;
+pub(crate) mod run;
+pub(crate) mod source_map;
+pub(crate) mod stats;

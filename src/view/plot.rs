@@ -18,7 +18,7 @@ use crate::machine::motion::{Axes, Motion, MoveKind, Plane};
 
 /// Which way the toolpath is looked at.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum View {
+pub(crate) enum View {
     /// From above: X to the right, Y up.
     #[default]
     Xy,
@@ -31,7 +31,7 @@ pub enum View {
 }
 
 impl View {
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             View::Xy => "XY (from above)",
             View::Xz => "XZ (from the front)",
@@ -113,7 +113,7 @@ const TOL_PX: f64 = 0.25;
 
 /// Collects the motion of a program for the picture.
 #[derive(Debug, Clone)]
-pub struct Plot {
+pub(crate) struct Plot {
     view: View,
     paths: Vec<Path>,
     min: [f64; 2],
@@ -127,7 +127,7 @@ pub struct Plot {
 }
 
 impl Plot {
-    pub fn new(view: View) -> Plot {
+    pub(crate) fn new(view: View) -> Plot {
         Plot {
             view,
             paths: Vec::new(),
@@ -166,7 +166,7 @@ impl Plot {
     }
 
     /// Adds one motion event.
-    pub fn add(&mut self, m: &Motion) {
+    pub(crate) fn add(&mut self, m: &Motion) {
         match m {
             Motion::ToolChange { tool } => self.tool = *tool,
             Motion::Line { kind, from, to, .. } => {
@@ -452,7 +452,7 @@ impl Plot {
         by_style
     }
 
-    pub fn svg(&self, caption: &str) -> String {
+    pub(crate) fn svg(&self, caption: &str) -> String {
         let view = self.view;
         let (w0, h0) = (self.max[0] - self.min[0], self.max[1] - self.min[1]);
         let ext = w0.max(h0);
@@ -638,7 +638,7 @@ fn fmt_mm(v: f64) -> String {
     crate::emit::number_string(v, Some(3))
 }
 
-pub fn xml_escape(s: &str) -> String {
+pub(crate) fn xml_escape(s: &str) -> String {
     let mut o = String::with_capacity(s.len());
     for c in s.chars() {
         match c {

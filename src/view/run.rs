@@ -11,7 +11,7 @@ use crate::machine::motion::Motion;
 /// Everything that looks at the motion stream of one run. Only what was
 /// asked for is present.
 #[derive(Debug, Default)]
-pub struct Observer {
+pub(crate) struct Observer {
     pub stats: Option<Stats>,
     pub plot: Option<Plot>,
     pub limits: Option<LimitCheck>,
@@ -19,7 +19,7 @@ pub struct Observer {
 
 impl Observer {
     /// For flattening and `check`: the travel-limit check only.
-    pub fn limits(axes: &MachineAxes) -> Observer {
+    pub(crate) fn limits(axes: &MachineAxes) -> Observer {
         Observer {
             limits: LimitCheck::new(axes),
             ..Observer::default()
@@ -27,7 +27,7 @@ impl Observer {
     }
 
     /// For `stats` (and `plot` with `view`).
-    pub fn stats(axes: &MachineAxes, view: Option<View>) -> Observer {
+    pub(crate) fn stats(axes: &MachineAxes, view: Option<View>) -> Observer {
         Observer {
             stats: Some(Stats::new(axes.clone())),
             plot: view.map(Plot::new),
@@ -36,13 +36,13 @@ impl Observer {
     }
 
     /// Whether anything needs the motion at all.
-    pub fn is_active(&self) -> bool {
+    pub(crate) fn is_active(&self) -> bool {
         self.stats.is_some() || self.plot.is_some() || self.limits.is_some()
     }
 
     /// Feeds one motion event; an error stops the run at the line that
     /// made it.
-    pub fn motion(&mut self, m: &Motion) -> Result<(), ErrorKind> {
+    pub(crate) fn motion(&mut self, m: &Motion) -> Result<(), ErrorKind> {
         if let Some(l) = &self.limits {
             l.check(m)?;
         }
@@ -58,7 +58,7 @@ impl Observer {
 
 /// Writes `data` to `path` atomically (a temporary file beside it, then a
 /// rename), so that a failed run leaves the old file.
-pub fn write_atomic(path: &std::path::Path, data: &[u8]) -> std::io::Result<()> {
+pub(crate) fn write_atomic(path: &std::path::Path, data: &[u8]) -> std::io::Result<()> {
     let dir = path
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
@@ -76,7 +76,7 @@ pub fn write_atomic(path: &std::path::Path, data: &[u8]) -> std::io::Result<()> 
 
 /// Runs a program and feeds its motion to `observer` (nothing is written).
 /// Returns the warnings.
-pub fn observe(
+pub(crate) fn observe(
     source: crate::program::SourceFile,
     cfg: &crate::config::Config,
     observer: &mut Observer,
@@ -132,7 +132,7 @@ fn run_for_view(
 }
 
 /// `ngcflat stats`.
-pub fn stats_command(
+pub(crate) fn stats_command(
     file: Option<&std::path::Path>,
     json: bool,
     cfg: &crate::config::Config,
@@ -159,7 +159,7 @@ pub fn stats_command(
 }
 
 /// `ngcflat plot`.
-pub fn plot_command(
+pub(crate) fn plot_command(
     file: Option<&std::path::Path>,
     output: &std::path::Path,
     view: View,
@@ -212,7 +212,7 @@ pub fn plot_command(
 
 /// What flattening may be asked for besides the output.
 #[derive(Debug, Clone, Default)]
-pub struct Extras {
+pub(crate) struct Extras {
     /// Write a source map (JSON lines) to this file.
     pub source_map: Option<std::path::PathBuf>,
     /// Append each line's origin as a comment.
@@ -222,7 +222,7 @@ pub struct Extras {
 /// Flattens like [`crate::flatten::flatten`], checking travel limits when the
 /// configuration has them and writing the source map and annotations when
 /// asked. Without any of these it is exactly [`crate::flatten::flatten`].
-pub fn flatten_observed(
+pub(crate) fn flatten_observed(
     source: crate::program::SourceFile,
     settings: &crate::eval::Settings,
     search: &crate::program::SearchPath,
@@ -241,7 +241,7 @@ pub fn flatten_observed(
 /// check). Returns every diagnostic and the error that stopped the run, as
 /// [`crate::flatten::flatten_with`]. The source map and annotations are only for
 /// output written line for line (no `next`).
-pub fn flatten_chained<'s>(
+pub(crate) fn flatten_chained<'s>(
     source: crate::program::SourceFile,
     settings: &'s crate::eval::Settings,
     search: &crate::program::SearchPath,

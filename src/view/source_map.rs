@@ -12,7 +12,7 @@ use crate::program::SourceFile;
 
 /// A place in a program: a file and a byte offset in it.
 #[derive(Debug, Clone)]
-pub struct Place {
+pub(crate) struct Place {
     pub file: Arc<SourceFile>,
     pub offset: u32,
 }
@@ -22,13 +22,13 @@ type Lines = (Arc<SourceFile>, Vec<u8>, Vec<u32>);
 
 /// Line starts of the files seen so far, keyed by the file's address.
 #[derive(Default)]
-pub struct Locator {
+pub(crate) struct Locator {
     files: HashMap<usize, Lines>,
 }
 
 /// A located place.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
-pub struct Located {
+pub(crate) struct Located {
     pub file: String,
     pub line: u32,
     pub column: u32,
@@ -36,7 +36,7 @@ pub struct Located {
 
 impl Locator {
     /// File name, 1-based line and column (in characters) of a place.
-    pub fn locate(&mut self, p: &Place) -> Located {
+    pub(crate) fn locate(&mut self, p: &Place) -> Located {
         let key = Arc::as_ptr(&p.file) as usize;
         let (file, bytes, starts) = self.files.entry(key).or_insert_with(|| {
             let bytes = p.file.bytes().into_owned();
@@ -68,14 +68,14 @@ struct Entry<'a> {
 }
 
 /// Writes the JSON-lines source map.
-pub struct SourceMap<W: Write> {
+pub(crate) struct SourceMap<W: Write> {
     out: W,
     locator: Locator,
     line: u64,
 }
 
 impl<W: Write> SourceMap<W> {
-    pub fn new(out: W) -> SourceMap<W> {
+    pub(crate) fn new(out: W) -> SourceMap<W> {
         SourceMap {
             out,
             locator: Locator::default(),
@@ -85,7 +85,7 @@ impl<W: Write> SourceMap<W> {
 
     /// Records the next output line, made at `at` with the call sites
     /// `calls` (innermost first).
-    pub fn line(&mut self, at: &Place, calls: &[Place]) -> io::Result<()> {
+    pub(crate) fn line(&mut self, at: &Place, calls: &[Place]) -> io::Result<()> {
         self.line += 1;
         let at = self.locator.locate(at);
         let calls: Vec<Located> = calls.iter().map(|c| self.locator.locate(c)).collect();
@@ -98,11 +98,12 @@ impl<W: Write> SourceMap<W> {
         self.out.write_all(b"\n")
     }
 
-    pub fn out_mut(&mut self) -> &mut W {
+    pub(crate) fn out_mut(&mut self) -> &mut W {
         &mut self.out
     }
 
-    pub fn finish(mut self) -> io::Result<W> {
+    #[cfg(test)]
+    pub(crate) fn finish(mut self) -> io::Result<W> {
         self.out.flush()?;
         Ok(self.out)
     }
@@ -113,7 +114,7 @@ impl<W: Write> SourceMap<W> {
 /// only on the last parenthesised comment of a line, so one added after a
 /// `(MSG,...)` would silence the message. Control characters in file names
 /// become `?`.
-pub fn annotation(at: &Located, calls: &[Located]) -> String {
+pub(crate) fn annotation(at: &Located, calls: &[Located]) -> String {
     let clean = |s: &str| s.replace(|c: char| c.is_control(), "?");
     let mut s = format!(" ;from {}:{}:{}", clean(&at.file), at.line, at.column);
     for c in calls {

@@ -11,7 +11,7 @@ use crate::machine::axes::{LETTERS, MachineAxes, is_rotary};
 use crate::machine::motion::{Axes, FeedMode, Motion, MoveKind};
 
 /// How the run time is estimated, printed with every estimate.
-pub const TIME_MODEL: &str = "each move is timed on its own as a trapezoid that starts and ends at rest: \
+pub(crate) const TIME_MODEL: &str = "each move is timed on its own as a trapezoid that starts and ends at rest: \
 it speeds up at the acceleration limit, runs at the programmed feed (rapids: the \
 maximum velocity), and slows down again; the feed and acceleration of a move are \
 capped so that no axis exceeds its own maximum velocity or acceleration, and an arc \
@@ -23,7 +23,7 @@ tool changes count as no time.";
 
 /// The range of one axis.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Range {
+pub(crate) struct Range {
     pub min: f64,
     pub max: f64,
 }
@@ -45,7 +45,7 @@ impl Range {
 
 /// Accumulates statistics over a motion stream.
 #[derive(Debug, Clone)]
-pub struct Stats {
+pub(crate) struct Stats {
     axes: MachineAxes,
     pub work: [Option<Range>; 9],
     pub machine: [Option<Range>; 9],
@@ -72,7 +72,7 @@ pub struct Stats {
 }
 
 impl Stats {
-    pub fn new(axes: MachineAxes) -> Stats {
+    pub(crate) fn new(axes: MachineAxes) -> Stats {
         Stats {
             axes,
             work: [None; 9],
@@ -97,7 +97,7 @@ impl Stats {
     }
 
     /// Adds one motion event.
-    pub fn add(&mut self, m: &Motion) {
+    pub(crate) fn add(&mut self, m: &Motion) {
         match m {
             Motion::Line {
                 kind,
@@ -256,7 +256,7 @@ impl Stats {
         }
     }
 
-    pub fn total_time(&self) -> f64 {
+    pub(crate) fn total_time(&self) -> f64 {
         self.feed_time + self.rapid_time + self.dwell_time
     }
 
@@ -272,7 +272,7 @@ impl Stats {
     }
 
     /// The statistics as a serialisable report.
-    pub fn report(&self, program: &str) -> Report {
+    pub(crate) fn report(&self, program: &str) -> Report {
         let axes = self
             .shown_axes()
             .into_iter()
@@ -368,7 +368,7 @@ fn path_len(d: &Axes) -> f64 {
 
 /// Time of a move of length `len` from rest to rest at cruise velocity `v`
 /// and acceleration `a` (infinite: no ramps).
-pub fn trapezoid(len: f64, v: f64, a: f64) -> f64 {
+pub(crate) fn trapezoid(len: f64, v: f64, a: f64) -> f64 {
     if len <= 0.0 || v.is_nan() || v <= 0.0 {
         return 0.0;
     }
@@ -386,7 +386,7 @@ pub fn trapezoid(len: f64, v: f64, a: f64) -> f64 {
 }
 
 #[derive(Debug, Clone, Serialize)]
-pub struct AxisReport {
+pub(crate) struct AxisReport {
     pub axis: String,
     pub unit: &'static str,
     pub work: Option<Range>,
@@ -394,7 +394,7 @@ pub struct AxisReport {
 }
 
 #[derive(Debug, Clone, Serialize)]
-pub struct TimeReport {
+pub(crate) struct TimeReport {
     pub total_s: f64,
     pub feed_s: f64,
     pub rapid_s: f64,
@@ -408,7 +408,7 @@ pub struct TimeReport {
 /// One axis's travel limits and whether the program stays inside them
 /// (`None`: machine coordinates not known, or the axis never moved).
 #[derive(Debug, Clone, Serialize)]
-pub struct LimitReport {
+pub(crate) struct LimitReport {
     pub axis: String,
     pub min: Option<f64>,
     pub max: Option<f64>,
@@ -417,7 +417,7 @@ pub struct LimitReport {
 }
 
 #[derive(Debug, Clone, Serialize)]
-pub struct Report {
+pub(crate) struct Report {
     pub program: String,
     /// Travel limits given for the machine (machine coordinates).
     pub limits: Vec<LimitReport>,
@@ -438,7 +438,7 @@ pub struct Report {
 }
 
 /// `h:mm:ss.s`
-pub fn hms(s: f64) -> String {
+pub(crate) fn hms(s: f64) -> String {
     let s = s.max(0.0);
     let h = (s / 3600.0).floor();
     let m = ((s - h * 3600.0) / 60.0).floor();
@@ -456,12 +456,12 @@ fn num(v: f64) -> String {
 }
 
 impl Report {
-    pub fn json(&self) -> String {
+    pub(crate) fn json(&self) -> String {
         serde_json::to_string_pretty(self).unwrap_or_default() + "\n"
     }
 
     /// The human-readable statistics.
-    pub fn text(&self) -> String {
+    pub(crate) fn text(&self) -> String {
         let mut s = String::new();
         let _ = writeln!(s, "program: {}", self.program);
         let _ = writeln!(

@@ -157,7 +157,7 @@ fn in_range(x: f64) -> bool {
     x.is_finite() && x.abs() < 1.0e9
 }
 
-pub fn sin_deg(x: f64) -> f64 {
+pub(crate) fn sin_deg(x: f64) -> f64 {
     // A zero keeps its sign (the double-double sum would lose it).
     if x == 0.0 {
         return x;
@@ -168,14 +168,14 @@ pub fn sin_deg(x: f64) -> f64 {
     to_f64(round64(sin_cos(radians(x)).0))
 }
 
-pub fn cos_deg(x: f64) -> f64 {
+pub(crate) fn cos_deg(x: f64) -> f64 {
     if !in_range(x) {
         return (x * (std::f64::consts::PI / 180.0)).cos();
     }
     to_f64(round64(sin_cos(radians(x)).1))
 }
 
-pub fn tan_deg(x: f64) -> f64 {
+pub(crate) fn tan_deg(x: f64) -> f64 {
     if x == 0.0 {
         return x;
     }
@@ -190,7 +190,7 @@ pub fn tan_deg(x: f64) -> f64 {
 }
 
 /// `(r * 180.0) / M_PIl` for a result `r` in radians from the double libm.
-pub fn to_degrees(r: f64) -> f64 {
+pub(crate) fn to_degrees(r: f64) -> f64 {
     if r == 0.0 {
         return r;
     }

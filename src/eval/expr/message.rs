@@ -130,7 +130,7 @@ impl Interp<'_> {
 /// Makes a substituted text read back unchanged: a `#` that would start a
 /// parameter (or end the text, which LinuxCNC mishandles) is followed by a
 /// `%d` directive, which prints nothing and keeps the `#` literal.
-pub fn stabilize(text: &str) -> String {
+pub(crate) fn stabilize(text: &str) -> String {
     let b = text.as_bytes();
     let mut out = String::with_capacity(text.len() + 4);
     for (i, ch) in text.char_indices() {
@@ -142,7 +142,7 @@ pub fn stabilize(text: &str) -> String {
     out
 }
 
-pub fn is_stable(text: &str) -> bool {
+pub(crate) fn is_stable(text: &str) -> bool {
     let b = text.as_bytes();
     for (i, &c) in b.iter().enumerate() {
         match c {

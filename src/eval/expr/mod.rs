@@ -16,17 +16,17 @@ use crate::eval::Interp;
 use crate::eval::expr::params::{MAX_PARAM, ParamClass, classify};
 
 /// EQ/NE tolerance of LinuxCNC 2.9.
-pub const TOLERANCE_EQUAL: f64 = 0.0001;
+pub(super) const TOLERANCE_EQUAL: f64 = 0.0001;
 
 /// An evaluation error: its kind and the span it is reported at. Boxed, so
 /// that a result is two words wide and comes back in registers.
-pub type Fault = Box<(ErrorKind, Span)>;
+pub(super) type Fault = Box<(ErrorKind, Span)>;
 
-pub type EvalResult = Result<f64, Fault>;
+pub(super) type EvalResult = Result<f64, Fault>;
 
 /// A fault of `kind` at `span`.
 #[cold]
-pub fn fault(kind: ErrorKind, span: Span) -> Fault {
+pub(super) fn fault(kind: ErrorKind, span: Span) -> Fault {
     Box::new((kind, span))
 }
 
@@ -61,7 +61,7 @@ fn binary_fast(op: BinOp, a: f64, c: f64, span: Span) -> EvalResult {
 
 /// Binary operation; `span` is where a domain error is reported.
 #[inline(never)]
-pub fn binary(op: BinOp, a: f64, c: f64, span: Span) -> EvalResult {
+pub(super) fn binary(op: BinOp, a: f64, c: f64, span: Span) -> EvalResult {
     Ok(match op {
         BinOp::Pow => {
             if a < 0.0 && c.floor() != c {
@@ -93,7 +93,7 @@ pub fn binary(op: BinOp, a: f64, c: f64, span: Span) -> EvalResult {
 
 /// `a MOD c`: the remainder made non-negative by adding `|c|`.
 #[inline]
-pub fn modulo(a: f64, c: f64) -> f64 {
+pub(super) fn modulo(a: f64, c: f64) -> f64 {
     let (ai, ci) = (a as i64, c as i64);
     let mut r =
         if ai as f64 == a && ci as f64 == c && ci != 0 && a.abs() < 9.0e15 && c.abs() < 9.0e15 {
@@ -115,7 +115,7 @@ pub fn modulo(a: f64, c: f64) -> f64 {
 }
 
 /// One-argument function.
-pub fn unary(f: Func, x: f64, span: Span) -> EvalResult {
+pub(super) fn unary(f: Func, x: f64, span: Span) -> EvalResult {
     Ok(match f {
         // As the reference computes it: -0 stays -0 (ATAN cares).
         Func::Abs => {
@@ -160,7 +160,7 @@ pub fn unary(f: Func, x: f64, span: Span) -> EvalResult {
 }
 
 /// `(int)(x + (x < 0 ? -0.5 : 0.5))` as x86 computes it.
-pub fn round_half_away(x: f64) -> f64 {
+pub(super) fn round_half_away(x: f64) -> f64 {
     let t = (x + if x < 0.0 { -0.5 } else { 0.5 }).trunc();
     if !(-2147483648.0..2147483648.0).contains(&t) || t.is_nan() {
         -2147483648.0
@@ -171,7 +171,7 @@ pub fn round_half_away(x: f64) -> f64 {
 }
 
 /// `(int)nearbyint(x)`: half to even, overflow to INT_MIN.
-pub fn round_half_even_int(x: f64) -> i64 {
+pub(super) fn round_half_even_int(x: f64) -> i64 {
     let r = x.round_ties_even();
     if !(-2147483648.0..2147483648.0).contains(&r) {
         i32::MIN as i64

@@ -13,15 +13,15 @@ use crate::parse::ast::{Line, OKind};
 use crate::program::FileIndex;
 
 /// Deepest nesting of active calls (the tenth nested call fails).
-pub const MAX_CALL_LEVEL: usize = 9;
+pub(super) const MAX_CALL_LEVEL: usize = 9;
 
 /// Parsed body lines kept (see `Flow::cache`); past this, the kept lines
 /// are dropped and the cache fills again.
-pub const LINES_KEPT: usize = 1 << 14;
+pub(super) const LINES_KEPT: usize = 1 << 14;
 
 /// Where reading continues.
 #[derive(Clone)]
-pub struct Cursor {
+pub(super) struct Cursor {
     pub file: Rc<FileIndex>,
     /// Byte offset of the next line.
     pub pos: u32,
@@ -32,7 +32,7 @@ pub struct Cursor {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum FrameKind {
+pub(super) enum FrameKind {
     Main,
     Call,
     M98,
@@ -40,7 +40,7 @@ pub enum FrameKind {
 
 /// Record of a control label reached in this activation.
 #[derive(Debug, Clone, Copy)]
-pub struct LabelRec {
+pub(super) struct LabelRec {
     pub kind: OKind,
     pub oidx: u32,
     pub line: u32,
@@ -48,7 +48,7 @@ pub struct LabelRec {
     pub repeat: i64,
 }
 
-pub struct Frame {
+pub(super) struct Frame {
     pub kind: FrameKind,
     pub name: Name,
     pub ret: Option<Cursor>,
@@ -110,7 +110,7 @@ impl Frame {
 
 /// A registered subroutine definition.
 #[derive(Clone)]
-pub struct SubRec {
+pub(super) struct SubRec {
     pub file: Rc<FileIndex>,
     pub oidx: u32,
 }

@@ -1,7 +1,7 @@
 //! The output: lines written, their count against the limits, progress, and
 //! the consumer that may take them instead.
 
-pub mod hook;
+pub(super) mod hook;
 pub(super) mod progress;
 
 use crate::emit::{Output, Sink};

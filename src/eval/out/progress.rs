@@ -8,9 +8,9 @@ use std::io::Write;
 use std::time::{Duration, Instant};
 
 /// How many output lines pass between two looks at the clock.
-pub const EVERY: u64 = 4096;
+pub(crate) const EVERY: u64 = 4096;
 
-pub struct Progress {
+pub(crate) struct Progress {
     start: Instant,
     /// Nothing is shown before this much time has passed (short runs stay
     /// quiet).
@@ -19,7 +19,7 @@ pub struct Progress {
 }
 
 impl Progress {
-    pub fn new(delay: Duration) -> Progress {
+    pub(crate) fn new(delay: Duration) -> Progress {
         Progress {
             start: Instant::now(),
             delay,
@@ -28,7 +28,7 @@ impl Progress {
     }
 
     /// Shows the state if enough time has passed since the last update.
-    pub fn tick(&mut self, lines: u64, input_line: u32, file: &str) {
+    pub(crate) fn tick(&mut self, lines: u64, input_line: u32, file: &str) {
         let now = Instant::now();
         let elapsed = now.duration_since(self.start);
         if elapsed < self.delay
@@ -47,7 +47,7 @@ impl Progress {
     }
 
     /// Clears the progress line, if one was shown.
-    pub fn clear(&self) {
+    pub(crate) fn clear(&self) {
         if self.last.is_some() {
             let _ = std::io::stderr().lock().write_all(b"\r\x1b[K");
         }

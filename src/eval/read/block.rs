@@ -15,11 +15,11 @@ use crate::eval::expr::message::{is_stable, stabilize};
 use crate::eval::expr::params::is_read_only;
 
 /// Evaluated words of the line: (letter, value).
-pub type Words = Vec<(u8, f64)>;
+pub(crate) type Words = Vec<(u8, f64)>;
 
 /// Per-line buffers kept between lines.
 #[derive(Default)]
-pub struct Scratch {
+pub(crate) struct Scratch {
     words: Words,
     repl: Vec<(Span, Edit)>,
     num_set: Vec<(usize, f64)>,

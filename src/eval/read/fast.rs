@@ -6,7 +6,7 @@
 
 /// A word of a plain line.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FastWord {
+pub(crate) struct FastWord {
     pub letter: u8,
     pub value: f64,
     pub start: u16,
@@ -19,7 +19,7 @@ pub(in crate::eval) const POW10: [f64; 23] = [
 ];
 
 /// Parses `[+-]digits[.digits]` exactly as `str::parse::<f64>` would.
-pub fn parse_decimal(t: &[u8]) -> Option<f64> {
+pub(crate) fn parse_decimal(t: &[u8]) -> Option<f64> {
     let (neg, body) = match t.first()? {
         b'-' => (true, &t[1..]),
         b'+' => (false, &t[1..]),
@@ -69,7 +69,7 @@ fn slow(t: &[u8]) -> Option<f64> {
 
 /// Scans a plain line into `out`. Returns false when the line needs the
 /// grammar (expressions, parameters, comments, O-words, unusual forms).
-pub fn scan(raw: &[u8], out: &mut Vec<FastWord>) -> bool {
+pub(crate) fn scan(raw: &[u8], out: &mut Vec<FastWord>) -> bool {
     out.clear();
     if raw.len() > crate::parse::MAX_LINE || raw.len() >= u16::MAX as usize {
         return false;

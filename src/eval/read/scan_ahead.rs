@@ -21,7 +21,7 @@ const AHEAD: usize = 4;
 
 /// What the loop finds at a line start.
 #[derive(Clone, Copy)]
-pub enum Read<'p> {
+pub(super) enum Read<'p> {
     /// An empty line (a newline only).
     Blank,
     /// A plain line.
@@ -34,12 +34,12 @@ pub enum Read<'p> {
 
 /// A source of lines for the straight-line loop, read at line starts in
 /// order.
-pub trait Lines {
+pub(super) trait Lines {
     fn read(&mut self, i: usize) -> Read<'_>;
 }
 
 /// Reads each line when the loop asks for it, up to a byte offset.
-pub struct InPlace<'b> {
+pub(super) struct InPlace<'b> {
     pub buf: &'b [u8],
     pub comments: bool,
     /// Lines starting here or later are left to another source.
@@ -72,7 +72,7 @@ enum Rec {
 
 /// Chunk boundaries: line starts about `size` bytes apart, from the line
 /// start `from` to the buffer's end.
-pub fn cut(buf: &[u8], from: usize, size: usize) -> Vec<usize> {
+pub(super) fn cut(buf: &[u8], from: usize, size: usize) -> Vec<usize> {
     let size = size.max(1);
     let mut cuts = vec![from];
     let mut at = from + size;
@@ -90,7 +90,7 @@ pub fn cut(buf: &[u8], from: usize, size: usize) -> Vec<usize> {
 }
 
 /// State both threads share.
-pub struct Shared<'b> {
+pub(super) struct Shared<'b> {
     buf: &'b [u8],
     comments: bool,
     cuts: Vec<usize>,
@@ -111,7 +111,7 @@ pub struct Shared<'b> {
 
 impl<'b> Shared<'b> {
     /// Chunks of `buf` from the line start `from` on.
-    pub fn new(buf: &'b [u8], from: usize, comments: bool, chunk: usize) -> Shared<'b> {
+    pub(super) fn new(buf: &'b [u8], from: usize, comments: bool, chunk: usize) -> Shared<'b> {
         let cuts = cut(buf, from, chunk);
         let n = cuts.len() - 1;
         Shared {
@@ -212,7 +212,7 @@ impl<'b> Shared<'b> {
 
     /// The second thread: reads chunks until all are read or the loop is
     /// done.
-    pub fn help(&self) {
+    pub(super) fn help(&self) {
         loop {
             let seen = self.seen();
             if self.done.load(Ordering::Acquire)
@@ -239,7 +239,7 @@ impl<'b> Shared<'b> {
 }
 
 /// Lines from chunks read by either thread, in order.
-pub struct Ahead<'s, 'b> {
+pub(super) struct Ahead<'s, 'b> {
     shared: &'s Shared<'b>,
     /// Chunk being applied (`usize::MAX` before the first).
     chunk: usize,
@@ -248,7 +248,7 @@ pub struct Ahead<'s, 'b> {
 }
 
 impl<'s, 'b> Ahead<'s, 'b> {
-    pub fn new(shared: &'s Shared<'b>) -> Ahead<'s, 'b> {
+    pub(super) fn new(shared: &'s Shared<'b>) -> Ahead<'s, 'b> {
         Ahead {
             shared,
             chunk: usize::MAX,

@@ -63,7 +63,7 @@ fn m_group(m: i64) -> Option<u8> {
 }
 
 /// Whether a G-code (×10) is a motion code.
-pub fn is_motion(g: i32) -> bool {
+pub(crate) fn is_motion(g: i32) -> bool {
     g_group(g) == Some(1)
 }
 
@@ -75,7 +75,7 @@ fn g_uses_axes(g: i32) -> bool {
 /// Checks a block. `words` are (letter, value) in line order; returns the
 /// error and the index of the word it concerns, or whether the block runs
 /// a lathe cycle (G70–G72).
-pub fn check_block(
+pub(crate) fn check_block(
     words: &[(u8, f64)],
     modal: &Modal,
     points: &Nurbs,

@@ -5,13 +5,13 @@
 use crate::eval::state::Machine;
 
 /// Whether a motion mode (G-code ×10) is a canned cycle.
-pub fn is_cycle(motion: i32) -> bool {
+pub(crate) fn is_cycle(motion: i32) -> bool {
     matches!(motion, 730 | 740 | 810..=890)
 }
 
 /// The depth axis of cycles in a plane (G17 → Z, G18 → Y, G19 → X), as a
 /// letter and a name.
-pub fn depth_axis(plane: i32) -> (u8, &'static str) {
+pub(crate) fn depth_axis(plane: i32) -> (u8, &'static str) {
     match plane {
         180 | 181 => (b'y', "Y"),
         190 | 191 => (b'x', "X"),
@@ -22,7 +22,7 @@ pub fn depth_axis(plane: i32) -> (u8, &'static str) {
 /// R plane and depth of the last cycle block, as written (incremental values
 /// in G91).
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Cycle {
+pub(crate) struct Cycle {
     pub r: f64,
     pub depth: f64,
 }

@@ -17,7 +17,7 @@ use crate::eval::flow::{FrameKind, SubRec};
 use crate::eval::{Interp, file_key, read_error};
 
 /// A cycle whose contour subroutine is running.
-pub struct LatheRun {
+pub(crate) struct LatheRun {
     /// Number of frames once the subroutine has returned.
     level: usize,
     /// The cycle line.

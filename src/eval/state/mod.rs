@@ -14,10 +14,10 @@ use crate::eval::Settings;
 use crate::fx_hasher::FxMap;
 
 /// Axis letters in parameter order (X Y Z A B C U V W).
-pub const AXES: [u8; 9] = *b"xyzabcuvw";
+pub(crate) const AXES: [u8; 9] = *b"xyzabcuvw";
 
 #[derive(Debug, Clone, PartialEq)]
-pub struct Modal {
+pub(crate) struct Modal {
     pub metric: bool,
     pub absolute: bool,
     pub ijk_absolute: bool,
@@ -86,7 +86,7 @@ impl Default for Modal {
 
 impl Modal {
     /// The state after M2/M30.
-    pub fn reset_at_end(&mut self) {
+    pub(crate) fn reset_at_end(&mut self) {
         self.coord_index = 1;
         self.plane = 170;
         self.absolute = true;
@@ -104,25 +104,25 @@ impl Modal {
 
 /// Why a position became unknown.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Unknown {
+pub(crate) enum Unknown {
     Start,
     After(&'static str, u32),
 }
 
 #[derive(Debug, Clone)]
-pub struct Position {
+pub(crate) struct Position {
     /// Current position in program coordinates and program units.
     pub axes: [Result<f64, Unknown>; 9],
 }
 
 impl Position {
-    pub fn unknown() -> Position {
+    pub(crate) fn unknown() -> Position {
         Position {
             axes: std::array::from_fn(|_| Err(Unknown::Start)),
         }
     }
 
-    pub fn zero() -> Position {
+    pub(crate) fn zero() -> Position {
         Position {
             axes: std::array::from_fn(|_| Ok(0.0)),
         }

@@ -8,13 +8,13 @@ use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
 
 /// Motion mode of a NURBS block (G5.2 ×10).
-pub const NURBS: i32 = 52;
+pub(crate) const NURBS: i32 = 52;
 /// What G5.3 leaves: no motion mode.
-pub const NO_MOTION: i32 = -1;
+pub(crate) const NO_MOTION: i32 = -1;
 
 /// Control points collected since the last G5.3.
 #[derive(Debug, Clone)]
-pub struct Nurbs {
+pub(crate) struct Nurbs {
     points: u32,
     order: u32,
     /// X and Y of the last point.
@@ -33,12 +33,12 @@ impl Default for Nurbs {
 
 impl Nurbs {
     /// Points are pending (a G5.2 block was started and not ended).
-    pub fn pending(&self) -> bool {
+    pub(crate) fn pending(&self) -> bool {
         self.points > 0
     }
 
     /// The order, if fewer points than it are pending.
-    pub fn short_of_order(&self) -> Option<u32> {
+    pub(crate) fn short_of_order(&self) -> Option<u32> {
         (self.points < self.order).then_some(self.order)
     }
 }

@@ -13,7 +13,7 @@ use crate::eval::state::Modal;
 /// The state M70 or M73 saves: the modal state, and whether G92 offsets
 /// were applied (M72 turns them on or off again).
 #[derive(Clone)]
-pub struct Saved {
+pub(crate) struct Saved {
     pub modal: Modal,
     pub g92_applied: bool,
 }

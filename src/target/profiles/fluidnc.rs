@@ -15,7 +15,7 @@
 
 use crate::target::profile::{Comments, LineCount, Profile, ToolChange};
 
-pub const PROFILE: Profile = Profile {
+pub(crate) const PROFILE: Profile = Profile {
     name: "fluidnc",
     summary: "FluidNC, 3-axis configuration (flood coolant, no mist)",
     source: "bdring/FluidNC e952f33f FluidNC/src/GCode.cpp, Channel.cpp",

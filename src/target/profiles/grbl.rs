@@ -11,7 +11,7 @@
 
 use crate::target::profile::{Comments, LineCount, Profile, ToolChange};
 
-pub const PROFILE: Profile = Profile {
+pub(crate) const PROFILE: Profile = Profile {
     name: "grbl",
     summary: "GRBL 1.1, default build (3 axes, no M7)",
     source: "gnea/grbl bfb67f0c grbl/gcode.c, grbl/protocol.c, grbl/serial.c",

@@ -27,7 +27,7 @@
 
 use crate::target::profile::{Comments, LineCount, Profile, ToolChange};
 
-pub const PROFILE: Profile = Profile {
+pub(crate) const PROFILE: Profile = Profile {
     name: "grblhal",
     summary: "grblHAL, default core build (3 axes, G54-G59.3, no tool table)",
     source: "grblHAL/core f80fc34d gcode.c, gcode.h, motion_control.c, protocol.c, config.h",

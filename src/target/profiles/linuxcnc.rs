@@ -2,7 +2,7 @@
 
 use crate::target::profile::{Comments, Profile, ToolChange};
 
-pub const PROFILE: Profile = Profile {
+pub(crate) const PROFILE: Profile = Profile {
     name: "linuxcnc",
     summary: "LinuxCNC 2.9: the flattened program as it is (the default)",
     source: "LinuxCNC 2.9 rs274ngc (the reference itself)",

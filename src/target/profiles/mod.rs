@@ -1,6 +1,6 @@
 //! One profile per controller.
 
-pub mod fluidnc;
-pub mod grbl;
-pub mod grblhal;
-pub mod linuxcnc;
+pub(crate) mod fluidnc;
+pub(crate) mod grbl;
+pub(crate) mod grblhal;
+pub(crate) mod linuxcnc;
