@@ -369,9 +369,9 @@ impl Interp<'_> {
             }
             OKind::Do => self.exec_do(file, oidx, key),
             OKind::While => self.exec_while(file, oidx, o, key),
-            OKind::EndWhile => self.exec_endwhile(file, oidx, key),
+            OKind::EndWhile => self.exec_loop_back(file, oidx, key, OKind::While),
             OKind::Repeat => self.exec_repeat(file, oidx, o, key),
-            OKind::EndRepeat => self.exec_endrepeat(file, oidx, key),
+            OKind::EndRepeat => self.exec_loop_back(file, oidx, key, OKind::Repeat),
             OKind::Break | OKind::Continue => self.exec_break_continue(file, oidx, o, key),
             OKind::Sub => self.reach_sub(file, oidx, key),
             OKind::EndSub | OKind::Return => self.exec_return(file, oidx, o),
@@ -499,15 +499,27 @@ impl Interp<'_> {
         self.loop_exit(file, oidx, key, OKind::EndWhile)
     }
 
-    /// `endwhile`: back to the `while`.
-    // One call site, on the hot path: kept inline as before the split.
+    /// `endwhile` and `endrepeat`: back to the loop's opening line
+    /// (`opener`, While or Repeat).
+    // Two call sites, on the hot path: kept inline as before the split.
     #[inline(always)]
-    fn exec_endwhile(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) -> Result<(), Error> {
-        let rec = match self.expect(file, oidx, key, &[OKind::While], "while") {
+    fn exec_loop_back(
+        &mut self,
+        file: &Rc<FileIndex>,
+        oidx: u32,
+        key: &Name,
+        opener: OKind,
+    ) -> Result<(), Error> {
+        let repeat = matches!(opener, OKind::Repeat);
+        let name = if repeat { "repeat" } else { "while" };
+        let rec = match self.expect(file, oidx, key, &[opener], name) {
             Ok(r) => r,
             Err(e) => return self.soft(e, file),
         };
         self.flow.note_loop(file, rec.oidx, key);
+        if repeat {
+            self.flow.repeat_again = Some(rec.oidx);
+        }
         self.flow.goto(file, rec.oidx, false);
         Ok(())
     }
@@ -557,20 +569,6 @@ impl Interp<'_> {
             }
             self.loop_exit(file, oidx, key, OKind::EndRepeat)
         }
-    }
-
-    /// `endrepeat`: back to the `repeat`.
-    // One call site, on the hot path: kept inline as before the split.
-    #[inline(always)]
-    fn exec_endrepeat(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) -> Result<(), Error> {
-        let rec = match self.expect(file, oidx, key, &[OKind::Repeat], "repeat") {
-            Ok(r) => r,
-            Err(e) => return self.soft(e, file),
-        };
-        self.flow.note_loop(file, rec.oidx, key);
-        self.flow.repeat_again = Some(rec.oidx);
-        self.flow.goto(file, rec.oidx, false);
-        Ok(())
     }
 
     /// `break`/`continue`: finds the end of the loop and leaves or repeats it.
@@ -1065,23 +1063,29 @@ impl Interp<'_> {
             next_o: oidx as usize + 1,
         };
         self.push_frame(file, oidx, FrameKind::Call, base, ret)?;
+        self.bind_args(&argv, nargs as f64);
+        self.flow.goto(&target.file, target.oidx, true);
+        Ok(())
+    }
+
+    /// Gives the frame just pushed its arguments: #1-#30 saved in it (the
+    /// caller gets them back on return) and set to `argv`, and `n_args`
+    /// when the INI asks for it.
+    pub(in crate::eval) fn bind_args(&mut self, argv: &[f64; 30], nargs: f64) {
         let mut saved = self
             .flow
             .saved_pool
             .pop()
             .unwrap_or_else(|| Box::new([0.0; 30]));
         saved.copy_from_slice(&self.params.values[1..31]);
-        self.params.values[1..31].copy_from_slice(&argv);
+        self.params.values[1..31].copy_from_slice(argv);
         self.params.set[1..31].fill(true);
-        let nargs = nargs as f64;
         let oword_nargs = self.s.oword_nargs;
         let f = self.flow.frame();
         f.saved = Some(saved);
         if oword_nargs {
             f.locals.insert(Name::new("n_args"), nargs);
         }
-        self.flow.goto(&target.file, target.oidx, true);
-        Ok(())
     }
 
     fn return_from_call(

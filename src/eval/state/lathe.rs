@@ -175,19 +175,9 @@ impl Interp<'_> {
             ));
         }
         f.ret = Some(ret);
-        let mut saved = self
-            .flow
-            .saved_pool
-            .pop()
-            .unwrap_or_else(|| Box::new([0.0; 30]));
-        saved.copy_from_slice(&self.params.values[1..31]);
-        self.params.values[1..31].fill(0.0);
-        self.params.set[1..31].fill(true);
-        f.saved = Some(saved);
-        if self.s.oword_nargs {
-            f.locals.insert(Name::new("n_args"), 0.0);
-        }
         self.flow.frames.push(f);
+        // A call without arguments.
+        self.bind_args(&[0.0; 30], 0.0);
         self.flow
             .subs
             .entry(label.clone())
