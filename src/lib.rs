@@ -10,6 +10,7 @@
 #![deny(unreachable_pub)]
 
 mod check;
+mod codes;
 pub mod config;
 pub mod diag;
 pub mod emit;

@@ -58,12 +58,7 @@ pub enum Plane {
     YZ,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SpindleDir {
-    Off,
-    Cw,
-    Ccw,
-}
+pub(crate) use crate::codes::SpindleDir;
 
 #[derive(Debug, Clone, PartialEq)]
 pub enum Motion {

@@ -7,6 +7,7 @@ use std::collections::BTreeSet;
 const ORDER: &[&str] = &[
     "source",
     "number",
+    "codes",
     "geom",
     "fx_hasher",
     "diag",

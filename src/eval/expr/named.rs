@@ -5,6 +5,8 @@ use crate::diag::ErrorKind;
 use crate::parse::Name;
 use crate::parse::ast::Span;
 
+use crate::codes as code;
+use crate::codes::SpindleDir;
 use crate::eval::Interp;
 use crate::eval::expr::{EvalResult, Fault, fault};
 use crate::eval::state::{AXES, Unknown};
@@ -147,9 +149,9 @@ impl Interp<'_> {
             Predef::Imperial => flag(!m.metric),
             Predef::Absolute => flag(m.absolute),
             Predef::Incremental => flag(!m.absolute),
-            Predef::InverseTime => flag(m.feed_mode == 930),
-            Predef::UnitsPerMinute => flag(m.feed_mode == 940),
-            Predef::UnitsPerRev => flag(m.feed_mode == 950),
+            Predef::InverseTime => flag(m.feed_mode == code::FeedMode::InverseTime),
+            Predef::UnitsPerMinute => flag(m.feed_mode == code::FeedMode::PerMinute),
+            Predef::UnitsPerRev => flag(m.feed_mode == code::FeedMode::PerRev),
             Predef::CoordSystem => {
                 let i = m.coord_index;
                 if i < 7 {
@@ -158,9 +160,13 @@ impl Interp<'_> {
                     (584 + i) as f64
                 }
             }
-            Predef::MotionMode => m.motion as f64,
-            Predef::Plane => m.plane as f64,
-            Predef::Ccomp => m.ccomp as f64,
+            // The G code ×10, as LinuxCNC reports them; -1 after G5.3.
+            Predef::MotionMode => match m.motion {
+                code::MotionMode::NurbsEnd => -1.0,
+                motion => motion.code10() as f64,
+            },
+            Predef::Plane => m.plane.code10() as f64,
+            Predef::Ccomp => m.ccomp.code10() as f64,
             Predef::ToolOffset => flag(m.tool_offset),
             Predef::RetractRPlane => flag(m.retract_r),
             Predef::RetractOldZ => flag(!m.retract_r),
@@ -169,8 +175,8 @@ impl Interp<'_> {
             Predef::IjkAbsoluteMode => flag(m.ijk_absolute),
             Predef::LatheDiameterMode => flag(m.lathe_diameter),
             Predef::LatheRadiusMode => flag(!m.lathe_diameter),
-            Predef::SpindleOn => flag(m.spindle != 0),
-            Predef::SpindleCw => flag(m.spindle == 3),
+            Predef::SpindleOn => flag(m.spindle != SpindleDir::Off),
+            Predef::SpindleCw => flag(m.spindle == SpindleDir::Cw),
             Predef::Mist => flag(m.mist),
             Predef::Flood => flag(m.flood),
             Predef::SpeedOverride => flag(m.speed_override),
@@ -273,7 +279,7 @@ impl Interp<'_> {
 
     /// Current position on an axis, or why it is unknown.
     pub(crate) fn position(&self, axis: usize, span: Span) -> EvalResult {
-        if self.mach.modal.ccomp != 400 {
+        if self.mach.modal.ccomp != code::CutterComp::Off {
             let why = "cutter radius compensation is on".to_string();
             return Err(fault(
                 ErrorKind::UnknownPosition {

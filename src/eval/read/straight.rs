@@ -12,6 +12,7 @@ use std::rc::Rc;
 use crate::diag::Error;
 use crate::program::FileIndex;
 
+use crate::codes::{CutterComp, FeedMode, MotionMode, Plane};
 use crate::eval::Interp;
 use crate::eval::read::fast::POW10;
 use crate::eval::read::scan_ahead::{Ahead, InPlace, Lines, Read, Shared};
@@ -309,7 +310,7 @@ impl Interp<'_> {
     ) -> Result<u32, Error> {
         if !self.s.plain_runs
             || self.mach.rotated
-            || (self.mach.modal.ccomp != 400 || self.mach.comp_pending)
+            || (self.mach.modal.ccomp != CutterComp::Off || self.mach.comp_pending)
             || self.out.ended
         {
             return Ok(0);
@@ -422,7 +423,7 @@ impl Interp<'_> {
                 *batch_start = p.next;
                 if self.out.ended
                     || self.mach.rotated
-                    || (self.mach.modal.ccomp != 400 || self.mach.comp_pending)
+                    || (self.mach.modal.ccomp != CutterComp::Off || self.mach.comp_pending)
                 {
                     *last_start = *i;
                     *i = p.next;
@@ -471,10 +472,10 @@ impl Interp<'_> {
             self.mach.modal.motion
         } else {
             match p.vals[G] {
-                0.0 => 0,
-                1.0 => 10,
-                2.0 => 20,
-                3.0 => 30,
+                0.0 => MotionMode::Rapid,
+                1.0 => MotionMode::Linear,
+                2.0 => MotionMode::ArcCw,
+                3.0 => MotionMode::ArcCcw,
                 _ => return false,
             }
         };
@@ -484,13 +485,13 @@ impl Interp<'_> {
             self.mach.modal.feed
         };
         let moves = g || p.mask & AXIS_MASK != 0;
-        let feed_ok = self.mach.modal.feed_mode != 930 && feed != 0.0;
+        let feed_ok = self.mach.modal.feed_mode != FeedMode::InverseTime && feed != 0.0;
         let accepted = match motion {
-            0 => p.mask & !FAST_MASK == 0,
-            10 => p.mask & !FAST_MASK == 0 && (!moves || feed_ok),
-            20 | 30 => {
+            MotionMode::Rapid => p.mask & !FAST_MASK == 0,
+            MotionMode::Linear => p.mask & !FAST_MASK == 0 && (!moves || feed_ok),
+            MotionMode::ArcCw | MotionMode::ArcCcw => {
                 p.mask & !ARC_MASK == 0
-                    && self.mach.modal.plane == 170
+                    && self.mach.modal.plane == Plane::XY
                     && p.mask & (1 << I | 1 << J | 1 << R) != 0
                     && feed_ok
                     && self.arc_ok(p, motion)
@@ -519,7 +520,7 @@ impl Interp<'_> {
     /// to leave them to the general checks.
     pub(in crate::eval) fn fast_words(&mut self, words: &[(u8, f64)]) -> bool {
         if self.mach.rotated
-            || (self.mach.modal.ccomp != 400 || self.mach.comp_pending)
+            || (self.mach.modal.ccomp != CutterComp::Off || self.mach.comp_pending)
             || !self.s.plain_runs
         {
             return false;
@@ -537,7 +538,7 @@ impl Interp<'_> {
     }
 
     /// The arc geometry checks of the general path, on an XY arc line.
-    fn arc_ok(&mut self, p: &Plain, motion: i32) -> bool {
+    fn arc_ok(&mut self, p: &Plain, motion: MotionMode) -> bool {
         if p.mask & AXIS_MASK == 0 {
             return true;
         }

@@ -5,10 +5,27 @@
 
 use crate::diag::ErrorKind;
 
+use crate::codes::SpindleDir;
+use crate::codes::{CutterComp, FeedMode, MotionMode};
 use crate::diag::BlockError;
 use crate::eval::state::Modal;
-use crate::eval::state::cycle::{Cycle, depth_axis, is_cycle};
-use crate::eval::state::nurbs::{NO_MOTION, NURBS, Nurbs};
+use crate::eval::state::cycle::{Cycle, depth_axis};
+use crate::eval::state::nurbs::{NURBS, Nurbs};
+
+/// The motion mode as a code ×10 (-1: none, after G5.3).
+fn motion10(m: MotionMode) -> i32 {
+    match m {
+        MotionMode::NurbsEnd => NO_MOTION,
+        m => m.code10() as i32,
+    }
+}
+
+const NO_MOTION: i32 = -1;
+
+/// Whether a motion mode (G-code ×10) is a canned cycle.
+fn is_cycle(motion: i32) -> bool {
+    matches!(motion, 730 | 740 | 810..=890)
+}
 
 /// Modal group of a G-code (×10), or None for an unknown code.
 fn g_group(g: i32) -> Option<u8> {
@@ -60,11 +77,6 @@ fn m_group(m: i64) -> Option<u8> {
         98 | 99 => 4,
         _ => return None,
     })
-}
-
-/// Whether a G-code (×10) is a motion code.
-pub(crate) fn is_motion(g: i32) -> bool {
-    g_group(g) == Some(1)
 }
 
 /// Groups of G-codes that take axis words.
@@ -130,7 +142,7 @@ fn simple_block_ok(words: &[(u8, f64)], modal: &Modal) -> bool {
         }
     }
     let motion = match g {
-        None => modal.motion,
+        None => motion10(modal.motion),
         Some(0.0) => 0,
         Some(1.0) => 10,
         Some(_) => return false,
@@ -138,7 +150,10 @@ fn simple_block_ok(words: &[(u8, f64)], modal: &Modal) -> bool {
     let moves = mask & AXES != 0 || g.is_some();
     match motion {
         0 => true,
-        10 => !moves || (modal.feed_mode != 930 && feed.unwrap_or(modal.feed) != 0.0),
+        10 => {
+            !moves
+                || (modal.feed_mode != FeedMode::InverseTime && feed.unwrap_or(modal.feed) != 0.0)
+        }
         _ => false,
     }
 }
@@ -190,7 +205,7 @@ impl<'a> Decoded<'a> {
         let feed_mode = gs
             .iter()
             .find(|g| matches!(g.0, 930 | 940 | 950))
-            .map_or(modal.feed_mode, |g| g.0);
+            .map_or(modal.feed_mode.code10() as i32, |g| g.0);
         let axis_g0 = gs
             .iter()
             .find(|(g, _)| g_uses_axes(*g))
@@ -204,9 +219,9 @@ impl<'a> Decoded<'a> {
             has,
             axis_word,
             motion_here,
-            motion: motion_here.unwrap_or(modal.motion),
+            motion: motion_here.unwrap_or(motion10(modal.motion)),
             feed_mode,
-            nurbs: motion_here.unwrap_or(modal.motion) == NURBS,
+            nurbs: motion_here.unwrap_or(motion10(modal.motion)) == motion10(NURBS),
             g53: gs.iter().find(|g| g.0 == 53).map(|g| g.1),
             axis_g0,
         }
@@ -346,7 +361,7 @@ fn full_check(
     check_g10(&d)?;
     check_required_words(&d)?;
     check_feed(&d)?;
-    if modal.ccomp != 400 || d.g_on(&[410, 411, 420, 421]) {
+    if modal.ccomp != CutterComp::Off || d.g_on(&[410, 411, 420, 421]) {
         check_comp(&d)?;
     }
     Ok(lathe)
@@ -362,7 +377,7 @@ fn check_comp(d: &Decoded<'_>) -> Check {
     let forbid =
         |action: &'static str, at: Option<usize>| Err((ErrorKind::CompForbids { action }, at));
     let planes = |g: &i32| matches!(g, 170 | 180 | 190 | 171 | 181 | 191);
-    let before = d.modal.ccomp != 400;
+    let before = d.modal.ccomp != CutterComp::Off;
     let turning_on =
         d.gs.iter()
             .find(|(g, _)| matches!(g, 410 | 411 | 420 | 421));
@@ -384,7 +399,7 @@ fn check_comp(d: &Decoded<'_>) -> Check {
             return forbid("enable or disable overrides", Some(i));
         }
         if let Some(&(p, i)) = d.gs.iter().find(|(g, _)| planes(g))
-            && p != d.modal.plane
+            && p != d.modal.plane.code10() as i32
         {
             return Err((ErrorKind::CompPlaneChange, Some(i)));
         }
@@ -392,7 +407,7 @@ fn check_comp(d: &Decoded<'_>) -> Check {
     let plane =
         d.gs.iter()
             .find(|(g, _)| planes(g))
-            .map_or(d.modal.plane, |g| g.0);
+            .map_or(d.modal.plane.code10() as i32, |g| g.0);
     if let Some(&(g, i)) = turning_on {
         if plane != 170 && plane != 180 {
             return Err((ErrorKind::CompPlane, Some(i)));
@@ -533,7 +548,7 @@ fn check_motion_words(d: &Decoded<'_>) -> Check {
             return bad(BlockError::ArcWordsMissing, None);
         }
         if matches!(m, 330 | 331)
-            && d.modal.spindle == 0
+            && d.modal.spindle == SpindleDir::Off
             && !d.ms.iter().any(|x| matches!(x.0, 3 | 4))
         {
             return bad(BlockError::SpindleStoppedG33, None);
@@ -561,7 +576,7 @@ fn check_cycle(d: &Decoded<'_>, cycle: &Cycle) -> Check {
         && (d.motion_here.is_some() || (d.axis_word.is_some() && d.axis_g0.is_none()));
     if cycle_runs {
         // Entering the cycle (not repeating it) needs the depth and R.
-        let first = d.modal.motion != d.motion;
+        let first = motion10(d.modal.motion) != d.motion;
         let (depth, name) = depth_axis(d.modal.plane);
         if first && d.has_at(depth).is_none() {
             return bad(BlockError::CycleDepthMissing { axis: name }, None);
@@ -580,7 +595,7 @@ fn check_cycle(d: &Decoded<'_>, cycle: &Cycle) -> Check {
         if d.feed_mode == 930 {
             return bad(BlockError::CycleInverseTime, None);
         }
-        if d.modal.ccomp != 400 && !d.g_on(&[400]) || d.g_on(&[410, 411, 420, 421]) {
+        if d.modal.ccomp != CutterComp::Off && !d.g_on(&[400]) || d.g_on(&[410, 411, 420, 421]) {
             return bad(BlockError::CycleWithComp, None);
         }
         // The R plane must not be below the bottom of the hole (in G91 the
@@ -591,11 +606,14 @@ fn check_cycle(d: &Decoded<'_>, cycle: &Cycle) -> Check {
         if below {
             return bad(BlockError::CycleRBelowDepth { axis: name }, d.has_at(b'r'));
         }
-        let spindle =
-            d.ms.iter()
-                .rev()
-                .find(|m| matches!(m.0, 3..=5))
-                .map_or(d.modal.spindle, |m| if m.0 == 5 { 0 } else { m.0 as i32 });
+        let spindle = d.ms.iter().rev().find(|m| matches!(m.0, 3..=5)).map_or(
+            match d.modal.spindle {
+                SpindleDir::Off => 0,
+                SpindleDir::Cw => 3,
+                SpindleDir::Ccw => 4,
+            },
+            |m| if m.0 == 5 { 0 } else { m.0 as i32 },
+        );
         let spindle_msg = match (d.motion, spindle) {
             (840, 0) | (740, 0) | (860, 0) | (870, 0) | (880, 0) => {
                 Some(BlockError::CycleSpindleStopped)
@@ -661,7 +679,10 @@ fn check_word_values(d: &Decoded<'_>) -> Check {
 fn check_unused_words(d: &Decoded<'_>) -> Check {
     let arcish = d.g_on(&[20, 30, 50, 51, 100, 331, 760, 870])
         || (d.motion_here.is_none()
-            && matches!(d.modal.motion, 20 | 30 | 50 | 51 | 331 | 760 | 870)
+            && matches!(
+                motion10(d.modal.motion),
+                20 | 30 | 50 | 51 | 331 | 760 | 870
+            )
             && d.axis_word.is_some());
     let uses = |letter: u8, ok: bool, msg: BlockError| -> Result<(), (ErrorKind, Option<usize>)> {
         match d.has_at(letter) {
@@ -771,7 +792,9 @@ fn check_whole_numbers(d: &Decoded<'_>) -> Check {
     }
     // G53 moves in machine coordinates: with G0 or G1, never incremental.
     if let Some(at) = d.gs.iter().find(|g| g.0 == 530).map(|g| g.1) {
-        let motion_to_be = d.motion_here.or(d.axis_word.map(|_| d.modal.motion));
+        let motion_to_be = d
+            .motion_here
+            .or(d.axis_word.map(|_| motion10(d.modal.motion)));
         if !matches!(motion_to_be, Some(0 | 10)) {
             return bad(BlockError::G53NeedsG0G1, Some(at));
         }
@@ -841,8 +864,8 @@ fn check_feed(d: &Decoded<'_>) -> Check {
     if moves && d.axis_g0.is_none() && matches!(d.motion, 10 | 20 | 30 | 50 | 51 | 730 | 810..=890)
     {
         let feed = d.words.iter().rev().find(|w| w.0 == b'f').map(|w| w.1);
-        let inverse =
-            d.gs.iter().any(|g| g.0 == 930) || (d.modal.feed_mode == 930 && !d.g_on(&[940, 950]));
+        let inverse = d.gs.iter().any(|g| g.0 == 930)
+            || (d.modal.feed_mode == FeedMode::InverseTime && !d.g_on(&[940, 950]));
         if inverse {
             if feed.is_none() && d.axis_word.is_some() {
                 return bad(BlockError::InverseTimeFMissing, None);

@@ -13,6 +13,7 @@
 use crate::diag::{ErrorKind, WarningKind};
 use crate::geom::comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
 
+use crate::codes::{CutterComp, MotionMode, Plane};
 use crate::eval::Interp;
 use crate::eval::state::Machine;
 
@@ -31,23 +32,23 @@ fn geom(error: CompError) -> ErrorKind {
 }
 
 impl Interp<'_> {
-    /// G41/G42 (`g` 410 or 420) or G41.1/G42.1 (411, 421) on the block
-    /// with `words`; the block checks have accepted them.
+    /// G41/G42 or G41.1/G42.1 (`g`) on the block with `words`; the block
+    /// checks have accepted them.
     pub(in crate::eval) fn comp_on(
         &mut self,
-        g: i32,
+        g: CutterComp,
         words: &[(u8, f64)],
         file: &std::rc::Rc<crate::program::FileIndex>,
         start: u32,
     ) -> Result<(), ErrorKind> {
         let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
-        let side = if matches!(g, 410 | 411) {
+        let side = if g.side() == CutterComp::Left {
             Side::Left
         } else {
             Side::Right
         };
-        let xz = self.mach.modal.plane == 180;
-        let tool = if matches!(g, 411 | 421) {
+        let xz = self.mach.modal.plane == Plane::XZ;
+        let tool = if matches!(g, CutterComp::DynamicLeft | CutterComp::DynamicRight) {
             word(b'd').map(|d| (d / 2.0, word(b'l').map_or(0, |l| l.round() as i32)))
         } else {
             let number = match word(b'd') {
@@ -147,7 +148,7 @@ impl Interp<'_> {
 impl Machine {
     /// Axis indices of the compensation plane's coordinates (a, b, third).
     fn comp_axes(&self) -> [usize; 3] {
-        if self.modal.plane == 180 {
+        if self.modal.plane == Plane::XZ {
             [2, 0, 1]
         } else {
             [0, 1, 2]
@@ -176,24 +177,25 @@ impl Machine {
     }
 
     /// The move of a block just applied to the position model (`motion`
-    /// is the motion mode, ×10).
+    /// is the motion mode).
     pub(in crate::eval) fn comp_move(
         &mut self,
         words: &[(u8, f64)],
-        motion: i32,
+        motion: MotionMode,
     ) -> Result<(), ErrorKind> {
-        if self.modal.ccomp == 400 {
+        if self.modal.ccomp == CutterComp::Off {
             if self.comp_pending {
+                use MotionMode as M;
                 match motion {
-                    20 | 30 => return Err(ErrorKind::CompArcAfterOff),
-                    0 | 10 | 330 | 331 => self.comp_pending = false,
+                    M::ArcCw | M::ArcCcw => return Err(ErrorKind::CompArcAfterOff),
+                    M::Rapid | M::Linear | M::Thread | M::RigidTap => self.comp_pending = false,
                     _ => {}
                 }
             }
             return Ok(());
         }
         let end = self.comp_pos();
-        let xz = self.modal.plane == 180;
+        let xz = self.modal.plane == Plane::XZ;
         let ijk_absolute = self.modal.ijk_absolute;
         let Some(run) = self.comp.as_mut().filter(|r| r.known) else {
             return Ok(());
@@ -203,12 +205,15 @@ impl Machine {
             return Ok(());
         };
         let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
+        use MotionMode as M;
         let r = match motion {
             // The reference runs a G76 line with compensation on as a
             // compensated straight feed (its threading check is never
             // reached).
-            0 | 10 | 760 => run.comp.straight(motion == 0, end, (), &mut run.out),
-            20 | 30 => {
+            M::Rapid | M::Linear | M::ThreadCycle => {
+                run.comp.straight(motion == M::Rapid, end, (), &mut run.out)
+            }
+            M::ArcCw | M::ArcCcw => {
                 let center = match word(b'r') {
                     Some(r) => ArcCenter::Radius(r),
                     None => {
@@ -226,7 +231,7 @@ impl Machine {
                 };
                 let turns = word(b'p').map_or(1, |p| p.round() as i32);
                 let arc = Arc {
-                    ccw: motion == 30,
+                    ccw: motion == M::ArcCcw,
                     center,
                     turns,
                 };
@@ -245,7 +250,7 @@ impl Machine {
 
     /// Whether G53 would move with an offset path (the reference refuses it).
     pub(in crate::eval) fn comp_offsetting(&self) -> bool {
-        self.modal.ccomp != 400
+        self.modal.ccomp != CutterComp::Off
             && self
                 .comp
                 .as_ref()

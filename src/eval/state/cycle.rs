@@ -2,20 +2,16 @@
 //! and the depth of the last one, which a repeat of the same cycle reuses
 //! when its line leaves them out.
 
+use crate::codes::Plane;
 use crate::eval::state::Machine;
-
-/// Whether a motion mode (G-code ×10) is a canned cycle.
-pub(crate) fn is_cycle(motion: i32) -> bool {
-    matches!(motion, 730 | 740 | 810..=890)
-}
 
 /// The depth axis of cycles in a plane (G17 → Z, G18 → Y, G19 → X), as a
 /// letter and a name.
-pub(crate) fn depth_axis(plane: i32) -> (u8, &'static str) {
+pub(crate) fn depth_axis(plane: Plane) -> (u8, &'static str) {
     match plane {
-        180 | 181 => (b'y', "Y"),
-        190 | 191 => (b'x', "X"),
-        _ => (b'z', "Z"),
+        Plane::XZ | Plane::WU => (b'y', "Y"),
+        Plane::YZ | Plane::VW => (b'x', "X"),
+        Plane::XY | Plane::UV => (b'z', "Z"),
     }
 }
 

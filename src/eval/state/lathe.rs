@@ -13,6 +13,7 @@ use crate::parse::Name;
 use crate::parse::ast::{Item, Line, LineKind};
 use crate::program::{FileIndex, Window, next_line};
 
+use crate::codes::{CutterComp, GCode, MotionMode, Plane};
 use crate::eval::flow::{FrameKind, SubRec};
 use crate::eval::{Interp, file_key, read_error};
 
@@ -29,8 +30,8 @@ pub(crate) struct LatheRun {
     contour: Contour,
     /// The contour's current point (where the next element starts).
     point: C,
-    /// Motion mode the contour lines take (G-code ×10).
-    motion: i32,
+    /// Motion mode the contour lines take.
+    motion: MotionMode,
     absolute: bool,
     ijk_absolute: bool,
     /// Where the machine is while the contour is read (after the rapid).
@@ -64,23 +65,23 @@ impl Interp<'_> {
         len: u32,
         words: &[(u8, f64)],
     ) -> Result<(), Error> {
-        let mut code = 0;
+        // G70 (70, 0) or G71/G72 and their .1 and .2 (71, 1).
+        let mut code = (0, 0);
         let mut others: Vec<(u8, f64)> = Vec::new();
         let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
         for &(l, v) in words {
             match l {
-                b'g' if matches!(
-                    (v * 10.0).round() as i32,
-                    700 | 710 | 711 | 712 | 720 | 721 | 722
-                ) =>
+                b'g' if let Some(GCode::Motion(MotionMode::LatheCycle { number, sub })) =
+                    GCode::nearest(v) =>
                 {
-                    code = (v * 10.0).round() as i32
+                    code = (number, sub)
                 }
                 b'q' | b'd' | b'e' | b'i' | b'p' | b'r' | b'u' | b'w' | b'x' | b'z' => {}
                 _ => others.push((l, v)),
             }
         }
-        let name = format!("G{}", number_string(code as f64 / 10.0, None));
+        let (number, sub) = code;
+        let name = GCode::Motion(MotionMode::LatheCycle { number, sub }).name();
         // The block's other words act before its motion.
         let mut ends = false;
         if others.iter().any(|w| w.0 != b'n') {
@@ -98,10 +99,10 @@ impl Interp<'_> {
         let Some(q) = word(b'q') else {
             return Err(self.lathe_err(LatheError::NoQ { code: name }, file, start, len));
         };
-        if self.mach.modal.ccomp != 400 && code != 700 {
+        if self.mach.modal.ccomp != CutterComp::Off && number != 70 {
             return Err(self.lathe_err(LatheError::WithComp { code: name }, file, start, len));
         }
-        if self.mach.modal.plane != 180 {
+        if self.mach.modal.plane != Plane::XZ {
             return Err(self.lathe_err(LatheError::NotXz { code: name }, file, start, len));
         }
         if q.fract() != 0.0 || !(0.0..1e9).contains(&q) {
@@ -122,7 +123,7 @@ impl Interp<'_> {
             x += word(b'x').unwrap_or(0.0);
             z += word(b'z').unwrap_or(0.0);
         }
-        let cycle = lathe_cycle(code, word);
+        let cycle = lathe_cycle(number, sub, word);
         // The rapid to the start is made with the words taken as absolute.
         let rapid = C::new(word(b'z').unwrap_or(cz), word(b'x').unwrap_or(cx));
         self.lathe_move(file, start, len, Move::Rapid(rapid))?;
@@ -333,21 +334,24 @@ impl Interp<'_> {
         }
         let mut motion = run.motion;
         for &(l, v) in &words {
-            let g = (v * 10.0).round() as i32;
-            if l == b'g' && crate::eval::read::validate::is_motion(g) {
-                motion = g;
+            if l == b'g'
+                && let Some(GCode::Motion(m)) = GCode::nearest(v)
+            {
+                motion = m;
             }
         }
         let mut add: Option<Element> = None;
         if end != point {
             match motion {
-                0 | 10 => add = Some(Element::Line(end)),
-                20 | 30 => {
+                MotionMode::Rapid | MotionMode::Linear => add = Some(Element::Line(end)),
+                MotionMode::ArcCw | MotionMode::ArcCcw => {
                     if let Some(r) = word(b'r') {
                         if iw.is_some() || kw.is_some() {
                             return Err(bad(self, LatheError::ArcRAndIk));
                         }
-                        let Some(c) = center_from_radius(point, end, r, motion == 30) else {
+                        let Some(c) =
+                            center_from_radius(point, end, r, motion == MotionMode::ArcCcw)
+                        else {
                             return Err(bad(self, LatheError::ArcRadiusTooSmall));
                         };
                         center = c;
@@ -359,13 +363,17 @@ impl Interp<'_> {
                             center = center + point;
                         }
                     }
-                    let ccw = motion == 30;
+                    let ccw = motion == MotionMode::ArcCcw;
                     add = Some(Element::Arc(ccw, center, end));
                 }
                 _ => {}
             }
         }
-        let corner = if end != point && matches!(motion, 0 | 10 | 20 | 30) {
+        let corner = if end != point
+            && matches!(
+                motion,
+                MotionMode::Rapid | MotionMode::Linear | MotionMode::ArcCw | MotionMode::ArcCcw
+            ) {
             let (a, c) = (word(b'a'), word(b'c'));
             if a.is_some() && c.is_some() {
                 return Err(bad(self, LatheError::AAndC));
@@ -498,10 +506,10 @@ fn line_len(file: &Rc<FileIndex>, start: u32) -> u32 {
     }
 }
 
-/// The cycle a G70 (`code` 700) or G71/G72 (710..722) block asks for, from
-/// its words.
-fn lathe_cycle(code: i32, word: impl Fn(u8) -> Option<f64>) -> Cycle {
-    if code == 700 {
+/// The cycle a G70 (`number` 70) or G71/G72 (71, 72 and `sub` 0, 1, 2)
+/// block asks for, from its words.
+fn lathe_cycle(number: u8, sub: u8, word: impl Fn(u8) -> Option<f64>) -> Cycle {
+    if number == 70 {
         Cycle::Finish {
             d: word(b'd').unwrap_or(0.0),
             e: word(b'e').unwrap_or(0.0),
@@ -509,8 +517,8 @@ fn lathe_cycle(code: i32, word: impl Fn(u8) -> Option<f64>) -> Cycle {
         }
     } else {
         Cycle::Rough {
-            face: code >= 720,
-            mode: (code % 10) as u8,
+            face: number == 72,
+            mode: sub,
             u: word(b'u').unwrap_or(0.0),
             w: word(b'w').unwrap_or(0.0),
             d: word(b'd').unwrap_or(0.0),

@@ -10,6 +10,8 @@ pub(super) mod nurbs;
 pub(super) mod restore;
 pub mod tools;
 
+use crate::codes::SpindleDir;
+use crate::codes::{CutterComp, FeedMode, MotionMode, PathMode, Plane};
 use crate::eval::Settings;
 use crate::fx_hasher::FxMap;
 
@@ -21,14 +23,12 @@ pub(crate) struct Modal {
     pub metric: bool,
     pub absolute: bool,
     pub ijk_absolute: bool,
-    /// 170, 180, 190, 171, 181, 191
-    pub plane: i32,
-    /// 930, 940, 950
-    pub feed_mode: i32,
+    pub plane: Plane,
+    pub feed_mode: FeedMode,
     pub feed: f64,
     pub speed: f64,
-    /// G-code ×10 (G0 → 0, G1 → 10, G80 → 800, G38.2 → 382)
-    pub motion: i32,
+    /// The motion mode; G5.3 (`NurbsEnd`) is none, as G5.3 leaves it.
+    pub motion: MotionMode,
     /// 1 (G54) … 9 (G59.3)
     pub coord_index: i32,
     pub tool_offset: bool,
@@ -36,16 +36,15 @@ pub(crate) struct Modal {
     pub retract_r: bool,
     /// G96 (css) / G97 (rpm)
     pub css: bool,
-    /// 0 off, 3 cw, 4 ccw
-    pub spindle: i32,
+    pub spindle: SpindleDir,
     pub mist: bool,
     pub flood: bool,
-    /// 610, 611, 640
-    pub path: i32,
+    pub path: PathMode,
     pub path_p: Option<f64>,
     pub path_q: Option<f64>,
-    /// 400, 410, 420
-    pub ccomp: i32,
+    /// Off, Left or Right (G41.1 and G42.1 are kept as the side they
+    /// compensate on, as `#<_ccomp>` reads them).
+    pub ccomp: CutterComp,
     pub lathe_diameter: bool,
     pub speed_override: bool,
     pub feed_override: bool,
@@ -59,22 +58,22 @@ impl Default for Modal {
             metric: true,
             absolute: true,
             ijk_absolute: false,
-            plane: 170,
-            feed_mode: 940,
+            plane: Plane::XY,
+            feed_mode: FeedMode::PerMinute,
             feed: 0.0,
             speed: 0.0,
-            motion: 800,
+            motion: MotionMode::CancelCycle,
             coord_index: 1,
             tool_offset: false,
             retract_r: true,
             css: false,
-            spindle: 0,
+            spindle: SpindleDir::Off,
             mist: false,
             flood: false,
-            path: 640,
+            path: PathMode::Blend,
             path_p: None,
             path_q: None,
-            ccomp: 400,
+            ccomp: CutterComp::Off,
             lathe_diameter: false,
             speed_override: true,
             feed_override: true,
@@ -88,15 +87,15 @@ impl Modal {
     /// The state after M2/M30.
     pub(crate) fn reset_at_end(&mut self) {
         self.coord_index = 1;
-        self.plane = 170;
+        self.plane = Plane::XY;
         self.absolute = true;
-        self.feed_mode = 940;
+        self.feed_mode = FeedMode::PerMinute;
         self.feed = 0.0;
-        self.spindle = 0;
+        self.spindle = SpindleDir::Off;
         self.mist = false;
         self.flood = false;
-        self.ccomp = 400;
-        self.motion = 10;
+        self.ccomp = CutterComp::Off;
+        self.motion = MotionMode::Linear;
         self.speed_override = true;
         self.feed_override = true;
     }

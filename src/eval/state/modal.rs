@@ -6,11 +6,21 @@ use crate::diag::BlockError;
 use crate::diag::{Error, ErrorKind};
 use crate::program::FileIndex;
 
+use crate::codes::{
+    ArcDistance, CutterComp, Distance, GCode, LatheMode, MCode, MotionMode, NonModal, Plane,
+    Retract, SpindleMode, ToolLength, Units,
+};
 use crate::eval::Interp;
 use crate::eval::read::block::Words;
 use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
 use crate::eval::state::nurbs::{NO_MOTION, NURBS};
+
+/// A motion code other than G80 (which gives way to one on its line).
+#[inline]
+fn is_moving_code(g: GCode) -> bool {
+    matches!(g, GCode::Motion(m) if m != MotionMode::CancelCycle)
+}
 
 const LINEAR: [bool; 9] = [true, true, true, false, false, false, true, true, true];
 
@@ -102,13 +112,14 @@ impl Interp<'_> {
         self.mach.pos.axes[axis] = v.ok_or(Unknown::After(what, line));
     }
 
-    /// G43 (430) or G43.2 (432) with the tool of `h` or the current one.
-    fn g43(&mut self, g: i32, h: Option<f64>) {
+    /// G43 (`add` false) or G43.2 (true) with the tool of `h` or the
+    /// current one.
+    fn g43(&mut self, add: bool, h: Option<f64>) {
         self.mach.modal.tool_offset = true;
         let tool = h.or(self.mach.current_tool);
         let data = tool.and_then(|t| self.tool(t));
-        let new = match (g, data) {
-            (430, Some(d)) => Some(d.offsets),
+        let new = match (add, data) {
+            (false, Some(d)) => Some(d.offsets),
             (_, Some(d)) => self
                 .mach
                 .tlo
@@ -125,7 +136,7 @@ impl Interp<'_> {
     /// restores them.
     pub(in crate::eval) fn tool_offset_words(&mut self, on: bool) {
         if on {
-            self.g43(430, None);
+            self.g43(false, None);
         } else {
             self.mach.modal.tool_offset = false;
             self.set_tlo(Some([0.0; 9]), "G49");
@@ -173,17 +184,17 @@ impl Interp<'_> {
         if w.tool_changed && self.s.retain_g43 && self.mach.modal.tool_offset {
             let on = self.mach.current_tool != Some(0.0);
             self.tool_offset_words(on);
-            if !w.gs().iter().any(|g| matches!(g, 430 | 431 | 432 | 490)) {
+            if !w.gs().iter().any(|g| matches!(g, GCode::ToolLength(_))) {
                 self.mach.retain_line = Some(on);
             }
         }
         let (special, dynamic_tlo) = self.apply_g_modes(&w);
         let _ = self.line_no();
-        if self.mach.comp.is_some() || self.mach.modal.ccomp != 400 {
+        if self.mach.comp.is_some() || self.mach.modal.ccomp != CutterComp::Off {
             for &g in w.gs() {
                 let r = match g {
-                    400 => self.mach.comp_off(),
-                    410 | 411 | 420 | 421 => self.comp_on(g, words, file, start),
+                    GCode::CutterComp(CutterComp::Off) => self.mach.comp_off(),
+                    GCode::CutterComp(c) => self.comp_on(c, words, file, start),
                     _ => Ok(()),
                 };
                 if let Err(k) = r {
@@ -227,8 +238,11 @@ impl Interp<'_> {
         for &(l, v) in words {
             match l {
                 b'g' => {
-                    if w.gn < w.g.len() {
-                        w.g[w.gn] = (v * 10.0).round() as i32;
+                    // The block checks have refused unknown codes.
+                    if w.gn < w.g.len()
+                        && let Some(g) = GCode::nearest(v)
+                    {
+                        w.g[w.gn] = g;
                         w.gn += 1;
                     }
                 }
@@ -252,7 +266,7 @@ impl Interp<'_> {
                 b'q' => w.q = Some(v),
                 b'l' => w.l = Some(v),
                 b'r' => w.r = Some(v),
-                b'm' => self.apply_m((v * 10.0).round() as i32, w),
+                b'm' => self.apply_m(MCode::decode(v), w),
                 _ => {
                     if let Some(a) = axis_index(l)
                         && w.an < w.axes.len()
@@ -266,17 +280,15 @@ impl Interp<'_> {
         Ok(())
     }
 
-    /// One M code (× 10) in the first pass: spindle, tool change, coolant,
+    /// One M code in the first pass: spindle, tool change, coolant,
     /// overrides; M2/M30 end the program.
     // One call site, on the hot path: kept inline as before the split.
     #[inline(always)]
-    fn apply_m(&mut self, m: i32, w: &mut LineWords) {
+    fn apply_m(&mut self, m: MCode, w: &mut LineWords) {
         match m {
-            20 | 300 => w.ends = true,
-            30 => self.mach.modal.spindle = 3,
-            40 => self.mach.modal.spindle = 4,
-            50 => self.mach.modal.spindle = 0,
-            60 => {
+            MCode::End { .. } => w.ends = true,
+            MCode::Spindle(d) => self.mach.modal.spindle = d,
+            MCode::ToolChange => {
                 self.mach.current_tool = self.mach.selected_tool;
                 if let Some(p) = &mut self.mach.pockets {
                     p.0 = p.1;
@@ -285,24 +297,24 @@ impl Interp<'_> {
                 self.tool_change_sync();
                 w.tool_changed = true;
             }
-            70 => self.mach.modal.mist = true,
-            80 => self.mach.modal.flood = true,
-            90 => {
+            MCode::Mist => self.mach.modal.mist = true,
+            MCode::Flood => self.mach.modal.flood = true,
+            MCode::CoolantOff => {
                 self.mach.modal.mist = false;
                 self.mach.modal.flood = false;
             }
-            480 => {
+            MCode::Override(48) => {
                 self.mach.modal.speed_override = true;
                 self.mach.modal.feed_override = true;
             }
-            490 => {
+            MCode::Override(49) => {
                 self.mach.modal.speed_override = false;
                 self.mach.modal.feed_override = false;
             }
-            500 => self.mach.modal.feed_override = w.p.is_none_or(|p| p != 0.0),
-            510 => self.mach.modal.speed_override = w.p.is_none_or(|p| p != 0.0),
-            520 => self.mach.modal.adaptive_feed = w.p.is_none_or(|p| p != 0.0),
-            530 => self.mach.modal.feed_hold = w.p.is_none_or(|p| p != 0.0),
+            MCode::Override(50) => self.mach.modal.feed_override = w.p.is_none_or(|p| p != 0.0),
+            MCode::Override(51) => self.mach.modal.speed_override = w.p.is_none_or(|p| p != 0.0),
+            MCode::Override(52) => self.mach.modal.adaptive_feed = w.p.is_none_or(|p| p != 0.0),
+            MCode::Override(53) => self.mach.modal.feed_hold = w.p.is_none_or(|p| p != 0.0),
             _ => {}
         }
     }
@@ -313,15 +325,14 @@ impl Interp<'_> {
     fn apply_m_p_words(&mut self, words: &Words, w: &mut LineWords) {
         for &(l, v) in words {
             if l == b'm' {
-                let m = (v * 10.0).round() as i32;
                 let on = w.p.is_none_or(|p| p != 0.0);
-                match m {
-                    500 => self.mach.modal.feed_override = on,
-                    510 => self.mach.modal.speed_override = on,
-                    520 => self.mach.modal.adaptive_feed = on,
-                    530 => self.mach.modal.feed_hold = on,
+                match MCode::decode(v) {
+                    MCode::Override(50) => self.mach.modal.feed_override = on,
+                    MCode::Override(51) => self.mach.modal.speed_override = on,
+                    MCode::Override(52) => self.mach.modal.adaptive_feed = on,
+                    MCode::Override(53) => self.mach.modal.feed_hold = on,
                     // M61's Q may come after it on the line.
-                    610 => {
+                    MCode::SetTool => {
                         if self.mach.m61.is_none() {
                             self.mach.m61 = Some((self.line_no(), self.mach.current_tool));
                         }
@@ -343,35 +354,25 @@ impl Interp<'_> {
     /// tool length offset from axis words.
     // One call site, on the hot path: kept inline as before the split.
     #[inline(always)]
-    fn apply_g_modes(&mut self, w: &LineWords) -> (Option<i32>, bool) {
+    fn apply_g_modes(&mut self, w: &LineWords) -> (Option<NonModal>, bool) {
         let mut special = None;
         let mut dynamic_tlo = false;
-        let other_motion = w
-            .gs()
-            .iter()
-            .any(|&g| g != 800 && crate::eval::read::validate::is_motion(g));
+        let other_motion = w.gs().iter().any(|&g| is_moving_code(g));
         for &g in w.gs() {
-            if g == 800 && other_motion {
-                continue;
-            }
             match g {
+                GCode::Motion(MotionMode::CancelCycle) if other_motion => {}
                 // G5.3 ends a NURBS block without choosing a motion.
-                g if g != 53 && crate::eval::read::validate::is_motion(g) => {
-                    self.mach.modal.motion = g
-                }
-                170 | 180 | 190 | 171 | 181 | 191 => self.mach.modal.plane = g,
-                200 => self.set_units(false),
-                210 => self.set_units(true),
-                900 => self.mach.modal.absolute = true,
-                910 => self.mach.modal.absolute = false,
-                901 => self.mach.modal.ijk_absolute = true,
-                911 => self.mach.modal.ijk_absolute = false,
-                930 | 940 | 950 => self.mach.modal.feed_mode = g,
-                400 => self.mach.modal.ccomp = 400,
-                410 | 411 => self.mach.modal.ccomp = 410,
-                420 | 421 => self.mach.modal.ccomp = 420,
-                430 | 432 => self.g43(g, w.h),
-                431 => {
+                GCode::Motion(MotionMode::NurbsEnd) => {}
+                GCode::Motion(m) => self.mach.modal.motion = m,
+                GCode::Plane(p) => self.mach.modal.plane = p,
+                GCode::Units(u) => self.set_units(u == Units::Mm),
+                GCode::Distance(d) => self.mach.modal.absolute = d == Distance::Absolute,
+                GCode::ArcDistance(d) => self.mach.modal.ijk_absolute = d == ArcDistance::Absolute,
+                GCode::FeedMode(f) => self.mach.modal.feed_mode = f,
+                GCode::CutterComp(c) => self.mach.modal.ccomp = c.side(),
+                GCode::ToolLength(ToolLength::Apply) => self.g43(false, w.h),
+                GCode::ToolLength(ToolLength::Add) => self.g43(true, w.h),
+                GCode::ToolLength(ToolLength::Dynamic) => {
                     self.mach.modal.tool_offset = true;
                     let mut new = [0.0; 9];
                     for &(a, v) in w.axis_words() {
@@ -380,29 +381,15 @@ impl Interp<'_> {
                     self.set_tlo(Some(new), "G43.1");
                     dynamic_tlo = true;
                 }
-                490 => self.tool_offset_words(false),
-                610 | 611 | 640 => {
-                    self.mach.modal.path = g;
-                }
-                980 => self.mach.modal.retract_r = false,
-                990 => self.mach.modal.retract_r = true,
-                960 => self.mach.modal.css = true,
-                970 => self.mach.modal.css = false,
-                70 => self.mach.modal.lathe_diameter = true,
-                80 => self.mach.modal.lathe_diameter = false,
-                540 | 550 | 560 | 570 | 580 | 590 | 591 | 592 | 593 => {
-                    let cs = match g {
-                        591 => 7,
-                        592 => 8,
-                        593 => 9,
-                        _ => (g - 530) / 10,
-                    };
-                    self.select_cs(cs);
-                }
-                100 | 280 | 281 | 300 | 301 | 530 | 920 | 921 | 922 | 923 | 520 => {
-                    special = Some(g)
-                }
-                _ => {}
+                GCode::ToolLength(ToolLength::Cancel) => self.tool_offset_words(false),
+                GCode::Path(p) => self.mach.modal.path = p,
+                GCode::Retract(r) => self.mach.modal.retract_r = r == Retract::R,
+                GCode::SpindleMode(m) => self.mach.modal.css = m == SpindleMode::ConstantSurface,
+                GCode::Lathe(l) => self.mach.modal.lathe_diameter = l == LatheMode::Diameter,
+                GCode::Coord(cs) => self.select_cs(cs.0 as i32),
+                // G4 acts in the output alone.
+                GCode::NonModal(NonModal::Dwell) => {}
+                GCode::NonModal(n) => special = Some(n),
             }
         }
         (special, dynamic_tlo)
@@ -414,12 +401,12 @@ impl Interp<'_> {
         &mut self,
         file: &Rc<FileIndex>,
         start: u32,
-        special: i32,
+        special: NonModal,
         words: &Words,
         w: &LineWords,
     ) -> Result<(), Error> {
         match special {
-            920 => {
+            NonModal::SetG92 => {
                 self.keep_active_g92();
                 for &(a, v) in w.axis_words() {
                     // The position becomes the given value; the offset is
@@ -432,16 +419,16 @@ impl Interp<'_> {
                 }
                 self.params.assign(5210, 1.0);
             }
-            921 | 922 => {
+            NonModal::ResetG92 | NonModal::SuspendG92 => {
                 self.g92_switch(false);
                 // G92.1 also clears the parameters (no longer applied).
-                if special == 921 {
+                if special == NonModal::ResetG92 {
                     for a in 0..9 {
                         self.params.assign(5211 + a, 0.0);
                     }
                 }
             }
-            520 => {
+            NonModal::LocalOffset => {
                 // G52: a local offset kept in the G92 parameters.
                 let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
                 self.keep_active_g92();
@@ -455,13 +442,17 @@ impl Interp<'_> {
                     }
                 }
             }
-            923 => self.g92_switch(true),
-            100 => match w.l.map(|v| v.round() as i32) {
+            NonModal::RestoreG92 => self.g92_switch(true),
+            NonModal::SetData => match w.l.map(|v| v.round() as i32) {
                 Some(l @ (1 | 10 | 11)) => self.g10_tool(l, w.p, w.r, words, w.axis_words()),
                 _ => self.g10(w.l, w.p, w.r, w.axis_words()),
             },
-            280 | 300 => {
-                let base = if special == 280 { 5161 } else { 5181 };
+            NonModal::Home | NonModal::Home2 => {
+                let base = if special == NonModal::Home {
+                    5161
+                } else {
+                    5181
+                };
                 let axes: Vec<usize> = if w.axis_words().is_empty() {
                     (0..9).collect()
                 } else {
@@ -473,19 +464,23 @@ impl Interp<'_> {
                     self.set_from_machine_tip(a, home, what);
                 }
             }
-            281 | 301 => {
-                let base = if special == 281 { 5161 } else { 5181 };
+            NonModal::SetHome | NonModal::SetHome2 => {
+                let base = if special == NonModal::SetHome {
+                    5161
+                } else {
+                    5181
+                };
                 for a in 0..9 {
                     let m = self.machine_pos(a);
                     self.set_param_prog(base + a, a, m);
                 }
             }
-            530 => {
+            NonModal::MachineCoords => {
                 if self.mach.comp_offsetting() {
                     let k = ErrorKind::CompForbids { action: "use G53" };
                     return Err(self.error(k, file, start, start));
                 }
-                if self.mach.modal.ccomp != 400 {
+                if self.mach.modal.ccomp != CutterComp::Off {
                     self.forget(&[0, 1, 2], "cutter radius compensation");
                 }
                 for &(a, v) in w.axis_words() {
@@ -507,35 +502,34 @@ impl Interp<'_> {
         start: u32,
         words: &Words,
         w: &LineWords,
-        motion_before: i32,
+        motion_before: MotionMode,
         dynamic_tlo: bool,
     ) -> Result<(), Error> {
         let axis_words = w.axis_words();
-        if w.gs().contains(&53) {
+        if w.gs().contains(&GCode::Motion(MotionMode::NurbsEnd)) {
             // G5.3 ends the block; axis words on its line start another
             // one (the reference runs them as G5.2).
             self.nurbs_end();
             if !axis_words.is_empty() {
                 self.mach.nurbs_point(NO_MOTION, axis_words, w.l);
             }
-        } else if w.gs().contains(&NURBS) || (motion_before == NURBS && !axis_words.is_empty()) {
+        } else if w.gs().contains(&GCode::Motion(NURBS))
+            || (motion_before == NURBS && !axis_words.is_empty())
+        {
             self.mach.nurbs_point(motion_before, axis_words, w.l);
         } else {
             // G43.1's axis words are a move too when the line has a
             // motion code.
-            let explicit_motion = w
-                .gs()
-                .iter()
-                .any(|&g| g != 800 && crate::eval::read::validate::is_motion(g));
+            let explicit_motion = w.gs().iter().any(|&g| is_moving_code(g));
             if !axis_words.is_empty() && (!dynamic_tlo || explicit_motion) {
                 if let Err(k) = self.mach.check_motion(words, axis_words) {
                     return Err(self.error(k, file, start, start));
                 }
-                if crate::eval::state::cycle::is_cycle(self.mach.modal.motion) {
+                if self.mach.modal.motion.is_canned_cycle() {
                     self.mach.note_cycle(words);
                 }
                 self.move_to(axis_words);
-                if (self.mach.comp.is_some() || self.mach.modal.ccomp != 400)
+                if (self.mach.comp.is_some() || self.mach.modal.ccomp != CutterComp::Off)
                     && let Err(k) = self.mach.comp_move(words, self.mach.modal.motion)
                 {
                     return Err(self.error(k, file, start, start));
@@ -724,14 +718,15 @@ impl Interp<'_> {
             return;
         }
         let motion = self.mach.modal.motion;
+        use MotionMode as M;
         match motion {
-            382..=385 => self.probe(axis_words),
-            730 | 740 | 760 | 810..=890 | 330 | 331 => {
+            M::Probe(_) => self.probe(axis_words),
+            M::Cycle(_) | M::ThreadCycle | M::Thread | M::RigidTap => {
                 // Canned cycles and threading end at positions that depend on
                 // retract rules and machine state.
                 let axes: Vec<usize> = axis_words.iter().map(|a| a.0).collect();
                 self.forget(&axes, "a canned cycle or threading move");
-                if motion != 330 && motion != 331 {
+                if !matches!(motion, M::Thread | M::RigidTap) {
                     self.forget(&[2], "a canned cycle");
                 }
             }
@@ -748,8 +743,8 @@ impl Interp<'_> {
 
 /// A line's words as `apply_words` gathers them in its first pass.
 struct LineWords {
-    /// G codes × 10, in order.
-    g: [i32; 16],
+    /// G codes, in order.
+    g: [GCode; 16],
     gn: usize,
     /// Axis words: (axis index, value).
     axes: [(usize, f64); 9],
@@ -768,7 +763,7 @@ impl LineWords {
     #[inline]
     fn new(ends: bool) -> LineWords {
         LineWords {
-            g: [0; 16],
+            g: [GCode::Motion(MotionMode::Rapid); 16],
             gn: 0,
             axes: [(0, 0.0); 9],
             an: 0,
@@ -783,7 +778,7 @@ impl LineWords {
     }
 
     #[inline]
-    fn gs(&self) -> &[i32] {
+    fn gs(&self) -> &[GCode] {
         &self.g[..self.gn]
     }
 
@@ -798,7 +793,7 @@ impl Machine {
     /// a plain state: as the general update below, in a few steps. False
     /// leaves the state untouched.
     fn apply_simple(&mut self, words: &[(u8, f64)]) -> bool {
-        if self.rotated || self.modal.ccomp != 400 || self.comp_pending {
+        if self.rotated || self.modal.ccomp != CutterComp::Off || self.comp_pending {
             return false;
         }
         let mut motion = self.modal.motion;
@@ -810,13 +805,13 @@ impl Machine {
             }
             seen |= bit;
             match l {
-                b'g' if v == 0.0 => motion = 0,
-                b'g' if v == 1.0 => motion = 10,
+                b'g' if v == 0.0 => motion = MotionMode::Rapid,
+                b'g' if v == 1.0 => motion = MotionMode::Linear,
                 b'x' | b'y' | b'z' | b'a' | b'b' | b'c' | b'f' | b's' => {}
                 _ => return false,
             }
         }
-        if !matches!(motion, 0 | 10) {
+        if !matches!(motion, MotionMode::Rapid | MotionMode::Linear) {
             return false;
         }
         self.modal.motion = motion;
@@ -887,11 +882,11 @@ impl Machine {
         let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
         let bad = ErrorKind::Block;
         match motion {
-            20 | 30 => {
+            MotionMode::ArcCw | MotionMode::ArcCcw => {
                 let (a0, a1, c0, c1) = match self.modal.plane {
-                    180 | 181 => (2, 0, b'k', b'i'),
-                    190 | 191 => (1, 2, b'j', b'k'),
-                    _ => (0, 1, b'i', b'j'),
+                    Plane::XZ | Plane::WU => (2, 0, b'k', b'i'),
+                    Plane::YZ | Plane::VW => (1, 2, b'j', b'k'),
+                    Plane::XY | Plane::UV => (0, 1, b'i', b'j'),
                 };
                 let (Some(sx), Some(sy), Some(ex), Some(ey)) =
                     (start(a0), start(a1), end(a0), end(a1))
@@ -910,7 +905,7 @@ impl Machine {
                     },
                 };
                 let arc = Arc {
-                    ccw: motion == 30,
+                    ccw: motion == MotionMode::ArcCcw,
                     center,
                     turns: 1,
                 };
@@ -935,7 +930,7 @@ impl Machine {
                     }
                 }
             }
-            382 | 384 => {
+            MotionMode::Probe(2 | 4) => {
                 // Axes without a word do not move, known or not.
                 let d: f64 = axis_words
                     .iter()

@@ -3,14 +3,15 @@
 //! -1). The points survive a switch to another motion until the next G5.2,
 //! as in the reference, whose checks depend on how many are pending.
 
+use crate::codes::{CutterComp, MotionMode};
 use crate::eval::Interp;
 use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
 
-/// Motion mode of a NURBS block (G5.2 ×10).
-pub(crate) const NURBS: i32 = 52;
-/// What G5.3 leaves: no motion mode.
-pub(crate) const NO_MOTION: i32 = -1;
+/// Motion mode of a NURBS block (G5.2).
+pub(crate) const NURBS: MotionMode = MotionMode::Nurbs;
+/// What G5.3 leaves: no motion mode (kept as G5.3, read as -1).
+pub(crate) const NO_MOTION: MotionMode = MotionMode::NurbsEnd;
 
 /// Control points collected since the last G5.3.
 #[derive(Debug, Clone)]
@@ -53,7 +54,7 @@ impl Interp<'_> {
         );
         self.mach.nurbs.points = 0;
         self.mach.modal.motion = NO_MOTION;
-        if self.mach.rotated || self.mach.modal.ccomp != 400 {
+        if self.mach.rotated || self.mach.modal.ccomp != CutterComp::Off {
             self.forget(&[0, 1], "a NURBS block");
         } else {
             self.mach.pos.axes[0] = x;
@@ -68,7 +69,7 @@ impl Machine {
     /// the line found.
     pub(in crate::eval) fn nurbs_point(
         &mut self,
-        motion_before: i32,
+        motion_before: MotionMode,
         axis_words: &[(usize, f64)],
         l_word: Option<f64>,
     ) {

@@ -7,6 +7,8 @@ use crate::diag::{Error, ErrorKind};
 use crate::parse::ast::Span;
 use crate::program::FileIndex;
 
+use crate::codes::SpindleDir;
+use crate::codes::{CutterComp, GCode};
 use crate::eval::Interp;
 use crate::eval::state::Modal;
 
@@ -80,9 +82,9 @@ impl Interp<'_> {
         }
         let mut words: Vec<String> = Vec::new();
         if cur.plane != saved.plane {
-            words.push(gcode(saved.plane));
+            words.push(GCode::Plane(saved.plane).name());
         }
-        if cur.ccomp != saved.ccomp && saved.ccomp == 400 {
+        if cur.ccomp != saved.ccomp && saved.ccomp == CutterComp::Off {
             words.push("G40".into());
         }
         if cur.absolute != saved.absolute {
@@ -100,7 +102,7 @@ impl Interp<'_> {
             });
         }
         if cur.feed_mode != saved.feed_mode {
-            words.push(gcode(saved.feed_mode));
+            words.push(GCode::FeedMode(saved.feed_mode).name());
         }
         if cur.coord_index != saved.coord_index {
             words.push(match saved.coord_index {
@@ -126,7 +128,7 @@ impl Interp<'_> {
         }
         if cur.path != saved.path {
             // The reference restores G64 without its P and Q.
-            words.push(gcode(saved.path));
+            words.push(GCode::Path(saved.path).name());
         }
         let number = |v: f64, p| {
             let mut b = Vec::new();
@@ -140,10 +142,14 @@ impl Interp<'_> {
             words.push(format!("S{}", number(saved.speed, self.s.precision)));
         }
         if cur.spindle != saved.spindle {
-            words.push(format!(
-                "M{}",
-                if saved.spindle == 0 { 5 } else { saved.spindle }
-            ));
+            words.push(
+                match saved.spindle {
+                    SpindleDir::Cw => "M3",
+                    SpindleDir::Ccw => "M4",
+                    SpindleDir::Off => "M5",
+                }
+                .into(),
+            );
         }
         if !words.is_empty() {
             let line = words.join(" ");
@@ -187,13 +193,5 @@ impl Interp<'_> {
             self.mach.modal.flood = flood;
         }
         Ok(())
-    }
-}
-
-fn gcode(g10: i32) -> String {
-    if g10 % 10 == 0 {
-        format!("G{}", g10 / 10)
-    } else {
-        format!("G{}.{}", g10 / 10, g10 % 10)
     }
 }
