@@ -5,83 +5,67 @@
 
 use crate::diag::ErrorKind;
 
-use crate::codes::SpindleDir;
-use crate::codes::{CutterComp, FeedMode, MotionMode};
+use crate::codes::{
+    CutterComp, Distance, FeedMode, GCode, MCode, MotionMode, NonModal, PathMode, Plane,
+    SpindleDir, SpindleMode, ToolLength,
+};
 use crate::diag::BlockError;
 use crate::eval::state::Modal;
 use crate::eval::state::cycle::{Cycle, depth_axis};
-use crate::eval::state::nurbs::{NURBS, Nurbs};
+use crate::eval::state::nurbs::{NO_MOTION, NURBS, Nurbs};
 
-/// The motion mode as a code ×10 (-1: none, after G5.3).
-fn motion10(m: MotionMode) -> i32 {
-    match m {
-        MotionMode::NurbsEnd => NO_MOTION,
-        m => m.code10() as i32,
-    }
-}
+use MotionMode as M;
 
-const NO_MOTION: i32 = -1;
-
-/// Whether a motion mode (G-code ×10) is a canned cycle.
-fn is_cycle(motion: i32) -> bool {
-    matches!(motion, 730 | 740 | 810..=890)
-}
-
-/// Modal group of a G-code (×10), or None for an unknown code.
-fn g_group(g: i32) -> Option<u8> {
-    Some(match g {
-        0
-        | 10
-        | 20
-        | 30
-        | 50
-        | 51
-        | 52
-        | 53
-        | 330
-        | 331
-        | 382..=385
-        | 730
-        | 740
-        | 760
-        | 800..=890 => 1,
-        40 | 100 | 280 | 281 | 300 | 301 | 520 | 530 | 920..=923 => 0,
-        170 | 180 | 190 | 171 | 181 | 191 => 2,
-        900 | 910 => 3,
-        901 | 911 => 4,
-        930 | 940 | 950 => 5,
-        200 | 210 => 6,
-        400 | 410 | 411 | 420 | 421 => 7,
-        430 | 431 | 432 | 490 => 8,
-        980 | 990 => 10,
-        540 | 550 | 560 | 570 | 580 | 590 | 591 | 592 | 593 => 12,
-        610 | 611 | 640 => 13,
-        960 | 970 => 14,
-        70 | 80 => 15,
-        700 | 710 | 711 | 712 | 720 | 721 | 722 => 1,
-        _ => return None,
-    })
-}
-
-/// Modal group of an M-code, or None for an unknown code.
-fn m_group(m: i64) -> Option<u8> {
+/// Modal group of an M-code, or None for an unknown code (M100–M199 are
+/// the user's, checked on their own).
+fn m_group(m: MCode) -> Option<u8> {
     Some(match m {
-        0 | 1 | 2 | 30 | 60 => 4,
-        6 | 61 => 6,
-        3..=5 => 7,
-        7..=9 => 8,
-        48..=53 => 9,
-        19 => 7,
-        62..=68 => 5,
-        70..=73 => 10,
-        98 | 99 => 4,
-        _ => return None,
+        MCode::Pause { .. } | MCode::End { .. } | MCode::PalletPause | MCode::Other(98 | 99) => 4,
+        MCode::ToolChange | MCode::SetTool => 6,
+        MCode::Spindle(_) | MCode::Orient => 7,
+        MCode::Mist | MCode::Flood | MCode::CoolantOff => 8,
+        MCode::Override(_) => 9,
+        MCode::Io(_) => 5,
+        MCode::State(_) => 10,
+        MCode::User(_) | MCode::Other(_) => return None,
     })
 }
 
-/// Groups of G-codes that take axis words.
-fn g_uses_axes(g: i32) -> bool {
-    matches!(g, 100 | 280 | 300 | 520 | 920)
+/// Codes that take the axis words (besides motion codes).
+fn g_uses_axes(g: GCode) -> bool {
+    matches!(
+        g,
+        GCode::NonModal(
+            NonModal::SetData
+                | NonModal::Home
+                | NonModal::Home2
+                | NonModal::LocalOffset
+                | NonModal::SetG92
+        )
+    )
+}
+
+/// G41/G42 or G41.1/G42.1.
+fn comp_on(g: GCode) -> bool {
+    matches!(g, GCode::CutterComp(c) if c != CutterComp::Off)
+}
+
+const G40: GCode = GCode::CutterComp(CutterComp::Off);
+
+/// An arc (G2 or G3).
+fn arc(m: MotionMode) -> bool {
+    matches!(m, M::ArcCw | M::ArcCcw)
+}
+
+/// G71, G72 and their .1 and .2 (rough turning and facing).
+fn rough(m: MotionMode) -> bool {
+    matches!(
+        m,
+        M::LatheCycle {
+            number: 71 | 72,
+            ..
+        }
+    )
 }
 
 /// Checks a block. `words` are (letter, value) in line order; returns the
@@ -142,15 +126,15 @@ fn simple_block_ok(words: &[(u8, f64)], modal: &Modal) -> bool {
         }
     }
     let motion = match g {
-        None => motion10(modal.motion),
-        Some(0.0) => 0,
-        Some(1.0) => 10,
+        None => modal.motion,
+        Some(0.0) => M::Rapid,
+        Some(1.0) => M::Linear,
         Some(_) => return false,
     };
     let moves = mask & AXES != 0 || g.is_some();
     match motion {
-        0 => true,
-        10 => {
+        M::Rapid => true,
+        M::Linear => {
             !moves
                 || (modal.feed_mode != FeedMode::InverseTime && feed.unwrap_or(modal.feed) != 0.0)
         }
@@ -165,52 +149,60 @@ fn bad<T>(e: BlockError, at: Option<usize>) -> Result<T, (ErrorKind, Option<usiz
     Err((ErrorKind::Block(e), at))
 }
 
-/// A block's words decoded once for the checks: its G- and M-codes (×10 for
-/// G) with the index of their word, where each other letter is, and what
-/// follows from them in the modal state the block meets.
+/// A block's words decoded once for the checks: its G and M codes with
+/// the index of their word, where each other letter is, and what follows
+/// from them in the modal state the block meets.
 struct Decoded<'a> {
     words: &'a [(u8, f64)],
     modal: &'a Modal,
-    gs: &'a [(i32, usize)],
-    ms: &'a [(i64, usize)],
+    gs: &'a [(GCode, usize)],
+    ms: &'a [(MCode, usize)],
     has: &'a [Option<u8>; 128],
     /// The first axis word.
     axis_word: Option<usize>,
     /// The motion code on the line.
-    motion_here: Option<i32>,
+    motion_here: Option<MotionMode>,
     /// The motion mode the block runs in.
-    motion: i32,
+    motion: MotionMode,
     /// The feed mode the block moves in (G93/G94/G95 on the line first).
-    feed_mode: i32,
+    feed_mode: FeedMode,
     /// A NURBS block (G5.2 ... G5.3).
     nurbs: bool,
     /// The G5.3 word.
     g53: Option<usize>,
     /// The non-motion code that takes the axis words (G43.1 without a
     /// motion code on the line takes them as offsets).
-    axis_g0: Option<i32>,
+    axis_g0: Option<GCode>,
 }
 
 impl<'a> Decoded<'a> {
     fn new(
         words: &'a [(u8, f64)],
         modal: &'a Modal,
-        gs: &'a [(i32, usize)],
-        ms: &'a [(i64, usize)],
+        gs: &'a [(GCode, usize)],
+        ms: &'a [(MCode, usize)],
         has: &'a [Option<u8>; 128],
     ) -> Decoded<'a> {
+        const G431: GCode = GCode::ToolLength(ToolLength::Dynamic);
         let at = |c: u8| has[c as usize].map(usize::from);
         let axis_word = b"xyzabcuvw".iter().find_map(|&c| at(c));
-        let motion_here = gs.iter().find(|(g, _)| g_group(*g) == Some(1)).map(|x| x.0);
+        let motion_here = gs.iter().find_map(|&(g, _)| match g {
+            GCode::Motion(m) => Some(m),
+            _ => None,
+        });
         let feed_mode = gs
             .iter()
-            .find(|g| matches!(g.0, 930 | 940 | 950))
-            .map_or(modal.feed_mode.code10() as i32, |g| g.0);
+            .find_map(|&(g, _)| match g {
+                GCode::FeedMode(f) => Some(f),
+                _ => None,
+            })
+            .unwrap_or(modal.feed_mode);
         let axis_g0 = gs
             .iter()
             .find(|(g, _)| g_uses_axes(*g))
             .map(|x| x.0)
-            .or_else(|| (gs.iter().any(|g| g.0 == 431) && motion_here.is_none()).then_some(431));
+            .or_else(|| (gs.iter().any(|g| g.0 == G431) && motion_here.is_none()).then_some(G431));
+        let motion = motion_here.unwrap_or(modal.motion);
         Decoded {
             words,
             modal,
@@ -219,10 +211,13 @@ impl<'a> Decoded<'a> {
             has,
             axis_word,
             motion_here,
-            motion: motion_here.unwrap_or(motion10(modal.motion)),
+            motion,
             feed_mode,
-            nurbs: motion_here.unwrap_or(motion10(modal.motion)) == motion10(NURBS),
-            g53: gs.iter().find(|g| g.0 == 53).map(|g| g.1),
+            nurbs: motion == NURBS,
+            g53: gs
+                .iter()
+                .find(|g| g.0 == GCode::Motion(M::NurbsEnd))
+                .map(|g| g.1),
             axis_g0,
         }
     }
@@ -232,17 +227,34 @@ impl<'a> Decoded<'a> {
         self.has[c as usize].map(usize::from)
     }
 
-    fn g_on(&self, codes: &[i32]) -> bool {
-        self.gs.iter().any(|(g, _)| codes.contains(g))
+    /// Whether a G code of the line is one `is` accepts.
+    fn g_on(&self, is: impl Fn(GCode) -> bool) -> bool {
+        self.gs.iter().any(|&(g, _)| is(g))
     }
 
-    fn m_on(&self, codes: &[i64]) -> bool {
-        self.ms.iter().any(|(m, _)| codes.contains(m))
+    /// The index of the first G word `is` accepts.
+    fn g_at(&self, is: impl Fn(GCode) -> bool) -> Option<usize> {
+        self.gs.iter().find(|&&(g, _)| is(g)).map(|x| x.1)
+    }
+
+    /// This G code is on the line.
+    fn has_g(&self, code: GCode) -> bool {
+        self.gs.iter().any(|&(g, _)| g == code)
+    }
+
+    /// Whether an M code of the line is one `is` accepts.
+    fn m_on(&self, is: impl Fn(MCode) -> bool) -> bool {
+        self.ms.iter().any(|&(m, _)| is(m))
+    }
+
+    /// The index of the first M word `is` accepts.
+    fn m_at(&self, is: impl Fn(MCode) -> bool) -> Option<usize> {
+        self.ms.iter().find(|&&(m, _)| is(m)).map(|x| x.1)
     }
 
     /// A user M-code (M100-M199) is on the line: it takes P and Q.
     fn user_m(&self) -> bool {
-        self.ms.iter().any(|(m, _)| (100..=199).contains(m))
+        self.m_on(|m| matches!(m, MCode::User(_)))
     }
 
     fn value(&self, c: u8) -> Option<f64> {
@@ -263,12 +275,14 @@ fn full_check(
     cycle: &Cycle,
     user_m: u128,
 ) -> Result<bool, (ErrorKind, Option<usize>)> {
+    // G80 may share a line with another motion code (which wins).
+    const G80: GCode = GCode::Motion(M::CancelCycle);
     let mut gseen: [Option<usize>; 16] = [None; 16];
     let mut mseen: [Option<usize>; 16] = [None; 16];
     // Fixed-size scratch: this runs for every line.
-    let mut gbuf = [(0i32, 0usize); 16];
+    let mut gbuf = [(G80, 0usize); 16];
     let mut gn = 0;
-    let mut mbuf = [(0i64, 0usize); 16];
+    let mut mbuf = [(MCode::Other(0), 0usize); 16];
     let mut mn = 0;
     let mut has = [None::<u8>; 128];
     let mut lathe = false;
@@ -282,8 +296,7 @@ fn full_check(
                 if (v * 10.0 - g10).abs() > 0.0001 {
                     return bad(BlockError::UnknownGCodeFraction, Some(i));
                 }
-                let g = g10 as i32;
-                let Some(grp) = g_group(g) else {
+                let Some(g) = GCode::from_code10(g10 as u16) else {
                     return bad(
                         BlockError::UnknownGCode {
                             code: crate::emit::number_string(v, None),
@@ -291,27 +304,27 @@ fn full_check(
                         Some(i),
                     );
                 };
-                // G80 may share a line with another motion code (which wins).
-                let g80_pair = grp == 1 && gseen[1].is_some_and(|j| g == 800 || words[j].1 == 80.0);
-                if gseen[grp as usize].is_some() && !g80_pair {
+                let grp = g.group() as usize;
+                let g80_pair = grp == 1 && gseen[1].is_some_and(|j| g == G80 || words[j].1 == 80.0);
+                if gseen[grp].is_some() && !g80_pair {
                     return bad(BlockError::SameGroupG, Some(i));
                 }
-                if g80_pair && g == 800 {
+                if g80_pair && g == G80 {
                     continue;
                 }
                 if g80_pair {
                     // Replace the G80 recorded before.
-                    if let Some(k) = gbuf[..gn].iter().position(|x| x.0 == 800) {
+                    if let Some(k) = gbuf[..gn].iter().position(|x| x.0 == G80) {
                         gbuf[k] = (g, i);
                         gseen[1] = Some(i);
                         continue;
                     }
                 }
-                if matches!(g, 700 | 710 | 711 | 712 | 720 | 721 | 722) {
+                if matches!(g, GCode::Motion(M::LatheCycle { .. })) {
                     // The lathe cycles run a contour subroutine named by Q.
                     lathe = true;
                 }
-                gseen[grp as usize] = Some(i);
+                gseen[grp] = Some(i);
                 gbuf[gn] = (g, i);
                 gn += 1;
             }
@@ -323,7 +336,8 @@ fn full_check(
                 if m > 199 {
                     return bad(BlockError::MCodeOver199 { m }, Some(i));
                 }
-                let grp = match m_group(m) {
+                let code = MCode::decode(v);
+                let grp = match m_group(code) {
                     Some(g) => g,
                     None if m >= 100 && user_m & (1u128 << (m - 100)) != 0 => USER_M_GROUP,
                     None if m >= 100 => {
@@ -339,7 +353,7 @@ fn full_check(
                     // (More than four M words are refused before this.)
                     return Err((ErrorKind::TooManyMWords, Some(i)));
                 }
-                mbuf[mn] = (m, i);
+                mbuf[mn] = (code, i);
                 mn += 1;
             }
             _ => {
@@ -361,7 +375,7 @@ fn full_check(
     check_g10(&d)?;
     check_required_words(&d)?;
     check_feed(&d)?;
-    if modal.ccomp != CutterComp::Off || d.g_on(&[410, 411, 420, 421]) {
+    if modal.ccomp != CutterComp::Off || d.g_on(comp_on) {
         check_comp(&d)?;
     }
     Ok(lathe)
@@ -372,58 +386,58 @@ fn full_check(
 /// with the state before the block, the other G-codes after the block's
 /// G40/G41/G42 (the reference's order of execution).
 fn check_comp(d: &Decoded<'_>) -> Check {
-    let g_at = |codes: &[i32]| d.gs.iter().find(|(g, _)| codes.contains(g)).map(|x| x.1);
-    let m_at = |codes: &[i64]| d.ms.iter().find(|(m, _)| codes.contains(m)).map(|x| x.1);
     let forbid =
         |action: &'static str, at: Option<usize>| Err((ErrorKind::CompForbids { action }, at));
-    let planes = |g: &i32| matches!(g, 170 | 180 | 190 | 171 | 181 | 191);
+    let plane_here = d.gs.iter().find_map(|&(g, i)| match g {
+        GCode::Plane(p) => Some((p, i)),
+        _ => None,
+    });
     let before = d.modal.ccomp != CutterComp::Off;
-    let turning_on =
-        d.gs.iter()
-            .find(|(g, _)| matches!(g, 410 | 411 | 420 | 421));
-    let after = turning_on.is_some() || (before && g_at(&[400]).is_none());
+    let turning_on = d.gs.iter().find_map(|&(g, i)| match g {
+        GCode::CutterComp(c) if c != CutterComp::Off => Some((c, i)),
+        _ => None,
+    });
+    let after = turning_on.is_some() || (before && !d.has_g(G40));
     if before {
-        if let Some(i) = m_at(&[6]) {
+        if let Some(i) = d.m_at(|m| m == MCode::ToolChange) {
             return forbid("change tools", Some(i));
         }
-        if let Some(i) = m_at(&[62, 63, 64, 65]) {
+        if let Some(i) = d.m_at(|m| matches!(m, MCode::Io(62..=65))) {
             return forbid("set a digital output", Some(i));
         }
-        if let Some(i) = m_at(&[66]) {
+        if let Some(i) = d.m_at(|m| m == MCode::Io(66)) {
             return forbid("wait for an input", Some(i));
         }
-        if let Some(i) = m_at(&[67, 68]) {
+        if let Some(i) = d.m_at(|m| matches!(m, MCode::Io(67 | 68))) {
             return forbid("set an analog output", Some(i));
         }
-        if let Some(i) = m_at(&[48, 49, 50, 51, 52, 53]) {
+        if let Some(i) = d.m_at(|m| matches!(m, MCode::Override(_))) {
             return forbid("enable or disable overrides", Some(i));
         }
-        if let Some(&(p, i)) = d.gs.iter().find(|(g, _)| planes(g))
-            && p != d.modal.plane.code10() as i32
+        if let Some((p, i)) = plane_here
+            && p != d.modal.plane
         {
             return Err((ErrorKind::CompPlaneChange, Some(i)));
         }
     }
-    let plane =
-        d.gs.iter()
-            .find(|(g, _)| planes(g))
-            .map_or(d.modal.plane.code10() as i32, |g| g.0);
-    if let Some(&(g, i)) = turning_on {
-        if plane != 170 && plane != 180 {
+    let plane = plane_here.map_or(d.modal.plane, |p| p.0);
+    if let Some((c, i)) = turning_on {
+        if plane != Plane::XY && plane != Plane::XZ {
             return Err((ErrorKind::CompPlane, Some(i)));
         }
         if before {
             return Err((ErrorKind::CompAlreadyOn, Some(i)));
         }
-        if matches!(g, 411 | 421) {
-            let name = if g == 411 { "G41.1" } else { "G42.1" };
+        if matches!(c, CutterComp::DynamicLeft | CutterComp::DynamicRight) {
+            let left = c == CutterComp::DynamicLeft;
+            let name = if left { "G41.1" } else { "G42.1" };
             if d.has_at(b'd').is_none() {
                 return Err((ErrorKind::CompNoDiameter { g: name }, Some(i)));
             }
             if let Some(l) = d.has_at(b'l')
-                && plane != 180
+                && plane != Plane::XZ
             {
-                let what = if g == 411 {
+                let what = if left {
                     "G41.1 with an L word (lathe tool orientation)"
                 } else {
                     "G42.1 with an L word (lathe tool orientation)"
@@ -435,19 +449,19 @@ fn check_comp(d: &Decoded<'_>) -> Check {
     if !after {
         return Ok(());
     }
-    if let Some(i) = g_at(&[430, 431, 432, 490]) {
+    if let Some(i) = d.g_at(|g| matches!(g, GCode::ToolLength(_))) {
         return forbid("change the tool length offset", Some(i));
     }
-    if let Some(i) = g_at(&[540, 550, 560, 570, 580, 590, 591, 592, 593]) {
+    if let Some(i) = d.g_at(|g| matches!(g, GCode::Coord(_))) {
         return forbid("change the coordinate system", Some(i));
     }
-    if let Some(i) = g_at(&[610, 611, 640]) {
+    if let Some(i) = d.g_at(|g| matches!(g, GCode::Path(_))) {
         return forbid("change the path control mode", Some(i));
     }
-    if let Some(i) = g_at(&[980, 990]) {
+    if let Some(i) = d.g_at(|g| matches!(g, GCode::Retract(_))) {
         return forbid("change the canned cycle return mode", Some(i));
     }
-    if let Some(i) = g_at(&[100]) {
+    if let Some(i) = d.g_at(|g| g == GCode::NonModal(NonModal::SetData)) {
         let l = d.value(b'l').map(|v| v.round() as i32);
         let p = d.value(b'p').map_or(0, |v| (v + 0.0001) as i32);
         let p = if p == 0 { d.modal.coord_index } else { p };
@@ -455,24 +469,34 @@ fn check_comp(d: &Decoded<'_>) -> Check {
             return forbid("change the active coordinate system's offsets", Some(i));
         }
     }
-    if let Some(i) = g_at(&[280, 300]) {
+    if let Some(i) = d.g_at(|g| matches!(g, GCode::NonModal(NonModal::Home | NonModal::Home2))) {
         return forbid("use G28 or G30", Some(i));
     }
-    if let Some(i) = g_at(&[281, 301]) {
+    if let Some(i) =
+        d.g_at(|g| matches!(g, GCode::NonModal(NonModal::SetHome | NonModal::SetHome2)))
+    {
         return forbid("set a home position (G28.1, G30.1)", Some(i));
     }
-    if let Some(i) = g_at(&[520, 920, 921, 922, 923]) {
+    if let Some(i) = d.g_at(|g| {
+        matches!(
+            g,
+            GCode::NonModal(
+                NonModal::LocalOffset
+                    | NonModal::SetG92
+                    | NonModal::ResetG92
+                    | NonModal::SuspendG92
+                    | NonModal::RestoreG92
+            )
+        )
+    }) {
         return forbid("change axis offsets (G52, G92)", Some(i));
     }
-    let motion_at =
-        d.gs.iter()
-            .find(|(g, _)| g_group(*g) == Some(1))
-            .map(|x| x.1);
+    let motion_at = d.g_at(|g| matches!(g, GCode::Motion(_)));
     let moves = d.motion_here.is_some() || (d.axis_word.is_some() && d.axis_g0.is_none());
     if moves {
         match d.motion {
-            382..=385 => return forbid("probe", motion_at),
-            50 | 51 => return forbid("make a spline", motion_at),
+            M::Probe(_) => return forbid("probe", motion_at),
+            M::CubicSpline | M::QuadSpline => return forbid("make a spline", motion_at),
             _ => {}
         }
     }
@@ -510,7 +534,7 @@ fn check_nurbs(d: &Decoded<'_>, points: &Nurbs) -> Check {
             );
         }
         let feed = d.value(b'f').unwrap_or(d.modal.feed);
-        if d.feed_mode == 940 && feed == 0.0 {
+        if d.feed_mode == FeedMode::PerMinute && feed == 0.0 {
             return bad(BlockError::NurbsZeroFeed, d.has_at(b'f'));
         }
     }
@@ -527,29 +551,29 @@ fn check_nurbs(d: &Decoded<'_>, points: &Nurbs) -> Check {
 /// Motion codes that need axis words, and their required words.
 fn check_motion_words(d: &Decoded<'_>) -> Check {
     if let Some(m) = d.motion_here {
-        let needs_axes = matches!(m, 382..=385 | 730 | 760 | 810..=890);
-        if needs_axes && d.axis_word.is_none() && !matches!(m, 760) {
+        let needs_axes = matches!(m, M::Probe(_) | M::Cycle(73 | 81..=89));
+        if needs_axes && d.axis_word.is_none() {
             return bad(BlockError::AxesMissing, None);
         }
-        if matches!(m, 820 | 860 | 880 | 890) && !d.given(b'p') {
+        if matches!(m, M::Cycle(82 | 86 | 88 | 89)) && !d.given(b'p') {
             return bad(BlockError::CycleDwellMissing, None);
         }
-        if matches!(m, 730 | 830) && !d.given(b'q') {
+        if matches!(m, M::Cycle(73 | 83)) && !d.given(b'q') {
             return bad(BlockError::PeckQMissing, None);
         }
-        if m == 760 && d.has_at(b'p').is_none() {
+        if m == M::ThreadCycle && d.has_at(b'p').is_none() {
             return bad(BlockError::G76PMissing, None);
         }
-        if matches!(m, 20 | 30)
+        if arc(m)
             && ![b'i', b'j', b'k', b'r']
                 .iter()
                 .any(|&c| d.has_at(c).is_some())
         {
             return bad(BlockError::ArcWordsMissing, None);
         }
-        if matches!(m, 330 | 331)
+        if matches!(m, M::Thread | M::RigidTap)
             && d.modal.spindle == SpindleDir::Off
-            && !d.ms.iter().any(|x| matches!(x.0, 3 | 4))
+            && !d.m_on(|m| matches!(m, MCode::Spindle(SpindleDir::Cw | SpindleDir::Ccw)))
         {
             return bad(BlockError::SpindleStoppedG33, None);
         }
@@ -560,7 +584,7 @@ fn check_motion_words(d: &Decoded<'_>) -> Check {
 /// Two codes that both take the axis words.
 fn check_axis_codes(d: &Decoded<'_>) -> Check {
     if let (Some(_), Some(_), Some(i)) = (d.motion_here, d.axis_g0, d.axis_word)
-        && d.motion_here != Some(800)
+        && d.motion_here != Some(M::CancelCycle)
     {
         return bad(BlockError::TwoAxisGCodes, Some(i));
     }
@@ -572,11 +596,11 @@ fn check_axis_codes(d: &Decoded<'_>) -> Check {
 fn check_cycle(d: &Decoded<'_>, cycle: &Cycle) -> Check {
     // A canned cycle runs: its code is on the line, or it is the motion mode
     // and the line has axis words no other code takes.
-    let cycle_runs = is_cycle(d.motion)
+    let cycle_runs = d.motion.is_canned_cycle()
         && (d.motion_here.is_some() || (d.axis_word.is_some() && d.axis_g0.is_none()));
     if cycle_runs {
         // Entering the cycle (not repeating it) needs the depth and R.
-        let first = motion10(d.modal.motion) != d.motion;
+        let first = d.modal.motion != d.motion;
         let (depth, name) = depth_axis(d.modal.plane);
         if first && d.has_at(depth).is_none() {
             return bad(BlockError::CycleDepthMissing { axis: name }, None);
@@ -592,34 +616,35 @@ fn check_cycle(d: &Decoded<'_>, cycle: &Cycle) -> Check {
         if d.value(b'l') == Some(0.0) {
             return bad(BlockError::CycleL0, d.has_at(b'l'));
         }
-        if d.feed_mode == 930 {
+        if d.feed_mode == FeedMode::InverseTime {
             return bad(BlockError::CycleInverseTime, None);
         }
-        if d.modal.ccomp != CutterComp::Off && !d.g_on(&[400]) || d.g_on(&[410, 411, 420, 421]) {
+        if d.modal.ccomp != CutterComp::Off && !d.has_g(G40) || d.g_on(comp_on) {
             return bad(BlockError::CycleWithComp, None);
         }
         // The R plane must not be below the bottom of the hole (in G91 the
         // depth is relative to R, so it must not be positive).
         let cc = d.value(depth).unwrap_or(cycle.depth);
-        let absolute = d.g_on(&[900]) || (d.modal.absolute && !d.g_on(&[910]));
+        let absolute = d.has_g(GCode::Distance(Distance::Absolute))
+            || (d.modal.absolute && !d.has_g(GCode::Distance(Distance::Incremental)));
         let below = if absolute { r < cc } else { cc > 0.0 };
         if below {
             return bad(BlockError::CycleRBelowDepth { axis: name }, d.has_at(b'r'));
         }
-        let spindle = d.ms.iter().rev().find(|m| matches!(m.0, 3..=5)).map_or(
-            match d.modal.spindle {
-                SpindleDir::Off => 0,
-                SpindleDir::Cw => 3,
-                SpindleDir::Ccw => 4,
-            },
-            |m| if m.0 == 5 { 0 } else { m.0 as i32 },
-        );
+        let spindle =
+            d.ms.iter()
+                .rev()
+                .find_map(|&(m, _)| match m {
+                    MCode::Spindle(dir) => Some(dir),
+                    _ => None,
+                })
+                .unwrap_or(d.modal.spindle);
         let spindle_msg = match (d.motion, spindle) {
-            (840, 0) | (740, 0) | (860, 0) | (870, 0) | (880, 0) => {
+            (M::Cycle(84 | 74 | 86 | 87 | 88), SpindleDir::Off) => {
                 Some(BlockError::CycleSpindleStopped)
             }
-            (840, 4) => Some(BlockError::G84SpindleCcw),
-            (740, 3) => Some(BlockError::G74SpindleCw),
+            (M::Cycle(84), SpindleDir::Ccw) => Some(BlockError::G84SpindleCcw),
+            (M::Cycle(74), SpindleDir::Cw) => Some(BlockError::G74SpindleCw),
             _ => None,
         };
         if let Some(msg) = spindle_msg {
@@ -633,10 +658,10 @@ fn check_cycle(d: &Decoded<'_>, cycle: &Cycle) -> Check {
 fn check_axis_values(d: &Decoded<'_>) -> Check {
     if let Some(i) = d.axis_word
         && d.axis_g0.is_none()
-        && matches!(d.motion, 800 | NO_MOTION)
+        && (d.motion == M::CancelCycle || (d.motion_here.is_none() && d.motion == NO_MOTION))
     {
         return bad(
-            if d.motion_here == Some(800) {
+            if d.motion_here == Some(M::CancelCycle) {
                 BlockError::AxesWithG80
             } else {
                 BlockError::AxesWithoutGCode
@@ -677,111 +702,169 @@ fn check_word_values(d: &Decoded<'_>) -> Check {
 
 /// Words that need a code to use them.
 fn check_unused_words(d: &Decoded<'_>) -> Check {
-    let arcish = d.g_on(&[20, 30, 50, 51, 100, 331, 760, 870])
-        || (d.motion_here.is_none()
-            && matches!(
-                motion10(d.modal.motion),
-                20 | 30 | 50 | 51 | 331 | 760 | 870
+    // Motion that takes I, J and K: arcs, splines, G33.1, G76, G87.
+    let arcish_motion = |m: MotionMode| {
+        arc(m)
+            || matches!(
+                m,
+                M::CubicSpline | M::QuadSpline | M::RigidTap | M::ThreadCycle | M::Cycle(87)
             )
-            && d.axis_word.is_some());
+    };
+    let set_data = GCode::NonModal(NonModal::SetData);
+    let arcish = d.g_on(|g| matches!(g, GCode::Motion(m) if arcish_motion(m)) || g == set_data)
+        || (d.motion_here.is_none() && arcish_motion(d.modal.motion) && d.axis_word.is_some());
     let uses = |letter: u8, ok: bool, msg: BlockError| -> Result<(), (ErrorKind, Option<usize>)> {
         match d.has_at(letter) {
             Some(i) if !ok => bad(msg, Some(i)),
             _ => Ok(()),
         }
     };
-    let rough = matches!(d.motion, 710 | 711 | 712 | 720 | 721 | 722);
-    let lathe = rough || d.motion == 700;
+    let rough = rough(d.motion);
+    let lathe = rough || d.motion == G70;
     uses(
         b'i',
-        arcish || (d.motion == 20 || d.motion == 30) || rough,
+        arcish || arc(d.motion) || rough,
         BlockError::WordUnused { letter: 'i' },
     )?;
     uses(
         b'j',
-        arcish || (d.motion == 20 || d.motion == 30),
+        arcish || arc(d.motion),
         BlockError::WordUnused { letter: 'j' },
     )?;
     uses(
         b'k',
-        arcish || matches!(d.motion, 20 | 30 | 330 | 331 | 760 | 870),
+        arcish
+            || arc(d.motion)
+            || matches!(
+                d.motion,
+                M::Thread | M::RigidTap | M::ThreadCycle | M::Cycle(87)
+            ),
         BlockError::WordUnused { letter: 'k' },
     )?;
-    let canned = matches!(d.motion, 730 | 740 | 760 | 810..=890);
+    let canned = matches!(d.motion, M::Cycle(_) | M::ThreadCycle);
     uses(
         b'r',
-        matches!(d.motion, 20 | 30)
+        arc(d.motion)
             || canned
-            || d.g_on(&[100])
-            || d.axis_g0 == Some(100)
-            || d.m_on(&[19])
+            || d.has_g(set_data)
+            || d.axis_g0 == Some(set_data)
+            || d.m_on(|m| m == MCode::Orient)
             || rough,
         BlockError::WordUnused { letter: 'r' },
     )?;
-    uses(
-        b'p',
-        d.g_on(&[20, 30, 40, 100, 640, 50, 52, 760, 820, 860, 880, 890])
-            || matches!(d.motion, 20 | 30 | 52 | 820 | 860 | 880 | 890 | 700)
-            || d.m_on(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98])
-            || d.user_m(),
-        BlockError::WordUnused { letter: 'p' },
-    )?;
+    uses(b'p', takes_p(d), BlockError::WordUnused { letter: 'p' })?;
     uses(
         b'q',
-        d.g_on(&[50, 100, 640, 730, 760, 830])
-            || matches!(d.motion, 730 | 830)
-            || lathe
-            || d.m_on(&[19, 66, 67, 68, 61])
-            || d.user_m(),
+        takes_q(d) || lathe,
         BlockError::WordUnused { letter: 'q' },
     )?;
     uses(
         b'h',
-        d.g_on(&[430, 432, 760]),
+        d.g_on(|g| {
+            matches!(
+                g,
+                GCode::ToolLength(ToolLength::Apply | ToolLength::Add)
+                    | GCode::Motion(M::ThreadCycle)
+            )
+        }),
         BlockError::WordUnused { letter: 'h' },
     )?;
     uses(
         b'd',
-        d.g_on(&[410, 411, 420, 421, 960]) || lathe,
+        d.g_on(|g| comp_on(g) || g == GCode::SpindleMode(SpindleMode::ConstantSurface)) || lathe,
         BlockError::WordUnused { letter: 'd' },
     )?;
     uses(
         b'e',
-        d.g_on(&[760]) || d.m_on(&[66, 67, 68]) || d.motion == 700,
+        d.has_g(GCode::Motion(M::ThreadCycle))
+            || d.m_on(|m| matches!(m, MCode::Io(66..=68)))
+            || d.motion == G70,
         BlockError::WordUnused { letter: 'e' },
     )?;
     uses(
         b'l',
         // (G74 takes no L in the reference.)
-        d.g_on(&[100, 410, 411, 420, 421, 760])
-            || (canned && d.motion != 740)
-            || d.m_on(&[66, 98])
-            || d.g_on(&[52, 53]),
+        d.g_on(|g| g == set_data || comp_on(g) || g == GCode::Motion(M::ThreadCycle))
+            || (canned && d.motion != M::Cycle(74))
+            || d.m_on(|m| matches!(m, MCode::Io(66) | MCode::Other(98)))
+            || d.g_on(|g| matches!(g, GCode::Motion(M::Nurbs | M::NurbsEnd))),
         BlockError::WordUnused { letter: 'l' },
     )?;
     uses(
         b'$',
-        d.m_on(&[3, 4, 5, 19, 51]) || d.g_on(&[330, 331, 760, 950, 960, 970]),
+        d.m_on(|m| matches!(m, MCode::Spindle(_) | MCode::Orient | MCode::Override(51)))
+            || d.g_on(|g| {
+                matches!(
+                    g,
+                    GCode::Motion(M::Thread | M::RigidTap | M::ThreadCycle)
+                        | GCode::FeedMode(FeedMode::PerRev)
+                        | GCode::SpindleMode(_)
+                )
+            }),
         BlockError::WordUnused { letter: '$' },
     )?;
     Ok(())
 }
 
+/// The G70 lathe cycle (finishing).
+const G70: MotionMode = M::LatheCycle { number: 70, sub: 0 };
+
+/// Whether a code of the block takes a P word.
+fn takes_p(d: &Decoded<'_>) -> bool {
+    d.g_on(|g| {
+        matches!(
+            g,
+            GCode::Motion(
+                M::ArcCw
+                    | M::ArcCcw
+                    | M::CubicSpline
+                    | M::Nurbs
+                    | M::ThreadCycle
+                    | M::Cycle(82 | 86 | 88 | 89)
+            ) | GCode::NonModal(NonModal::Dwell | NonModal::SetData)
+                | GCode::Path(PathMode::Blend)
+        )
+    }) || matches!(
+        d.motion,
+        M::ArcCw | M::ArcCcw | M::Nurbs | M::Cycle(82 | 86 | 88 | 89) | G70
+    ) || d.m_on(|m| {
+        matches!(
+            m,
+            MCode::Orient | MCode::Override(50..=53) | MCode::Io(62..=66) | MCode::Other(98)
+        )
+    }) || d.user_m()
+}
+
+/// Whether a code of the block takes a Q word (the lathe cycles aside).
+fn takes_q(d: &Decoded<'_>) -> bool {
+    d.g_on(|g| {
+        matches!(
+            g,
+            GCode::Motion(M::CubicSpline | M::ThreadCycle | M::Cycle(73 | 83))
+                | GCode::NonModal(NonModal::SetData)
+                | GCode::Path(PathMode::Blend)
+        )
+    }) || matches!(d.motion, M::Cycle(73 | 83))
+        || d.m_on(|m| matches!(m, MCode::Orient | MCode::Io(66..=68) | MCode::SetTool))
+        || d.user_m()
+}
+
 /// Whole numbers, peck depths, H, and G53's conditions.
 fn check_whole_numbers(d: &Decoded<'_>) -> Check {
     // Whole numbers.
+    let g41_g42 = d.g_on(|g| matches!(g, GCode::CutterComp(CutterComp::Left | CutterComp::Right)));
     for (i, &(l, v)) in d.words.iter().enumerate() {
         if matches!(l, b't' | b'h') && crate::parse::integer_value(v).is_err() {
             return Err((ErrorKind::NonInteger { value: v }, Some(i)));
         }
         // The reference's test: the D value within 0.0001 of the integer
         // (int)(D + 0.5), which also refuses every negative D.
-        if l == b'd' && d.g_on(&[410, 420]) && (((v + 0.5) as i64) as f64 - v).abs() >= 0.0001 {
+        if l == b'd' && g41_g42 && (((v + 0.5) as i64) as f64 - v).abs() >= 0.0001 {
             return bad(BlockError::CompDNotWhole, Some(i));
         }
     }
     // Peck depths of a running G73/G83.
-    if matches!(d.motion, 730 | 830)
+    if matches!(d.motion, M::Cycle(73 | 83))
         && (d.motion_here.is_some() || d.axis_word.is_some())
         && d.value(b'q').is_some_and(|q| q != -1.0 && q <= 0.0)
     {
@@ -791,14 +874,13 @@ fn check_whole_numbers(d: &Decoded<'_>) -> Check {
         return bad(BlockError::NegativeH, d.has_at(b'h'));
     }
     // G53 moves in machine coordinates: with G0 or G1, never incremental.
-    if let Some(at) = d.gs.iter().find(|g| g.0 == 530).map(|g| g.1) {
-        let motion_to_be = d
-            .motion_here
-            .or(d.axis_word.map(|_| motion10(d.modal.motion)));
-        if !matches!(motion_to_be, Some(0 | 10)) {
+    if let Some(at) = d.g_at(|g| g == GCode::NonModal(NonModal::MachineCoords)) {
+        let motion_to_be = d.motion_here.or(d.axis_word.map(|_| d.modal.motion));
+        if !matches!(motion_to_be, Some(M::Rapid | M::Linear)) {
             return bad(BlockError::G53NeedsG0G1, Some(at));
         }
-        let incremental = d.g_on(&[910]) || (!d.modal.absolute && !d.g_on(&[900]));
+        let incremental = d.has_g(GCode::Distance(Distance::Incremental))
+            || (!d.modal.absolute && !d.has_g(GCode::Distance(Distance::Absolute)));
         if incremental {
             return bad(BlockError::G53Incremental, Some(at));
         }
@@ -811,7 +893,7 @@ fn check_g10(d: &Decoded<'_>) -> Check {
     // G10's L and P: P is a tool number (L1, L10, L11) or a coordinate
     // system (L2, L20), rounded half away from zero; an absent P reads as
     // -1, and only a P above its rounding by more than 0.0001 is refused.
-    if d.g_on(&[100]) {
+    if d.has_g(GCode::NonModal(NonModal::SetData)) {
         let p = d.value(b'p').unwrap_or(-1.0);
         let l = d.value(b'l').map_or(-1, |l| l.round() as i64);
         let p_int = if p >= 0.0 {
@@ -837,22 +919,20 @@ fn check_g10(d: &Decoded<'_>) -> Check {
 
 /// Codes that need words.
 fn check_required_words(d: &Decoded<'_>) -> Check {
-    if d.g_on(&[40]) && !d.given(b'p') {
-        return bad(
-            BlockError::G4PMissing,
-            d.gs.iter().find(|g| g.0 == 40).map(|g| g.1),
-        );
+    let g4 = d.g_at(|g| g == GCode::NonModal(NonModal::Dwell));
+    if g4.is_some() && !d.given(b'p') {
+        return bad(BlockError::G4PMissing, g4);
     }
-    if d.g_on(&[960]) && d.has_at(b's').is_none() {
+    if d.has_g(GCode::SpindleMode(SpindleMode::ConstantSurface)) && d.has_at(b's').is_none() {
         return bad(BlockError::G96SMissing, None);
     }
-    if d.m_on(&[62, 63, 64, 65]) && d.has_at(b'p').is_none() {
+    if d.m_on(|m| matches!(m, MCode::Io(62..=65))) && d.has_at(b'p').is_none() {
         return bad(BlockError::M62PMissing, None);
     }
-    if d.m_on(&[66]) && !d.given(b'p') && d.has_at(b'e').is_none() {
+    if d.m_on(|m| m == MCode::Io(66)) && !d.given(b'p') && d.has_at(b'e').is_none() {
         return bad(BlockError::M66PEMissing, None);
     }
-    if d.m_on(&[61]) && d.has_at(b'q').is_none() {
+    if d.m_on(|m| m == MCode::SetTool) && d.has_at(b'q').is_none() {
         return bad(BlockError::M61QMissing, None);
     }
     Ok(())
@@ -861,11 +941,17 @@ fn check_required_words(d: &Decoded<'_>) -> Check {
 /// Motion needing a feed rate; arcs needing their words; G33's K.
 fn check_feed(d: &Decoded<'_>) -> Check {
     let moves = d.motion_here.is_some() || d.axis_word.is_some();
-    if moves && d.axis_g0.is_none() && matches!(d.motion, 10 | 20 | 30 | 50 | 51 | 730 | 810..=890)
-    {
+    let feeds = matches!(
+        d.motion,
+        M::Linear | M::ArcCw | M::ArcCcw | M::CubicSpline | M::QuadSpline | M::Cycle(73 | 81..=89)
+    );
+    if moves && d.axis_g0.is_none() && feeds {
         let feed = d.words.iter().rev().find(|w| w.0 == b'f').map(|w| w.1);
-        let inverse = d.gs.iter().any(|g| g.0 == 930)
-            || (d.modal.feed_mode == FeedMode::InverseTime && !d.g_on(&[940, 950]));
+        let inverse = d.has_g(GCode::FeedMode(FeedMode::InverseTime))
+            || (d.modal.feed_mode == FeedMode::InverseTime
+                && !d.g_on(|g| {
+                    matches!(g, GCode::FeedMode(FeedMode::PerMinute | FeedMode::PerRev))
+                }));
         if inverse {
             if feed.is_none() && d.axis_word.is_some() {
                 return bad(BlockError::InverseTimeFMissing, None);
@@ -873,7 +959,7 @@ fn check_feed(d: &Decoded<'_>) -> Check {
         } else if feed.unwrap_or(d.modal.feed) == 0.0 {
             return bad(BlockError::ZeroFeed, None);
         }
-        if matches!(d.motion, 20 | 30) && d.axis_word.is_some() {
+        if arc(d.motion) && d.axis_word.is_some() {
             let arc = ["i", "j", "k", "r"]
                 .iter()
                 .any(|c| d.has[c.as_bytes()[0] as usize].is_some());
@@ -882,7 +968,10 @@ fn check_feed(d: &Decoded<'_>) -> Check {
             }
         }
     }
-    if d.motion_here.is_some_and(|m| matches!(m, 330 | 331)) && d.has_at(b'k').is_none() {
+    if d.motion_here
+        .is_some_and(|m| matches!(m, M::Thread | M::RigidTap))
+        && d.has_at(b'k').is_none()
+    {
         return bad(BlockError::G33KMissing, None);
     }
     Ok(())
