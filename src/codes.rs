@@ -96,6 +96,14 @@ pub enum ToolLength {
 pub struct CoordSystem(pub u8);
 
 impl CoordSystem {
+    /// G54, LinuxCNC's first coordinate system.
+    pub const G54: CoordSystem = CoordSystem(1);
+
+    /// The first of its parameters (#5221 for G54, #5241 for G55, ...).
+    pub fn parameters(self) -> usize {
+        5221 + 20 * (self.0 as usize).saturating_sub(1)
+    }
+
     /// The G code ×10 (G54 → 540, G59.1 → 591).
     pub fn code10(self) -> u16 {
         match self.0 {
@@ -580,5 +588,9 @@ mod tests {
         assert_eq!(g711.group(), 1);
         assert_eq!(GCode::from_code10(593).unwrap().name(), "G59.3");
         assert_eq!(CutterComp::DynamicRight.side(), CutterComp::Right);
+        assert_eq!(CoordSystem::G54.parameters(), 5221);
+        assert_eq!(CoordSystem(9).parameters(), 5381);
+        assert_eq!(CoordSystem(6).code10(), 590);
+        assert_eq!(CoordSystem(7).code10(), 591);
     }
 }

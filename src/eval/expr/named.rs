@@ -152,14 +152,8 @@ impl Interp<'_> {
             Predef::InverseTime => flag(m.feed_mode == code::FeedMode::InverseTime),
             Predef::UnitsPerMinute => flag(m.feed_mode == code::FeedMode::PerMinute),
             Predef::UnitsPerRev => flag(m.feed_mode == code::FeedMode::PerRev),
-            Predef::CoordSystem => {
-                let i = m.coord_index;
-                if i < 7 {
-                    (530 + 10 * i) as f64
-                } else {
-                    (584 + i) as f64
-                }
-            }
+            // The G code ×10 (G59.1 is 591).
+            Predef::CoordSystem => m.coord.code10() as f64,
             // The G code ×10, as LinuxCNC reports them; -1 after G5.3.
             Predef::MotionMode => match m.motion {
                 code::MotionMode::NurbsEnd => -1.0,

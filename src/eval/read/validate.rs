@@ -464,8 +464,9 @@ fn check_comp(d: &Decoded<'_>) -> Check {
     if let Some(i) = d.g_at(|g| g == GCode::NonModal(NonModal::SetData)) {
         let l = d.value(b'l').map(|v| v.round() as i32);
         let p = d.value(b'p').map_or(0, |v| (v + 0.0001) as i32);
-        let p = if p == 0 { d.modal.coord_index } else { p };
-        if matches!(l, Some(2 | 20)) && p == d.modal.coord_index {
+        let active = d.modal.coord.0 as i32;
+        let p = if p == 0 { active } else { p };
+        if matches!(l, Some(2 | 20)) && p == active {
             return forbid("change the active coordinate system's offsets", Some(i));
         }
     }

@@ -11,7 +11,7 @@ pub(super) mod restore;
 pub mod tools;
 
 use crate::codes::SpindleDir;
-use crate::codes::{CutterComp, FeedMode, MotionMode, PathMode, Plane};
+use crate::codes::{CoordSystem, CutterComp, FeedMode, MotionMode, PathMode, Plane};
 use crate::eval::Settings;
 use crate::fx_hasher::FxMap;
 
@@ -29,8 +29,7 @@ pub(crate) struct Modal {
     pub speed: f64,
     /// The motion mode; G5.3 (`NurbsEnd`) is none, as G5.3 leaves it.
     pub motion: MotionMode,
-    /// 1 (G54) … 9 (G59.3)
-    pub coord_index: i32,
+    pub coord: CoordSystem,
     pub tool_offset: bool,
     /// G98 (true) / G99
     pub retract_r: bool,
@@ -63,7 +62,7 @@ impl Default for Modal {
             feed: 0.0,
             speed: 0.0,
             motion: MotionMode::CancelCycle,
-            coord_index: 1,
+            coord: CoordSystem::G54,
             tool_offset: false,
             retract_r: true,
             css: false,
@@ -86,7 +85,7 @@ impl Default for Modal {
 impl Modal {
     /// The state after M2/M30.
     pub(crate) fn reset_at_end(&mut self) {
-        self.coord_index = 1;
+        self.coord = CoordSystem::G54;
         self.plane = Plane::XY;
         self.absolute = true;
         self.feed_mode = FeedMode::PerMinute;

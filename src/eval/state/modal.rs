@@ -7,8 +7,8 @@ use crate::diag::{Error, ErrorKind};
 use crate::program::FileIndex;
 
 use crate::codes::{
-    ArcDistance, CutterComp, Distance, GCode, LatheMode, MCode, MotionMode, NonModal, Plane,
-    Retract, SpindleMode, ToolLength, Units,
+    ArcDistance, CoordSystem, CutterComp, Distance, GCode, LatheMode, MCode, MotionMode, NonModal,
+    Plane, Retract, SpindleMode, ToolLength, Units,
 };
 use crate::eval::Interp;
 use crate::eval::read::block::Words;
@@ -77,9 +77,9 @@ impl Interp<'_> {
         }
     }
 
-    /// G5x offset of coordinate system `cs` (1–9) on an axis, program units.
-    fn g5x_offset(&self, cs: i32, axis: usize) -> Option<f64> {
-        self.param_prog(5221 + 20 * (cs as usize - 1) + axis, axis)
+    /// G5x offset of coordinate system `cs` on an axis, program units.
+    fn g5x_offset(&self, cs: CoordSystem, axis: usize) -> Option<f64> {
+        self.param_prog(cs.parameters() + axis, axis)
     }
 
     /// Applied G92 offset, program units.
@@ -93,7 +93,7 @@ impl Interp<'_> {
     /// Machine position (without tool offsets), program units.
     fn machine_pos(&self, axis: usize) -> Option<f64> {
         let p = self.mach.pos.axes[axis].as_ref().ok()?;
-        Some(p + self.g5x_offset(self.mach.modal.coord_index, axis)? + self.g92_offset(axis)?)
+        Some(p + self.g5x_offset(self.mach.modal.coord, axis)? + self.g92_offset(axis)?)
     }
 
     /// Absolute machine position including the tool length offset, program
@@ -107,7 +107,7 @@ impl Interp<'_> {
     fn set_from_machine(&mut self, axis: usize, m: Option<f64>, what: &'static str) {
         let line = self.line_no();
         let v = m.and_then(|m| {
-            Some(m - self.g5x_offset(self.mach.modal.coord_index, axis)? - self.g92_offset(axis)?)
+            Some(m - self.g5x_offset(self.mach.modal.coord, axis)? - self.g92_offset(axis)?)
         });
         self.mach.pos.axes[axis] = v.ok_or(Unknown::After(what, line));
     }
@@ -386,7 +386,7 @@ impl Interp<'_> {
                 GCode::Retract(r) => self.mach.modal.retract_r = r == Retract::R,
                 GCode::SpindleMode(m) => self.mach.modal.css = m == SpindleMode::ConstantSurface,
                 GCode::Lathe(l) => self.mach.modal.lathe_diameter = l == LatheMode::Diameter,
-                GCode::Coord(cs) => self.select_cs(cs.0 as i32),
+                GCode::Coord(cs) => self.select_cs(cs),
                 // G4 acts in the output alone.
                 GCode::NonModal(NonModal::Dwell) => {}
                 GCode::NonModal(n) => special = Some(n),
@@ -412,7 +412,7 @@ impl Interp<'_> {
                     // The position becomes the given value; the offset is
                     // known only if the machine position was.
                     let m = self.machine_pos(a);
-                    let g5x = self.g5x_offset(self.mach.modal.coord_index, a);
+                    let g5x = self.g5x_offset(self.mach.modal.coord, a);
                     let off = m.zip(g5x).map(|(m, o)| m - o - v);
                     self.set_param_prog(5211 + a, a, off);
                     self.mach.pos.axes[a] = Ok(v);
@@ -608,10 +608,10 @@ impl Interp<'_> {
         self.mach.comp_units(metric);
     }
 
-    pub(in crate::eval) fn select_cs(&mut self, cs: i32) {
+    pub(in crate::eval) fn select_cs(&mut self, cs: CoordSystem) {
         let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
-        self.mach.modal.coord_index = cs;
-        self.params.assign(5220, cs as f64);
+        self.mach.modal.coord = cs;
+        self.params.assign(5220, cs.0 as f64);
         for (a, m) in machine.into_iter().enumerate() {
             if self.mach.pos.axes[a].is_ok() {
                 self.set_from_machine(a, m, "a coordinate system change");
@@ -622,11 +622,11 @@ impl Interp<'_> {
     fn g10(&mut self, l: Option<f64>, p: Option<f64>, r: Option<f64>, axis_words: &[(usize, f64)]) {
         let l = l.map(|v| v.round() as i32);
         let cs = match p.map(|v| v.round() as i32) {
-            Some(0) | None => self.mach.modal.coord_index,
-            Some(n) => n.clamp(1, 9),
+            Some(0) | None => self.mach.modal.coord,
+            Some(n) => CoordSystem(n.clamp(1, 9) as u8),
         };
-        let base = 5221 + 20 * (cs as usize - 1);
-        let active = cs == self.mach.modal.coord_index;
+        let base = cs.parameters();
+        let active = cs == self.mach.modal.coord;
         match l {
             Some(2) | Some(20) => {
                 if r.is_some_and(|r| r != 0.0) {

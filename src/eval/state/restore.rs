@@ -104,13 +104,8 @@ impl Interp<'_> {
         if cur.feed_mode != saved.feed_mode {
             words.push(GCode::FeedMode(saved.feed_mode).name());
         }
-        if cur.coord_index != saved.coord_index {
-            words.push(match saved.coord_index {
-                7 => "G59.1".into(),
-                8 => "G59.2".into(),
-                9 => "G59.3".into(),
-                n => format!("G{}", 53 + n),
-            });
+        if cur.coord != saved.coord {
+            words.push(GCode::Coord(saved.coord).name());
         }
         if cur.tool_offset != saved.tool_offset {
             // G43 takes the current tool's offset, as the reference restores.
@@ -161,8 +156,8 @@ impl Interp<'_> {
         }
         // The position model follows what those words do.
         self.set_units(saved.metric);
-        if cur.coord_index != saved.coord_index {
-            self.select_cs(saved.coord_index);
+        if cur.coord != saved.coord {
+            self.select_cs(saved.coord);
         }
         if cur.tool_offset != saved.tool_offset {
             self.tool_offset_words(saved.tool_offset);

@@ -3,6 +3,7 @@
 //! by the program itself (G10 L1/L10/L11). Tool data is kept in machine
 //! units, as LinuxCNC stores it.
 
+use crate::codes::CoordSystem;
 use crate::eval::Interp;
 use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
@@ -144,10 +145,10 @@ impl Interp<'_> {
                     .map(|(pos, tlo)| pos + tlo[a] * f - v),
                 _ => {
                     // L11: relative to G59.3 instead of the current system.
-                    let cur = self.mach.modal.coord_index;
-                    let g5x = |cs: i32, this: &Self| {
-                        this.params.known[5221 + 20 * (cs as usize - 1) + a]
-                            .then(|| this.params.values[5221 + 20 * (cs as usize - 1) + a] * f)
+                    let cur = self.mach.modal.coord;
+                    let g5x = |cs: CoordSystem, this: &Self| {
+                        this.params.known[cs.parameters() + a]
+                            .then(|| this.params.values[cs.parameters() + a] * f)
                     };
                     let g92 = if self.params.values[5210] == 0.0 {
                         Some(0.0)
@@ -158,7 +159,7 @@ impl Interp<'_> {
                         self.mach.pos.axes[a].as_ref().ok(),
                         self.mach.tlo,
                         g5x(cur, self),
-                        g5x(9, self),
+                        g5x(CoordSystem(9), self),
                         g92,
                     ) {
                         (Some(pos), Some(tlo), Some(oc), Some(o9), Some(g)) => {
