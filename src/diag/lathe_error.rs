@@ -36,6 +36,11 @@ pub enum LatheError {
     ArcRadiusTooSmall,
     /// The contour cannot be cut.
     Geometry(Geom),
+    /// G70 with cutter compensation offsetting the path where the output
+    /// keeps G41/G42 (or the compensation's geometry is not known): LinuxCNC
+    /// compensates the cycle's moves from the contour's end, which written
+    /// G0/G1/G2/G3 lines under G41/G42 do not reproduce.
+    G70Comp { why: &'static str },
 }
 
 impl LatheError {
@@ -65,6 +70,7 @@ impl LatheError {
                 Geom::Endless => "E1319",
                 Geom::TooManyMoves => "E1320",
             },
+            G70Comp { .. } => "E1321",
         }
     }
 }
@@ -98,6 +104,10 @@ impl fmt::Display for LatheError {
                 f.write_str("lathe cycle contour: arc radius too small to reach the end point")
             }
             Geometry(g) => write!(f, "lathe cycle: {g}"),
+            G70Comp { why } => write!(
+                f,
+                "G70 with cutter compensation on is not flattened here: {why}"
+            ),
         }
     }
 }

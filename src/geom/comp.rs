@@ -469,6 +469,16 @@ impl<T: Clone> Comp<T> {
         self.programmed
     }
 
+    /// Puts the tool's position (as the next move reads it) at `p` in the
+    /// plane, leaving the programmed point and the held moves as they are.
+    /// LinuxCNC's G70 does this while it reads its contour: each contour
+    /// point becomes the position, so the compensated moves of the cycle
+    /// start from the contour's end, offset or not.
+    pub fn set_current(&mut self, p: [f64; 2]) {
+        self.current[0] = p[0];
+        self.current[1] = p[1];
+    }
+
     fn lathe_shift(&self, p: [f64; 2]) -> [f64; 2] {
         if !self.xz {
             return p;
@@ -1157,6 +1167,24 @@ mod tests {
         assert!(c.off(&mut out).unwrap());
         assert_eq!(c.programmed(), [3.0, 1.0, 0.0]);
         assert!(!c.holding());
+    }
+
+    #[test]
+    fn set_current_moves_where_the_next_move_starts() {
+        let mut c = inch();
+        let mut out = Vec::new();
+        c.start(Side::Left, 0.25, 0, false, [0.0, 0.0, 0.0]);
+        c.straight(true, [1.0, 0.0, 0.0], 1, &mut out).unwrap();
+        c.set_current([5.0, 2.0]);
+        assert_eq!(c.current(), [5.0, 2.0, 0.0]);
+        assert_eq!(c.programmed(), [1.0, 0.0, 0.0]);
+        // A move to the programmed point again has no motion in the plane:
+        // it goes to the position set, held with the move before.
+        c.straight(true, [1.0, 0.0, 0.0], 2, &mut out).unwrap();
+        assert!(out.is_empty());
+        c.stop(false, &mut out).unwrap();
+        assert_eq!(out.len(), 2);
+        assert_eq!(line_end(&out[1]), [5.0, 2.0, 0.0]);
     }
 
     #[test]

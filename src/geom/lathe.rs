@@ -634,6 +634,10 @@ impl Contour {
     pub(crate) fn len(&self) -> usize {
         self.segs.len()
     }
+    /// Where the contour ends.
+    pub(crate) fn last(&self) -> C {
+        self.last
+    }
     /// A straight line (G0 or G1) to `end`.
     pub(crate) fn line(&mut self, end: C) {
         self.segs.push(Seg::line(self.last, end));
@@ -1095,7 +1099,36 @@ pub(crate) fn cut(contour: &Contour, start: C, cycle: &Cycle) -> Result<Vec<Move
 
 /// As [`cut`], with the moves made before an error (the reference makes
 /// them, one by one, before it stops; a move it refuses comes first).
+#[cfg(test)]
 pub(crate) fn cut_partial(
+    contour: &Contour,
+    start: C,
+    cycle: &Cycle,
+) -> (Vec<Move>, Option<LatheError>) {
+    let (mut moves, err) = cut_moves(contour, start, cycle);
+    let mut cur = contour.last;
+    moves.retain(|m| {
+        if arc_in_place(m, cur) {
+            return false;
+        }
+        cur = m.end();
+        true
+    });
+    (moves, err)
+}
+
+/// Whether `m` is an arc to where the machine already is (`cur`, within
+/// 0.0001 on both axes): the reference does not make it. Where the machine
+/// is, for the reference, is the contour's end before the first move.
+pub(crate) fn arc_in_place(m: &Move, cur: C) -> bool {
+    let e = m.end();
+    let same = (e.re - cur.re).abs() < 1e-4 && (e.im - cur.im).abs() < 1e-4;
+    matches!(m, Move::Arc { .. }) && same
+}
+
+/// The moves of a cycle, with the error that stopped it; arcs in place
+/// ([`arc_in_place`]) are still among them.
+pub(crate) fn cut_moves(
     contour: &Contour,
     start: C,
     cycle: &Cycle,
@@ -1120,20 +1153,7 @@ pub(crate) fn cut_partial(
             r,
         } => path.rough(&mut out, mode, start, face, C::new(w, u), d, i, r),
     };
-    // An arc to where the machine already is (within 0.0001 on both axes)
-    // is not made.
-    let mut cur = contour.last;
-    let mut moves = out.moves;
-    moves.retain(|m| {
-        let e = m.end();
-        let same = (e.re - cur.re).abs() < 1e-4 && (e.im - cur.im).abs() < 1e-4;
-        if matches!(m, Move::Arc { .. }) && same {
-            return false;
-        }
-        cur = e;
-        true
-    });
-    (moves, r.err())
+    (out.moves, r.err())
 }
 
 #[cfg(test)]

@@ -316,6 +316,16 @@ impl LineConsumer for Lowering {
         Ok(())
     }
 
+    fn computes_comp(&self) -> bool {
+        !self.p.passthrough && !self.p.has_g(410)
+    }
+
+    fn comp_position(&mut self, p: [f64; 2]) {
+        if let Some(c) = &mut self.comp {
+            c.comp.set_current(p);
+        }
+    }
+
     fn finish(&mut self, _out: &mut Output) -> Result<Vec<Diagnostic>, Error> {
         let mut all = std::mem::take(&mut self.warnings);
         all.append(&mut self.errors);

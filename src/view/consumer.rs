@@ -133,6 +133,16 @@ impl LineConsumer for ViewConsumer<'_> {
         Ok(())
     }
 
+    fn computes_comp(&self) -> bool {
+        self.next.as_ref().is_some_and(|n| n.computes_comp())
+    }
+
+    fn comp_position(&mut self, p: [f64; 2]) {
+        if let Some(n) = &mut self.next {
+            n.comp_position(p);
+        }
+    }
+
     fn finish(&mut self, out: &mut Output) -> Result<Vec<Diagnostic>, Error> {
         if let Some(sm) = self.source_map.as_mut() {
             sm.flush().map_err(|e| io_error("<source map>", e))?;

@@ -321,3 +321,233 @@ fn lathe_cycles_match_rs274() {
         "only {same} of {cases} programs were cut"
     );
 }
+
+/// A G70 run with cutter compensation on: a random contour (lines and
+/// arcs, sometimes pockets and mirrored), G41.1/G42.1 with a random
+/// diameter (sometimes zero) and lathe tool orientation, entered by a move
+/// of its own or by the cycle's rapid, the cycle's X or Z sometimes left
+/// out (it starts from the compensated position), moves after the cycle,
+/// and G40 or M2.
+pub fn comp_case(seed: u64) -> Case {
+    let mut g = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x0707_7070);
+    let pockets = g.chance(0.3);
+    let n = 2 + g.below(4);
+    let mut pts = vec![(r3(g.float(-0.5, 1.0)), r3(g.float(1.0, 5.0)))];
+    for _ in 0..n {
+        let (z, x) = *pts.last().unwrap_or(&(0.0, 0.0));
+        let dx = if pockets {
+            g.float(-2.0, 3.0)
+        } else {
+            g.float(0.0, 3.0)
+        };
+        pts.push((r3(z - g.float(0.8, 4.0)), r3((x + dx).max(0.5))));
+    }
+    let top = pts.iter().map(|p| p.1).fold(0.0, f64::max) + r3(g.float(1.0, 4.0));
+    let zs = pts[0].0 + r3(g.float(0.5, 3.0));
+    let (mx, mz) = (g.chance(0.25), g.chance(0.25));
+    let m = |(z, x): (f64, f64)| (if mz { -z } else { z }, if mx { -x } else { x });
+    let mut text = String::from("G18 G21 G90 F100\n");
+    let (sz, sx) = m((zs, top));
+    let (fz, fx) = m((zs + 4.0, top + 4.0));
+    text.push_str(&format!("G0 X{} Z{}\n", num(fx), num(fz)));
+    text.push_str("o100 sub\n");
+    let first = m(pts[0]);
+    let lead = if g.chance(0.5) { "G0" } else { "G1" };
+    text.push_str(&format!("  {lead} X{} Z{}\n", num(first.1), num(first.0)));
+    for k in 1..pts.len() {
+        let (p, q) = (m(pts[k - 1]), m(pts[k]));
+        if g.chance(0.35) {
+            let (cz, cx) = (q.0 - p.0, q.1 - p.1);
+            let chord = (cz * cz + cx * cx).sqrt();
+            let r = chord / 2.0 * g.float(1.2, 4.0);
+            let h = (r * r - chord * chord / 4.0).max(0.0).sqrt();
+            let side = if g.chance(0.5) { 1.0 } else { -1.0 };
+            let (nz, nx) = (-cx / chord * side, cz / chord * side);
+            let (kz, kx) = ((p.0 + q.0) / 2.0 + nz * h, (p.1 + q.1) / 2.0 + nx * h);
+            let g23 = if side > 0.0 { "G3" } else { "G2" };
+            text.push_str(&format!(
+                "  {g23} X{} Z{} I{} K{}\n",
+                num(q.1),
+                num(q.0),
+                num(kx - p.1),
+                num(kz - p.0)
+            ));
+        } else {
+            text.push_str(&format!("  G1 X{} Z{}\n", num(q.1), num(q.0)));
+        }
+    }
+    if g.chance(0.6) {
+        let last = *pts.last().unwrap_or(&(0.0, 0.0));
+        let (rz, rx) = m((last.0, top));
+        text.push_str(&format!("  G1 X{} Z{}\n", num(rx), num(rz)));
+    }
+    text.push_str("o100 endsub\n");
+    let dia = if g.chance(0.1) {
+        0.0
+    } else {
+        r3(g.float(0.05, 0.8))
+    };
+    let side = if g.chance(0.5) { "G41.1" } else { "G42.1" };
+    let orient = if g.chance(0.5) {
+        String::new()
+    } else {
+        format!(" L{}", g.below(10))
+    };
+    text.push_str(&format!("{side} D{}{orient}\n", num(dia)));
+    let entry = g.chance(0.7);
+    if entry {
+        let mv = if g.chance(0.5) { "G0" } else { "G1" };
+        let (ez, ex) = m((zs + g.float(1.0, 3.0), top + g.float(0.5, 3.0)));
+        text.push_str(&format!("{mv} X{} Z{}\n", num(ex), num(ez)));
+    }
+    let d = r3(g.float(0.0, 1.0));
+    let e = r3(g.float(0.0, d));
+    let passes = 1 + g.below(3);
+    let mut words = format!("D{} E{} P{passes}", num(d), num(e));
+    let omit = if entry { g.below(6) } else { 5 };
+    if omit != 0 {
+        words = format!("Z{} {words}", num(sz));
+    }
+    if omit != 1 {
+        words = format!("X{} {words}", num(sx));
+    }
+    text.push_str(&format!("G70 Q100 {words}\n"));
+    if g.chance(0.5) {
+        let last = m(*pts.last().unwrap_or(&(0.0, 0.0)));
+        let (az, ax) = (last.0, last.1 + if mx { -2.0 } else { 2.0 });
+        text.push_str(&format!("G1 X{} Z{}\n", num(ax), num(az)));
+    }
+    if g.chance(0.7) {
+        text.push_str(&format!("G40\nG0 X{} Z{}\n", num(fx), num(fz)));
+    }
+    text.push_str("M2\n");
+    let what = format!(
+        "G70 with {side} D{}{orient}, {n} elements{}{}{}{}",
+        num(dia),
+        if entry { "" } else { ", G70 enters" },
+        if pockets { ", pockets" } else { "" },
+        if mx { ", X mirrored" } else { "" },
+        if mz { ", Z mirrored" } else { "" }
+    );
+    Case { text, what }
+}
+
+/// The text of the line rs274 names in its refusal (the line after the
+/// message), trimmed.
+fn rs274_error_text(stderr: &str) -> Option<String> {
+    let mut lines = stderr.lines().filter(|l| *l != "executing");
+    lines.next()?;
+    lines.next().map(|l| l.trim().to_string())
+}
+
+/// The text of the line ngcflat's first error (short format) names.
+fn ngcflat_error_text(program: &str, stderr: &str) -> Option<String> {
+    let n: usize = stderr
+        .lines()
+        .find_map(|l| l.strip_prefix("prog.ngc:")?.split(':').next()?.parse().ok())?;
+    program.lines().nth(n - 1).map(|l| l.trim().to_string())
+}
+
+/// One G70-with-compensation case: for a target that computes the
+/// compensation (GRBL, grblHAL) ngcflat must write the path rs274 moves
+/// along, or refuse at the line rs274 refuses; where the output keeps
+/// G41/G42 (LinuxCNC) it must refuse (E1321) unless the diameter is zero,
+/// when it writes the canon rs274 makes. Ok(Some(message)) when rs274
+/// refuses.
+pub fn comp_check(c: &Case, seed: u64) -> Result<Option<String>, String> {
+    let run = oracle::run_with(c.text.as_bytes(), "", None, None);
+    let dir = crate::tmp();
+    crate::put(dir.path(), "prog.ngc", &c.text);
+    let target = if seed.is_multiple_of(2) {
+        "grbl"
+    } else {
+        "grblhal"
+    };
+    let common = ["--zero-start", "--message-format", "short", "prog.ngc"];
+    let mut args = vec!["--target", target];
+    args.extend(common);
+    let (code, flat, stderr) = crate::run(dir.path(), &args);
+    if !run.ok {
+        let theirs = rs274_error_text(&run.stderr);
+        let mine = ngcflat_error_text(&c.text, &stderr);
+        if code != 1 || theirs != mine {
+            return Err(format!(
+                "rs274 refuses {theirs:?} ({}), ngcflat for {target} exits {code} at {mine:?}: {stderr}",
+                run.stderr.trim()
+            ));
+        }
+    } else {
+        if code != 0 {
+            return Err(format!(
+                "rs274 runs it, ngcflat for {target} refuses: {stderr}"
+            ));
+        }
+        crate::motion::same_motion(c.text.as_bytes(), flat.as_bytes())
+            .map_err(|e| format!("{target}: {e}\n---- flattened\n{flat}"))?;
+    }
+    let (code, flat, stderr) = crate::run(dir.path(), &common);
+    let zero = c.what.contains(" D0,") || c.what.contains(" D0 L");
+    if zero && run.ok {
+        let b = oracle::run_with(flat.as_bytes(), "", None, None);
+        if code != 0 || !b.ok {
+            return Err(format!("diameter 0: ngcflat exits {code}: {stderr}"));
+        }
+        oracle::compare(&run.lines, &b.lines, 2e-4)?;
+    } else if code != 1
+        || !(stderr.contains("E1321")
+            || ngcflat_error_text(&c.text, &stderr) == rs274_error_text(&run.stderr))
+    {
+        return Err(format!(
+            "for LinuxCNC, ngcflat exits {code} without E1321 or rs274's refusal: {stderr}"
+        ));
+    }
+    Ok((!run.ok).then(|| {
+        let m = run.stderr.lines().find(|l| *l != "executing").unwrap_or("");
+        m.split(':').next().unwrap_or("").to_string()
+    }))
+}
+
+#[test]
+fn g70_with_compensation_matches_rs274() {
+    if !oracle::available("g70_with_compensation_matches_rs274") {
+        return;
+    }
+    let seeds = oracle::suite_seeds("NGCFLAT_LATHE_COMP", 120);
+    let (cases, start) = (seeds.end - seeds.start, seeds.start);
+    let results = oracle::on_threads(seeds, 1, |seed| {
+        let c = comp_case(seed);
+        comp_check(&c, seed).map_err(|e| format!("seed {seed} ({}): {e}\n{}", c.what, c.text))
+    });
+    let (mut same, mut refused) = (0, 0);
+    let mut failures = Vec::new();
+    let mut messages = std::collections::BTreeMap::<String, usize>::new();
+    for (_, r) in results {
+        match r {
+            Ok(Some(m)) => {
+                refused += 1;
+                *messages.entry(m).or_default() += 1;
+            }
+            Ok(None) => same += 1,
+            Err(e) => failures.push(e),
+        }
+    }
+    eprintln!(
+        "G70 with compensation: {cases} programs from seed {start}: {same} move the same, {refused} refused by both at the same line, {} differ",
+        failures.len()
+    );
+    for (m, n) in messages {
+        eprintln!("  {n:6}  refused: {m}");
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {cases} differ; first:\n{}",
+        failures.len(),
+        failures[0]
+    );
+    // LinuxCNC's rapid toward the contour's end makes many of them gouge:
+    // a third at least must run.
+    assert!(
+        same * 3 > cases as usize,
+        "only {same} of {cases} programs ran"
+    );
+}

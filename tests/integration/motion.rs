@@ -456,6 +456,15 @@ fn motion_check(path: &Path) -> Result<(), String> {
     compare(&Replay::run(&a), &Replay::run(&b), 0.002)
 }
 
+/// Whether rs274 moves the machine the same for `original` and `lowered`
+/// (no tool table; the same tolerance as the fixtures'). Err says where
+/// they differ, or that rs274 refuses one of them.
+pub fn same_motion(original: &[u8], lowered: &[u8]) -> Result<(), String> {
+    let a = rs274(original, None).map_err(|e| format!("rs274 on the original: {e}"))?;
+    let b = rs274(lowered, None).map_err(|e| format!("rs274 rejects the lowered output: {e}"))?;
+    compare(&Replay::run(&a), &Replay::run(&b), 0.002)
+}
+
 #[test]
 fn lowered_fixtures_move_as_the_originals() {
     if !oracle::available("lowered_fixtures_move_as_the_originals") {

@@ -283,6 +283,12 @@ impl Interp<'_> {
                 span,
             ));
         }
+        self.programmed_position(axis, span)
+    }
+
+    /// The position model's value on an axis (with compensation on, the
+    /// programmed position), or why it is unknown.
+    pub(crate) fn programmed_position(&self, axis: usize, span: Span) -> EvalResult {
         match &self.mach.pos.axes[axis] {
             Ok(v) => Ok(*v),
             Err(why) => {

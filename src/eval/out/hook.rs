@@ -36,6 +36,17 @@ pub trait LineConsumer {
     /// The program ended; returns diagnostics gathered on the way (warnings,
     /// and in check mode errors kept to report them all).
     fn finish(&mut self, out: &mut Output) -> Result<Vec<Diagnostic>, Error>;
+
+    /// Whether the consumer computes cutter radius compensation into the
+    /// path (rather than writing G41/G42 for the controller to apply).
+    fn computes_comp(&self) -> bool {
+        false
+    }
+
+    /// LinuxCNC's G70 has put the position its cutter radius compensation
+    /// reads at `p` (plane coordinates: Z, X in G18) without a move, before
+    /// the cycle's moves (the lines that follow).
+    fn comp_position(&mut self, _p: [f64; 2]) {}
 }
 
 impl Interp<'_> {
@@ -62,6 +73,23 @@ impl Interp<'_> {
         let r = c.line(text, &origin, &mut self.out.output);
         self.out.consumer = Some(c);
         r.map_err(|e| self.placed(e, file, line_start))
+    }
+
+    /// Whether the consumer computes cutter radius compensation into the
+    /// path.
+    pub(in crate::eval) fn consumer_computes_comp(&self) -> bool {
+        self.out
+            .consumer
+            .as_ref()
+            .is_some_and(|c| c.computes_comp())
+    }
+
+    /// Tells the consumer where LinuxCNC's compensation now reads the
+    /// tool's position (see [`LineConsumer::comp_position`]).
+    pub(in crate::eval) fn consumer_comp_position(&mut self, p: [f64; 2]) {
+        if let Some(c) = self.out.consumer.as_mut() {
+            c.comp_position(p);
+        }
     }
 
     /// Hands each line of `bytes` (the file's bytes from offset `start`,

@@ -248,6 +248,32 @@ impl Machine {
         r.map_err(geom)
     }
 
+    /// With compensation on and its geometry followed: whether it offsets
+    /// the moves (a radius above zero). `None` when it is not followed.
+    pub(in crate::eval) fn comp_offsets(&self) -> Option<bool> {
+        self.comp
+            .as_ref()
+            .filter(|r| r.known && self.modal.ccomp != CutterComp::Off)
+            .map(|r| r.comp.is_offsetting())
+    }
+
+    /// The tool's position as the compensation reads it (plane
+    /// coordinates), when its geometry is followed.
+    pub(in crate::eval) fn comp_current(&self) -> Option<[f64; 3]> {
+        self.comp
+            .as_ref()
+            .filter(|r| r.known)
+            .map(|r| r.comp.current())
+    }
+
+    /// LinuxCNC's G70 put the position the compensation reads at `p`
+    /// (plane coordinates) while reading its contour.
+    pub(in crate::eval) fn comp_set_current(&mut self, p: [f64; 2]) {
+        if let Some(run) = self.comp.as_mut().filter(|r| r.known) {
+            run.comp.set_current(p);
+        }
+    }
+
     /// Whether G53 would move with an offset path (the reference refuses it).
     pub(in crate::eval) fn comp_offsetting(&self) -> bool {
         self.modal.ccomp != CutterComp::Off

@@ -6,9 +6,9 @@
 
 use std::rc::Rc;
 
-use crate::diag::{Error, ErrorKind, LatheError};
+use crate::diag::{Error, ErrorKind, LatheError, Site};
 use crate::emit::number_string;
-use crate::geom::lathe::{C, Contour, Cycle, Move, cut_partial};
+use crate::geom::lathe::{C, Contour, Cycle, Move, arc_in_place, cut_moves};
 use crate::parse::Name;
 use crate::parse::ast::{Item, Line, LineKind};
 use crate::program::{FileIndex, Window, next_line};
@@ -30,6 +30,9 @@ pub(crate) struct LatheRun {
     contour: Contour,
     /// The contour's current point (where the next element starts).
     point: C,
+    /// Whether a contour line has moved the point (LinuxCNC then reads the
+    /// position as the point).
+    moved: bool,
     /// Motion mode the contour lines take.
     motion: MotionMode,
     absolute: bool,
@@ -99,7 +102,8 @@ impl Interp<'_> {
         let Some(q) = word(b'q') else {
             return Err(self.lathe_err(LatheError::NoQ { code: name }, file, start, len));
         };
-        if self.mach.modal.ccomp != CutterComp::Off && number != 70 {
+        let comp = self.mach.modal.ccomp != CutterComp::Off;
+        if comp && number != 70 {
             return Err(self.lathe_err(LatheError::WithComp { code: name }, file, start, len));
         }
         if self.mach.modal.plane != Plane::XZ {
@@ -108,14 +112,23 @@ impl Interp<'_> {
         if q.fract() != 0.0 || !(0.0..1e9).contains(&q) {
             return Err(self.lathe_err(LatheError::BadQ { q }, file, start, len));
         }
+        if comp && let Err(k) = self.g70_comp() {
+            return Err(self.lathe_err(k, file, start, len));
+        }
         let span = crate::parse::ast::Span::new(0, len);
+        // The rapid reads a missing axis from the programmed position, the
+        // cycle's start from the tool's (with compensation: its offset
+        // position).
         let cx = self
-            .position(0, span)
+            .programmed_position(0, span)
             .map_err(|f| self.fault_in_line(*f, file, start))?;
         let cz = self
-            .position(2, span)
+            .programmed_position(2, span)
             .map_err(|f| self.fault_in_line(*f, file, start))?;
-        let (mut x, mut z) = (cx, cz);
+        let (mut x, mut z) = match self.mach.comp_current().filter(|_| comp) {
+            Some([a, b, _]) => (b, a),
+            None => (cx, cz),
+        };
         if self.mach.modal.absolute {
             x = word(b'x').unwrap_or(x);
             z = word(b'z').unwrap_or(z);
@@ -144,6 +157,7 @@ impl Interp<'_> {
             begin,
             contour: Contour::new(begin),
             point: begin,
+            moved: false,
             motion: self.mach.modal.motion,
             absolute: self.mach.modal.absolute,
             ijk_absolute: self.mach.modal.ijk_absolute,
@@ -399,6 +413,7 @@ impl Interp<'_> {
                 run.contour.chamfer(c);
             }
             run.point = end;
+            run.moved = true;
             self.mach.pos.axes[0] = Ok(end.im);
             self.mach.pos.axes[2] = Ok(end.re);
         }
@@ -419,10 +434,19 @@ impl Interp<'_> {
         }
         // The moves made before a geometry error are checked first: the
         // reference makes them before it stops.
-        let (moves, failed) = cut_partial(&run.contour, run.begin, &run.cycle);
+        let (moves, failed) = cut_moves(&run.contour, run.begin, &run.cycle);
+        // With compensation offsetting the path, the position LinuxCNC's
+        // compensation reads is the contour's end (set while reading it),
+        // the programmed position the rapid's end.
+        let offsets = self.mach.comp_offsets() == Some(true);
+        if self.mach.modal.ccomp != CutterComp::Off && run.moved {
+            let p = [run.point.re, run.point.im];
+            self.mach.comp_set_current(p);
+            self.consumer_comp_position(p);
+        }
         // The moves start where the machine is (LinuxCNC's position is the
         // contour's end, which only its arcs' skip test reads).
-        if !moves.is_empty() {
+        if !moves.is_empty() || offsets {
             (self.mach.pos.axes[0], self.mach.pos.axes[2]) = run.at.clone();
         }
         // The moves belong to the cycle line.
@@ -430,13 +454,44 @@ impl Interp<'_> {
         let saved = (self.reader.line_start, self.reader.line_idx);
         self.reader.at(cs, run.line);
         let clen = line_len(&cf, cs);
+        let mut cur = run.contour.last();
         for m in moves {
-            self.lathe_move(&cf, cs, clen, m)?;
+            if arc_in_place(&m, cur) {
+                continue;
+            }
+            if let Err(mut e) = self.lathe_move(&cf, cs, clen, m) {
+                // The reference makes the moves after reading the `endsub`
+                // line, and reports a move it refuses there.
+                (self.reader.line_start, self.reader.line_idx) = saved;
+                e.site = Some(Site::new(&file.file, start, start + len));
+                e.stack = self.stack();
+                return Err(e);
+            }
+            cur = match self.mach.comp_current().filter(|_| offsets) {
+                Some([a, b, _]) => C::new(a, b),
+                None => m.end(),
+            };
         }
         (self.reader.line_start, self.reader.line_idx) = saved;
         match failed {
             Some(g) => Err(self.lathe_err(LatheError::Geometry(g), file, start, len)),
             None => Ok(()),
+        }
+    }
+
+    /// Whether G70 can run with the cutter compensation that is on: it can
+    /// where the compensation offsets nothing (radius zero), or where the
+    /// output computes it into the path and its geometry is known here.
+    fn g70_comp(&self) -> Result<(), LatheError> {
+        match self.mach.comp_offsets() {
+            Some(false) => Ok(()),
+            Some(true) if self.consumer_computes_comp() => Ok(()),
+            Some(true) | None if !self.consumer_computes_comp() => Err(LatheError::G70Comp {
+                why: "LinuxCNC moves the position its compensation reads to the contour's end while reading the contour, so the cycle's compensated moves start from there (it rapids toward the contour's end first); G0/G1/G2/G3 lines under G41/G42 cannot reproduce that. Flatten for a target that computes the compensation into the path (--target grbl, grblhal or fluidnc), or turn it off (G40) before G70",
+            }),
+            Some(true) | None => Err(LatheError::G70Comp {
+                why: "the compensation's path is not known here (the tool's diameter or the position is unknown: give --tool-table and --start-position, or --zero-start)",
+            }),
         }
     }
 
