@@ -15,6 +15,7 @@ use crate::program::{FileIndex, Window, next_line};
 
 use crate::codes::{CutterComp, GCode, MotionMode, Plane};
 use crate::eval::flow::{FrameKind, SubRec};
+use crate::eval::read::validate::GCodes;
 use crate::eval::{Interp, file_key, read_error};
 
 /// A cycle whose contour subroutine is running.
@@ -97,7 +98,7 @@ impl Interp<'_> {
                 text.push_str(&number_string(v, self.s.precision));
             }
             self.emit_raw(text.as_bytes())?;
-            ends = self.apply_words(file, start, &others, false)?;
+            ends = self.apply_words(file, start, &others, &GCodes::NONE, false)?;
         }
         let Some(q) = word(b'q') else {
             return Err(self.lathe_err(LatheError::NoQ { code: name }, file, start, len));
@@ -527,12 +528,14 @@ impl Interp<'_> {
                 words.push((b'k', c.re - cz));
             }
         }
+        let mut codes = GCodes::NONE;
         if let Err((k, _)) = crate::eval::read::validate::check_block(
             &words,
             &self.mach.modal,
             &self.mach.nurbs,
             &self.mach.cycle,
             self.s.user_m,
+            &mut codes,
         ) {
             return Err(self.error(k, file, start, start + len));
         }
@@ -545,7 +548,7 @@ impl Interp<'_> {
             text.push_str(&number_string(v, self.s.precision));
         }
         self.emit_raw(text.as_bytes())?;
-        self.apply_words(file, start, &words, false)?;
+        self.apply_words(file, start, &words, &codes, false)?;
         Ok(())
     }
 }

@@ -12,6 +12,7 @@ use crate::codes::{
 };
 use crate::eval::Interp;
 use crate::eval::read::block::Words;
+use crate::eval::read::validate::GCodes;
 use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
 use crate::eval::state::nurbs::{NO_MOTION, NURBS};
@@ -168,6 +169,7 @@ impl Interp<'_> {
         file: &Rc<FileIndex>,
         start: u32,
         words: &Words,
+        codes: &GCodes,
         m99: bool,
     ) -> Result<bool, Error> {
         if !m99 && self.mach.apply_simple(words) {
@@ -175,7 +177,7 @@ impl Interp<'_> {
         }
         let motion_before = self.mach.modal.motion;
         // Filled in place: returning it would copy it.
-        let mut w = LineWords::new(m99);
+        let mut w = LineWords::new(m99, codes);
         self.read_words(file, start, words, &mut w)?;
         self.apply_m_p_words(words, &mut w);
         // RETAIN_G43: a tool change while G43 is in effect applies the new
@@ -238,8 +240,10 @@ impl Interp<'_> {
         for &(l, v) in words {
             match l {
                 b'g' => {
-                    // The block checks have refused unknown codes.
-                    if w.gn < w.g.len()
+                    // The block checks have refused unknown codes, and
+                    // decoded the line's codes unless it is a plain move.
+                    if !w.decoded
+                        && w.gn < w.g.len()
                         && let Some(g) = GCode::nearest(v)
                     {
                         w.g[w.gn] = g;
@@ -746,6 +750,8 @@ struct LineWords {
     /// G codes, in order.
     g: [GCode; 16],
     gn: usize,
+    /// The G codes come from the block checks.
+    decoded: bool,
     /// Axis words: (axis index, value).
     axes: [(usize, f64); 9],
     an: usize,
@@ -761,10 +767,19 @@ struct LineWords {
 
 impl LineWords {
     #[inline]
-    fn new(ends: bool) -> LineWords {
+    fn new(ends: bool, codes: &GCodes) -> LineWords {
+        let mut g = [GCode::Motion(MotionMode::Rapid); 16];
+        let gn = match codes.get() {
+            Some(c) => {
+                g[..c.len()].copy_from_slice(c);
+                c.len()
+            }
+            None => 0,
+        };
         LineWords {
-            g: [GCode::Motion(MotionMode::Rapid); 16],
-            gn: 0,
+            g,
+            gn,
+            decoded: codes.get().is_some(),
             axes: [(0, 0.0); 9],
             an: 0,
             p: None,
