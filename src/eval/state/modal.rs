@@ -212,10 +212,7 @@ impl Interp<'_> {
             self.emit_raw(if on { b"G43" } else { b"G49" })?;
         }
         if self.mach.comp.is_some() {
-            let stop = w.ends
-                || words
-                    .iter()
-                    .any(|&(l, v)| l == b'm' && matches!(v, 0.0 | 1.0 | 60.0));
+            let stop = w.ends || w.pauses;
             if stop && let Err(k) = self.mach.comp_stop(w.ends) {
                 return Err(self.error(k, file, start, start));
             }
@@ -291,6 +288,7 @@ impl Interp<'_> {
     fn apply_m(&mut self, m: MCode, w: &mut LineWords) {
         match m {
             MCode::End { .. } => w.ends = true,
+            MCode::Pause { .. } | MCode::PalletPause => w.pauses = true,
             MCode::Spindle(d) => self.mach.modal.spindle = d,
             MCode::ToolChange => {
                 self.mach.current_tool = self.mach.selected_tool;
@@ -762,6 +760,8 @@ struct LineWords {
     r: Option<f64>,
     /// The line ends the program (M2, M30, or M99 ending the main program).
     ends: bool,
+    /// The line pauses the program (M0, M1, M60).
+    pauses: bool,
     tool_changed: bool,
 }
 
@@ -788,6 +788,7 @@ impl LineWords {
             l: None,
             r: None,
             ends,
+            pauses: false,
             tool_changed: false,
         }
     }
