@@ -130,7 +130,7 @@ impl Interp<'_> {
             Some([a, b, _]) => (b, a),
             None => (cx, cz),
         };
-        if self.mach.modal.absolute {
+        if self.mach.modal.absolute() {
             x = word(b'x').unwrap_or(x);
             z = word(b'z').unwrap_or(z);
         } else {
@@ -160,8 +160,8 @@ impl Interp<'_> {
             point: begin,
             moved: false,
             motion: self.mach.modal.motion,
-            absolute: self.mach.modal.absolute,
-            ijk_absolute: self.mach.modal.ijk_absolute,
+            absolute: self.mach.modal.absolute(),
+            ijk_absolute: self.mach.modal.ijk_absolute(),
             at: (self.mach.pos.axes[0].clone(), self.mach.pos.axes[2].clone()),
         }));
         Ok(())
@@ -336,7 +336,7 @@ impl Interp<'_> {
         let len = line_len(file, start);
         let bad = |s: &Self, k: LatheError| s.lathe_err(k, file, start, len);
         let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
-        let diameter = self.mach.modal.lathe_diameter;
+        let diameter = self.mach.modal.lathe_diameter();
         let Some(run) = self.mach.lathe.as_deref() else {
             return Ok(());
         };
@@ -511,16 +511,16 @@ impl Interp<'_> {
             Move::Feed(e) => (1.0, e, None),
             Move::Arc { ccw, center, end } => (if ccw { 3.0 } else { 2.0 }, end, Some(center)),
         };
-        let (xw, zw) = if self.mach.modal.absolute {
+        let (xw, zw) = if self.mach.modal.absolute() {
             (end.im, end.re)
-        } else if self.mach.modal.lathe_diameter {
+        } else if self.mach.modal.lathe_diameter() {
             (end.im - 2.0 * cx, end.re - cz)
         } else {
             (end.im - cx, end.re - cz)
         };
         let mut words = vec![(b'g', g), (b'x', xw), (b'z', zw)];
         if let Some(c) = center {
-            if self.mach.modal.ijk_absolute {
+            if self.mach.modal.ijk_absolute() {
                 words.push((b'i', c.im));
                 words.push((b'k', c.re));
             } else {
