@@ -889,6 +889,30 @@ fn radius_center(a: [f64; 2], b: [f64; 2], r: f64, ccw: bool) -> [f64; 2] {
 mod tests {
     use super::*;
 
+    /// The machine model and the evaluator start in the same modal state
+    /// (LinuxCNC's power-on state), group by group, in the same types.
+    #[test]
+    fn power_on_modes_are_the_evaluators() {
+        let e = crate::eval::state::Modal::default();
+        let m = Modes::default();
+        assert_eq!(e.motion, m.motion);
+        assert_eq!(e.plane, m.plane);
+        assert_eq!(e.distance, m.distance);
+        assert_eq!(e.arc_distance, m.arc_distance);
+        assert_eq!(e.feed_mode, m.feed_mode);
+        assert_eq!(e.units, m.units);
+        assert_eq!(e.ccomp, m.cutter_comp);
+        assert_eq!(e.coord.0, m.coord);
+        assert_eq!(e.path, m.path);
+        assert_eq!(e.retract, m.retract);
+        assert_eq!(e.spindle_mode, m.spindle_mode);
+        assert_eq!(e.lathe, m.lathe);
+        assert_eq!(e.spindle, m.spindle);
+        assert_eq!((e.mist, e.flood), (m.mist, m.flood));
+        assert_eq!((e.feed, e.speed), (m.feed, m.speed));
+        assert_eq!(e.tool_offset, m.tool_length.is_some());
+    }
+
     fn run(lines: &[&str]) -> (Machine, Vec<Motion>) {
         let s = Settings {
             zero_start: true,
