@@ -7,6 +7,7 @@ use std::fs::File;
 use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};
 
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Mutex, OnceLock};
 
 use super::locate::{Block, LineCol, LineSamples, block_pieces, file_pieces, memory_pieces};
@@ -97,6 +98,10 @@ pub struct SourceFile {
     modified: Option<std::time::SystemTime>,
     /// Sampled line starts, made on the first diagnostic that needs them.
     samples: OnceLock<LineSamples>,
+    /// Bytes read from the start to locate offsets before the samples were
+    /// made: while that stays below the file's length, reading up to an
+    /// offset costs less than sampling the file.
+    scanned: AtomicU64,
     /// The block of a streamed file read last for a diagnostic (diagnostics
     /// come mostly in file order: a million warnings read the file about
     /// once, not a piece each).
@@ -130,6 +135,7 @@ impl SourceFile {
             len,
             modified: None,
             samples: OnceLock::new(),
+            scanned: AtomicU64::new(0),
             block: Mutex::default(),
         }
     }
@@ -185,6 +191,7 @@ impl SourceFile {
             len: meta.len(),
             modified: meta.modified().ok(),
             samples: OnceLock::new(),
+            scanned: AtomicU64::new(0),
             block: Mutex::default(),
         })
     }
@@ -202,6 +209,7 @@ impl SourceFile {
             len: meta.len(),
             modified: meta.modified().ok(),
             samples: OnceLock::new(),
+            scanned: AtomicU64::new(0),
             block: Mutex::default(),
         })
     }
@@ -314,6 +322,7 @@ impl SourceFile {
             len: total,
             modified,
             samples: OnceLock::new(),
+            scanned: AtomicU64::new(0),
             block: Mutex::default(),
         })
     }
@@ -372,11 +381,31 @@ impl SourceFile {
         }
     }
 
-    /// Line, column and line text of a byte offset, for a diagnostic. A
-    /// streamed file is read once for line samples, then only from the
-    /// sample nearest the offset.
+    /// Line, column and line text of a byte offset, for a diagnostic. The
+    /// file is read from its start up to the offset while the bytes read so
+    /// add up to less than the file; after that it is read once for line
+    /// samples, then only from the sample nearest the offset.
     pub fn locate(&self, offset: u32) -> LineCol {
         let offset = u64::from(offset).min(self.len);
+        // Near the start, or for the first few diagnostics, read from the
+        // start instead of sampling the whole file.
+        let early = self.samples.get().is_none()
+            && self
+                .scanned
+                .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| {
+                    (n + offset <= self.len).then_some(n + offset)
+                })
+                .is_ok();
+        if early {
+            let none = LineSamples::default();
+            return match &self.text {
+                Text::Memory(d) => none.locate(offset, &mut memory_pieces(d)),
+                Text::Disk(f) => match self.block.lock() {
+                    Ok(mut block) => none.locate(offset, &mut block_pieces(f, &mut block)),
+                    Err(_) => none.locate(offset, &mut file_pieces(f)),
+                },
+            };
+        }
         match &self.text {
             Text::Memory(d) => {
                 let samples = self
@@ -809,6 +838,35 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    /// Offsets located by reading from the start (the first ones) and
+    /// from the samples (once that would read more than the file) give the
+    /// same lines, columns and texts as counting.
+    #[test]
+    fn located_from_the_start_or_the_samples_alike() {
+        let mut text = Vec::new();
+        for k in 0..3000 {
+            text.extend_from_slice(format!("G1 X{k} Y{}\n", k % 7).as_bytes());
+        }
+        let f = SourceFile::new("t".into(), "t".into(), text.clone());
+        let count = |offset: usize| {
+            let before = &text[..offset];
+            let line = before.iter().filter(|&&b| b == b'\n').count() as u32 + 1;
+            let start = before
+                .iter()
+                .rposition(|&b| b == b'\n')
+                .map_or(0, |p| p + 1);
+            (line, (offset - start) as u32 + 1)
+        };
+        let offsets: Vec<usize> = (0..40).map(|k| (k * 7919) % text.len()).collect();
+        for &o in &offsets {
+            let got = f.locate(o as u32);
+            assert_eq!((got.line, got.col), count(o), "offset {o}");
+        }
+        // Forty offsets read more than the file: the later ones were
+        // located from the samples.
+        assert!(f.samples.get().is_some());
+    }
+
     type Hits = (KeptHits, u32);
 
     /// The lines handed on that hold an `o`, or all with `every`.
@@ -838,6 +896,7 @@ mod tests {
             len: data.len() as u64,
             modified: None,
             samples: OnceLock::new(),
+            scanned: AtomicU64::new(0),
             block: Mutex::default(),
         }
     }
