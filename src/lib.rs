@@ -9,6 +9,7 @@
 
 #![deny(unreachable_pub)]
 
+pub mod block;
 mod check;
 mod codes;
 pub mod config;

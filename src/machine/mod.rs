@@ -1,10 +1,10 @@
-//! The machine model for what follows evaluation: typed blocks of executed
-//! lines ([`block`]), the state they put the machine in ([`model`]), the
-//! motion they make ([`motion`]), and the machine's axes: travel limits,
-//! velocities and accelerations ([`axes`]).
+//! The machine model for what follows evaluation: the state executed lines
+//! (typed [`block`]s) put the machine in ([`model`]), the motion they make
+//! ([`motion`]), and the machine's axes: travel limits, velocities and
+//! accelerations ([`axes`]).
 
 pub(crate) mod axes;
-pub mod block;
+pub use crate::block;
 pub(crate) mod model;
 pub(crate) mod motion;
 

@@ -15,11 +15,12 @@ use crate::eval::Settings;
 use crate::eval::tools::ToolData;
 use crate::fx_hasher::FxMap;
 
-use super::block::{
-    ArcDistance, Block, CutterComp, Distance, FeedMode as BFeedMode, LatheMode, MCode, MotionMode,
-    NonModal, PathMode, Plane as BPlane, Retract, SpindleMode, ToolLength, Units,
-};
 use super::motion::{Feed, FeedMode, Motion, MoveKind, Plane, Point, SpindleDir};
+use crate::block::{
+    AXIS_LETTERS, ArcDistance, Block, CutterComp, Distance, FeedMode as BFeedMode, LatheMode,
+    MCode, MotionMode, NonModal, PathMode, Plane as BPlane, Retract, SpindleMode, ToolLength,
+    Units,
+};
 
 const MM_PER_INCH: f64 = 25.4;
 
@@ -322,6 +323,53 @@ impl Machine {
 
     /// Applies one decoded block in LinuxCNC's order of execution.
     pub fn apply(&mut self, b: &Block) {
+        if !self.record && b.is_plain_move() && self.plain_motion(b.motion) {
+            self.apply_plain_move(b);
+            return;
+        }
+        self.apply_any(b);
+    }
+
+    /// Whether the motion of a block whose motion code is `m` is G0–G3.
+    fn plain_motion(&self, m: Option<MotionMode>) -> bool {
+        matches!(
+            m.unwrap_or(self.modes.motion),
+            MotionMode::Rapid | MotionMode::Linear | MotionMode::ArcCw | MotionMode::ArcCcw
+        )
+    }
+
+    /// [`Machine::apply`] for a block of G0–G3 (written or modal), axis
+    /// words, F, S and arc words alone, without motion events: only the
+    /// steps of [`Machine::apply_any`] such a block reaches (a test runs
+    /// both on random blocks).
+    fn apply_plain_move(&mut self, b: &Block) {
+        if let Some(f) = b.value(b'F') {
+            self.modes.feed = f;
+        }
+        if let Some(s) = b.value(b'S') {
+            // The spindle event is a motion event: none are recorded.
+            self.modes.speed = s;
+        }
+        if let Some(m) = b.motion {
+            self.modes.motion = m;
+        }
+        if !b.has_axis() {
+            return;
+        }
+        if self.rotated {
+            self.pos = UNKNOWN;
+            return;
+        }
+        let s = self.scale();
+        for (a, &l) in AXIS_LETTERS.iter().enumerate() {
+            if let Some(v) = b.value(l) {
+                self.pos[a] = self.axis_target(a, v, s);
+            }
+        }
+    }
+
+    /// Applies any decoded block in LinuxCNC's order of execution.
+    fn apply_any(&mut self, b: &Block) {
         if b.percent || self.ended && b.words.is_empty() {
             return;
         }
@@ -499,16 +547,7 @@ impl Machine {
         let mut t = self.pos;
         for a in 0..9 {
             if let Some(v) = axes[a] {
-                let v = if a == 0 && self.modes.lathe == LatheMode::Diameter {
-                    v / 2.0
-                } else {
-                    v
-                };
-                let rot = if (3..=5).contains(&a) { 1.0 } else { s };
-                t[a] = match self.modes.distance {
-                    Distance::Absolute => Some(v * rot),
-                    Distance::Incremental => self.pos[a].map(|p| p + v * rot),
-                };
+                t[a] = self.axis_target(a, v, s);
             }
         }
         // Polar words: @ radius, ^ angle (XY plane).
@@ -530,6 +569,22 @@ impl Machine {
             }
         }
         t
+    }
+
+    /// Where axis `a` goes for its word `v` (program units; `s` mm per
+    /// program unit), by the distance and diameter modes.
+    #[inline]
+    fn axis_target(&self, a: usize, v: f64, s: f64) -> Option<f64> {
+        let v = if a == 0 && self.modes.lathe == LatheMode::Diameter {
+            v / 2.0
+        } else {
+            v
+        };
+        let rot = if (3..=5).contains(&a) { 1.0 } else { s };
+        match self.modes.distance {
+            Distance::Absolute => Some(v * rot),
+            Distance::Incremental => self.pos[a].map(|p| p + v * rot),
+        }
     }
 
     fn non_modal(&mut self, b: &Block, n: NonModal) -> bool {
@@ -889,30 +944,6 @@ fn radius_center(a: [f64; 2], b: [f64; 2], r: f64, ccw: bool) -> [f64; 2] {
 mod tests {
     use super::*;
 
-    /// The machine model and the evaluator start in the same modal state
-    /// (LinuxCNC's power-on state), group by group, in the same types.
-    #[test]
-    fn power_on_modes_are_the_evaluators() {
-        let e = crate::eval::state::Modal::default();
-        let m = Modes::default();
-        assert_eq!(e.motion, m.motion);
-        assert_eq!(e.plane, m.plane);
-        assert_eq!(e.distance, m.distance);
-        assert_eq!(e.arc_distance, m.arc_distance);
-        assert_eq!(e.feed_mode, m.feed_mode);
-        assert_eq!(e.units, m.units);
-        assert_eq!(e.ccomp, m.cutter_comp);
-        assert_eq!(e.coord.0, m.coord);
-        assert_eq!(e.path, m.path);
-        assert_eq!(e.retract, m.retract);
-        assert_eq!(e.spindle_mode, m.spindle_mode);
-        assert_eq!(e.lathe, m.lathe);
-        assert_eq!(e.spindle, m.spindle);
-        assert_eq!((e.mist, e.flood), (m.mist, m.flood));
-        assert_eq!((e.feed, e.speed), (m.feed, m.speed));
-        assert_eq!(e.tool_offset, m.tool_length.is_some());
-    }
-
     fn run(lines: &[&str]) -> (Machine, Vec<Motion>) {
         let s = Settings {
             zero_start: true,
@@ -925,6 +956,57 @@ mod tests {
             ev.extend(m.take_events());
         }
         (m, ev)
+    }
+
+    proptest::proptest! {
+        /// The short way for plain moves leaves the machine as the whole
+        /// of `apply` does, line after line, from random lines of moves,
+        /// modes, offsets and their near misses.
+        #[test]
+        fn plain_moves_apply_as_any_block(
+            lines in proptest::collection::vec(
+                proptest::collection::vec(
+                    proptest::sample::select(vec![
+                        "G0", "G1", "G2", "G3", "G7", "G8", "G17", "G18", "G20", "G21",
+                        "G90", "G91", "G91.1", "G80", "G81", "G92", "G54", "G55", "G43",
+                        "G10 L2 P2", "M3", "M5", "T2", "S100", "F50", "R2",
+                    ]),
+                    0..3,
+                ),
+                1..12,
+            ),
+            values in proptest::collection::vec((0usize..10, -50.0f64..50.0), 12),
+            zero in proptest::bool::ANY,
+            rotated in proptest::bool::ANY,
+        ) {
+            let s = Settings {
+                zero_start: zero,
+                ..Settings::default()
+            };
+            let mut fast = Machine::new(&s).without_events();
+            fast.rotated = rotated;
+            let mut slow = fast.clone();
+            for (k, codes) in lines.iter().enumerate() {
+                let (axis, v) = values[k % values.len()];
+                let mut line = codes.join(" ");
+                // Zero, one or two axis words, and arc words.
+                for l in ["X", "Y", "Z", "A", "I", "J", "R", "X Y", "Z I J", ""][..=axis]
+                    .iter()
+                    .rev()
+                    .take(2)
+                {
+                    for w in l.split_whitespace() {
+                        line.push_str(&format!(" {w}{v:.3}"));
+                    }
+                }
+                let Ok(b) = Block::decode(line.as_bytes()) else {
+                    continue;
+                };
+                fast.apply(&b);
+                slow.apply_any(&b);
+                proptest::prop_assert_eq!(format!("{fast:?}"), format!("{slow:?}"), "{}", line);
+            }
+        }
     }
 
     #[test]

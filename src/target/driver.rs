@@ -7,15 +7,15 @@
 use std::collections::HashSet;
 use std::sync::Arc;
 
+use crate::block::{
+    ArcDistance, Block, CommentKind, CutterComp, DecodeError, Distance, FeedMode, GCode, LatheMode,
+    MCode, MotionMode, NonModal, PathMode, Plane, SpindleMode, ToolLength, Units, Word, WordKind,
+};
 use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};
 use crate::emit::Output;
 use crate::eval::{LineConsumer, Origin, Settings};
 use crate::geom::comp::{Arc as CompArc, ArcCenter, Comp, Out, Side, Tolerances};
 use crate::machine::Machine;
-use crate::machine::block::{
-    ArcDistance, Block, CommentKind, CutterComp, DecodeError, Distance, FeedMode, GCode, LatheMode,
-    MCode, MotionMode, NonModal, PathMode, Plane, SpindleMode, ToolLength, Units, Word, WordKind,
-};
 use crate::machine::motion::SpindleDir;
 use crate::program::SourceFile;
 
@@ -28,7 +28,7 @@ mod plain;
 
 /// A problem found on a line: the word it is about and what it is.
 struct Problem {
-    span: Option<crate::machine::block::Span>,
+    span: Option<crate::block::Span>,
     kind: ErrorKind,
 }
 
@@ -60,7 +60,8 @@ pub struct Lowering {
     opts: TargetOptions,
     /// The machine as LinuxCNC runs the program.
     m: Machine,
-    block: Block,
+    /// Scratch for decoding (boxed: taken out and put back each line).
+    block: Option<Box<Block>>,
     w: LineWriter,
     /// Errors kept in check mode.
     errors: Vec<Diagnostic>,
@@ -154,7 +155,7 @@ impl Lowering {
             p,
             opts,
             m: m.without_events(),
-            block: Block::default(),
+            block: None,
             w: LineWriter::new(p),
             errors: Vec::new(),
             warnings: Vec::new(),
@@ -216,7 +217,7 @@ impl Lowering {
 /// The site of `span` of a flat line from `origin`: exact on a line written
 /// as read; otherwise the same-lettered word of the source line (by its
 /// rank), or the whole line.
-fn site_of(origin: &Origin<'_>, text: &[u8], span: Option<crate::machine::block::Span>) -> Site {
+fn site_of(origin: &Origin<'_>, text: &[u8], span: Option<crate::block::Span>) -> Site {
     let file: &Arc<SourceFile> = origin.file;
     let start = origin.line_start;
     let Some(span) = span else {
@@ -297,23 +298,31 @@ impl LineConsumer for Lowering {
         if self.p.passthrough {
             return out.line(text).map_err(io_error);
         }
-        let mut block = std::mem::take(&mut self.block);
+        let mut block = self.block.take().unwrap_or_default();
         let problems = match block.decode_into(text) {
-            Ok(()) if self.plain && self.is_plain(&block) => self.write_plain(&block, text, out),
-            Ok(()) => self.lower_block(&block, text, origin, out),
+            Ok(()) => self.run_block(&block, text, origin, out),
             Err(e) => Ok(vec![decode_problem(e)]),
         };
-        self.block = block;
-        let problems = problems?;
-        for p in problems {
-            let mut d = Diagnostic::error(p.kind, Some(site_of(origin, text, p.span)));
-            d.stack = (origin.stack)();
-            if !self.opts.check {
-                return Err(d);
-            }
-            self.errors.push(*d);
+        self.block = Some(block);
+        self.report(problems?, text, origin)
+    }
+
+    fn reads_blocks(&self) -> bool {
+        !self.p.passthrough
+    }
+
+    fn decoded_line(
+        &mut self,
+        text: &[u8],
+        block: &Block,
+        origin: &Origin<'_>,
+        out: &mut Output,
+    ) -> Result<(), Error> {
+        if self.p.passthrough {
+            return out.line(text).map_err(io_error);
         }
-        Ok(())
+        let problems = self.run_block(block, text, origin, out)?;
+        self.report(problems, text, origin)
     }
 
     fn computes_comp(&self) -> bool {
@@ -338,6 +347,43 @@ fn io_error(e: std::io::Error) -> Error {
 }
 
 impl Lowering {
+    /// Runs and writes the decoded line `b` (the short way when it is
+    /// plain); the problems found.
+    fn run_block(
+        &mut self,
+        b: &Block,
+        text: &[u8],
+        origin: &Origin<'_>,
+        out: &mut Output,
+    ) -> Result<Vec<Problem>, Error> {
+        if self.plain && self.is_plain(b) {
+            self.write_plain(b, text, out)
+        } else {
+            self.lower_block(b, text, origin, out)
+        }
+    }
+
+    /// Stops the run at the first problem, or in check mode keeps them all.
+    fn report(
+        &mut self,
+        problems: Vec<Problem>,
+        text: &[u8],
+        origin: &Origin<'_>,
+    ) -> Result<(), Error> {
+        if problems.is_empty() {
+            return Ok(());
+        }
+        for p in problems {
+            let mut d = Diagnostic::error(p.kind, Some(site_of(origin, text, p.span)));
+            d.stack = (origin.stack)();
+            if !self.opts.check {
+                return Err(d);
+            }
+            self.errors.push(*d);
+        }
+        Ok(())
+    }
+
     /// Decides every word of `b`, runs it on the machine model and writes
     /// the target's lines. Returns the problems (the line is not written
     /// when there are any).
@@ -883,7 +929,7 @@ impl Lowering {
         let _ = m.take_events();
         // The target's own axes must be known and unmoved; the others
         // cannot be written for it anyway.
-        let same = crate::machine::block::AXIS_LETTERS
+        let same = crate::block::AXIS_LETTERS
             .iter()
             .zip(before.pos.iter().zip(m.pos.iter()))
             .filter(|(l, _)| self.p.has_axis(**l))
@@ -1233,7 +1279,7 @@ impl Lowering {
 
     fn value_fate(&mut self, b: &Block, w: &Word, problems: &mut Vec<Problem>) -> Fate {
         let l = w.letter;
-        let axis = crate::machine::block::AXIS_LETTERS.contains(&l);
+        let axis = crate::block::AXIS_LETTERS.contains(&l);
         if axis && !self.p.has_axis(l) {
             problems.push(Problem {
                 span: Some(w.span),
@@ -1801,8 +1847,8 @@ impl Lowering {
                 Units::Inch => lower::Units::Inch,
             },
             retract: match m.retract {
-                crate::machine::block::Retract::Initial => lower::Retract::OldZ,
-                crate::machine::block::Retract::R => lower::Retract::RPlane,
+                crate::block::Retract::Initial => lower::Retract::OldZ,
+                crate::block::Retract::R => lower::Retract::RPlane,
             },
             spindle: match m.spindle {
                 SpindleDir::Off => lower::Spindle::Off,
@@ -1824,7 +1870,7 @@ impl Lowering {
     }
     fn comp_refusal(
         &self,
-        span: Option<crate::machine::block::Span>,
+        span: Option<crate::block::Span>,
         code: &'static str,
         message: &str,
     ) -> Problem {
@@ -2053,7 +2099,7 @@ impl Lowering {
         &mut self,
         motion: MotionMode,
         other_axis_use: bool,
-        motion_span: Option<crate::machine::block::Span>,
+        motion_span: Option<crate::block::Span>,
     ) -> Result<PlainLine, Problem> {
         if other_axis_use || !matches!(motion, MotionMode::Rapid | MotionMode::Linear) {
             return Err(self.comp_refusal(
@@ -2091,7 +2137,7 @@ impl Lowering {
 
     fn comp_problem(
         &self,
-        span: Option<crate::machine::block::Span>,
+        span: Option<crate::block::Span>,
         error: crate::geom::comp::CompError,
     ) -> Problem {
         Problem {
@@ -2107,7 +2153,7 @@ impl Lowering {
         c: &mut CompPath,
         released: &[Out<MoveTag>],
         lines: &mut Vec<PlainLine>,
-        span: Option<crate::machine::block::Span>,
+        span: Option<crate::block::Span>,
     ) -> Result<[f64; 3], Problem> {
         let (out, at) = lower::comp::lower_comp_moves(
             c.plane,
@@ -2147,7 +2193,7 @@ impl Lowering {
         b: &Block,
         before: &Machine,
         cc: CutterComp,
-        span: Option<crate::machine::block::Span>,
+        span: Option<crate::block::Span>,
     ) -> Result<(), Problem> {
         let need = |s: &Self, value: &str, option: &str| Problem {
             span,
@@ -2256,7 +2302,7 @@ impl Lowering {
         motion: MotionMode,
         moves: bool,
         other_axis_use: bool,
-        span: Option<crate::machine::block::Span>,
+        span: Option<crate::block::Span>,
         lines: &mut Vec<PlainLine>,
     ) -> Result<bool, Problem> {
         let arc = matches!(motion, MotionMode::ArcCw | MotionMode::ArcCcw);
@@ -2364,7 +2410,7 @@ fn words_line(l: &[(u8, f64)]) -> PlainLine {
     }
 }
 
-fn g_span(b: &Block, a: u16, c: u16) -> Option<crate::machine::block::Span> {
+fn g_span(b: &Block, a: u16, c: u16) -> Option<crate::block::Span> {
     b.words
         .iter()
         .find(|w| matches!(w.kind, WordKind::G(_)) && (code10(w) == a || code10(w) == c))

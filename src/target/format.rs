@@ -2,8 +2,8 @@
 //! with an exponent, comments stripped or cleaned, every line measured as
 //! the firmware measures it and checked for bytes it acts on in real time.
 
+use crate::block::{Block, CommentKind, Shape, Units, Word, WordKind};
 use crate::diag::ErrorKind;
-use crate::machine::block::{Block, CommentKind, Shape, Units, Word, WordKind};
 
 use super::lower::PlainLine;
 use super::profile::{Comments, LineCount, Profile};
@@ -96,6 +96,46 @@ impl LineWriter {
         } else {
             self.word(w.letter, w.value, w.kind);
         }
+    }
+
+    /// Whether the line `text`, whose decoded block is `b`, is already what
+    /// [`LineWriter::begin`], [`LineWriter::word_of`] for each word,
+    /// [`LineWriter::comments`] and [`LineWriter::finished_line`] would put
+    /// together under `units`: its words alone, each written as is, in
+    /// upper case, one blank apart, and short enough for any count of the
+    /// line limit. Such a line is written by copying it.
+    pub(super) fn is_written_as_is(&self, b: &Block, text: &[u8], units: Units) -> bool {
+        if b.line_number.is_some() || !b.comments.is_empty() || b.block_delete || b.percent {
+            return false;
+        }
+        if self
+            .p
+            .line_limit
+            .is_some_and(|(limit, _)| text.len() >= limit)
+        {
+            return false;
+        }
+        let decimals = match units {
+            Units::Mm => self.p.decimals_mm,
+            Units::Inch => self.p.decimals_inch,
+        };
+        // The next word starts here.
+        let mut at = 0;
+        for w in &b.words {
+            let (start, end) = (w.span.start as usize, w.span.end as usize);
+            if start != at || text.get(start) != Some(&w.letter) {
+                return false;
+            }
+            let code = matches!(w.kind, WordKind::G(_) | WordKind::M(_));
+            if !written_as_is(w.shape, code, decimals, self.p.max_digits) {
+                return false;
+            }
+            at = end + 1;
+            if end < text.len() && text[end] != b' ' {
+                return false;
+            }
+        }
+        at == text.len() + 1
     }
 
     /// Appends the comments of `b` (read from `text`) the target keeps.

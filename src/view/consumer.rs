@@ -6,10 +6,10 @@ use std::io::Write;
 
 use super::run::Observer;
 use super::source_map::{Locator, Place, SourceMap, annotation};
+use crate::block::Block;
 use crate::diag::{Diagnostic, Error, ErrorKind, Site};
 use crate::emit::Output;
 use crate::eval::{LineConsumer, Origin, Settings};
-use crate::machine::block::Block;
 use crate::machine::model::Machine;
 
 /// Where the source map goes.

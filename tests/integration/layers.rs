@@ -8,6 +8,7 @@ const ORDER: &[&str] = &[
     "source",
     "number",
     "codes",
+    "block",
     "geom",
     "fx_hasher",
     "diag",

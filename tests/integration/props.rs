@@ -1007,7 +1007,7 @@ fn target_line() -> impl Strategy<Value = String> {
 /// only the profile's codes and words, within its line buffer as the
 /// firmware counts it, no byte it acts on in real time, no exponent.
 fn target_output_fits(name: &str, lines: &[String]) -> Result<(), TestCaseError> {
-    use ngcflat::machine::block::{Block, WordKind};
+    use ngcflat::block::{Block, WordKind};
     use ngcflat::target::{LineCount, TargetOptions, find, significant_len};
     let program = format!("{}\nM2\n", lines.join("\n"));
     let profile = find(name).expect("profile");

@@ -7,6 +7,7 @@
 
 use std::sync::Arc;
 
+use crate::block::Block;
 use crate::diag::{Diagnostic, Error, Site};
 use crate::emit::Output;
 use crate::program::SourceFile;
@@ -32,6 +33,26 @@ pub trait LineConsumer {
     /// One output line (no terminator). An error stops the run, unless the
     /// consumer keeps it to report at the end (check mode).
     fn line(&mut self, text: &[u8], origin: &Origin<'_>, out: &mut Output) -> Result<(), Error>;
+
+    /// Whether the consumer reads lines as typed blocks: the straight-line
+    /// loop then decodes its lines ahead, on its second thread, and hands
+    /// them over through [`LineConsumer::decoded_line`].
+    fn reads_blocks(&self) -> bool {
+        false
+    }
+
+    /// One output line and `block`, its text decoded (no error): what
+    /// [`LineConsumer::line`] does with the line, without decoding it again.
+    fn decoded_line(
+        &mut self,
+        text: &[u8],
+        block: &Block,
+        origin: &Origin<'_>,
+        out: &mut Output,
+    ) -> Result<(), Error> {
+        let _ = block;
+        self.line(text, origin, out)
+    }
 
     /// The program ended; returns diagnostics gathered on the way (warnings,
     /// and in check mode errors kept to report them all).
@@ -90,6 +111,31 @@ impl Interp<'_> {
         if let Some(c) = self.out.consumer.as_mut() {
             c.comp_position(p);
         }
+    }
+
+    /// Hands a line and its decoded block to the consumer (there is one).
+    #[cold]
+    pub(in crate::eval) fn consume_decoded(
+        &mut self,
+        file: &Arc<SourceFile>,
+        line_start: u32,
+        text: &[u8],
+        block: &Block,
+    ) -> Result<(), Error> {
+        let Some(mut c) = self.out.consumer.take() else {
+            return Ok(());
+        };
+        let frames = &self.flow.frames;
+        let stack = || crate::eval::flow::stack_of(frames);
+        let origin = Origin {
+            file,
+            line_start,
+            verbatim: true,
+            stack: &stack,
+        };
+        let r = c.decoded_line(text, block, &origin, &mut self.out.output);
+        self.out.consumer = Some(c);
+        r.map_err(|e| self.placed(e, file, line_start))
     }
 
     /// Hands each line of `bytes` (the file's bytes from offset `start`,

@@ -13,7 +13,6 @@ use crate::program::FileIndex;
 use crate::eval::Interp;
 use crate::eval::expr::message::{is_stable, stabilize};
 use crate::eval::expr::params::is_read_only;
-use crate::eval::read::validate::GCodes;
 
 /// Evaluated words of the line: (letter, value).
 pub(crate) type Words = Vec<(u8, f64)>;
@@ -133,7 +132,6 @@ impl Interp<'_> {
             }
         }
         // The reference checks the block before acting on it.
-        let mut codes = GCodes::NONE;
         if !words.is_empty() {
             match crate::eval::read::validate::check_block(
                 words,
@@ -141,7 +139,6 @@ impl Interp<'_> {
                 &self.mach.nurbs,
                 &self.mach.cycle,
                 self.s.user_m,
-                &mut codes,
             ) {
                 Err((k, at)) => {
                     let span = at
@@ -190,7 +187,7 @@ impl Interp<'_> {
             self.write_line(file, start, raw, repl)?;
         }
         // 6. State.
-        let ends = self.apply_words(file, start, words, &codes, m99)?;
+        let ends = self.apply_words(file, start, words, m99)?;
         for &(op, span) in context_ops.iter() {
             self.context_op(op, file, start, span)?;
         }
@@ -381,14 +378,12 @@ impl Interp<'_> {
             // Checked and applied: a plain move.
             return self.write_line(file, start, raw, repl);
         }
-        let mut codes = GCodes::NONE;
         match crate::eval::read::validate::check_block(
             words,
             &self.mach.modal,
             &self.mach.nurbs,
             &self.mach.cycle,
             self.s.user_m,
-            &mut codes,
         ) {
             Err((k, at)) => {
                 let span = match at.and_then(|i| items.get(i)) {
@@ -401,7 +396,7 @@ impl Interp<'_> {
             Ok(false) => {}
         }
         self.write_line(file, start, raw, repl)?;
-        if self.apply_words(file, start, words, &codes, false)? {
+        if self.apply_words(file, start, words, false)? {
             self.end_program()?;
         }
         Ok(())
@@ -518,14 +513,12 @@ impl Interp<'_> {
             words.push((w.letter, w.value));
         }
         let r = (|| {
-            let mut codes = GCodes::NONE;
             match crate::eval::read::validate::check_block(
                 &words,
                 &self.mach.modal,
                 &self.mach.nurbs,
                 &self.mach.cycle,
                 self.s.user_m,
-                &mut codes,
             ) {
                 Err((k, at)) => {
                     let span = at
@@ -542,7 +535,7 @@ impl Interp<'_> {
                 .rposition(|b| !b.is_ascii_whitespace())
                 .map_or(0, |p| p + 1);
             self.emit_source(file, start, &raw[..trimmed])?;
-            if self.apply_words(file, start, &words, &codes, false)? {
+            if self.apply_words(file, start, &words, false)? {
                 self.end_program()?;
             }
             Ok(())

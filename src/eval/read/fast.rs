@@ -4,6 +4,8 @@
 //! the grammar. A property test checks this scanner against the grammar on
 //! every line it accepts.
 
+use crate::number::POW10;
+
 /// A word of a plain line.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct FastWord {
@@ -12,11 +14,6 @@ pub(crate) struct FastWord {
     pub start: u16,
     pub end: u16,
 }
-
-pub(in crate::eval) const POW10: [f64; 23] = [
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
-    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
-];
 
 /// Parses `[+-]digits[.digits]` exactly as `str::parse::<f64>` would.
 pub(crate) fn parse_decimal(t: &[u8]) -> Option<f64> {

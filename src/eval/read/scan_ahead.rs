@@ -10,10 +10,16 @@
 //! still reading is read again in place. The other thread, once far enough
 //! ahead, sleeps on a condition variable until the loop moves on; nothing
 //! spins.
+//!
+//! When a consumer reads the output as typed blocks (a target controller),
+//! each chunk's lines are also decoded into [`Block`]s where the chunk is
+//! read, so that decoding, which depends on a line's text alone, is done on
+//! the second core too; the consumer gets the same block it would decode.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Condvar, Mutex};
 
+use crate::block::Block;
 use crate::eval::read::straight::{Plain, read_line};
 
 /// Chunks read ahead of the one being applied, at most.
@@ -24,8 +30,9 @@ const AHEAD: usize = 4;
 pub(super) enum Read<'p> {
     /// An empty line (a newline only).
     Blank,
-    /// A plain line.
-    Line(&'p Plain),
+    /// A plain line, and its text decoded when the source decodes lines
+    /// and could.
+    Line(&'p Plain, Option<&'p Block>),
     /// Not a plain line (or the end of the buffer): the run ends here.
     Stop,
     /// The source has no more lines for this run; another one goes on.
@@ -55,7 +62,7 @@ impl Lines for InPlace<'_> {
         } else if self.buf.get(i) == Some(&b'\n') {
             Read::Blank
         } else if read_line(self.buf, i, &mut self.line, self.comments) {
-            Read::Line(&self.line)
+            Read::Line(&self.line, None)
         } else {
             Read::Stop
         }
@@ -68,6 +75,15 @@ enum Rec {
     Blank,
     Line(Plain),
     Stop,
+}
+
+/// The lines of a chunk read ahead, and with `decode` their blocks: the
+/// block of `recs[k]` is `blocks[k]` when `decoded[k]`.
+#[derive(Default)]
+struct Chunk {
+    recs: Vec<Rec>,
+    blocks: Vec<Block>,
+    decoded: Vec<bool>,
 }
 
 /// Chunk boundaries: line starts about `size` bytes apart, from the line
@@ -93,6 +109,8 @@ pub(super) fn cut(buf: &[u8], from: usize, size: usize) -> Vec<usize> {
 pub(super) struct Shared<'b> {
     buf: &'b [u8],
     comments: bool,
+    /// Decode each plain line into a block too.
+    decode: bool,
     cuts: Vec<usize>,
     /// Next chunk to claim.
     next: AtomicUsize,
@@ -100,9 +118,12 @@ pub(super) struct Shared<'b> {
     applied: AtomicUsize,
     /// The loop is done: stop reading.
     done: AtomicBool,
-    slots: Vec<Mutex<Option<Vec<Rec>>>>,
-    /// Spent chunk vectors, for reuse.
-    pool: Mutex<Vec<Vec<Rec>>>,
+    /// The second thread has stopped (also if it failed): the loop waits
+    /// for no chunk it claimed.
+    helper_gone: AtomicBool,
+    slots: Vec<Mutex<Option<Chunk>>>,
+    /// Spent chunks, for reuse (their blocks keep their room for words).
+    pool: Mutex<Vec<Chunk>>,
     /// Counts changes a waiting thread may be waiting for (a chunk stored,
     /// the loop moving to the next chunk, the loop done).
     changes: Mutex<u64>,
@@ -110,17 +131,26 @@ pub(super) struct Shared<'b> {
 }
 
 impl<'b> Shared<'b> {
-    /// Chunks of `buf` from the line start `from` on.
-    pub(super) fn new(buf: &'b [u8], from: usize, comments: bool, chunk: usize) -> Shared<'b> {
+    /// Chunks of `buf` from the line start `from` on; `decode`: plain lines
+    /// are decoded into blocks as well.
+    pub(super) fn new(
+        buf: &'b [u8],
+        from: usize,
+        comments: bool,
+        decode: bool,
+        chunk: usize,
+    ) -> Shared<'b> {
         let cuts = cut(buf, from, chunk);
         let n = cuts.len() - 1;
         Shared {
             buf,
             comments,
+            decode,
             cuts,
             next: AtomicUsize::new(0),
             applied: AtomicUsize::new(0),
             done: AtomicBool::new(false),
+            helper_gone: AtomicBool::new(false),
             slots: (0..n).map(|_| Mutex::new(None)).collect(),
             pool: Mutex::new(Vec::new()),
             changes: Mutex::new(0),
@@ -159,14 +189,16 @@ impl<'b> Shared<'b> {
     }
 
     /// Reads the lines of chunk `c`, up to the first one that is not plain.
-    fn read_chunk(&self, c: usize) -> Vec<Rec> {
-        let mut v = self
+    fn read_chunk(&self, c: usize) -> Chunk {
+        let mut chunk = self
             .pool
             .lock()
             .ok()
             .and_then(|mut p| p.pop())
             .unwrap_or_default();
+        let v = &mut chunk.recs;
         v.clear();
+        chunk.decoded.clear();
         let (mut i, end) = (self.cuts[c], self.cuts[c + 1]);
         while i < end {
             if self.buf[i] == b'\n' {
@@ -181,21 +213,31 @@ impl<'b> Shared<'b> {
             };
             if !read_line(self.buf, i, p, self.comments) {
                 *v.last_mut().expect("pushed") = Rec::Stop;
-                return v;
+                return chunk;
             }
+            let line = i..p.text_end;
             i = p.next;
+            if self.decode {
+                let k = v.len() - 1;
+                if chunk.blocks.len() <= k {
+                    chunk.blocks.resize_with(k + 1, Block::default);
+                }
+                chunk.decoded.resize(k, false);
+                let ok = chunk.blocks[k].decode_into(&self.buf[line]).is_ok();
+                chunk.decoded.push(ok);
+            }
         }
-        v
+        chunk
     }
 
-    fn store(&self, c: usize, v: Vec<Rec>) {
+    fn store(&self, c: usize, v: Chunk) {
         if let Ok(mut s) = self.slots[c].lock() {
             *s = Some(v);
         }
         self.signal();
     }
 
-    fn take(&self, c: usize) -> Option<Vec<Rec>> {
+    fn take(&self, c: usize) -> Option<Chunk> {
         self.slots[c].lock().ok().and_then(|mut s| s.take())
     }
 
@@ -213,6 +255,15 @@ impl<'b> Shared<'b> {
     /// The second thread: reads chunks until all are read or the loop is
     /// done.
     pub(super) fn help(&self) {
+        /// Marks the thread gone however it ends.
+        struct Gone<'a, 'b>(&'a Shared<'b>);
+        impl Drop for Gone<'_, '_> {
+            fn drop(&mut self) {
+                self.0.helper_gone.store(true, Ordering::Release);
+                self.0.signal();
+            }
+        }
+        let _gone = Gone(self);
         loop {
             let seen = self.seen();
             if self.done.load(Ordering::Acquire)
@@ -243,7 +294,7 @@ pub(super) struct Ahead<'s, 'b> {
     shared: &'s Shared<'b>,
     /// Chunk being applied (`usize::MAX` before the first).
     chunk: usize,
-    recs: Vec<Rec>,
+    lines: Chunk,
     pos: usize,
 }
 
@@ -252,17 +303,30 @@ impl<'s, 'b> Ahead<'s, 'b> {
         Ahead {
             shared,
             chunk: usize::MAX,
-            recs: Vec::new(),
+            lines: Chunk::default(),
             pos: 0,
         }
     }
 
     /// Chunk `c`, read by whichever thread gets to it first (or by both).
-    fn obtain(&self, c: usize) -> Vec<Rec> {
+    fn obtain(&self, c: usize) -> Chunk {
         let s = self.shared;
         loop {
+            let seen = s.seen();
             if let Some(v) = s.take(c) {
                 return v;
+            }
+            // Lines that are decoded too are the larger share of the work:
+            // the loop leaves reading to the other thread while that one
+            // is at it, and sleeps until the chunk is stored (reading it
+            // here too would only do the work twice, and reading chunks
+            // further on would take the loop's time from its own work).
+            if s.decode
+                && s.next.load(Ordering::Acquire) > c
+                && !s.helper_gone.load(Ordering::Acquire)
+            {
+                s.wait(seen);
+                continue;
             }
             match s.claim() {
                 Some(k) => {
@@ -295,11 +359,16 @@ impl Lines for Ahead<'_, '_> {
     #[inline]
     fn read(&mut self, _i: usize) -> Read<'_> {
         loop {
-            if self.pos < self.recs.len() {
+            let k = self.pos;
+            if k < self.lines.recs.len() {
                 self.pos += 1;
-                return match &self.recs[self.pos - 1] {
+                let l = &self.lines;
+                return match &l.recs[k] {
                     Rec::Blank => Read::Blank,
-                    Rec::Line(q) => Read::Line(q),
+                    Rec::Line(q) => {
+                        let decoded = l.decoded.get(k) == Some(&true);
+                        Read::Line(q, decoded.then(|| &l.blocks[k]))
+                    }
                     Rec::Stop => Read::Stop,
                 };
             }
@@ -307,14 +376,14 @@ impl Lines for Ahead<'_, '_> {
             if next >= self.shared.chunks() {
                 return Read::Stop;
             }
-            let spent = std::mem::take(&mut self.recs);
+            let spent = std::mem::take(&mut self.lines);
             if let Ok(mut pool) = self.shared.pool.lock() {
                 pool.push(spent);
             }
             self.chunk = next;
             self.shared.applied.store(next, Ordering::Release);
             self.shared.signal();
-            self.recs = self.obtain(next);
+            self.lines = self.obtain(next);
             self.pos = 0;
         }
     }
@@ -356,12 +425,17 @@ mod tests {
         }
         text.push_str("M2\nG1 X1\n");
         let buf = text.as_bytes();
-        // Without a helper thread too (when none can be started).
-        for (chunk, helper) in [1, 64, 1000, 1 << 20]
-            .into_iter()
-            .flat_map(|c| [(c, true), (c, false)])
-        {
-            let shared = Shared::new(buf, 0, true, chunk);
+        // Without a helper thread too (when none can be started); with and
+        // without blocks.
+        for (chunk, helper, decode) in [1, 64, 1000, 1 << 20].into_iter().flat_map(|c| {
+            [
+                (c, true, false),
+                (c, false, false),
+                (c, true, true),
+                (c, false, true),
+            ]
+        }) {
+            let shared = Shared::new(buf, 0, true, decode, chunk);
             std::thread::scope(|s| {
                 if helper {
                     s.spawn(|| shared.help());
@@ -378,12 +452,16 @@ mod tests {
                 loop {
                     match (ahead.read(i), here.read(i)) {
                         (Read::Blank, Read::Blank) => i += 1,
-                        (Read::Line(p), Read::Line(q)) => {
+                        (Read::Line(p, block), Read::Line(q, None)) => {
                             assert_eq!((p.mask, p.next, p.text_end), (q.mask, q.next, q.text_end));
                             // Only the slots of the line's words are read.
                             for s in (0..14).filter(|s| p.mask >> s & 1 == 1) {
                                 assert_eq!(p.vals[s].to_bits(), q.vals[s].to_bits());
                             }
+                            // The block is the line's text decoded.
+                            let mut want = Block::default();
+                            want.decode_into(&buf[i..p.text_end]).expect("decodes");
+                            assert_eq!(block, decode.then_some(&want), "{chunk} {decode}");
                             i = p.next;
                         }
                         (Read::Stop, Read::Stop) => break,

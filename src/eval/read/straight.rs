@@ -10,11 +10,11 @@
 use std::rc::Rc;
 
 use crate::diag::Error;
+use crate::number::{POW10, digits_in};
 use crate::program::FileIndex;
 
 use crate::codes::{CutterComp, FeedMode, MotionMode, Plane};
 use crate::eval::Interp;
-use crate::eval::read::fast::POW10;
 use crate::eval::read::scan_ahead::{Ahead, InPlace, Lines, Read, Shared};
 
 /// Word slots: G, X, Y, Z, A, B, C, F, S (the fast set), then I, J, K, R, P
@@ -91,77 +91,12 @@ fn is_blank(c: u8) -> bool {
     matches!(c, b' ' | b'\t' | b'\r')
 }
 
-/// `b` in every byte of a `u64` (eight bytes at a time, first byte lowest).
-const fn splat(b: u8) -> u64 {
-    0x0101_0101_0101_0101 * b as u64
-}
-
-/// The low seven bits of every byte.
-const LO7: u64 = splat(0x7f);
-
-const POW10_INT: [u64; 9] = [
-    1,
-    10,
-    100,
-    1_000,
-    10_000,
-    100_000,
-    1_000_000,
-    10_000_000,
-    100_000_000,
-];
-
-/// Number of leading ASCII digits among the 8 bytes of `w` (first byte
-/// lowest).
-#[inline(always)]
-fn leading_digits(w: u64) -> u32 {
-    let x = ((w & splat(0xf0)) ^ splat(0x30))
-        | ((w & splat(0x0f)).wrapping_add(splat(0x06)) & splat(0xf0));
-    // High bit of every byte that is not a digit.
-    let non = ((x & LO7).wrapping_add(LO7) | x) & splat(0x80);
-    non.trailing_zeros() / 8
-}
-
-/// Value of the first `len` (1–8) digit bytes of `w`.
-#[inline(always)]
-fn digits_value(w: u64, len: u32) -> u64 {
-    let d = w.wrapping_sub(splat(b'0')) << (8 * (8 - len));
-    let d = (d.wrapping_mul(10).wrapping_add(d >> 8)) & 0x00ff_00ff_00ff_00ff;
-    let d = (d.wrapping_mul(100).wrapping_add(d >> 16)) & 0x0000_ffff_0000_ffff;
-    (d.wrapping_mul(10_000).wrapping_add(d >> 32)) & 0xffff_ffff
-}
-
-#[inline(always)]
-fn load8(buf: &[u8], i: usize) -> u64 {
-    u64::from_le_bytes(buf[i..i + 8].try_into().expect("8 bytes"))
-}
-
-/// Reads `digits[.digits]` at `buf[i..]` eight bytes at a time, without a
-/// branch per digit. `None` for anything unusual (long numbers, the end of
-/// the buffer); [`number_slow`] then decides.
+/// Reads `digits[.digits]` at `buf[i..]` eight bytes at a time (see
+/// [`digits_in`]); `None` for anything unusual, which [`number_slow`] then
+/// decides.
 #[inline(always)]
 fn number(buf: &[u8], i: usize) -> Option<(f64, usize)> {
-    if i + 16 > buf.len() {
-        return None;
-    }
-    let w = load8(buf, i);
-    let n1 = leading_digits(w);
-    if n1 == 8 {
-        return None;
-    }
-    let int = if n1 == 0 { 0 } else { digits_value(w, n1) };
-    let j = i + n1 as usize;
-    if buf[j] != b'.' {
-        return (n1 > 0).then_some((int as f64, j));
-    }
-    let w2 = load8(buf, j + 1);
-    let n2 = leading_digits(w2);
-    if n2 == 8 || n1 + n2 == 0 || n1 + n2 > 15 {
-        return None;
-    }
-    let frac = if n2 == 0 { 0 } else { digits_value(w2, n2) };
-    let mant = int * POW10_INT[n2 as usize] + frac;
-    Some((mant as f64 / POW10[n2 as usize], j + 1 + n2 as usize))
+    digits_in(buf, i).map(|d| (d.value(), d.end))
 }
 
 /// Reads `digits[.digits]` at `buf[i..]` a byte at a time; exact for up to
@@ -338,7 +273,8 @@ impl Interp<'_> {
         };
         let paused = self.run_lines(&at, &mut here, &mut run)?;
         if paused {
-            let shared = Shared::new(buf, run.i, comments, chunk);
+            let decode = self.out.consumer.as_ref().is_some_and(|c| c.reads_blocks());
+            let shared = Shared::new(buf, run.i, comments, decode, chunk);
             std::thread::scope(|s| {
                 // Without a second thread (none can be started) the loop
                 // reads every chunk itself.
@@ -385,7 +321,7 @@ impl Interp<'_> {
             last_start,
         } = run;
         while *lines < max_lines && self.out.lines + *emitted < self.out.budget {
-            let p = match src.read(*i) {
+            let (p, block) = match src.read(*i) {
                 Read::Pause => return Ok(true),
                 Read::Stop => break,
                 Read::Blank => {
@@ -397,7 +333,7 @@ impl Interp<'_> {
                     *lines += 1;
                     continue;
                 }
-                Read::Line(p) => p,
+                Read::Line(p, block) => (p, block),
             };
             if !self.fast_line(p) {
                 // Other words or modes: the block checks and the full
@@ -430,6 +366,13 @@ impl Interp<'_> {
                     *lines += 1;
                     break;
                 }
+            } else if let Some(block) = block {
+                // Decoded ahead for the consumer: handed over line by line.
+                *emitted += 1;
+                self.flush_input(file, base, &buf[*batch_start..*i], *batch_start)?;
+                let start = base + *i as u32;
+                self.consume_decoded(&file.file, start, &buf[*i..p.text_end], block)?;
+                *batch_start = p.next;
             } else {
                 *emitted += 1;
                 if p.text_end + 1 != p.next {

@@ -71,48 +71,17 @@ fn rough(m: MotionMode) -> bool {
 /// Checks a block. `words` are (letter, value) in line order; returns the
 /// error and the index of the word it concerns, or whether the block runs
 /// a lathe cycle (G70–G72).
-/// The block's G codes are left in `codes` for the state update when the
-/// full check decoded them.
 pub(crate) fn check_block(
     words: &[(u8, f64)],
     modal: &Modal,
     points: &Nurbs,
     cycle: &Cycle,
     user_m: u128,
-    codes: &mut GCodes,
 ) -> Result<bool, (ErrorKind, Option<usize>)> {
     if simple_block_ok(words, modal) {
         return Ok(false);
     }
-    full_check(words, modal, points, cycle, user_m, codes)
-}
-
-/// A block's G codes as the checks decoded them, in line order (a G80
-/// beside another motion code left out: the other one wins), for the state
-/// update to read instead of decoding the words again.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct GCodes {
-    codes: [GCode; 16],
-    len: u8,
-    /// Filled by the full check; the quick acceptance of plain moves leaves
-    /// it unfilled, and the state update decodes those lines itself when it
-    /// needs to.
-    decoded: bool,
-}
-
-impl GCodes {
-    /// None decoded yet.
-    pub(crate) const NONE: GCodes = GCodes {
-        codes: [GCode::Motion(M::CancelCycle); 16],
-        len: 0,
-        decoded: false,
-    };
-
-    /// The codes, if the checks decoded them.
-    #[inline]
-    pub(crate) fn get(&self) -> Option<&[GCode]> {
-        self.decoded.then(|| &self.codes[..self.len as usize])
-    }
+    full_check(words, modal, points, cycle, user_m)
 }
 
 /// Modal group of the user M-codes M100-M199 (one group: two on a line are
@@ -305,7 +274,6 @@ fn full_check(
     points: &Nurbs,
     cycle: &Cycle,
     user_m: u128,
-    codes: &mut GCodes,
 ) -> Result<bool, (ErrorKind, Option<usize>)> {
     // G80 may share a line with another motion code (which wins).
     const G80: GCode = GCode::Motion(M::CancelCycle);
@@ -395,11 +363,6 @@ fn full_check(
             }
         }
     }
-    for (c, g) in codes.codes.iter_mut().zip(&gbuf[..gn]) {
-        *c = g.0;
-    }
-    codes.len = gn as u8;
-    codes.decoded = true;
     let d = Decoded::new(words, modal, &gbuf[..gn], &mbuf[..mn], &has);
     check_nurbs(&d, points)?;
     check_motion_words(&d)?;
@@ -664,7 +627,7 @@ fn check_cycle(d: &Decoded<'_>, cycle: &Cycle) -> Check {
         // depth is relative to R, so it must not be positive).
         let cc = d.value(depth).unwrap_or(cycle.depth);
         let absolute = d.has_g(GCode::Distance(Distance::Absolute))
-            || (d.modal.absolute() && !d.has_g(GCode::Distance(Distance::Incremental)));
+            || (d.modal.absolute && !d.has_g(GCode::Distance(Distance::Incremental)));
         let below = if absolute { r < cc } else { cc > 0.0 };
         if below {
             return bad(BlockError::CycleRBelowDepth { axis: name }, d.has_at(b'r'));
@@ -918,7 +881,7 @@ fn check_whole_numbers(d: &Decoded<'_>) -> Check {
             return bad(BlockError::G53NeedsG0G1, Some(at));
         }
         let incremental = d.has_g(GCode::Distance(Distance::Incremental))
-            || (!d.modal.absolute() && !d.has_g(GCode::Distance(Distance::Absolute)));
+            || (!d.modal.absolute && !d.has_g(GCode::Distance(Distance::Absolute)));
         if incremental {
             return bad(BlockError::G53Incremental, Some(at));
         }

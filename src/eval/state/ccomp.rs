@@ -81,7 +81,7 @@ impl Interp<'_> {
             }
         };
         let pos = self.mach.comp_pos();
-        let tol = Tolerances::default_for(self.mach.modal.metric());
+        let tol = Tolerances::default_for(self.mach.modal.metric);
         let run = self.mach.comp.get_or_insert_with(|| {
             Box::new(CompRun {
                 comp: Comp::new(tol),
@@ -137,7 +137,7 @@ impl Interp<'_> {
             0.03937007874016
         };
         let mm = v / ext;
-        if self.mach.modal.metric() {
+        if self.mach.modal.metric {
             mm
         } else {
             mm / 25.4
@@ -170,7 +170,7 @@ impl Machine {
             self.comp_pending = run.comp.off(&mut run.out).map_err(geom)?;
             run.out.clear();
         } else {
-            run.comp = Comp::new(Tolerances::default_for(self.modal.metric()));
+            run.comp = Comp::new(Tolerances::default_for(self.modal.metric));
         }
         run.known = false;
         Ok(())
@@ -196,7 +196,7 @@ impl Machine {
         }
         let end = self.comp_pos();
         let xz = self.modal.plane == Plane::XZ;
-        let ijk_absolute = self.modal.ijk_absolute();
+        let ijk_absolute = self.modal.ijk_absolute;
         let Some(run) = self.comp.as_mut().filter(|r| r.known) else {
             return Ok(());
         };
@@ -297,7 +297,7 @@ impl Machine {
             run.out.clear();
         }
         if end {
-            run.comp = Comp::new(Tolerances::default_for(self.modal.metric()));
+            run.comp = Comp::new(Tolerances::default_for(self.modal.metric));
             run.known = false;
         }
         Ok(())

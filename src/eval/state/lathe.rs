@@ -15,7 +15,6 @@ use crate::program::{FileIndex, Window, next_line};
 
 use crate::codes::{CutterComp, GCode, MotionMode, Plane};
 use crate::eval::flow::{FrameKind, SubRec};
-use crate::eval::read::validate::GCodes;
 use crate::eval::{Interp, file_key, read_error};
 
 /// A cycle whose contour subroutine is running.
@@ -98,7 +97,7 @@ impl Interp<'_> {
                 text.push_str(&number_string(v, self.s.precision));
             }
             self.emit_raw(text.as_bytes())?;
-            ends = self.apply_words(file, start, &others, &GCodes::NONE, false)?;
+            ends = self.apply_words(file, start, &others, false)?;
         }
         let Some(q) = word(b'q') else {
             return Err(self.lathe_err(LatheError::NoQ { code: name }, file, start, len));
@@ -130,7 +129,7 @@ impl Interp<'_> {
             Some([a, b, _]) => (b, a),
             None => (cx, cz),
         };
-        if self.mach.modal.absolute() {
+        if self.mach.modal.absolute {
             x = word(b'x').unwrap_or(x);
             z = word(b'z').unwrap_or(z);
         } else {
@@ -160,8 +159,8 @@ impl Interp<'_> {
             point: begin,
             moved: false,
             motion: self.mach.modal.motion,
-            absolute: self.mach.modal.absolute(),
-            ijk_absolute: self.mach.modal.ijk_absolute(),
+            absolute: self.mach.modal.absolute,
+            ijk_absolute: self.mach.modal.ijk_absolute,
             at: (self.mach.pos.axes[0].clone(), self.mach.pos.axes[2].clone()),
         }));
         Ok(())
@@ -336,7 +335,7 @@ impl Interp<'_> {
         let len = line_len(file, start);
         let bad = |s: &Self, k: LatheError| s.lathe_err(k, file, start, len);
         let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
-        let diameter = self.mach.modal.lathe_diameter();
+        let diameter = self.mach.modal.lathe_diameter;
         let Some(run) = self.mach.lathe.as_deref() else {
             return Ok(());
         };
@@ -511,16 +510,16 @@ impl Interp<'_> {
             Move::Feed(e) => (1.0, e, None),
             Move::Arc { ccw, center, end } => (if ccw { 3.0 } else { 2.0 }, end, Some(center)),
         };
-        let (xw, zw) = if self.mach.modal.absolute() {
+        let (xw, zw) = if self.mach.modal.absolute {
             (end.im, end.re)
-        } else if self.mach.modal.lathe_diameter() {
+        } else if self.mach.modal.lathe_diameter {
             (end.im - 2.0 * cx, end.re - cz)
         } else {
             (end.im - cx, end.re - cz)
         };
         let mut words = vec![(b'g', g), (b'x', xw), (b'z', zw)];
         if let Some(c) = center {
-            if self.mach.modal.ijk_absolute() {
+            if self.mach.modal.ijk_absolute {
                 words.push((b'i', c.im));
                 words.push((b'k', c.re));
             } else {
@@ -528,14 +527,12 @@ impl Interp<'_> {
                 words.push((b'k', c.re - cz));
             }
         }
-        let mut codes = GCodes::NONE;
         if let Err((k, _)) = crate::eval::read::validate::check_block(
             &words,
             &self.mach.modal,
             &self.mach.nurbs,
             &self.mach.cycle,
             self.s.user_m,
-            &mut codes,
         ) {
             return Err(self.error(k, file, start, start + len));
         }
@@ -548,7 +545,7 @@ impl Interp<'_> {
             text.push_str(&number_string(v, self.s.precision));
         }
         self.emit_raw(text.as_bytes())?;
-        self.apply_words(file, start, &words, &codes, false)?;
+        self.apply_words(file, start, &words, false)?;
         Ok(())
     }
 }

@@ -11,10 +11,7 @@ pub(super) mod restore;
 pub mod tools;
 
 use crate::codes::SpindleDir;
-use crate::codes::{
-    ArcDistance, CoordSystem, CutterComp, Distance, FeedMode, LatheMode, MotionMode, PathMode,
-    Plane, Retract, SpindleMode, Units,
-};
+use crate::codes::{CoordSystem, CutterComp, FeedMode, MotionMode, PathMode, Plane};
 use crate::eval::Settings;
 use crate::fx_hasher::FxMap;
 
@@ -23,9 +20,9 @@ pub(crate) const AXES: [u8; 9] = *b"xyzabcuvw";
 
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Modal {
-    pub units: Units,
-    pub distance: Distance,
-    pub arc_distance: ArcDistance,
+    pub metric: bool,
+    pub absolute: bool,
+    pub ijk_absolute: bool,
     pub plane: Plane,
     pub feed_mode: FeedMode,
     pub feed: f64,
@@ -34,8 +31,10 @@ pub(crate) struct Modal {
     pub motion: MotionMode,
     pub coord: CoordSystem,
     pub tool_offset: bool,
-    pub retract: Retract,
-    pub spindle_mode: SpindleMode,
+    /// G98 (true) / G99
+    pub retract_r: bool,
+    /// G96 (css) / G97 (rpm)
+    pub css: bool,
     pub spindle: SpindleDir,
     pub mist: bool,
     pub flood: bool,
@@ -45,7 +44,7 @@ pub(crate) struct Modal {
     /// Off, Left or Right (G41.1 and G42.1 are kept as the side they
     /// compensate on, as `#<_ccomp>` reads them).
     pub ccomp: CutterComp,
-    pub lathe: LatheMode,
+    pub lathe_diameter: bool,
     pub speed_override: bool,
     pub feed_override: bool,
     pub adaptive_feed: bool,
@@ -55,9 +54,9 @@ pub(crate) struct Modal {
 impl Default for Modal {
     fn default() -> Modal {
         Modal {
-            units: Units::Mm,
-            distance: Distance::Absolute,
-            arc_distance: ArcDistance::Incremental,
+            metric: true,
+            absolute: true,
+            ijk_absolute: false,
             plane: Plane::XY,
             feed_mode: FeedMode::PerMinute,
             feed: 0.0,
@@ -65,9 +64,8 @@ impl Default for Modal {
             motion: MotionMode::CancelCycle,
             coord: CoordSystem::G54,
             tool_offset: false,
-            // LinuxCNC starts in G99 (`#<_retract_r_plane>` reads 1).
-            retract: Retract::R,
-            spindle_mode: SpindleMode::Rpm,
+            retract_r: true,
+            css: false,
             spindle: SpindleDir::Off,
             mist: false,
             flood: false,
@@ -75,7 +73,7 @@ impl Default for Modal {
             path_p: None,
             path_q: None,
             ccomp: CutterComp::Off,
-            lathe: LatheMode::Radius,
+            lathe_diameter: false,
             speed_override: true,
             feed_override: true,
             adaptive_feed: false,
@@ -85,35 +83,11 @@ impl Default for Modal {
 }
 
 impl Modal {
-    /// Millimetres (G21).
-    #[inline]
-    pub(crate) fn metric(&self) -> bool {
-        self.units == Units::Mm
-    }
-
-    /// Absolute distances (G90).
-    #[inline]
-    pub(crate) fn absolute(&self) -> bool {
-        self.distance == Distance::Absolute
-    }
-
-    /// Absolute arc centres (G90.1).
-    #[inline]
-    pub(crate) fn ijk_absolute(&self) -> bool {
-        self.arc_distance == ArcDistance::Absolute
-    }
-
-    /// X words are diameters (G7).
-    #[inline]
-    pub(crate) fn lathe_diameter(&self) -> bool {
-        self.lathe == LatheMode::Diameter
-    }
-
     /// The state after M2/M30.
     pub(crate) fn reset_at_end(&mut self) {
         self.coord = CoordSystem::G54;
         self.plane = Plane::XY;
-        self.distance = Distance::Absolute;
+        self.absolute = true;
         self.feed_mode = FeedMode::PerMinute;
         self.feed = 0.0;
         self.spindle = SpindleDir::Off;

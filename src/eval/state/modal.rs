@@ -7,11 +7,11 @@ use crate::diag::{Error, ErrorKind};
 use crate::program::FileIndex;
 
 use crate::codes::{
-    CoordSystem, CutterComp, GCode, MCode, MotionMode, NonModal, Plane, ToolLength, Units,
+    ArcDistance, CoordSystem, CutterComp, Distance, GCode, LatheMode, MCode, MotionMode, NonModal,
+    Plane, Retract, SpindleMode, ToolLength, Units,
 };
 use crate::eval::Interp;
 use crate::eval::read::block::Words;
-use crate::eval::read::validate::GCodes;
 use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
 use crate::eval::state::nurbs::{NO_MOTION, NURBS};
@@ -42,7 +42,7 @@ impl Interp<'_> {
 
     /// Factor from machine units (parameter storage) to program units.
     pub(in crate::eval) fn to_prog(&self, axis: usize) -> f64 {
-        if !LINEAR[axis] || self.s.machine_metric == self.mach.modal.metric() {
+        if !LINEAR[axis] || self.s.machine_metric == self.mach.modal.metric {
             1.0
         } else if self.s.machine_metric {
             1.0 / 25.4
@@ -168,7 +168,6 @@ impl Interp<'_> {
         file: &Rc<FileIndex>,
         start: u32,
         words: &Words,
-        codes: &GCodes,
         m99: bool,
     ) -> Result<bool, Error> {
         if !m99 && self.mach.apply_simple(words) {
@@ -176,7 +175,7 @@ impl Interp<'_> {
         }
         let motion_before = self.mach.modal.motion;
         // Filled in place: returning it would copy it.
-        let mut w = LineWords::new(m99, codes);
+        let mut w = LineWords::new(m99);
         self.read_words(file, start, words, &mut w)?;
         self.apply_m_p_words(words, &mut w);
         // RETAIN_G43: a tool change while G43 is in effect applies the new
@@ -211,7 +210,10 @@ impl Interp<'_> {
             self.emit_raw(if on { b"G43" } else { b"G49" })?;
         }
         if self.mach.comp.is_some() {
-            let stop = w.ends || w.pauses;
+            let stop = w.ends
+                || words
+                    .iter()
+                    .any(|&(l, v)| l == b'm' && matches!(v, 0.0 | 1.0 | 60.0));
             if stop && let Err(k) = self.mach.comp_stop(w.ends) {
                 return Err(self.error(k, file, start, start));
             }
@@ -236,10 +238,8 @@ impl Interp<'_> {
         for &(l, v) in words {
             match l {
                 b'g' => {
-                    // The block checks have refused unknown codes, and
-                    // decoded the line's codes unless it is a plain move.
-                    if !w.decoded
-                        && w.gn < w.g.len()
+                    // The block checks have refused unknown codes.
+                    if w.gn < w.g.len()
                         && let Some(g) = GCode::nearest(v)
                     {
                         w.g[w.gn] = g;
@@ -287,7 +287,6 @@ impl Interp<'_> {
     fn apply_m(&mut self, m: MCode, w: &mut LineWords) {
         match m {
             MCode::End { .. } => w.ends = true,
-            MCode::Pause { .. } | MCode::PalletPause => w.pauses = true,
             MCode::Spindle(d) => self.mach.modal.spindle = d,
             MCode::ToolChange => {
                 self.mach.current_tool = self.mach.selected_tool;
@@ -366,9 +365,9 @@ impl Interp<'_> {
                 GCode::Motion(MotionMode::NurbsEnd) => {}
                 GCode::Motion(m) => self.mach.modal.motion = m,
                 GCode::Plane(p) => self.mach.modal.plane = p,
-                GCode::Units(u) => self.set_units(u),
-                GCode::Distance(d) => self.mach.modal.distance = d,
-                GCode::ArcDistance(d) => self.mach.modal.arc_distance = d,
+                GCode::Units(u) => self.set_units(u == Units::Mm),
+                GCode::Distance(d) => self.mach.modal.absolute = d == Distance::Absolute,
+                GCode::ArcDistance(d) => self.mach.modal.ijk_absolute = d == ArcDistance::Absolute,
                 GCode::FeedMode(f) => self.mach.modal.feed_mode = f,
                 GCode::CutterComp(c) => self.mach.modal.ccomp = c.side(),
                 GCode::ToolLength(ToolLength::Apply) => self.g43(false, w.h),
@@ -384,9 +383,9 @@ impl Interp<'_> {
                 }
                 GCode::ToolLength(ToolLength::Cancel) => self.tool_offset_words(false),
                 GCode::Path(p) => self.mach.modal.path = p,
-                GCode::Retract(r) => self.mach.modal.retract = r,
-                GCode::SpindleMode(m) => self.mach.modal.spindle_mode = m,
-                GCode::Lathe(l) => self.mach.modal.lathe = l,
+                GCode::Retract(r) => self.mach.modal.retract_r = r == Retract::R,
+                GCode::SpindleMode(m) => self.mach.modal.css = m == SpindleMode::ConstantSurface,
+                GCode::Lathe(l) => self.mach.modal.lathe_diameter = l == LatheMode::Diameter,
                 GCode::Coord(cs) => self.select_cs(cs),
                 // G4 acts in the output alone.
                 GCode::NonModal(NonModal::Dwell) => {}
@@ -588,11 +587,10 @@ impl Interp<'_> {
         }
     }
 
-    pub(in crate::eval) fn set_units(&mut self, units: Units) {
-        if self.mach.modal.units == units {
+    pub(in crate::eval) fn set_units(&mut self, metric: bool) {
+        if self.mach.modal.metric == metric {
             return;
         }
-        let metric = units == Units::Mm;
         if self.mach.tlo.is_some_and(|t| t.iter().any(|&v| v != 0.0)) {
             let line = self.line_no();
             self.mach.standalone_drift = Some((
@@ -606,7 +604,7 @@ impl Interp<'_> {
                 *p *= f;
             }
         }
-        self.mach.modal.units = units;
+        self.mach.modal.metric = metric;
         self.mach.comp_units(metric);
     }
 
@@ -679,17 +677,13 @@ impl Interp<'_> {
             .collect();
         let mut target = start.clone();
         for &(a, v) in axis_words {
-            target[a] = if self.mach.modal.absolute() {
+            target[a] = if self.mach.modal.absolute {
                 Some(v)
             } else {
                 start[a].map(|s| s + v)
             };
         }
-        let backoff = if self.mach.modal.metric() {
-            0.254
-        } else {
-            0.01
-        };
+        let backoff = if self.mach.modal.metric { 0.254 } else { 0.01 };
         let dist: f64 = (0..3)
             .map(|a| match (start[a], target[a]) {
                 (Some(s), Some(t)) => (t - s) * (t - s),
@@ -752,8 +746,6 @@ struct LineWords {
     /// G codes, in order.
     g: [GCode; 16],
     gn: usize,
-    /// The G codes come from the block checks.
-    decoded: bool,
     /// Axis words: (axis index, value).
     axes: [(usize, f64); 9],
     an: usize,
@@ -764,26 +756,15 @@ struct LineWords {
     r: Option<f64>,
     /// The line ends the program (M2, M30, or M99 ending the main program).
     ends: bool,
-    /// The line pauses the program (M0, M1, M60).
-    pauses: bool,
     tool_changed: bool,
 }
 
 impl LineWords {
     #[inline]
-    fn new(ends: bool, codes: &GCodes) -> LineWords {
-        let mut g = [GCode::Motion(MotionMode::Rapid); 16];
-        let gn = match codes.get() {
-            Some(c) => {
-                g[..c.len()].copy_from_slice(c);
-                c.len()
-            }
-            None => 0,
-        };
+    fn new(ends: bool) -> LineWords {
         LineWords {
-            g,
-            gn,
-            decoded: codes.get().is_some(),
+            g: [GCode::Motion(MotionMode::Rapid); 16],
+            gn: 0,
             axes: [(0, 0.0); 9],
             an: 0,
             p: None,
@@ -792,7 +773,6 @@ impl LineWords {
             l: None,
             r: None,
             ends,
-            pauses: false,
             tool_changed: false,
         }
     }
@@ -853,7 +833,7 @@ impl Machine {
     /// diameter mode (G7), and the position is a radius.
     #[inline(always)]
     fn radius_word(&self, axis: usize, v: f64) -> f64 {
-        if axis == 0 && self.modal.lathe_diameter() {
+        if axis == 0 && self.modal.lathe_diameter {
             v / 2.0
         } else {
             v
@@ -864,7 +844,7 @@ impl Machine {
     /// (G91).
     pub(in crate::eval) fn axis_end(&self, axis: usize, v: f64) -> Result<f64, Unknown> {
         let v = self.radius_word(axis, v);
-        if self.modal.absolute() {
+        if self.modal.absolute {
             Ok(v)
         } else {
             self.pos.axes[axis].clone().map(|p| p + v)
@@ -877,7 +857,7 @@ impl Machine {
     pub(in crate::eval) fn move_axis(&mut self, axis: usize, v: f64) {
         self.tlo_moved = false;
         let v = self.radius_word(axis, v);
-        if self.modal.absolute() {
+        if self.modal.absolute {
             self.pos.axes[axis] = Ok(v);
         } else if let Ok(p) = &mut self.pos.axes[axis] {
             *p += v;
@@ -921,7 +901,7 @@ impl Machine {
                     None => ArcCenter::Offsets {
                         i: word(c0).unwrap_or(0.0),
                         j: word(c1).unwrap_or(0.0),
-                        absolute: self.modal.ijk_absolute(),
+                        absolute: self.modal.ijk_absolute,
                     },
                 };
                 let arc = Arc {
@@ -929,7 +909,7 @@ impl Machine {
                     center,
                     turns: 1,
                 };
-                let tol = Tolerances::default_for(self.modal.metric());
+                let tol = Tolerances::default_for(self.modal.metric);
                 match arc_center(&tol, arc, [sx, sy], [ex, ey]) {
                     Ok(_) => {}
                     Err(CompError::ArcSamePoint) => return Err(bad(BlockError::ArcSamePoint)),
@@ -939,7 +919,7 @@ impl Machine {
                     Err(CompError::ZeroRadiusArc) => return Err(bad(BlockError::ZeroRadiusArc)),
                     Err(_) => {
                         let (ci, cj) = (word(c0).unwrap_or(0.0), word(c1).unwrap_or(0.0));
-                        let (cx, cy) = if self.modal.ijk_absolute() {
+                        let (cx, cy) = if self.modal.ijk_absolute {
                             (ci, cj)
                         } else {
                             (sx + ci, sy + cj)
@@ -960,7 +940,7 @@ impl Machine {
                     .sqrt();
                 let known = axis_words
                     .iter()
-                    .all(|w| start(w.0).is_some() || (self.modal.absolute() && w.0 >= 3));
+                    .all(|w| start(w.0).is_some() || (self.modal.absolute && w.0 >= 3));
                 if known && d < 1e-7 {
                     return Err(bad(BlockError::ProbeTooClose));
                 }

@@ -9,11 +9,9 @@
 //! add nothing for such a block, are not gone through. The tests below run
 //! random lines both ways and compare output, state and diagnostics.
 
+use crate::block::{Block, Distance, GCode, LatheMode, MCode, MotionMode, Plane, Units, WordKind};
 use crate::diag::Error;
 use crate::emit::Output;
-use crate::machine::block::{
-    Block, Distance, GCode, LatheMode, MCode, MotionMode, Plane, Units, WordKind,
-};
 
 use super::{Lowering, Problem, Profile, io_error};
 
@@ -139,6 +137,10 @@ impl Lowering {
         self.f_before = self.last_f;
         if let Some(f) = b.value(b'F') {
             self.last_f = Some(f);
+        }
+        if self.w.is_written_as_is(b, text, self.m.modes.units) {
+            out.line(text).map_err(io_error)?;
+            return Ok(Vec::new());
         }
         self.w.begin(b, self.m.modes.units);
         for w in &b.words {
@@ -356,7 +358,7 @@ mod tests {
     fn common_lines_are_plain() {
         let settings = Settings::default();
         let mut l = Lowering::new(&settings, TargetOptions::new(PROFILES[1]));
-        let mut b = crate::machine::block::Block::default();
+        let mut b = crate::block::Block::default();
         for (text, want) in [
             ("G1 X1.5000 Y-2 F300", true),
             ("G2 X1 Y2 I1 J0", true),
@@ -370,7 +372,7 @@ mod tests {
             ("M2", false),
         ] {
             b.decode_into(text.as_bytes()).expect("decodes");
-            l.m.modes.motion = crate::machine::block::MotionMode::Linear;
+            l.m.modes.motion = crate::block::MotionMode::Linear;
             assert_eq!(l.is_plain(&b), want, "{text}");
         }
     }

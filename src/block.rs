@@ -13,6 +13,7 @@ pub use crate::codes::{
     ArcDistance, CoordSystem, CutterComp, Distance, FeedMode, GCode, LatheMode, MCode, MotionMode,
     NonModal, PathMode, Plane, Retract, SpindleMode, ToolLength, Units,
 };
+use crate::number::{POW10, digits_at};
 
 /// A span of the decoded line (byte offsets).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -125,6 +126,11 @@ pub struct Block {
     /// Index into `words` of each letter's value word (A = 0 … Z = 25),
     /// and of `@` (26) and `^` (27).
     value_at: [u8; 28],
+    /// The value of each slot's word where `present` has its bit (0
+    /// elsewhere).
+    vals: [f64; 28],
+    /// M words on the line.
+    m_words: u8,
     /// The slots of `value_at` that hold a word, as bits.
     present: u32,
     pub motion: Option<MotionMode>,
@@ -160,7 +166,13 @@ impl Block {
     /// The value of a non-G/M word (`letter` upper case, or `@`/`^`).
     #[inline]
     pub fn value(&self, letter: u8) -> Option<f64> {
-        self.word(letter).map(|w| w.value)
+        let s = match letter {
+            b'A'..=b'Z' => letter - b'A',
+            b'@' => 26,
+            b'^' => 27,
+            _ => return None,
+        };
+        (self.present >> s & 1 != 0).then(|| self.vals[s as usize])
     }
 
     /// The non-G/M word with this letter.
@@ -182,6 +194,43 @@ impl Block {
             return [None; 9];
         }
         std::array::from_fn(|i| self.value(AXIS_LETTERS[i]))
+    }
+
+    /// Whether the line is a move and nothing else: no code but G0–G3 (if
+    /// any), no words but axis words, F, S and I, J, K, R; not a `%` line.
+    pub fn is_plain_move(&self) -> bool {
+        const ALLOWED: u32 = {
+            let mut bits = 0;
+            let mut i = 0;
+            let letters = *b"XYZABCUVWFSIJKR";
+            while i < letters.len() {
+                bits |= 1 << (letters[i] - b'A');
+                i += 1;
+            }
+            bits
+        };
+        !self.percent
+            && self.present & !ALLOWED == 0
+            && self.m_words == 0
+            && matches!(
+                self.motion,
+                None | Some(
+                    MotionMode::Rapid | MotionMode::Linear | MotionMode::ArcCw | MotionMode::ArcCcw
+                )
+            )
+            && self.plane.is_none()
+            && self.distance.is_none()
+            && self.arc_distance.is_none()
+            && self.feed_mode.is_none()
+            && self.units.is_none()
+            && self.cutter_comp.is_none()
+            && self.tool_length.is_none()
+            && self.coord.is_none()
+            && self.path.is_none()
+            && self.retract.is_none()
+            && self.spindle_mode.is_none()
+            && self.lathe.is_none()
+            && self.non_modal.is_none()
     }
 
     /// Whether any axis word is present.
@@ -224,6 +273,8 @@ impl Block {
     pub fn decode(line: &[u8]) -> Result<Block, DecodeError> {
         let mut b = Block {
             value_at: [NO_WORD; 28],
+            vals: [0.0; 28],
+            m_words: 0,
             ..Block::default()
         };
         b.decode_into(line)?;
@@ -297,7 +348,13 @@ impl Block {
         self.words.clear();
         self.comments.clear();
         self.value_at = [NO_WORD; 28];
+        let mut p = self.present;
+        while p != 0 {
+            self.vals[p.trailing_zeros() as usize] = 0.0;
+            p &= p - 1;
+        }
         self.present = 0;
+        self.m_words = 0;
         self.motion = None;
         self.plane = None;
         self.distance = None;
@@ -471,7 +528,10 @@ impl Block {
                 }
                 WordKind::G(g)
             }
-            b'M' => WordKind::M(MCode::decode(value)),
+            b'M' => {
+                self.m_words = self.m_words.saturating_add(1);
+                WordKind::M(MCode::decode(value))
+            }
             l => {
                 let s = slot(l);
                 if self.value_at[s] != NO_WORD {
@@ -481,6 +541,7 @@ impl Block {
                     });
                 }
                 self.value_at[s] = self.words.len().min(NO_WORD as usize - 1) as u8;
+                self.vals[s] = value;
                 self.present |= 1 << s;
                 WordKind::Value
             }
@@ -528,6 +589,27 @@ fn read_number(line: &[u8], start: usize) -> Option<(f64, usize, Shape)> {
         _ => (false, false),
     };
     let first = line.get(i).copied().unwrap_or(b' ');
+    // The usual number, read eight bytes at a time.
+    if let Some(d) = digits_at(line, i) {
+        let after = skip_blanks(line, d.end);
+        if !matches!(line.get(after), Some(c) if c.is_ascii_digit() || *c == b'.') {
+            let last = line[d.end - 1];
+            let lone_zero = d.int == 1 && first == b'0';
+            let int_digits = if lone_zero { 0 } else { d.int };
+            let shape = Shape {
+                plain: !plus
+                    && d.int > 0
+                    && (d.int == 1 || first != b'0')
+                    && (!d.point || d.frac > 0 && last != b'0')
+                    && !(neg && lone_zero && d.frac == 0),
+                neg,
+                int: int_digits as u8,
+                frac: d.frac as u8,
+            };
+            let v = d.value();
+            return Some((if neg { -v } else { v }, d.end, shape));
+        }
+    }
     let mut mant: u64 = 0;
     // Significant digits (leading zeros not counted), digits before the
     // point, digits after it, the last character.
@@ -590,12 +672,6 @@ fn read_number(line: &[u8], start: usize) -> Option<(f64, usize, Shape)> {
     }
     read_number_slow(line, start).map(|(v, e)| (v, e, Shape::default()))
 }
-
-/// Exact powers of ten (every one up to 1e22 is a double).
-const POW10: [f64; 23] = [
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
-    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
-];
 
 /// [`read_number`] for numbers with blanks inside or many digits.
 #[cold]
