@@ -52,8 +52,11 @@ pub fn flatten(data: &[u8]) {
         _ => return,
     };
     let mut settings = Settings {
-        max_steps: 10_000,
-        max_output_lines: 10_000,
+        // Small run bounds: a program that loops stops within a
+        // millisecond (both guards are still met often), so that a long
+        // campaign makes millions of runs.
+        max_steps: 2_000,
+        max_output_lines: 2_000,
         zero_start: flags & 1 != 0,
         strip_comments: flags & 2 != 0,
         precision: if flags & 4 != 0 {
@@ -116,8 +119,11 @@ pub fn straight(data: &[u8]) {
         return;
     };
     let fast = Settings {
-        max_steps: 10_000,
-        max_output_lines: 10_000,
+        // Small run bounds: a program that loops stops within a
+        // millisecond (both guards are still met often), so that a long
+        // campaign makes millions of runs.
+        max_steps: 2_000,
+        max_output_lines: 2_000,
         zero_start: flags & 1 != 0,
         strip_comments: flags & 2 != 0,
         // Some runs read lines ahead on a second thread in tiny chunks.
