@@ -450,11 +450,13 @@ fn ngcflat_error_text(program: &str, stderr: &str) -> Option<String> {
 
 /// One G70-with-compensation case: for a target that computes the
 /// compensation (GRBL, grblHAL) ngcflat must write the path rs274 moves
-/// along, or refuse at the line rs274 refuses; where the output keeps
-/// G41/G42 (LinuxCNC) it must refuse (E1321) unless the diameter is zero,
-/// when it writes the canon rs274 makes. Ok(Some(message)) when rs274
-/// refuses.
-pub fn comp_check(c: &Case, seed: u64) -> Result<Option<String>, String> {
+/// along, or refuse at the line rs274 refuses. Where the output keeps
+/// G41/G42 (LinuxCNC) it must write the same canon at diameter zero, the
+/// same motion where it writes the path itself (the G70 enters the
+/// compensation), or refuse (E1321, or rs274's refusal). Returns rs274's
+/// message when it refuses, and whether the LinuxCNC output got a written
+/// path.
+pub fn comp_check(c: &Case, seed: u64) -> Result<(Option<String>, bool), String> {
     let run = oracle::run_with(c.text.as_bytes(), "", None, None);
     let dir = crate::tmp();
     crate::put(dir.path(), "prog.ngc", &c.text);
@@ -487,13 +489,22 @@ pub fn comp_check(c: &Case, seed: u64) -> Result<Option<String>, String> {
     }
     let (code, flat, stderr) = crate::run(dir.path(), &common);
     let zero = c.what.contains(" D0,") || c.what.contains(" D0 L");
-    if zero && run.ok {
-        let b = oracle::run_with(flat.as_bytes(), "", None, None);
-        if code != 0 || !b.ok {
-            return Err(format!("diameter 0: ngcflat exits {code}: {stderr}"));
+    if code == 0 {
+        if !run.ok {
+            return Err(format!(
+                "for LinuxCNC, ngcflat flattens what rs274 refuses:\n{flat}"
+            ));
         }
-        oracle::compare(&run.lines, &b.lines, 2e-4)?;
+        if zero {
+            // Nothing offset: the same canon.
+            let b = oracle::run_with(flat.as_bytes(), "", None, None);
+            oracle::compare(&run.lines, &b.lines, 2e-4)?;
+        } else {
+            crate::motion::same_motion(c.text.as_bytes(), flat.as_bytes())
+                .map_err(|e| format!("linuxcnc: {e}\n---- flattened\n{flat}"))?;
+        }
     } else if code != 1
+        || zero && run.ok
         || !(stderr.contains("E1321")
             || ngcflat_error_text(&c.text, &stderr) == rs274_error_text(&run.stderr))
     {
@@ -501,10 +512,11 @@ pub fn comp_check(c: &Case, seed: u64) -> Result<Option<String>, String> {
             "for LinuxCNC, ngcflat exits {code} without E1321 or rs274's refusal: {stderr}"
         ));
     }
-    Ok((!run.ok).then(|| {
+    let refused = (!run.ok).then(|| {
         let m = run.stderr.lines().find(|l| *l != "executing").unwrap_or("");
         m.split(':').next().unwrap_or("").to_string()
-    }))
+    });
+    Ok((refused, code == 0 && !zero))
 }
 
 #[test]
@@ -518,21 +530,24 @@ fn g70_with_compensation_matches_rs274() {
         let c = comp_case(seed);
         comp_check(&c, seed).map_err(|e| format!("seed {seed} ({}): {e}\n{}", c.what, c.text))
     });
-    let (mut same, mut refused) = (0, 0);
+    let (mut same, mut refused, mut written) = (0, 0, 0);
     let mut failures = Vec::new();
     let mut messages = std::collections::BTreeMap::<String, usize>::new();
     for (_, r) in results {
         match r {
-            Ok(Some(m)) => {
+            Ok((Some(m), _)) => {
                 refused += 1;
                 *messages.entry(m).or_default() += 1;
             }
-            Ok(None) => same += 1,
+            Ok((None, w)) => {
+                same += 1;
+                written += w as usize;
+            }
             Err(e) => failures.push(e),
         }
     }
     eprintln!(
-        "G70 with compensation: {cases} programs from seed {start}: {same} move the same, {refused} refused by both at the same line, {} differ",
+        "G70 with compensation: {cases} programs from seed {start}: {same} move the same ({written} of them also for LinuxCNC with the path written), {refused} refused by both at the same line, {} differ",
         failures.len()
     );
     for (m, n) in messages {

@@ -17,6 +17,31 @@ use crate::codes::{CutterComp, MotionMode, Plane};
 use crate::eval::Interp;
 use crate::eval::state::Machine;
 
+/// A G70 entered with compensation when the output keeps G41/G42
+/// (LinuxCNC): G-code with G41/G42 cannot put LinuxCNC's compensation in
+/// the state its G70 leaves it in, so the compensation is turned off in the
+/// output before the cycle and the compensated path written as plain moves.
+/// That is exact only until the program turns compensation off: a move
+/// while it is still on is refused, and the first move after G40 must name
+/// X and Z (LinuxCNC reads a missing axis from the programmed point there,
+/// the output from where the written path ended).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(in crate::eval) enum Written {
+    No,
+    /// The cycle's moves are being written; the tool is at `at` (X Y Z).
+    Cycle {
+        at: [f64; 3],
+    },
+    /// The cycle is written; compensation is still on in the program.
+    After,
+    /// G40 came after the cycle; the next move must name X and Z.
+    AfterOff,
+}
+
+/// Why a move after a written G70 is refused.
+const WRITTEN_AFTER: &str = "after a G70 entered with compensation, the output has compensation off (the path was written as plain moves); a move while it is still on in the program cannot be written so: turn it off (G40) right after the G70";
+const WRITTEN_AFTER_OFF: &str = "after a G70 entered with compensation, the first move after G40 must be G0 or G1 with X and Z in G90 (LinuxCNC reads a missing axis from the programmed point, the output from where the compensated path ended)";
+
 /// Compensation state of a run, made when a program first turns it on.
 #[derive(Debug)]
 pub(in crate::eval) struct CompRun {
@@ -163,6 +188,9 @@ impl Machine {
 
     /// G40.
     pub(in crate::eval) fn comp_off(&mut self) -> Result<(), ErrorKind> {
+        if self.comp_written == Written::After {
+            self.comp_written = Written::AfterOff;
+        }
         let Some(run) = self.comp.as_mut() else {
             return Ok(());
         };
@@ -183,6 +211,9 @@ impl Machine {
         words: &[(u8, f64)],
         motion: MotionMode,
     ) -> Result<(), ErrorKind> {
+        if matches!(self.comp_written, Written::After | Written::AfterOff) {
+            self.written_move(words, motion)?;
+        }
         if self.modal.ccomp == CutterComp::Off {
             if self.comp_pending {
                 use MotionMode as M;
@@ -244,7 +275,9 @@ impl Machine {
                 Ok(())
             }
         };
-        run.out.clear();
+        if !matches!(self.comp_written, Written::Cycle { .. }) {
+            run.out.clear();
+        }
         r.map_err(geom)
     }
 
@@ -274,6 +307,53 @@ impl Machine {
         }
     }
 
+    /// Whether the compensation is on, offsetting, and its entry move still
+    /// to come.
+    pub(in crate::eval) fn comp_entry_next(&self) -> bool {
+        self.comp_offsets() == Some(true) && self.comp.as_ref().is_some_and(|r| r.comp.is_first())
+    }
+
+    /// The moves the compensation released since the last call (kept only
+    /// while a G70's path is written).
+    pub(in crate::eval) fn comp_take_out(&mut self) -> Vec<Out<()>> {
+        self.comp
+            .as_mut()
+            .map(|r| std::mem::take(&mut r.out))
+            .unwrap_or_default()
+    }
+
+    /// Releases the held moves (as G40 or a program end will, the ends
+    /// where they are) into the moves [`Machine::comp_take_out`] returns.
+    pub(in crate::eval) fn comp_flush(&mut self) -> Result<(), ErrorKind> {
+        if let Some(run) = self.comp.as_mut().filter(|r| r.known) {
+            run.comp.stop(false, &mut run.out).map_err(geom)?;
+        }
+        Ok(())
+    }
+
+    /// A move after a written G70 (see [`Written`]): refused where the
+    /// output would not move as LinuxCNC does.
+    fn written_move(&mut self, words: &[(u8, f64)], motion: MotionMode) -> Result<(), ErrorKind> {
+        let refuse = |why| Err(ErrorKind::Lathe(crate::diag::LatheError::G70Comp { why }));
+        match self.comp_written {
+            Written::After => refuse(WRITTEN_AFTER),
+            Written::AfterOff => {
+                let has = |l: u8| words.iter().any(|w| w.0 == l);
+                if self.modal.ccomp != CutterComp::Off
+                    || !self.modal.absolute
+                    || !has(b'x')
+                    || !has(b'z')
+                    || !matches!(motion, MotionMode::Rapid | MotionMode::Linear)
+                {
+                    return refuse(WRITTEN_AFTER_OFF);
+                }
+                self.comp_written = Written::No;
+                Ok(())
+            }
+            _ => Ok(()),
+        }
+    }
+
     /// Whether G53 would move with an offset path (the reference refuses it).
     pub(in crate::eval) fn comp_offsetting(&self) -> bool {
         self.modal.ccomp != CutterComp::Off
@@ -288,6 +368,7 @@ impl Machine {
     pub(in crate::eval) fn comp_stop(&mut self, end: bool) -> Result<(), ErrorKind> {
         if end {
             self.comp_pending = false;
+            self.comp_written = Written::No;
         }
         let Some(run) = self.comp.as_mut() else {
             return Ok(());

@@ -13,6 +13,7 @@ use crate::parse::Name;
 use crate::parse::ast::{Item, Line, LineKind};
 use crate::program::{FileIndex, Window, next_line};
 
+use super::ccomp::Written;
 use crate::codes::{CutterComp, GCode, MotionMode, Plane};
 use crate::eval::flow::{FrameKind, SubRec};
 use crate::eval::{Interp, file_key, read_error};
@@ -112,7 +113,11 @@ impl Interp<'_> {
         if q.fract() != 0.0 || !(0.0..1e9).contains(&q) {
             return Err(self.lathe_err(LatheError::BadQ { q }, file, start, len));
         }
-        if comp && let Err(k) = self.g70_comp() {
+        let write = comp && self.written_g70();
+        if comp
+            && !write
+            && let Err(k) = self.g70_comp()
+        {
             return Err(self.lathe_err(k, file, start, len));
         }
         let span = crate::parse::ast::Span::new(0, len);
@@ -139,6 +144,14 @@ impl Interp<'_> {
         let cycle = lathe_cycle(number, sub, word);
         // The rapid to the start is made with the words taken as absolute.
         let rapid = C::new(word(b'z').unwrap_or(cz), word(b'x').unwrap_or(cx));
+        if write {
+            // The output turns compensation off and gets the path itself.
+            self.emit_raw(b"G40")?;
+            let p = |i: usize| self.mach.pos.axes[i].clone().unwrap_or(0.0);
+            self.mach.comp_written = Written::Cycle {
+                at: [p(0), p(1), p(2)],
+            };
+        }
         self.lathe_move(file, start, len, Move::Rapid(rapid))?;
         if ends {
             // An M2 on the cycle line: LinuxCNC ends before the contour.
@@ -472,11 +485,68 @@ impl Interp<'_> {
                 None => m.end(),
             };
         }
+        if matches!(self.mach.comp_written, Written::Cycle { .. }) {
+            // The cycle's last moves, held by the compensation until G40
+            // or the program's end (the only ways on from here), end where
+            // they are.
+            let r = self
+                .mach
+                .comp_flush()
+                .map_err(|k| self.error(k, file, start, start + len))
+                .and_then(|()| self.write_comp_out(file, start, len));
+            self.mach.comp_written = Written::After;
+            r?;
+        }
         (self.reader.line_start, self.reader.line_idx) = saved;
         match failed {
             Some(g) => Err(self.lathe_err(LatheError::Geometry(g), file, start, len)),
             None => Ok(()),
         }
+    }
+
+    /// Whether the evaluator writes the compensated path of this G70 itself
+    /// (see [`Written`]): the output keeps G41/G42, the compensation
+    /// offsets and the cycle's rapid is its entry move, in the modes the
+    /// written moves are read in (G90, G91.1, G8, no G93).
+    fn written_g70(&self) -> bool {
+        let m = &self.mach.modal;
+        !self.consumer_computes_comp()
+            && self.mach.comp_entry_next()
+            && self.mach.comp_written == Written::No
+            && m.absolute
+            && !m.ijk_absolute
+            && !m.lathe_diameter
+            && m.feed_mode != crate::codes::FeedMode::InverseTime
+    }
+
+    /// Writes the moves the compensation released while a G70's path is
+    /// written: plain absolute G0/G1/G2/G3 (Z and X in the plane, Y the
+    /// third axis; arc centres as offsets from the start).
+    fn write_comp_out(&mut self, file: &Rc<FileIndex>, start: u32, len: u32) -> Result<(), Error> {
+        let Written::Cycle { mut at } = self.mach.comp_written else {
+            return Ok(());
+        };
+        for m in self.mach.comp_take_out() {
+            let (words, end) = match comp_line(m, at, self.mach.modal.metric) {
+                Ok(w) => w,
+                Err(why) => {
+                    let k = LatheError::G70Comp { why };
+                    return Err(self.lathe_err(k, file, start, len));
+                }
+            };
+            let mut text = String::with_capacity(64);
+            for &(l, v) in &words {
+                if !text.is_empty() {
+                    text.push(' ');
+                }
+                text.push(l as char);
+                text.push_str(&number_string(v, self.s.precision));
+            }
+            self.emit_raw(text.as_bytes())?;
+            at = end;
+        }
+        self.mach.comp_written = Written::Cycle { at };
+        Ok(())
     }
 
     /// Whether G70 can run with the cutter compensation that is on: it can
@@ -487,7 +557,7 @@ impl Interp<'_> {
             Some(false) => Ok(()),
             Some(true) if self.consumer_computes_comp() => Ok(()),
             Some(true) | None if !self.consumer_computes_comp() => Err(LatheError::G70Comp {
-                why: "LinuxCNC moves the position its compensation reads to the contour's end while reading the contour, so the cycle's compensated moves start from there (it rapids toward the contour's end first); G0/G1/G2/G3 lines under G41/G42 cannot reproduce that. Flatten for a target that computes the compensation into the path (--target grbl, grblhal or fluidnc), or turn it off (G40) before G70",
+                why: "LinuxCNC moves the position its compensation reads to the contour's end while reading the contour, so the cycle's compensated moves start from there (it rapids toward the contour's end first); G0/G1/G2/G3 lines under G41/G42 cannot reproduce that. The path is written as plain moves only where the G70's rapid is the compensation's entry move (G41/G42 just before it), in G90, G91.1 and G8; else flatten for a target that computes the compensation into the path (--target grbl, grblhal or fluidnc), or turn it off (G40) before G70",
             }),
             Some(true) | None => Err(LatheError::G70Comp {
                 why: "the compensation's path is not known here (the tool's diameter or the position is unknown: give --tool-table and --start-position, or --zero-start)",
@@ -544,9 +614,65 @@ impl Interp<'_> {
             text.push(l.to_ascii_uppercase() as char);
             text.push_str(&number_string(v, self.s.precision));
         }
+        if matches!(self.mach.comp_written, Written::Cycle { .. }) {
+            self.apply_words(file, start, &words, false)?;
+            return self.write_comp_out(file, start, len);
+        }
         self.emit_raw(text.as_bytes())?;
         self.apply_words(file, start, &words, false)?;
         Ok(())
+    }
+}
+
+/// A written line of a compensated path (its words) and where it ends.
+type PathLine = (Vec<(u8, f64)>, [f64; 3]);
+
+/// The words of a move of the compensated path (plane coordinates Z, X,
+/// third Y) from `at` (X Y Z), and where it ends. An arc whose start and
+/// end lie at radii more than 0.005 mm apart (LinuxCNC releases such arcs
+/// in some corners) has no G2/G3: `Err` says why.
+fn comp_line(
+    m: crate::geom::comp::Out<()>,
+    at: [f64; 3],
+    metric: bool,
+) -> Result<PathLine, &'static str> {
+    use crate::geom::comp::Out;
+    match m {
+        Out::Line { rapid, end, .. } => {
+            let e = [end[1], end[2], end[0]];
+            let g = if rapid { 0.0 } else { 1.0 };
+            Ok((vec![(b'G', g), (b'X', e[0]), (b'Y', e[1]), (b'Z', e[2])], e))
+        }
+        Out::Arc {
+            end,
+            center,
+            turn,
+            end3,
+            ..
+        } => {
+            let e = [end[1], end3, end[0]];
+            let r1 = (center[0] - at[2]).hypot(center[1] - at[0]);
+            let r2 = (center[0] - end[0]).hypot(center[1] - end[1]);
+            let tol = if metric { 0.005 } else { 0.005 / 25.4 };
+            if (r1 - r2).abs() > tol {
+                return Err(
+                    "an arc of the compensated path starts and ends at different distances from its centre (a corner LinuxCNC cuts off its circle), which no G2/G3 writes",
+                );
+            }
+            let g = if turn > 0 { 3.0 } else { 2.0 };
+            let mut w = vec![
+                (b'G', g),
+                (b'X', e[0]),
+                (b'Y', e[1]),
+                (b'Z', e[2]),
+                (b'I', center[1] - at[0]),
+                (b'K', center[0] - at[2]),
+            ];
+            if turn.abs() > 1 {
+                w.push((b'P', f64::from(turn.abs())));
+            }
+            Ok((w, e))
+        }
     }
 }
 

@@ -165,6 +165,9 @@ pub(super) struct Machine {
     /// G40 ended an offset path: the next move must be straight (the fast
     /// paths leave such lines to the general one).
     pub(super) comp_pending: bool,
+    /// A G70 whose compensated path the evaluator writes itself (see
+    /// [`ccomp::Written`]).
+    pub(super) comp_written: ccomp::Written,
     /// A lathe cycle whose contour subroutine is running.
     pub(super) lathe: Option<Box<lathe::LatheRun>>,
 }
@@ -204,6 +207,7 @@ impl Machine {
             m61: None,
             comp: None,
             comp_pending: false,
+            comp_written: ccomp::Written::No,
             lathe: None,
         }
     }
