@@ -219,7 +219,7 @@ impl Scan {
             let label = Name::new(label);
             self.oline(idx, pos, (next, terminated, true), kind, Some(&label));
         } else if quick_is_candidate(raw) {
-            match parser.parse(raw, terminated) {
+            match parse_marked(parser, m, raw) {
                 Ok(line) => match &line.kind {
                     LineKind::Blank | LineKind::Items(_) => {}
                     LineKind::Percent => {
@@ -260,11 +260,11 @@ impl Scan {
                 }
             }
         } else if overlong(raw, terminated)
-            && let Err(e) = parser.parse(raw, terminated)
+            && let Err(e) = parse_marked(parser, m, raw)
         {
             self.skip_errors.push((idx, pos, e));
         }
-        if self.first_nonblank.is_none() && raw.iter().any(|b| !b.is_ascii_whitespace()) {
+        if self.first_nonblank.is_none() && m.first_nonblank {
             self.first_nonblank = Some(idx);
             self.first_nonblank_next = next;
         }
@@ -869,6 +869,19 @@ fn matters(raw: &[u8], terminated: bool) -> bool {
     starts_with_m99(raw) || quick_is_candidate(raw) || overlong(raw, terminated)
 }
 
+/// Parses a line the scan handed on. Its raw bytes are cut at 4 kB; a line
+/// longer than that is too long whatever it holds, and its error spans it
+/// to its true end, as when the whole line is parsed.
+fn parse_marked(parser: &mut LineParser, m: Marked, raw: &[u8]) -> Result<Line, LineError> {
+    let len = m.end - m.start;
+    parser.parse(raw, m.terminated).map_err(|mut e| {
+        if (raw.len() as u64) < len && matches!(e.kind, ErrorKind::CommandTooLong) {
+            e.span.end = len as u32;
+        }
+        e
+    })
+}
+
 /// Longer than the reference reads (an error even on a skipped line).
 fn overlong(raw: &[u8], terminated: bool) -> bool {
     raw.len() + terminated as usize > crate::parse::MAX_LINE + 1
@@ -1124,6 +1137,52 @@ mod tests {
             (Some(3), true, vec![3])
         );
         assert!(index.is_def(7) && !index.is_def(1));
+    }
+
+    /// Lines over 4 kB, which the scan hands on cut: a streamed file and the
+    /// same bytes in memory give the same first non-blank line (its
+    /// non-blank bytes past the cut) and the same too-long errors, spanning
+    /// each line to its true end.
+    #[test]
+    fn lines_over_the_cut_index_alike_streamed_and_in_memory() {
+        let text = [
+            b"\n".repeat(3),
+            b" ".repeat(5000),
+            b"G0 X1\n%\no100 if [0]\n(".to_vec(),
+            b"x".repeat(6000),
+            b")\no100 endif\n".to_vec(),
+            b" ".repeat(4500),
+            b"M2".to_vec(),
+        ]
+        .concat();
+        let d = tempfile::tempdir().expect("tmp");
+        let p = d.path().join("p.ngc");
+        std::fs::write(&p, &text).expect("write");
+        let memory = FileIndex::build(Arc::new(SourceFile::new(
+            p.clone(),
+            "p.ngc".into(),
+            text.clone(),
+        )));
+        let streamed = FileIndex::build(Arc::new(SourceFile::open_streamed(&p).expect("open")));
+        for index in [&memory, &streamed] {
+            assert_eq!(index.first_nonblank, Some(3));
+            assert!(!index.percent_start);
+            let errors: Vec<(u32, Span)> = index
+                .skip_errors
+                .iter()
+                .map(|(l, _, e)| (*l, e.span))
+                .collect();
+            assert_eq!(
+                errors,
+                [
+                    (3, Span::new(252, 5005)),
+                    (6, Span::new(252, 6002)),
+                    (8, Span::new(252, 4502)),
+                ]
+            );
+        }
+        assert_eq!(memory.skip_errors, streamed.skip_errors);
+        assert_eq!(memory.line_count, streamed.line_count);
     }
 
     /// A streamed file changed during the run: an O-line read again that is

@@ -77,6 +77,13 @@ const SPLIT_SCAN: u64 = 16 << 20;
 /// Longest line kept whole; longer lines are errors anyway.
 const LONG_LINE: usize = 4096;
 
+/// A line's first `LONG_LINE` bytes: what a scan hands on of a line, the
+/// same whether the line is held in memory, lies inside one chunk read from
+/// disk or runs across chunks.
+fn cut(line: &[u8]) -> &[u8] {
+    &line[..line.len().min(LONG_LINE)]
+}
+
 #[derive(Debug)]
 enum Text {
     Memory(Vec<u8>),
@@ -457,7 +464,9 @@ impl SourceFile {
 
     /// Calls `f(line, raw)` for the lines [`MarkedLines`] hands on (lines
     /// with `o`, `m` or `%`, lines longer than `long`, leading blank lines),
-    /// in order; `raw` is cut at 4096 bytes. Returns the number of lines.
+    /// in order; `raw` is cut at 4096 bytes however the file is held or
+    /// read (the line's true length is `line.end - line.start`). Returns the
+    /// number of lines.
     ///
     /// `matters(raw, terminated)` tells which of the lines after the leading
     /// blank lines `f` acts on: a large file's second half is scanned ahead
@@ -484,7 +493,7 @@ impl SourceFile {
         let mut s = MarkedLines::new(long);
         match &self.text {
             Text::Memory(data) => {
-                let mut hit = |m: Marked| f(m, &data[m.start as usize..m.end as usize]);
+                let mut hit = |m: Marked| f(m, cut(&data[m.start as usize..m.end as usize]));
                 s.feed(data, 0, &mut hit);
                 Ok(s.finish(data.len() as u64, &mut hit))
             }
@@ -601,7 +610,7 @@ impl SourceFile {
             let mut hit = |m: Marked| {
                 let end = (m.end - base) as usize;
                 if m.start >= base {
-                    f(m, &chunk[(m.start - base) as usize..end]);
+                    f(m, cut(&chunk[(m.start - base) as usize..end]));
                 } else {
                     let mut raw = carry.clone();
                     let room = LONG_LINE.saturating_sub(raw.len());
@@ -899,6 +908,73 @@ mod tests {
             scanned: AtomicU64::new(0),
             block: Mutex::default(),
         }
+    }
+
+    /// A line longer than `LONG_LINE` is handed on cut at `LONG_LINE`
+    /// bytes from memory as from disk: unterminated at the end (the case
+    /// proptest found: 4200 bytes), terminated inside one chunk, across a
+    /// chunk, and where the split point of the two-core scan falls inside
+    /// or just after it.
+    #[test]
+    fn overlong_lines_are_cut_alike_from_memory_and_disk() {
+        let long = |n: usize| -> Vec<u8> { (0..n).map(|i| b'a' + (i % 26) as u8).collect() };
+        let line = |n: usize| -> Vec<u8> { [long(n), b"\n".to_vec()].concat() };
+        let cases: Vec<Vec<u8>> = vec![
+            long(4200),
+            line(5000),
+            [b"G0 X1\n".repeat(100), line(9000), b"o1 sub\n".to_vec()].concat(),
+            [long(CHUNK - 100), b"\n".to_vec(), line(6000)].concat(),
+            [line(3000), line(5000), long(4200)].concat(),
+            [b"\n".to_vec(), long(8190), b"\nM2\n".to_vec()].concat(),
+            [b"  \n".to_vec(), b" ".repeat(4500), b"G0\n%\n".to_vec()].concat(),
+        ];
+        for data in &cases {
+            let mem = SourceFile::new("m".into(), "m".into(), data.clone());
+            let disk = on_disk(data);
+            for every in [true, false] {
+                let want = hits(&mem, 167, u64::MAX, every);
+                assert!(want.0.iter().all(|(_, raw)| raw.len() <= LONG_LINE));
+                let any_cut = want
+                    .0
+                    .iter()
+                    .any(|(m, raw)| m.end - m.start > raw.len() as u64);
+                assert!(any_cut || !every);
+                assert_eq!(
+                    hits(&disk, 167, u64::MAX, every),
+                    want,
+                    "{} bytes",
+                    data.len()
+                );
+                assert_eq!(
+                    hits(&disk, 167, 0, every),
+                    want,
+                    "{} bytes, split",
+                    data.len()
+                );
+            }
+        }
+    }
+
+    /// The first non-blank line is told even when its non-blank bytes lie
+    /// past the cut.
+    #[test]
+    fn the_first_nonblank_line_is_told_past_the_cut() {
+        let data = [
+            b"\n \n".to_vec(),
+            b" ".repeat(5000),
+            b"G0\nG1\n%\n".to_vec(),
+        ]
+        .concat();
+        let disk = on_disk(&data);
+        let (lines, n) = hits(&disk, 167, 0, true);
+        assert_eq!(n, 5);
+        let first: Vec<u32> = lines
+            .iter()
+            .filter(|(m, _)| m.first_nonblank)
+            .map(|(m, _)| m.idx)
+            .collect();
+        assert_eq!(first, [2]);
+        assert!(lines[2].1.iter().all(u8::is_ascii_whitespace));
     }
 
     proptest! {

@@ -11,13 +11,16 @@ pub(crate) fn is_mark(b: u8) -> bool {
 }
 
 /// A line handed on: index, start offset, end offset (its newline, or the
-/// end of the file), and whether a newline ends it.
+/// end of the file), whether a newline ends it, and whether it is the
+/// file's first non-blank line (told here because the raw bytes handed on
+/// with a line are cut, and its first non-blank byte may lie past the cut).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Marked {
     pub idx: u32,
     pub start: u64,
     pub end: u64,
     pub terminated: bool,
+    pub first_nonblank: bool,
 }
 
 /// Scanner state carried from one chunk of a file to the next.
@@ -114,6 +117,7 @@ impl MarkedLines {
                 start: self.line_start,
                 end: nl,
                 terminated: true,
+                first_nonblank: self.leading && self.nonblank,
             });
         }
         if self.nonblank {
@@ -133,6 +137,7 @@ impl MarkedLines {
                 start: self.line_start,
                 end: len,
                 terminated: false,
+                first_nonblank: self.leading && self.nonblank,
             });
             self.idx += 1;
         }
@@ -157,15 +162,17 @@ mod tests {
                 None => (data.len(), false),
             };
             let line = &data[start..end];
+            let nonblank = line.iter().any(|b| !b.is_ascii_whitespace());
             if !terminated || leading || line.iter().any(|&b| is_mark(b)) || line.len() + 1 > long {
                 out.push(Marked {
                     idx,
                     start: start as u64,
                     end: end as u64,
                     terminated,
+                    first_nonblank: leading && nonblank,
                 });
             }
-            if line.iter().any(|b| !b.is_ascii_whitespace()) {
+            if nonblank {
                 leading = false;
             }
             idx += 1;
