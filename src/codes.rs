@@ -99,9 +99,24 @@ impl CoordSystem {
     /// G54, LinuxCNC's first coordinate system.
     pub const G54: CoordSystem = CoordSystem(1);
 
+    /// Its row in a table of the nine systems (G54 is 0, G59.3 is 8).
+    pub fn index(self) -> usize {
+        (self.0.clamp(1, 9) - 1) as usize
+    }
+
     /// The first of its parameters (#5221 for G54, #5241 for G55, ...).
     pub fn parameters(self) -> usize {
         5221 + 20 * (self.0 as usize).saturating_sub(1)
+    }
+
+    /// Its G code as written (G54, G59.1).
+    pub fn name(self) -> String {
+        let c = CoordSystem(self.0.clamp(1, 9)).code10();
+        if c.is_multiple_of(10) {
+            format!("G{}", c / 10)
+        } else {
+            format!("G{}.{}", c / 10, c % 10)
+        }
     }
 
     /// The G code ×10 (G54 → 540, G59.1 → 591).

@@ -17,9 +17,9 @@ use crate::fx_hasher::FxMap;
 
 use super::motion::{Feed, FeedMode, Motion, MoveKind, Plane, Point, SpindleDir};
 use crate::block::{
-    AXIS_LETTERS, ArcDistance, Block, CutterComp, Distance, FeedMode as BFeedMode, LatheMode,
-    MCode, MotionMode, NonModal, PathMode, Plane as BPlane, Retract, SpindleMode, ToolLength,
-    Units,
+    AXIS_LETTERS, ArcDistance, Block, CoordSystem, CutterComp, Distance, FeedMode as BFeedMode,
+    LatheMode, MCode, MotionMode, NonModal, PathMode, Plane as BPlane, Retract, SpindleMode,
+    ToolLength, Units,
 };
 
 const MM_PER_INCH: f64 = 25.4;
@@ -42,8 +42,8 @@ pub struct Modes {
     pub cutter_comp: CutterComp,
     /// A tool length offset is in effect (G43, G43.1, G43.2).
     pub tool_length: Option<ToolLength>,
-    /// 1 (G54) … 9 (G59.3)
-    pub coord: u8,
+    /// G54 … G59.3
+    pub coord: CoordSystem,
     pub path: PathMode,
     pub retract: Retract,
     pub spindle_mode: SpindleMode,
@@ -67,7 +67,7 @@ impl Default for Modes {
             units: Units::Mm,
             cutter_comp: CutterComp::Off,
             tool_length: None,
-            coord: 1,
+            coord: CoordSystem::G54,
             path: PathMode::Blend,
             // LinuxCNC starts in G99 (`#<_retract_r_plane>` reads 1).
             retract: Retract::R,
@@ -157,7 +157,7 @@ impl Machine {
             .get(&5220)
             .map(|v| v.round())
             .filter(|v| (1.0..=9.0).contains(v))
-            .map_or(1, |v| v as u8);
+            .map_or(CoordSystem::G54, |v| CoordSystem(v as u8));
         let g92_applied = match p.get(&5210) {
             Some(v) => Some(*v != 0.0),
             None => zs.then_some(false),
@@ -236,7 +236,7 @@ impl Machine {
     /// The offset from work to machine coordinates (G5x, G92/G52 if applied,
     /// tool length), per axis.
     pub fn offset(&self) -> MaybeAxes {
-        let cs = &self.g5x[(self.modes.coord.clamp(1, 9) - 1) as usize];
+        let cs = &self.g5x[self.modes.coord.index()];
         std::array::from_fn(|a| {
             let g92 = match self.g92_applied {
                 Some(true) => self.g92[a]?,
@@ -443,7 +443,7 @@ impl Machine {
         }
         if let Some(c) = b.coord {
             let before = self.offset();
-            self.modes.coord = c.0;
+            self.modes.coord = c;
             self.shift(before);
         }
         if let Some(p) = b.path {
@@ -653,7 +653,7 @@ impl Machine {
             }
             NonModal::SetG92 | NonModal::LocalOffset => {
                 let before = self.offset();
-                let cs = self.g5x[(self.modes.coord.clamp(1, 9) - 1) as usize];
+                let cs = self.g5x[self.modes.coord.index()];
                 for a in 0..9 {
                     if let Some(v) = axes[a] {
                         let rot = if (3..=5).contains(&a) { 1.0 } else { s };
@@ -708,11 +708,11 @@ impl Machine {
                 }
                 let k = match p {
                     Some(0) | None => self.modes.coord,
-                    Some(k) => k.clamp(1, 9) as u8,
-                } as usize
-                    - 1;
+                    Some(k) => CoordSystem(k.clamp(1, 9) as u8),
+                }
+                .index();
                 let before = self.offset();
-                let active = k + 1 == self.modes.coord as usize;
+                let active = k == self.modes.coord.index();
                 for a in 0..9 {
                     if let Some(v) = axes[a] {
                         self.g5x[k][a] = if l == Some(2) {
@@ -749,7 +749,7 @@ impl Machine {
                             let cs = if l == Some(11) {
                                 self.g5x[8][a]
                             } else {
-                                self.g5x[(self.modes.coord.clamp(1, 9) - 1) as usize][a]
+                                self.g5x[self.modes.coord.index()][a]
                             };
                             match (self.pos[a], self.offset()[a], self.tlo[a], cs) {
                                 (Some(p), Some(o), Some(tl), Some(c)) => {
@@ -899,7 +899,7 @@ impl Machine {
     fn end(&mut self) {
         let before = self.offset();
         let m = &mut self.modes;
-        m.coord = 1;
+        m.coord = CoordSystem::G54;
         m.plane = BPlane::XY;
         m.distance = Distance::Absolute;
         m.feed_mode = BFeedMode::PerMinute;

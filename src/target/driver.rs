@@ -8,8 +8,9 @@ use std::collections::HashSet;
 use std::sync::Arc;
 
 use crate::block::{
-    ArcDistance, Block, CommentKind, CutterComp, DecodeError, Distance, FeedMode, GCode, LatheMode,
-    MCode, MotionMode, NonModal, PathMode, Plane, SpindleMode, ToolLength, Units, Word, WordKind,
+    ArcDistance, Block, CommentKind, CoordSystem, CutterComp, DecodeError, Distance, FeedMode,
+    GCode, LatheMode, MCode, MotionMode, NonModal, PathMode, Plane, SpindleMode, ToolLength, Units,
+    Word, WordKind,
 };
 use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};
 use crate::emit::Output;
@@ -110,7 +111,7 @@ pub struct Lowering {
     plain: bool,
     /// The coordinate system the target is in (1 = G54): the program's,
     /// or the last one the target has when the program's is lowered.
-    target_coord: u8,
+    target_coord: CoordSystem,
     /// G5.2 control points collected until G5.3.
     nurbs: Option<NurbsCurve>,
     codes: plain::Codes,
@@ -144,10 +145,10 @@ impl Lowering {
         let m = Machine::new(settings);
         // A program starting in a system the target lacks: the target is
         // in G54, as after its reset.
-        let target_coord = if m.modes.coord <= p.coord_systems {
+        let target_coord = if m.modes.coord.0 <= p.coord_systems {
             m.modes.coord
         } else {
-            1
+            CoordSystem::G54
         };
         Lowering {
             target_coord,
@@ -582,7 +583,7 @@ impl Lowering {
         if let Some(c) = b.coord
             && c.0 <= self.p.coord_systems
         {
-            self.target_coord = c.0;
+            self.target_coord = c;
         }
         if self.m.ended {
             // M2/M30 select G54 on LinuxCNC and on the GRBL family.
@@ -791,28 +792,21 @@ impl Lowering {
 
     /// What to add (mm, X Y Z) to a position in `m`'s work coordinates to
     /// get the same machine position in the target's system `target`.
-    fn coord_shift(&self, m: &Machine, target: u8) -> Result<[f64; 3], ErrorKind> {
-        let name = |c: u8| match c {
-            7 => "G59.1".to_string(),
-            8 => "G59.2".to_string(),
-            9 => "G59.3".to_string(),
-            c => format!("G{}", 53 + c),
-        };
-        let from = m.modes.coord.clamp(1, 9);
-        let to = target.clamp(1, 9);
-        let (a, t) = (&m.g5x[from as usize - 1], &m.g5x[to as usize - 1]);
+    fn coord_shift(&self, m: &Machine, target: CoordSystem) -> Result<[f64; 3], ErrorKind> {
+        let (from, to) = (m.modes.coord, target);
+        let (a, t) = (&m.g5x[from.index()], &m.g5x[to.index()]);
         let mut out = [0.0; 3];
         for i in 0..3 {
             match (a[i], t[i]) {
                 (Some(a), Some(t)) => out[i] = a - t,
                 _ => {
-                    let param = |c: u8| 5221 + 20 * (c as usize - 1) + i;
+                    let param = |c: CoordSystem| c.parameters() + i;
                     return Err(ErrorKind::TargetNeedsValue {
                         target: self.name(),
                         what: format!(
                             "{} (a coordinate system the target lacks, written as coordinates in {})",
-                            name(from),
-                            name(to)
+                            from.name(),
+                            to.name()
                         ),
                         value: format!(
                             "the {} offsets of both (parameters {} and {})",
@@ -1152,7 +1146,7 @@ impl Lowering {
                 // P0 (or none) is the active system, as LinuxCNC has it.
                 let k = match b.value(b'P').map(|v| v.round()) {
                     Some(v) if v >= 1.0 => v.min(255.0) as u8,
-                    _ => self.m.modes.coord,
+                    _ => self.m.modes.coord.0,
                 };
                 if k > p.coord_systems {
                     Fate::Drop
