@@ -290,26 +290,22 @@ pub fn differential(path: &Path) -> Result<Option<String>, String> {
     }
 }
 
-/// For the cutter compensation fixtures: ngcflat's error is at the line
-/// rs274 names (rs274 prints the offending line's text last).
+/// For the cutter compensation and lathe cycle fixtures: ngcflat's error is
+/// at the line rs274 names (rs274 prints the offending line's text last).
 fn same_error_line(path: &Path, program: &[u8], rs: &str, ours: &str) -> Result<(), String> {
-    if !path.to_string_lossy().contains("/err/comp/") {
+    let p = path.to_string_lossy();
+    if !p.contains("/err/comp/") && !p.contains("/err/lathe-cycles/") {
         return Ok(());
     }
     let text = String::from_utf8_lossy(program);
     let lines: Vec<&str> = text.lines().map(str::trim).collect();
-    let theirs: Vec<usize> = rs
-        .lines()
-        .rev()
-        .map(str::trim)
-        .find(|l| lines.contains(l))
-        .map(|t| {
-            (0..lines.len())
-                .filter(|&i| lines[i] == t)
-                .map(|i| i + 1)
-                .collect()
-        })
-        .unwrap_or_default();
+    let theirs: Vec<usize> = match rs.lines().rev().map(str::trim).find(|l| lines.contains(l)) {
+        Some(t) => (0..lines.len())
+            .filter(|&i| lines[i] == t)
+            .map(|i| i + 1)
+            .collect(),
+        None => cycle_call_lines(&lines, rs),
+    };
     let mine = ours
         .lines()
         .find_map(|l| l.trim_start().strip_prefix("--> "))
@@ -320,6 +316,33 @@ fn same_error_line(path: &Path, program: &[u8], rs: &str, ours: &str) -> Result<
             "rs274 refuses line(s) {theirs:?}, ngcflat line {mine:?}:\n{ours}"
         )),
     }
+}
+
+/// rs274 refusing the subroutine call it builds for a lathe cycle prints
+/// that call as `O<q> CALL` (`%f`), a text in no file: the lines of the
+/// cycles with that Q (README, deviations: ngcflat names the cycle line).
+fn cycle_call_lines(lines: &[&str], rs: &str) -> Vec<usize> {
+    let Some(q) = rs.lines().find_map(|l| {
+        let n = l.trim().strip_prefix('O')?.strip_suffix(" CALL")?;
+        n.parse::<f64>().ok()
+    }) else {
+        return Vec::new();
+    };
+    let q_of = |l: &str| -> Option<f64> {
+        let u = l.to_ascii_uppercase();
+        if !["G70", "G71", "G72"].iter().any(|g| u.contains(g)) {
+            return None;
+        }
+        let rest = &u[u.find('Q')? + 1..];
+        let end = rest
+            .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .unwrap_or(rest.len());
+        rest[..end].parse().ok()
+    };
+    (0..lines.len())
+        .filter(|&i| q_of(lines[i]).is_some_and(|v| (v - q).abs() < 1e-6))
+        .map(|i| i + 1)
+        .collect()
 }
 
 pub fn all_fixtures() -> Vec<PathBuf> {

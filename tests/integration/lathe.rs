@@ -3,7 +3,7 @@
 //! each cut by a random cycle with random D, I, R, E and P. The original
 //! and its flattened output must give rs274 the same canon (numbers within
 //! 2e-4: rs274 prints 4 decimals), and a program rs274 refuses must be
-//! refused by ngcflat.
+//! refused by ngcflat at the line rs274 names.
 //!
 //! `NGCFLAT_LATHE_CASES=N` sets the number of programs (default 200),
 //! `NGCFLAT_LATHE_SEED=S` the first seed.
@@ -161,8 +161,9 @@ pub fn case(seed: u64) -> Case {
 }
 
 /// rs274 on a program, given up after `limit` (it loops forever on some
-/// contours). None when it did not finish.
-fn rs274_within(program: &str, limit: Duration) -> Option<(bool, Vec<String>)> {
+/// contours): whether it succeeded, its canon lines and its stderr. None
+/// when it did not finish.
+fn rs274_within(program: &str, limit: Duration) -> Option<(bool, Vec<String>, String)> {
     let dir = tempfile::tempdir().expect("tempdir");
     let prog = dir.path().join("prog.ngc");
     std::fs::write(&prog, program).expect("write program");
@@ -182,6 +183,12 @@ fn rs274_within(program: &str, limit: Duration) -> Option<(bool, Vec<String>)> {
         let _ = out.read_to_string(&mut s);
         s
     });
+    let mut err = child.stderr.take().expect("stderr");
+    let err_reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = err.read_to_string(&mut s);
+        s
+    });
     let t0 = Instant::now();
     let status = loop {
         if let Some(st) = child.try_wait().expect("wait rs274") {
@@ -195,6 +202,7 @@ fn rs274_within(program: &str, limit: Duration) -> Option<(bool, Vec<String>)> {
         std::thread::sleep(Duration::from_millis(5));
     };
     let text = reader.join().unwrap_or_default();
+    let err_text = err_reader.join().unwrap_or_default();
     let status = status?;
     let lines = text
         .lines()
@@ -212,7 +220,47 @@ fn rs274_within(program: &str, limit: Duration) -> Option<(bool, Vec<String>)> {
         })
         .filter(|l| !l.starts_with("COMMENT("))
         .collect();
-    Some((status.success(), lines))
+    Some((status.success(), lines, err_text))
+}
+
+/// Whether ngcflat's error (its first ` --> file:line:col`) is at a line
+/// rs274's refusal names: rs274 prints the line's text last; a subroutine
+/// call it built for the cycle it prints as `O<q> CALL`, which stands for
+/// the cycle line (README, deviations).
+fn same_error_line(program: &str, rs: &str, ours: &str) -> Result<(), String> {
+    if !rs
+        .lines()
+        .map(str::trim)
+        .any(|l| !l.is_empty() && l != "executing")
+    {
+        // rs274 crashed (a segmentation fault on some contours with
+        // pockets): it names no line.
+        return Ok(());
+    }
+    let lines: Vec<&str> = program.lines().map(str::trim).collect();
+    let theirs: Vec<usize> = match rs.lines().rev().map(str::trim).find(|l| lines.contains(l)) {
+        Some(t) => (0..lines.len())
+            .filter(|&i| lines[i] == t)
+            .map(|i| i + 1)
+            .collect(),
+        None if rs.lines().any(|l| l.trim().ends_with(" CALL")) => (0..lines.len())
+            .filter(|&i| ["G70", "G71", "G72"].iter().any(|g| lines[i].contains(g)))
+            .map(|i| i + 1)
+            .collect(),
+        None => Vec::new(),
+    };
+    let mine = ours
+        .lines()
+        .find_map(|l| l.trim_start().strip_prefix("--> "))
+        .and_then(|site| site.rsplit(':').nth(1)?.parse::<usize>().ok());
+    match mine {
+        Some(l) if theirs.contains(&l) => Ok(()),
+        _ => Err(format!(
+            "rs274 refuses line(s) {theirs:?} ({}), ngcflat line {mine:?}: {}",
+            rs.trim(),
+            ours.lines().next().unwrap_or("")
+        )),
+    }
 }
 
 pub enum Verdict {
@@ -242,7 +290,7 @@ pub fn check(c: &Case) -> Result<Verdict, String> {
             Some(_) => Err(format!("ngcflat calls it endless, rs274 ends: {stderr}")),
         };
     }
-    let Some((ok, a)) = rs274_within(&c.text, Duration::from_secs(20)) else {
+    let Some((ok, a, rs_err)) = rs274_within(&c.text, Duration::from_secs(20)) else {
         return Err(format!(
             "rs274 did not finish; ngcflat: exit {:?} {stderr}",
             out.status.code()
@@ -255,6 +303,7 @@ pub fn check(c: &Case) -> Result<Verdict, String> {
                 a.iter().rev().take(3).collect::<Vec<_>>()
             ))
         } else {
+            same_error_line(&c.text, &rs_err, &stderr)?;
             Ok(Verdict::BothRefuse(
                 stderr.lines().next().unwrap_or("").to_string(),
             ))
@@ -264,7 +313,7 @@ pub fn check(c: &Case) -> Result<Verdict, String> {
         return Err(format!("rs274 accepts it, ngcflat refuses: {stderr}"));
     }
     let flat = String::from_utf8_lossy(&out.stdout).into_owned();
-    let Some((ok_b, b)) = rs274_within(&flat, Duration::from_secs(20)) else {
+    let Some((ok_b, b, _)) = rs274_within(&flat, Duration::from_secs(20)) else {
         return Err("rs274 did not finish the flattened program".into());
     };
     if !ok_b {
@@ -309,6 +358,9 @@ fn lathe_cycles_match_rs274() {
         "lathe cycles: {cases} programs from seed {seed}: {same} same motion, {refused} refused by both, {endless} endless in rs274, {} differ",
         failures.len()
     );
+    for f in &failures {
+        eprintln!("{}", f.lines().next().unwrap_or(""));
+    }
     assert!(
         failures.is_empty(),
         "{} of {cases} differ; first:\n{}",

@@ -34,6 +34,9 @@ pub(crate) struct LatheRun {
     /// Whether a contour line has moved the point (LinuxCNC then reads the
     /// position as the point).
     moved: bool,
+    /// An arc's radius was too small for its chord: LinuxCNC reads on and
+    /// refuses the contour at the `endsub` line.
+    short_radius: bool,
     /// Motion mode the contour lines take.
     motion: MotionMode,
     absolute: bool,
@@ -171,6 +174,7 @@ impl Interp<'_> {
             contour: Contour::new(begin),
             point: begin,
             moved: false,
+            short_radius: false,
             motion: self.mach.modal.motion,
             absolute: self.mach.modal.absolute,
             ijk_absolute: self.mach.modal.ijk_absolute,
@@ -230,7 +234,7 @@ impl Interp<'_> {
         }
         let err = |s: &Self, k: ErrorKind| s.error(k, file, start, start + len);
         let found = self.loader.find(label).map_err(|k| err(self, k))?;
-        let (sub_file, from) = match found {
+        let (sub_file, from) = match found.clone() {
             Some(f) => (f, 0),
             None => (file.clone(), self.reader.line_idx),
         };
@@ -244,15 +248,49 @@ impl Interp<'_> {
                 oidx: t,
             }),
             None => {
-                let searched = self.loader.searched();
-                Err(err(
-                    self,
-                    ErrorKind::SubNotFound {
-                        name: label.to_string(),
-                        searched,
-                    },
-                ))
+                let kind = ErrorKind::SubNotFound {
+                    name: label.to_string(),
+                    searched: self.loader.searched(),
+                };
+                if found.is_some() {
+                    return Err(err(self, kind));
+                }
+                // LinuxCNC looks for the definition further on in this
+                // file and names the line where its search stops.
+                let (a, b) = self.search_end(file, start)?;
+                Err(self.error(kind, file, a, b))
             }
+        }
+    }
+
+    /// The line a forward search from the line at `start` ends at: the
+    /// closing `%` of a program that opens with one, or the file's last
+    /// line (the line at `start` if none follows); its start and end.
+    fn search_end(&self, file: &Rc<FileIndex>, start: u32) -> Result<(u32, u32), Error> {
+        let from = self.reader.line_idx;
+        let stop = file
+            .percent_after(from)
+            .filter(|_| Rc::ptr_eq(file, &self.main) && self.main.percent_start);
+        let len = file.file.len();
+        let mut window = Window::default();
+        let (mut pos, mut idx) = (start, from);
+        loop {
+            let (end, next) = match file.file.memory() {
+                Some(data) => {
+                    let (end, next, _) = next_line(data, pos as usize);
+                    (end as u32, next as u32)
+                }
+                None => {
+                    let l = window
+                        .line(&file.file, pos)
+                        .map_err(|e| read_error(file, e))?;
+                    (pos + (l.b - l.a) as u32, l.next)
+                }
+            };
+            if stop == Some(idx) || next as u64 >= len {
+                return Ok((pos, end));
+            }
+            (pos, idx) = (next, idx + 1);
         }
     }
 
@@ -368,6 +406,7 @@ impl Interp<'_> {
             }
         }
         let mut add: Option<Element> = None;
+        let mut short_radius = false;
         if end != point {
             match motion {
                 MotionMode::Rapid | MotionMode::Linear => add = Some(Element::Line(end)),
@@ -376,12 +415,12 @@ impl Interp<'_> {
                         if iw.is_some() || kw.is_some() {
                             return Err(bad(self, LatheError::ArcRAndIk));
                         }
-                        let Some(c) =
-                            center_from_radius(point, end, r, motion == MotionMode::ArcCcw)
-                        else {
-                            return Err(bad(self, LatheError::ArcRadiusTooSmall));
-                        };
-                        center = c;
+                        match center_from_radius(point, end, r, motion == MotionMode::ArcCcw) {
+                            Some(c) => center = c,
+                            // Refused at the `endsub` (finish_lathe); the
+                            // contour goes on from the arc's end.
+                            None => short_radius = true,
+                        }
                     } else {
                         if iw.is_none() && kw.is_none() {
                             return Err(bad(self, LatheError::ArcNoIk));
@@ -391,7 +430,11 @@ impl Interp<'_> {
                         }
                     }
                     let ccw = motion == MotionMode::ArcCcw;
-                    add = Some(Element::Arc(ccw, center, end));
+                    add = Some(if short_radius {
+                        Element::Line(end)
+                    } else {
+                        Element::Arc(ccw, center, end)
+                    });
                 }
                 _ => {}
             }
@@ -413,6 +456,7 @@ impl Interp<'_> {
             return Ok(());
         };
         run.motion = motion;
+        run.short_radius |= short_radius;
         if end != point {
             match add {
                 Some(Element::Line(e)) => run.contour.line(e),
@@ -439,6 +483,9 @@ impl Interp<'_> {
         let Some(run) = self.mach.lathe.take() else {
             return Ok(());
         };
+        if run.short_radius {
+            return Err(self.lathe_err(LatheError::ArcRadiusTooSmall, file, start, len));
+        }
         if let Cycle::Rough { i, .. } = run.cycle
             && i <= 0.0
             && run.contour.len() > 1
