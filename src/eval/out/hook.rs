@@ -80,6 +80,31 @@ impl Interp<'_> {
         text: &[u8],
         verbatim: bool,
     ) -> Result<(), Error> {
+        self.hand_over(file, line_start, text, verbatim, None)
+    }
+
+    /// Hands a line and its decoded block to the consumer (there is one).
+    #[cold]
+    pub(in crate::eval) fn consume_decoded(
+        &mut self,
+        file: &Arc<SourceFile>,
+        line_start: u32,
+        text: &[u8],
+        block: &Block,
+    ) -> Result<(), Error> {
+        self.hand_over(file, line_start, text, true, Some(block))
+    }
+
+    /// [`LineConsumer::line`], or with `block` [`LineConsumer::decoded_line`],
+    /// with the line's origin; an error is placed at the line.
+    fn hand_over(
+        &mut self,
+        file: &Arc<SourceFile>,
+        line_start: u32,
+        text: &[u8],
+        verbatim: bool,
+        block: Option<&Block>,
+    ) -> Result<(), Error> {
         let Some(mut c) = self.out.consumer.take() else {
             return Ok(());
         };
@@ -91,7 +116,11 @@ impl Interp<'_> {
             verbatim,
             stack: &stack,
         };
-        let r = c.line(text, &origin, &mut self.out.output);
+        let out = &mut self.out.output;
+        let r = match block {
+            Some(b) => c.decoded_line(text, b, &origin, out),
+            None => c.line(text, &origin, out),
+        };
         self.out.consumer = Some(c);
         r.map_err(|e| self.placed(e, file, line_start))
     }
@@ -111,31 +140,6 @@ impl Interp<'_> {
         if let Some(c) = self.out.consumer.as_mut() {
             c.comp_position(p);
         }
-    }
-
-    /// Hands a line and its decoded block to the consumer (there is one).
-    #[cold]
-    pub(in crate::eval) fn consume_decoded(
-        &mut self,
-        file: &Arc<SourceFile>,
-        line_start: u32,
-        text: &[u8],
-        block: &Block,
-    ) -> Result<(), Error> {
-        let Some(mut c) = self.out.consumer.take() else {
-            return Ok(());
-        };
-        let frames = &self.flow.frames;
-        let stack = || crate::eval::flow::stack_of(frames);
-        let origin = Origin {
-            file,
-            line_start,
-            verbatim: true,
-            stack: &stack,
-        };
-        let r = c.decoded_line(text, block, &origin, &mut self.out.output);
-        self.out.consumer = Some(c);
-        r.map_err(|e| self.placed(e, file, line_start))
     }
 
     /// Hands each line of `bytes` (the file's bytes from offset `start`,
