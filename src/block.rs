@@ -306,21 +306,7 @@ impl Block {
             let c = line[i];
             match c {
                 b' ' | b'\t' | b'\r' | b'\n' => i += 1,
-                b'(' => {
-                    let close = line[i..]
-                        .iter()
-                        .position(|&b| b == b')')
-                        .ok_or(DecodeError {
-                            span: span(i, n),
-                            what: DecodeProblem::UnclosedComment,
-                        })?;
-                    self.comment(line, i, i + close + 1);
-                    i += close + 1;
-                }
-                b';' => {
-                    self.comment(line, i, n);
-                    i = n;
-                }
+                b'(' | b';' => i = self.comment_at(line, i)?,
                 _ => {
                     let letter = c.to_ascii_uppercase();
                     if !(letter.is_ascii_uppercase() || letter == b'@' || letter == b'^') {
@@ -372,31 +358,35 @@ impl Block {
     }
 
     fn comments_only(&mut self, line: &[u8], mut i: usize) -> Result<(), DecodeError> {
-        let n = line.len();
-        while i < n {
-            match line[i] {
-                b'(' => {
-                    let close = line[i..]
-                        .iter()
-                        .position(|&b| b == b')')
-                        .ok_or(DecodeError {
-                            span: Span {
-                                start: i as u16,
-                                end: n as u16,
-                            },
-                            what: DecodeProblem::UnclosedComment,
-                        })?;
-                    self.comment(line, i, i + close + 1);
-                    i += close + 1;
-                }
-                b';' => {
-                    self.comment(line, i, n);
-                    i = n;
-                }
-                _ => i += 1,
-            }
+        while i < line.len() {
+            i = match line[i] {
+                b'(' | b';' => self.comment_at(line, i)?,
+                _ => i + 1,
+            };
         }
         Ok(())
+    }
+
+    /// Keeps the comment starting at `line[i]` (`(` or `;`); the offset
+    /// after it.
+    fn comment_at(&mut self, line: &[u8], i: usize) -> Result<usize, DecodeError> {
+        let n = line.len();
+        if line[i] == b';' {
+            self.comment(line, i, n);
+            return Ok(n);
+        }
+        let close = line[i..]
+            .iter()
+            .position(|&b| b == b')')
+            .ok_or(DecodeError {
+                span: Span {
+                    start: i as u16,
+                    end: n as u16,
+                },
+                what: DecodeProblem::UnclosedComment,
+            })?;
+        self.comment(line, i, i + close + 1);
+        Ok(i + close + 1)
     }
 
     fn comment(&mut self, line: &[u8], start: usize, end: usize) {
