@@ -11,7 +11,7 @@ use std::fmt;
 
 pub use crate::codes::{
     ArcDistance, CoordSystem, CutterComp, Distance, FeedMode, GCode, LatheMode, MCode, MotionMode,
-    NonModal, PathMode, Plane, Retract, SpindleMode, ToolLength, Units,
+    NonModal, PathMode, Plane, Retract, SpindleDir, SpindleMode, ToolLength, Units,
 };
 use crate::number::{POW10, digits_at};
 

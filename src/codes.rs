@@ -436,6 +436,30 @@ impl Plane {
             Plane::VW => 191,
         }
     }
+
+    /// The plane's axes as indices into X Y Z A B C U V W: the first and
+    /// second in-plane axes, in LinuxCNC's order for the plane (XY, ZX, YZ,
+    /// UV, WU, VW), in which a counter-clockwise arc (G3) turns from the
+    /// first toward the second, and the normal (helix) axis.
+    pub fn axes(self) -> [usize; 3] {
+        match self {
+            Plane::XY => [0, 1, 2],
+            Plane::XZ => [2, 0, 1],
+            Plane::YZ => [1, 2, 0],
+            Plane::UV => [6, 7, 8],
+            Plane::WU => [8, 6, 7],
+            Plane::VW => [7, 8, 6],
+        }
+    }
+
+    /// [`Plane::axes`] of the XYZ planes (G17, G18, G19), indices into X Y
+    /// Z; `None` for the UVW planes (G17.1, G18.1, G19.1).
+    pub fn xyz_axes(self) -> Option<[usize; 3]> {
+        match self {
+            Plane::XY | Plane::XZ | Plane::YZ => Some(self.axes()),
+            Plane::UV | Plane::WU | Plane::VW => None,
+        }
+    }
 }
 
 impl FeedMode {
@@ -607,5 +631,22 @@ mod tests {
         assert_eq!(CoordSystem(9).parameters(), 5381);
         assert_eq!(CoordSystem(6).code10(), 590);
         assert_eq!(CoordSystem(7).code10(), 591);
+    }
+
+    #[test]
+    fn plane_axes() {
+        // G18 turns from Z toward X; G18.1 likewise from W toward U.
+        assert_eq!(Plane::XZ.axes(), [2, 0, 1]);
+        assert_eq!(Plane::WU.axes(), [8, 6, 7]);
+        for (xyz, uvw) in [
+            (Plane::XY, Plane::UV),
+            (Plane::XZ, Plane::WU),
+            (Plane::YZ, Plane::VW),
+        ] {
+            assert_eq!(xyz.xyz_axes(), Some(xyz.axes()));
+            assert_eq!(uvw.xyz_axes(), None);
+            // The UVW plane is its XYZ plane six axes on.
+            assert_eq!(uvw.axes(), xyz.axes().map(|i| i + 6));
+        }
     }
 }

@@ -15,11 +15,11 @@ use crate::eval::Settings;
 use crate::eval::tools::ToolData;
 use crate::fx_hasher::FxMap;
 
-use super::motion::{Feed, FeedMode, Motion, MoveKind, Plane, Point, SpindleDir};
+use super::motion::{Feed, Motion, MoveKind, Point};
 use crate::block::{
-    AXIS_LETTERS, ArcDistance, Block, CoordSystem, CutterComp, Distance, FeedMode as BFeedMode,
-    LatheMode, MCode, MotionMode, NonModal, PathMode, Plane as BPlane, Retract, SpindleMode,
-    ToolLength, Units,
+    AXIS_LETTERS, ArcDistance, Block, CoordSystem, CutterComp, Distance, FeedMode, LatheMode,
+    MCode, MotionMode, NonModal, PathMode, Plane, Retract, SpindleDir, SpindleMode, ToolLength,
+    Units,
 };
 
 const MM_PER_INCH: f64 = 25.4;
@@ -34,10 +34,10 @@ const ZERO: MaybeAxes = [Some(0.0); 9];
 #[derive(Debug, Clone, PartialEq)]
 pub struct Modes {
     pub motion: MotionMode,
-    pub plane: BPlane,
+    pub plane: Plane,
     pub distance: Distance,
     pub arc_distance: ArcDistance,
-    pub feed_mode: BFeedMode,
+    pub feed_mode: FeedMode,
     pub units: Units,
     pub cutter_comp: CutterComp,
     /// A tool length offset is in effect (G43, G43.1, G43.2).
@@ -60,10 +60,10 @@ impl Default for Modes {
     fn default() -> Modes {
         Modes {
             motion: MotionMode::CancelCycle,
-            plane: BPlane::XY,
+            plane: Plane::XY,
             distance: Distance::Absolute,
             arc_distance: ArcDistance::Incremental,
-            feed_mode: BFeedMode::PerMinute,
+            feed_mode: FeedMode::PerMinute,
             units: Units::Mm,
             cutter_comp: CutterComp::Off,
             tool_length: None,
@@ -296,10 +296,10 @@ impl Machine {
     }
 
     fn feed(&self) -> Feed {
-        let (rate, mode) = match self.modes.feed_mode {
-            BFeedMode::PerMinute => (self.modes.feed * self.scale(), FeedMode::UnitsPerMinute),
-            BFeedMode::PerRev => (self.modes.feed * self.scale(), FeedMode::UnitsPerRev),
-            BFeedMode::InverseTime => (self.modes.feed, FeedMode::InverseTime),
+        let mode = self.modes.feed_mode;
+        let rate = match mode {
+            FeedMode::PerMinute | FeedMode::PerRev => self.modes.feed * self.scale(),
+            FeedMode::InverseTime => self.modes.feed,
         };
         Feed { rate, mode }
     }
@@ -852,11 +852,13 @@ impl Machine {
             return;
         }
         let s = self.scale();
-        let (i0, i1, plane, o0, o1) = match self.modes.plane {
-            BPlane::XY => (0, 1, Plane::XY, b'I', b'J'),
-            BPlane::XZ => (0, 2, Plane::XZ, b'I', b'K'),
-            BPlane::YZ => (1, 2, Plane::YZ, b'J', b'K'),
-            _ => {
+        // The one place that builds a Motion::Arc: none in the UVW planes.
+        let plane = self.modes.plane;
+        let (i0, i1, o0, o1) = match plane {
+            Plane::XY => (0, 1, b'I', b'J'),
+            Plane::XZ => (0, 2, b'I', b'K'),
+            Plane::YZ => (1, 2, b'J', b'K'),
+            Plane::UV | Plane::WU | Plane::VW => {
                 self.pos = to;
                 return;
             }
@@ -900,9 +902,9 @@ impl Machine {
         let before = self.offset();
         let m = &mut self.modes;
         m.coord = CoordSystem::G54;
-        m.plane = BPlane::XY;
+        m.plane = Plane::XY;
         m.distance = Distance::Absolute;
-        m.feed_mode = BFeedMode::PerMinute;
+        m.feed_mode = FeedMode::PerMinute;
         m.cutter_comp = CutterComp::Off;
         m.motion = MotionMode::Linear;
         m.spindle = SpindleDir::Off;

@@ -6,6 +6,8 @@
 //! mm/min (or mm/rev, see [`FeedMode`]), times in seconds, whatever units
 //! the program was written in.
 
+use crate::codes::{FeedMode, Plane, SpindleDir};
+
 /// Axis values in parameter order: X Y Z A B C U V W.
 pub(crate) type Axes = [f64; 9];
 
@@ -37,28 +39,12 @@ pub enum MoveKind {
     SpindleSync,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum FeedMode {
-    UnitsPerMinute,
-    InverseTime,
-    UnitsPerRev,
-}
-
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Feed {
     /// mm/min, mm/rev, or 1/min in inverse time.
     pub rate: f64,
     pub mode: FeedMode,
 }
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Plane {
-    XY,
-    XZ,
-    YZ,
-}
-
-pub(crate) use crate::codes::SpindleDir;
 
 #[derive(Debug, Clone, PartialEq)]
 pub enum Motion {
@@ -69,8 +55,9 @@ pub enum Motion {
         to: Point,
         feed: Feed,
     },
-    /// An arc or helix in `plane`: `center` holds the two in-plane work
-    /// coordinates of its centre; `turns` is 1 for an arc of less than one
+    /// An arc or helix in `plane` (G17, G18 or G19: the model records no
+    /// arc in the UVW planes): `center` holds the two in-plane work
+    /// coordinates of its centre, in ascending axis order; `turns` is 1 for an arc of less than one
     /// turn, more for P turns (a full circle written without end point is
     /// one turn with `from == to`).
     Arc {

@@ -9,15 +9,14 @@ use std::sync::Arc;
 
 use crate::block::{
     ArcDistance, Block, CommentKind, CoordSystem, CutterComp, DecodeError, Distance, FeedMode,
-    GCode, LatheMode, MCode, MotionMode, NonModal, PathMode, Plane, SpindleMode, ToolLength, Units,
-    Word, WordKind,
+    GCode, LatheMode, MCode, MotionMode, NonModal, PathMode, Plane, SpindleDir, SpindleMode,
+    ToolLength, Units, Word, WordKind,
 };
 use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};
 use crate::emit::Output;
 use crate::eval::{LineConsumer, Origin, Settings};
 use crate::geom::comp::{Arc as CompArc, ArcCenter, Comp, Out, Side, Tolerances};
 use crate::machine::Machine;
-use crate::machine::motion::SpindleDir;
 use crate::program::SourceFile;
 
 use super::TargetOptions;
@@ -133,7 +132,7 @@ type MoveTag = (Option<f64>, u64);
 /// Cutter compensation on, on a target without it.
 struct CompPath {
     comp: Comp<MoveTag>,
-    plane: lower::Plane,
+    plane: Plane,
     /// Where the tool is (X Y Z, program units): the end of the last
     /// compensated move written.
     at: [f64; 3],
@@ -1540,12 +1539,10 @@ impl Lowering {
         }
     }
 
-    fn plane(m: &Machine) -> Result<lower::Plane, ErrorKind> {
+    fn plane(m: &Machine) -> Result<Plane, ErrorKind> {
         match m.modes.plane {
-            Plane::XY => Ok(lower::Plane::XY),
-            Plane::XZ => Ok(lower::Plane::XZ),
-            Plane::YZ => Ok(lower::Plane::YZ),
-            _ => Err(ErrorKind::Unsupported {
+            p @ (Plane::XY | Plane::XZ | Plane::YZ) => Ok(p),
+            Plane::UV | Plane::WU | Plane::VW => Err(ErrorKind::Unsupported {
                 what: "arcs and cycles in the UVW planes are not lowered".into(),
             }),
         }
@@ -1770,12 +1767,8 @@ impl Lowering {
         motion: MotionMode,
     ) -> Result<Vec<PlainLine>, ErrorKind> {
         let current = self.xy_known(before, "polar coordinates (@ ^)")?;
-        let distance = match self.m.modes.distance {
-            Distance::Absolute => lower::Distance::Absolute,
-            Distance::Incremental => lower::Distance::Incremental,
-        };
         let input = lower::polar::PolarInput {
-            distance,
+            distance: self.m.modes.distance,
             current,
             radius: b.value(b'@'),
             angle: b.value(b'^'),
@@ -1832,23 +1825,10 @@ impl Lowering {
         let m = &self.m.modes;
         let modal = lower::CycleModal {
             plane: Self::plane(&self.m)?,
-            distance: match m.distance {
-                Distance::Absolute => lower::Distance::Absolute,
-                Distance::Incremental => lower::Distance::Incremental,
-            },
-            units: match m.units {
-                Units::Mm => lower::Units::Mm,
-                Units::Inch => lower::Units::Inch,
-            },
-            retract: match m.retract {
-                crate::block::Retract::Initial => lower::Retract::OldZ,
-                crate::block::Retract::R => lower::Retract::RPlane,
-            },
-            spindle: match m.spindle {
-                SpindleDir::Off => lower::Spindle::Off,
-                SpindleDir::Cw => lower::Spindle::Cw,
-                SpindleDir::Ccw => lower::Spindle::Ccw,
-            },
+            distance: m.distance,
+            units: m.units,
+            retract: m.retract,
+            spindle: m.spindle,
         };
         let pos = self.prog_pos(before);
         let out = self
@@ -2260,11 +2240,7 @@ impl Lowering {
                 let v = if metric { mm } else { mm / 25.4 };
                 (v / 2.0, o)
             };
-        let plane = if xz {
-            lower::Plane::XZ
-        } else {
-            lower::Plane::XY
-        };
+        let plane = if xz { Plane::XZ } else { Plane::XY };
         let s = self.m.scale();
         let p = before.pos;
         let (Some(x), Some(y), Some(z)) = (p[0], p[1], p[2]) else {
@@ -2335,7 +2311,7 @@ impl Lowering {
                 "the end of a compensated move is not known",
             ));
         };
-        let xz = c.plane == lower::Plane::XZ;
+        let xz = c.plane == Plane::XZ;
         let end = if xz { [z, x, y] } else { [x, y, z] };
         self.comp_seq += 1;
         let feed = (self.last_f, self.comp_seq);

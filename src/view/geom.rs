@@ -3,23 +3,13 @@
 
 use std::f64::consts::{FRAC_PI_2, TAU};
 
-use crate::machine::motion::{Axes, Motion, Plane};
-
-/// The axis indices (into [`Axes`]) of an arc plane: the first and second
-/// in-plane axes in the order that makes counter-clockwise positive (as
-/// LinuxCNC orders them: XY, ZX, YZ) and the helix axis.
-pub(crate) fn plane_axes(plane: Plane) -> (usize, usize, usize) {
-    match plane {
-        Plane::XY => (0, 1, 2),
-        Plane::XZ => (2, 0, 1),
-        Plane::YZ => (1, 2, 0),
-    }
-}
+use crate::codes::Plane;
+use crate::machine::motion::{Axes, Motion};
 
 /// An arc or helix in its plane, ready for measuring.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct ArcGeom {
-    /// In-plane axes and helix axis (see [`plane_axes`]).
+    /// In-plane axes and helix axis (see [`Plane::axes`]).
     pub a: usize,
     pub b: usize,
     pub h: usize,
@@ -46,7 +36,7 @@ impl ArcGeom {
         ccw: bool,
         turns: u32,
     ) -> ArcGeom {
-        let (a, b, h) = plane_axes(plane);
+        let [a, b, h] = plane.axes();
         let (ca, cb) = if a < b {
             (center[0], center[1])
         } else {

@@ -85,7 +85,8 @@ impl LimitCheck {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::machine::motion::{Feed, FeedMode, MoveKind, Plane, Point};
+    use crate::codes::{FeedMode, Plane};
+    use crate::machine::motion::{Feed, MoveKind, Point};
 
     fn pt(x: f64, y: f64, off: Option<f64>) -> Point {
         let mut w = [0.0; 9];
@@ -98,7 +99,7 @@ mod tests {
     }
     const F: Feed = Feed {
         rate: 100.0,
-        mode: FeedMode::UnitsPerMinute,
+        mode: FeedMode::PerMinute,
     };
 
     fn check() -> LimitCheck {

@@ -14,7 +14,8 @@ use std::f64::consts::{FRAC_PI_6, TAU};
 use std::fmt::Write as _;
 
 use super::geom::ArcGeom;
-use crate::machine::motion::{Axes, Motion, MoveKind, Plane};
+use crate::codes::Plane;
+use crate::machine::motion::{Axes, Motion, MoveKind};
 
 /// Which way the toolpath is looked at.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -701,7 +702,8 @@ fn legend(s: &mut String, tools: &[i64], colour: &impl Fn(i64) -> &'static str, 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::machine::motion::{Feed, FeedMode, Point};
+    use crate::codes::FeedMode;
+    use crate::machine::motion::{Feed, Point};
 
     fn pt(x: f64, y: f64, z: f64) -> Point {
         let mut w = [0.0; 9];
@@ -715,7 +717,7 @@ mod tests {
     }
     const F: Feed = Feed {
         rate: 300.0,
-        mode: FeedMode::UnitsPerMinute,
+        mode: FeedMode::PerMinute,
     };
 
     fn line(kind: MoveKind, a: (f64, f64, f64), b: (f64, f64, f64)) -> Motion {

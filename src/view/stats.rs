@@ -7,8 +7,9 @@ use std::fmt::Write as _;
 use serde::Serialize;
 
 use super::geom::{ArcGeom, arc_length, extreme_points, line_length};
+use crate::codes::FeedMode;
 use crate::machine::axes::{LETTERS, MachineAxes, is_rotary};
-use crate::machine::motion::{Axes, FeedMode, Motion, MoveKind};
+use crate::machine::motion::{Axes, Motion, MoveKind};
 
 /// How the run time is estimated, printed with every estimate.
 pub(crate) const TIME_MODEL: &str = "each move is timed on its own as a trapezoid that starts and ends at rest: \
@@ -247,9 +248,9 @@ impl Stats {
             return Some(Speed::Duration(0.0));
         }
         match mode {
-            FeedMode::UnitsPerMinute if rate > 0.0 => Some(Speed::Rate(rate / 60.0)),
+            FeedMode::PerMinute if rate > 0.0 => Some(Speed::Rate(rate / 60.0)),
             FeedMode::InverseTime if rate > 0.0 => Some(Speed::Duration(60.0 / rate)),
-            FeedMode::UnitsPerRev if rate > 0.0 && self.spindle_speed > 0.0 => {
+            FeedMode::PerRev if rate > 0.0 && self.spindle_speed > 0.0 => {
                 Some(Speed::Rate(rate * self.spindle_speed / 60.0))
             }
             _ => None,
@@ -573,7 +574,8 @@ impl Report {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::machine::motion::{Feed, Plane, Point};
+    use crate::codes::Plane;
+    use crate::machine::motion::{Feed, Point};
 
     fn pt(x: f64, y: f64, z: f64, off: Option<f64>) -> Point {
         let mut w = [0.0; 9];
@@ -589,7 +591,7 @@ mod tests {
     fn feed(r: f64) -> Feed {
         Feed {
             rate: r,
-            mode: FeedMode::UnitsPerMinute,
+            mode: FeedMode::PerMinute,
         }
     }
 

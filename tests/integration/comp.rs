@@ -711,7 +711,7 @@ fn check(case: &Case) -> Verdict {
 /// moves through the target lowering), run through rs274: the same moves as
 /// the original's, arcs possibly in several parts around the same centre.
 fn lowered_matches(case: &Case, original: &[String]) -> Result<bool, String> {
-    use ngcflat::target::lower::Plane;
+    use ngcflat::block::Plane;
     use ngcflat::target::lower::comp::lower_comp_moves;
     let (_, out) = model_moves(case);
     let plane = if case.xz { Plane::XZ } else { Plane::XY };

@@ -8,10 +8,8 @@
 //! `NGCFLAT_LOWER_CASES=N` sets the number of programs per construct,
 //! `NGCFLAT_LOWER_SEED=S` the first seed.
 
-use ngcflat::target::lower::{
-    CycleBlock, CycleKind, CycleModal, CycleState, Distance, PlainLine, Plane, Retract, Spindle,
-    Units,
-};
+use ngcflat::block::{Distance, Plane, Retract, SpindleDir, Units};
+use ngcflat::target::lower::{CycleBlock, CycleKind, CycleModal, CycleState, PlainLine};
 
 use crate::oracle;
 use crate::rng::Rng;
@@ -242,12 +240,12 @@ fn interlude(
             ended = true;
         }
         2 => {
-            *retract = if *retract == Retract::OldZ {
-                Retract::RPlane
+            *retract = if *retract == Retract::Initial {
+                Retract::R
             } else {
-                Retract::OldZ
+                Retract::Initial
             };
-            orig.push_str(if *retract == Retract::OldZ {
+            orig.push_str(if *retract == Retract::Initial {
                 "G98\n"
             } else {
                 "G99\n"
@@ -305,18 +303,18 @@ fn cycle_program(seed: u64) -> Result<(String, String), String> {
     let plane = *rng.pick(&[Plane::XY, Plane::XY, Plane::XZ, Plane::YZ]);
     let (g_units, g_plane) = (
         if units == Units::Inch { "G20" } else { "G21" },
-        match plane {
-            Plane::XY => "G17",
-            Plane::XZ => "G18",
-            Plane::YZ => "G19",
-        },
+        plane_code(plane),
     );
     let spindle = if rng.chance(0.7) {
-        Spindle::Cw
+        SpindleDir::Cw
     } else {
-        Spindle::Ccw
+        SpindleDir::Ccw
     };
-    let m_spindle = if spindle == Spindle::Cw { "M3" } else { "M4" };
+    let m_spindle = if spindle == SpindleDir::Cw {
+        "M3"
+    } else {
+        "M4"
+    };
     let header = format!("{g_units} {g_plane} G90 G94 F100 S1000 {m_spindle}\n");
     let mut orig = header.clone();
     let mut low = header;
@@ -331,21 +329,17 @@ fn cycle_program(seed: u64) -> Result<(String, String), String> {
     let mut state = CycleState::default();
     let mut distance = Distance::Absolute;
     let mut retract = if rng.chance(0.5) {
-        Retract::OldZ
+        Retract::Initial
     } else {
-        Retract::RPlane
+        Retract::R
     };
-    orig.push_str(if retract == Retract::OldZ {
+    orig.push_str(if retract == Retract::Initial {
         "G98\n"
     } else {
         "G99\n"
     });
     let mut last: Option<CycleKind> = None;
-    let depth_axis = match plane {
-        Plane::XY => 2,
-        Plane::XZ => 1,
-        Plane::YZ => 0,
-    };
+    let depth_axis = arc_axes(plane)[2];
     for _ in 0..(3 + rng.below(6)) {
         // Something between the cycle blocks now and then.
         if interlude(
@@ -370,8 +364,8 @@ fn cycle_program(seed: u64) -> Result<(String, String), String> {
             *rng.pick(KINDS)
         };
         // Constructs LinuxCNC runs but no target block expresses.
-        if (kind == CycleKind::G84 && (plane != Plane::XY || spindle != Spindle::Cw))
-            || (kind == CycleKind::G87 && spindle != Spindle::Cw)
+        if (kind == CycleKind::G84 && (plane != Plane::XY || spindle != SpindleDir::Cw))
+            || (kind == CycleKind::G87 && spindle != SpindleDir::Cw)
         {
             continue;
         }
@@ -414,13 +408,10 @@ fn cycle_program(seed: u64) -> Result<(String, String), String> {
     Ok((orig, low))
 }
 
-/// Which of I/J/K (0, 1, 2) is the G87 back-bore level, counted from K.
+/// Which of I/J/K (0, 1, 2) is the G87 back-bore level, counted from K:
+/// K in G17, J in G18, I in G19.
 fn depth_axis_slot(plane: Plane) -> usize {
-    match plane {
-        Plane::XY => 0, // K
-        Plane::XZ => 1, // J
-        Plane::YZ => 2, // I
-    }
+    2 - arc_axes(plane)[2]
 }
 
 #[test]
@@ -464,6 +455,7 @@ fn arc_axes(plane: Plane) -> [usize; 3] {
         Plane::XY => [0, 1, 2],
         Plane::XZ => [2, 0, 1],
         Plane::YZ => [1, 2, 0],
+        Plane::UV | Plane::WU | Plane::VW => unreachable!("the programs here use G17-G19"),
     }
 }
 
@@ -607,6 +599,7 @@ fn plane_code(plane: Plane) -> &'static str {
         Plane::XY => "G17",
         Plane::XZ => "G18",
         Plane::YZ => "G19",
+        Plane::UV | Plane::WU | Plane::VW => unreachable!("the programs here use G17-G19"),
     }
 }
 

@@ -17,7 +17,8 @@
 //! incremental arc centres, G91.1, the default of LinuxCNC and the only
 //! form of GRBL). Axes other than X Y Z must not move during the arc.
 
-use super::{LowerError, PlainLine, Plane, push};
+use super::{LowerError, PlainLine, push};
+use crate::codes::Plane;
 use std::f64::consts::PI;
 
 /// An arc as LinuxCNC would run it. Coordinates are X, Y, Z in program
@@ -39,19 +40,16 @@ pub struct ArcInput {
 
 /// The in-plane axes (first, second) and the normal axis, as indices into
 /// X Y Z, in LinuxCNC's order for the plane (G17 X Y, G18 Z X, G19 Y Z),
-/// so that G3 turns from the first axis toward the second.
-fn axes(plane: Plane) -> [usize; 3] {
-    match plane {
-        Plane::XY => [0, 1, 2],
-        Plane::XZ => [2, 0, 1],
-        Plane::YZ => [1, 2, 0],
-    }
+/// so that G3 turns from the first axis toward the second; an arc in a UVW
+/// plane is refused.
+fn axes(plane: Plane) -> Result<[usize; 3], LowerError> {
+    super::xyz_axes(plane, "an arc")
 }
 
 /// The angle the arc turns through (radians, positive), as LinuxCNC moves
 /// it.
-pub fn sweep(a: &ArcInput) -> f64 {
-    let [p, q, _] = axes(a.plane);
+pub fn sweep(a: &ArcInput) -> Result<f64, LowerError> {
+    let [p, q, _] = axes(a.plane)?;
     let a0 = (a.start[q] - a.centre[q]).atan2(a.start[p] - a.centre[p]);
     let a1 = (a.end[q] - a.centre[q]).atan2(a.end[p] - a.centre[p]);
     let same = a.start[p] == a.end[p] && a.start[q] == a.end[q];
@@ -66,18 +64,18 @@ pub fn sweep(a: &ArcInput) -> f64 {
             base -= 2.0 * PI;
         }
     }
-    base + 2.0 * PI * f64::from(a.turns.max(1) - 1)
+    Ok(base + 2.0 * PI * f64::from(a.turns.max(1) - 1))
 }
 
 /// Lowers a full circle or a P-turn arc into arcs of less than half a turn
 /// without P (see the module doc for the rule).
 pub fn lower_arc(a: &ArcInput) -> Result<Vec<PlainLine>, LowerError> {
-    let [p, q, n] = axes(a.plane);
+    let [p, q, n] = axes(a.plane)?;
     let radius = (a.start[q] - a.centre[q]).hypot(a.start[p] - a.centre[p]);
     if radius.is_nan() || radius <= 0.0 || !radius.is_finite() {
         return Err(LowerError::BadArc);
     }
-    let total = sweep(a);
+    let total = sweep(a)?;
     let parts_f = (total / PI).floor() + 1.0;
     if parts_f > super::MAX_LINES as f64 {
         return Err(LowerError::TooManyLines);
@@ -165,9 +163,9 @@ mod tests {
             turns: 1,
         };
         // G18: G3 turns from Z toward X; from X to Z is three quarters.
-        assert!((sweep(&a) - 1.5 * PI).abs() < 1e-12);
+        assert!((sweep(&a).unwrap() - 1.5 * PI).abs() < 1e-12);
         a.turns = 3;
-        assert!((sweep(&a) - 5.5 * PI).abs() < 1e-12);
+        assert!((sweep(&a).unwrap() - 5.5 * PI).abs() < 1e-12);
         assert_eq!(lower_arc(&a).unwrap().len(), 6);
         // I and K, in that order, in G18.
         let l = &lower_arc(&a).unwrap()[0];
@@ -199,5 +197,21 @@ mod tests {
             turns: 1,
         };
         assert_eq!(lower_arc(&a), Err(LowerError::BadArc));
+    }
+
+    #[test]
+    fn uvw_planes_refused() {
+        for plane in [Plane::UV, Plane::WU, Plane::VW] {
+            let a = ArcInput {
+                plane,
+                clockwise: false,
+                start: [1.0, 0.0, 0.0],
+                end: [0.0, 1.0, 0.0],
+                centre: [0.0, 0.0, 0.0],
+                turns: 2,
+            };
+            assert_eq!(lower_arc(&a).map_err(|e| e.code()), Err("E1105"));
+            assert_eq!(sweep(&a).map_err(|e| e.code()), Err("E1105"));
+        }
     }
 }

@@ -23,15 +23,20 @@
 //! tool as wide as the hole) is the straight move it is.
 
 use super::arc::{ArcInput, lower_arc};
-use super::{LowerError, PlainLine, Plane, push};
+use super::{LowerError, PlainLine, push};
+use crate::codes::Plane;
 use crate::geom::comp::Out;
 
 /// XYZ indices of the compensation plane's coordinates (first, second,
-/// third), as [`crate::geom::comp`] orders them.
-fn axes(plane: Plane) -> [usize; 3] {
+/// third), as [`crate::geom::comp`] orders them: G17 X Y Z, G18 Z X Y.
+/// LinuxCNC compensates in those two planes only.
+fn axes(plane: Plane) -> Result<[usize; 3], LowerError> {
     match plane {
-        Plane::XZ => [2, 0, 1],
-        _ => [0, 1, 2],
+        Plane::XY | Plane::XZ => Ok(plane.axes()),
+        Plane::YZ | Plane::UV | Plane::WU | Plane::VW => Err(LowerError::NotExpressible {
+            construct: "cutter radius compensation",
+            why: "it is only lowered in the XY and XZ planes (G17, G18)",
+        }),
     }
 }
 
@@ -55,7 +60,7 @@ pub fn lower_comp_moves<T>(
     moves: &[Out<T>],
     radius_tolerance: f64,
 ) -> Result<Lowered<'_, T>, LowerError> {
-    let [a, b, c] = axes(plane);
+    let [a, b, c] = axes(plane)?;
     let xyz = |p: [f64; 3]| {
         let mut v = [0.0; 3];
         v[a] = p[0];
@@ -224,5 +229,18 @@ mod tests {
         // Two whole turns: more than four parts of under half a turn.
         assert!(lines.len() > 4, "{}", lines.len());
         assert_eq!(end, [1.0, 0.0, -1.0]);
+    }
+
+    #[test]
+    fn planes_other_than_g17_and_g18_are_refused() {
+        let moves = [Out::Line {
+            rapid: false,
+            end: [1.0, 2.0, 3.0],
+            tag: (),
+        }];
+        for plane in [Plane::YZ, Plane::UV, Plane::WU, Plane::VW] {
+            let e = lower_comp_moves(plane, [0.0; 3], &moves, 0.005).unwrap_err();
+            assert_eq!(e.code(), "E1105", "{plane:?}");
+        }
     }
 }

@@ -52,7 +52,8 @@
 //! [`CycleState::lower`] for every cycle block and [`CycleState::end`] when
 //! any other motion (G0–G3, G80, a probe, …) runs.
 
-use super::{Distance, LowerError, PlainLine, Plane, Spindle, Units, push};
+use super::{LowerError, PlainLine, push};
+use crate::codes::{Distance, Plane, Retract, SpindleDir, Units};
 
 /// Which cycle.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -86,13 +87,6 @@ impl CycleKind {
     }
 }
 
-/// Retract mode: G98 (back to the initial level) or G99 (to R).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Retract {
-    OldZ,
-    RPlane,
-}
-
 /// The modal state a cycle block runs in.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CycleModal {
@@ -100,7 +94,7 @@ pub struct CycleModal {
     pub distance: Distance,
     pub units: Units,
     pub retract: Retract,
-    pub spindle: Spindle,
+    pub spindle: SpindleDir,
 }
 
 /// The words of one cycle block, in program units, as written (X a radius
@@ -153,15 +147,6 @@ pub struct CycleState {
     ijk: [f64; 3],
 }
 
-/// Which of X Y Z (0, 1, 2) are the plane's first, second and depth axes.
-fn axes_of(plane: Plane) -> [usize; 3] {
-    match plane {
-        Plane::XY => [0, 1, 2],
-        Plane::YZ => [1, 2, 0],
-        Plane::XZ => [2, 0, 1],
-    }
-}
-
 /// The rapid up after each peck of G73 and the clearance above the last
 /// peck of G83: 0.010 inch.
 fn peck_clearance(units: Units) -> f64 {
@@ -171,15 +156,10 @@ fn peck_clearance(units: Units) -> f64 {
     }
 }
 
-/// Writes moves in plane coordinates (a, b, c) as XYZ lines.
-/// G87: the offset point and the back-bore level, from I/J/K in plane
-/// order.
-fn back_bore(modal: &CycleModal, ijk: [f64; 3], bottom: f64) -> (f64, f64, f64) {
-    let (off_a, off_b, middle) = match modal.plane {
-        Plane::XY => (ijk[0], ijk[1], ijk[2]),
-        Plane::XZ => (ijk[2], ijk[0], ijk[1]),
-        Plane::YZ => (ijk[1], ijk[2], ijk[0]),
-    };
+/// G87: the offset point and the back-bore level, from I/J/K (X Y Z
+/// order) taken in plane order (`map`, the plane's axes).
+fn back_bore(modal: &CycleModal, map: [usize; 3], ijk: [f64; 3], bottom: f64) -> (f64, f64, f64) {
+    let (off_a, off_b, middle) = (ijk[map[0]], ijk[map[1]], ijk[map[2]]);
     let middle = match modal.distance {
         Distance::Incremental => bottom + middle,
         Distance::Absolute => middle,
@@ -231,9 +211,10 @@ struct Levels {
     q: f64,
     /// The dwell.
     p: f64,
-    dir: Spindle,
+    dir: SpindleDir,
 }
 
+/// Writes moves in plane coordinates (a, b, c) as XYZ lines.
 struct Out {
     map: [usize; 3],
     lines: Vec<PlainLine>,
@@ -264,8 +245,8 @@ impl Out {
     fn m(&mut self, code: f64) -> Result<(), LowerError> {
         push(&mut self.lines, PlainLine::new(&[(b'M', code)]))
     }
-    fn spindle_on(&mut self, dir: Spindle) -> Result<(), LowerError> {
-        self.m(if dir == Spindle::Ccw { 4.0 } else { 3.0 })
+    fn spindle_on(&mut self, dir: SpindleDir) -> Result<(), LowerError> {
+        self.m(if dir == SpindleDir::Ccw { 4.0 } else { 3.0 })
     }
     fn orient(&mut self) -> Result<(), LowerError> {
         push(
@@ -399,7 +380,8 @@ impl CycleState {
     ) -> Result<CycleOutput, LowerError> {
         let name = kind.name();
         let same = self.active == Some(kind);
-        let map = axes_of(modal.plane);
+        // The plane's first, second and depth axes among X Y Z.
+        let map = super::xyz_axes(modal.plane, name)?;
         let axis_letter = |i: usize| ['X', 'Y', 'Z'][i];
         let known = |i: usize| {
             position[i].ok_or(LowerError::PositionUnknown {
@@ -459,8 +441,8 @@ impl CycleState {
             current_c = r;
         }
         let clear = match modal.retract {
-            Retract::RPlane => r,
-            Retract::OldZ => old_c,
+            Retract::R => r,
+            Retract::Initial => old_c,
         };
 
         // Per-cycle words, resolved before any motion so that an error
@@ -475,7 +457,7 @@ impl CycleState {
             return Err(LowerError::TooManyLines);
         }
         let dir = modal.spindle;
-        let (off_a, off_b, middle) = back_bore(modal, ijk, bottom);
+        let (off_a, off_b, middle) = back_bore(modal, map, ijk, bottom);
         let delta = peck_clearance(modal.units);
 
         for repeat in 0..repeats {
@@ -623,12 +605,12 @@ impl CycleState {
             CycleKind::G81 | CycleKind::G85 => {}
         }
         match (kind, modal.spindle) {
-            (CycleKind::G84, Spindle::Cw) => {}
+            (CycleKind::G84, SpindleDir::Cw) => {}
             (CycleKind::G84, _) => return Err(LowerError::Spindle { construct: name }),
-            (CycleKind::G86 | CycleKind::G87 | CycleKind::G88, Spindle::Off) => {
+            (CycleKind::G86 | CycleKind::G87 | CycleKind::G88, SpindleDir::Off) => {
                 return Err(LowerError::Spindle { construct: name });
             }
-            (CycleKind::G87, Spindle::Ccw) => {
+            (CycleKind::G87, SpindleDir::Ccw) => {
                 return Err(LowerError::NotExpressible {
                     construct: name,
                     why: "LinuxCNC orients the spindle counter-clockwise (mode 3), which M19 cannot ask for",
@@ -650,7 +632,7 @@ mod tests {
             distance,
             units: Units::Mm,
             retract,
-            spindle: Spindle::Cw,
+            spindle: SpindleDir::Cw,
         }
     }
 
@@ -679,7 +661,7 @@ mod tests {
             .lower(
                 CycleKind::G81,
                 &block,
-                &modal(Plane::XY, Distance::Absolute, Retract::OldZ),
+                &modal(Plane::XY, Distance::Absolute, Retract::Initial),
                 [Some(0.0), Some(0.0), Some(10.0)],
             )
             .unwrap();
@@ -708,7 +690,7 @@ mod tests {
             .lower(
                 CycleKind::G83,
                 &block,
-                &modal(Plane::XY, Distance::Absolute, Retract::OldZ),
+                &modal(Plane::XY, Distance::Absolute, Retract::Initial),
                 [Some(3.0), Some(2.0), Some(10.0)],
             )
             .unwrap();
@@ -722,7 +704,7 @@ mod tests {
     #[test]
     fn repeat_needs_r_on_entry_and_keeps_it() {
         let mut s = CycleState::default();
-        let m = modal(Plane::XY, Distance::Absolute, Retract::RPlane);
+        let m = modal(Plane::XY, Distance::Absolute, Retract::R);
         let block = CycleBlock {
             axes: [Some(1.0), None, Some(-1.0)],
             ..Default::default()
@@ -756,21 +738,26 @@ mod tests {
             ijk: [Some(0.5), Some(0.0), Some(0.0)],
             ..Default::default()
         };
-        let mut m = modal(Plane::XY, Distance::Absolute, Retract::OldZ);
-        m.spindle = Spindle::Ccw;
+        let mut m = modal(Plane::XY, Distance::Absolute, Retract::Initial);
+        m.spindle = SpindleDir::Ccw;
         let pos = [Some(0.0), Some(0.0), Some(5.0)];
         let mut s = CycleState::default();
         let e = s.lower(CycleKind::G84, &block, &m, pos).unwrap_err();
         assert_eq!(e.code(), "E1104");
         let e = s.lower(CycleKind::G87, &block, &m, pos).unwrap_err();
         assert_eq!(e.code(), "E1105");
-        m.spindle = Spindle::Off;
+        m.spindle = SpindleDir::Off;
         let e = s.lower(CycleKind::G86, &block, &m, pos).unwrap_err();
         assert_eq!(e.code(), "E1104");
-        m.spindle = Spindle::Cw;
+        m.spindle = SpindleDir::Cw;
         m.plane = Plane::XZ;
         let e = s.lower(CycleKind::G84, &block, &m, pos).unwrap_err();
         assert_eq!(e.code(), "E1105");
+        for plane in [Plane::UV, Plane::WU, Plane::VW] {
+            m.plane = plane;
+            let e = s.lower(CycleKind::G81, &block, &m, pos).unwrap_err();
+            assert_eq!(e.code(), "E1105", "{plane:?}");
+        }
         assert_eq!(s, CycleState::default());
     }
 
@@ -782,7 +769,7 @@ mod tests {
             p: Some(0.5),
             ..Default::default()
         };
-        let m = modal(Plane::XY, Distance::Absolute, Retract::OldZ);
+        let m = modal(Plane::XY, Distance::Absolute, Retract::Initial);
         let out = CycleState::default()
             .lower(
                 CycleKind::G88,
@@ -804,7 +791,7 @@ mod tests {
             q: Some(1e-6),
             ..Default::default()
         };
-        let m = modal(Plane::XY, Distance::Absolute, Retract::OldZ);
+        let m = modal(Plane::XY, Distance::Absolute, Retract::Initial);
         let e = CycleState::default()
             .lower(CycleKind::G83, &block, &m, [Some(0.0); 3])
             .unwrap_err();
@@ -832,7 +819,7 @@ mod tests {
             angle: Some(10.0),
             ..Default::default()
         };
-        let m = modal(Plane::XY, Distance::Incremental, Retract::OldZ);
+        let m = modal(Plane::XY, Distance::Incremental, Retract::Initial);
         let e = CycleState::default()
             .lower(CycleKind::G81, &block, &m, [Some(0.0); 3])
             .unwrap_err();
@@ -851,7 +838,7 @@ mod tests {
             .lower(
                 CycleKind::G81,
                 &block,
-                &modal(Plane::XZ, Distance::Absolute, Retract::OldZ),
+                &modal(Plane::XZ, Distance::Absolute, Retract::Initial),
                 [Some(0.0), None, Some(0.0)],
             )
             .unwrap_err();

@@ -36,9 +36,11 @@ pub mod diameter;
 pub mod polar;
 pub mod spline;
 
-pub use cycle::{CycleBlock, CycleKind, CycleModal, CycleOutput, CycleState, Retract};
+pub use cycle::{CycleBlock, CycleKind, CycleModal, CycleOutput, CycleState};
 
 use std::fmt;
+
+use crate::codes::Plane;
 
 /// One word of a plain block.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -71,36 +73,6 @@ impl PlainLine {
     }
 }
 
-/// The selected plane (G17, G18, G19).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Plane {
-    XY,
-    XZ,
-    YZ,
-}
-
-/// Distance mode (G90, G91).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Distance {
-    Absolute,
-    Incremental,
-}
-
-/// Length units (G21, G20).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Units {
-    Mm,
-    Inch,
-}
-
-/// The spindle's state.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Spindle {
-    Off,
-    Cw,
-    Ccw,
-}
-
 /// Why a construct could not be lowered. Codes E1100–E1149.
 #[derive(Debug, Clone, PartialEq)]
 pub enum LowerError {
@@ -127,7 +99,9 @@ pub enum LowerError {
     /// LinuxCNC's own motion cannot be written with the target's words:
     /// G87 with the spindle counter-clockwise (its orientation mode 3 has
     /// no M19 form), G84 outside G17 (LinuxCNC 2.9 swaps the axes of its
-    /// moves there), polar words outside G17.
+    /// moves there), polar words outside G17; and what the lowerings do
+    /// not write: arcs and cycles in the UVW planes, cutter compensation
+    /// outside G17 and G18 (which LinuxCNC refuses too).
     NotExpressible {
         construct: &'static str,
         why: &'static str,
@@ -194,6 +168,16 @@ impl fmt::Display for LowerError {
 }
 
 impl std::error::Error for LowerError {}
+
+/// The X Y Z indices of `plane`'s first, second and normal axis
+/// ([`Plane::axes`]); `construct` is refused in the UVW planes, whose axes
+/// the lowerings do not move.
+fn xyz_axes(plane: Plane, construct: &'static str) -> Result<[usize; 3], LowerError> {
+    plane.xyz_axes().ok_or(LowerError::NotExpressible {
+        construct,
+        why: "the UVW planes (G17.1, G18.1, G19.1) are not lowered",
+    })
+}
 
 /// Pushes a line, failing when the guard is reached.
 fn push(out: &mut Vec<PlainLine>, line: PlainLine) -> Result<(), LowerError> {

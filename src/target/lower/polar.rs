@@ -17,7 +17,8 @@
 //! the differences from the current point (or absolute values under a G90
 //! the caller adds).
 
-use super::{Distance, LowerError};
+use super::LowerError;
+use crate::codes::Distance;
 
 /// The polar words of a block and where the tool is.
 #[derive(Debug, Clone, Copy, PartialEq)]
