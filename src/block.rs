@@ -13,7 +13,7 @@ pub use crate::codes::{
     ArcDistance, CoordSystem, CutterComp, Distance, FeedMode, GCode, LatheMode, MCode, MotionMode,
     NonModal, PathMode, Plane, Retract, SpindleDir, SpindleMode, ToolLength, Units,
 };
-use crate::number::{POW10, digits_at};
+use crate::number::{Digits, POW10, digits_at};
 
 /// A span of the decoded line (byte offsets).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -56,6 +56,27 @@ pub struct Shape {
     pub int: u8,
     /// Digits after the point.
     pub frac: u8,
+}
+
+impl Shape {
+    /// How the number `d` (read at `line[start..]`, after its sign) is
+    /// written: one rule for every reader that hands words to a block.
+    #[inline(always)]
+    pub(crate) fn of(d: &Digits, line: &[u8], start: usize, neg: bool, plus: bool) -> Shape {
+        let first = line[start];
+        let last = line[d.end - 1];
+        let lone_zero = d.int == 1 && first == b'0';
+        Shape {
+            plain: !plus
+                && d.int > 0
+                && (d.int == 1 || first != b'0')
+                && (!d.point || d.frac > 0 && last != b'0')
+                && !(neg && lone_zero && d.frac == 0),
+            neg,
+            int: if lone_zero { 0 } else { d.int as u8 },
+            frac: d.frac as u8,
+        }
+    }
 }
 
 /// What a comment is.
@@ -327,6 +348,48 @@ impl Block {
         Ok(())
     }
 
+    /// Starts the block of a line that another reader splits into words
+    /// (the straight-line reader, which reads each number once for both):
+    /// it hands them in order to [`Block::read_word`], the line number to
+    /// [`Block::read_line_number`] and comments to [`Block::read_comment`],
+    /// which keep them as [`Block::decode_into`] does. Offsets are from the
+    /// line's start.
+    #[inline]
+    pub(crate) fn begin(&mut self) {
+        self.clear();
+    }
+
+    /// The line's N word, first on the line.
+    #[inline]
+    pub(crate) fn read_line_number(&mut self, value: f64, start: usize, end: usize) {
+        self.line_number = Some((value, span16(start, end)));
+    }
+
+    /// A word: `letter` as written, its number's value and shape, the span
+    /// from the letter to the number's end.
+    #[inline]
+    pub(crate) fn read_word(
+        &mut self,
+        letter: u8,
+        value: f64,
+        start: usize,
+        end: usize,
+        shape: Shape,
+    ) -> Result<(), DecodeError> {
+        self.push_word(
+            letter.to_ascii_uppercase(),
+            value,
+            span16(start, end),
+            shape,
+        )
+    }
+
+    /// A comment `line[start..end]` (parentheses or `;` included).
+    #[inline]
+    pub(crate) fn read_comment(&mut self, line: &[u8], start: usize, end: usize) {
+        self.comment(line, start, end);
+    }
+
     fn clear(&mut self) {
         self.block_delete = false;
         self.percent = false;
@@ -547,6 +610,15 @@ impl Block {
     }
 }
 
+/// A span of a line of at most `u16::MAX` bytes.
+#[inline(always)]
+fn span16(start: usize, end: usize) -> Span {
+    Span {
+        start: start as u16,
+        end: end as u16,
+    }
+}
+
 fn skip_blanks(line: &[u8], mut i: usize) -> usize {
     while i < line.len() && matches!(line[i], b' ' | b'\t' | b'\r') {
         i += 1;
@@ -583,19 +655,7 @@ fn read_number(line: &[u8], start: usize) -> Option<(f64, usize, Shape)> {
     if let Some(d) = digits_at(line, i) {
         let after = skip_blanks(line, d.end);
         if !matches!(line.get(after), Some(c) if c.is_ascii_digit() || *c == b'.') {
-            let last = line[d.end - 1];
-            let lone_zero = d.int == 1 && first == b'0';
-            let int_digits = if lone_zero { 0 } else { d.int };
-            let shape = Shape {
-                plain: !plus
-                    && d.int > 0
-                    && (d.int == 1 || first != b'0')
-                    && (!d.point || d.frac > 0 && last != b'0')
-                    && !(neg && lone_zero && d.frac == 0),
-                neg,
-                int: int_digits as u8,
-                frac: d.frac as u8,
-            };
+            let shape = Shape::of(&d, line, i, neg, plus);
             let v = d.value();
             return Some((if neg { -v } else { v }, d.end, shape));
         }

@@ -737,6 +737,24 @@ proptest! {
         let split = show(ngcflat::flatten_str(&prog, &ahead));
         prop_assert_eq!(&fast, &slow, "program:\n{}", prog);
         prop_assert_eq!(&split, &slow, "program:\n{}", prog);
+        // For a target the lines read ahead arrive decoded (one reading of
+        // each line for its record and its block): the same output and
+        // diagnostics as lines decoded one at a time.
+        let grbl = |s: &Settings| {
+            let profile = ngcflat::target::find("grbl").expect("profile");
+            let consumer =
+                ngcflat::lowering(s, Some(ngcflat::target::TargetOptions::new(profile)));
+            let (diags, r) =
+                ngcflat::flatten_memory(prog.clone().into_bytes(), Default::default(), s, consumer);
+            let shown: Vec<String> = diags
+                .iter()
+                .map(|d| render(d, MessageFormat::Short, false))
+                .collect();
+            (shown, show(r.map(|o| String::from_utf8_lossy(&o).into_owned())))
+        };
+        let slow = grbl(&off);
+        prop_assert_eq!(&grbl(&on), &slow, "program:\n{}", prog);
+        prop_assert_eq!(&grbl(&ahead), &slow, "program:\n{}", prog);
     }
 }
 

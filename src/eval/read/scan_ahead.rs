@@ -20,7 +20,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Condvar, Mutex};
 
 use crate::block::Block;
-use crate::eval::read::straight::{Plain, read_line};
+use crate::eval::read::straight::{Plain, ToBlock, read_line, read_line_into};
 
 /// Chunks read ahead of the one being applied, at most.
 const AHEAD: usize = 4;
@@ -207,25 +207,32 @@ impl<'b> Shared<'b> {
                 continue;
             }
             // Read straight into the record (no copy of the line).
+            let k = v.len();
             v.push(Rec::Line(Plain::default()));
             let Some(Rec::Line(p)) = v.last_mut() else {
                 unreachable!("just pushed")
             };
-            if !read_line(self.buf, i, p, self.comments) {
+            if !self.decode {
+                if !read_line(self.buf, i, p, self.comments) {
+                    *v.last_mut().expect("pushed") = Rec::Stop;
+                    return chunk;
+                }
+                i = p.next;
+                continue;
+            }
+            // The block from the same reading of the line.
+            if chunk.blocks.len() <= k {
+                chunk.blocks.resize_with(k + 1, Block::default);
+            }
+            chunk.decoded.resize(k, false);
+            let mut sink = ToBlock::new(&mut chunk.blocks[k], i);
+            if !read_line_into(self.buf, i, p, self.comments, &mut sink) {
                 *v.last_mut().expect("pushed") = Rec::Stop;
                 return chunk;
             }
-            let line = i..p.text_end;
+            let ok = sink.finish(&self.buf[i..p.text_end]);
             i = p.next;
-            if self.decode {
-                let k = v.len() - 1;
-                if chunk.blocks.len() <= k {
-                    chunk.blocks.resize_with(k + 1, Block::default);
-                }
-                chunk.decoded.resize(k, false);
-                let ok = chunk.blocks[k].decode_into(&self.buf[line]).is_ok();
-                chunk.decoded.push(ok);
-            }
+            chunk.decoded.push(ok);
         }
         chunk
     }

@@ -9,8 +9,9 @@
 
 use std::rc::Rc;
 
+use crate::block::{Block, Shape};
 use crate::diag::Error;
-use crate::number::{POW10, digits_in};
+use crate::number::{Digits, POW10, digits_in};
 use crate::program::FileIndex;
 
 use crate::codes::{CutterComp, FeedMode, MotionMode, Plane};
@@ -91,10 +92,8 @@ fn is_blank(c: u8) -> bool {
     matches!(c, b' ' | b'\t' | b'\r')
 }
 
-/// Reads `digits[.digits]` at `buf[i..]` eight bytes at a time (see
-/// [`digits_in`]); `None` for anything unusual, which [`number_slow`] then
-/// decides.
-#[inline(always)]
+/// [`digits_in`] as a value and end (for the tests).
+#[cfg(test)]
 fn number(buf: &[u8], i: usize) -> Option<(f64, usize)> {
     digits_in(buf, i).map(|d| (d.value(), d.end))
 }
@@ -130,6 +129,121 @@ fn number_slow(buf: &[u8], mut i: usize) -> Option<(f64, usize)> {
 /// general path.
 #[inline(always)]
 pub(in crate::eval) fn read_line(buf: &[u8], line: usize, p: &mut Plain, comments: bool) -> bool {
+    read_line_into(buf, line, p, comments, &mut ())
+}
+
+/// What a straight-line read hands on besides its record: the words as they
+/// are read, in order (offsets into the buffer).
+pub(in crate::eval) trait WordSink {
+    /// The N word: its letter's offset, its value and end.
+    fn line_number(&mut self, at: usize, value: f64, end: usize);
+    /// A word: the letter's offset, its sign, the digits read at `num`.
+    fn word(&mut self, buf: &[u8], at: usize, sign: u8, num: usize, d: &Digits);
+    /// A word whose number the byte-at-a-time reader read.
+    fn slow_word(&mut self);
+    /// The comment `buf[start..end]` ending the line.
+    fn comment(&mut self, buf: &[u8], start: usize, end: usize);
+}
+
+/// No sink: the record alone.
+impl WordSink for () {
+    #[inline(always)]
+    fn line_number(&mut self, _: usize, _: f64, _: usize) {}
+    #[inline(always)]
+    fn word(&mut self, _: &[u8], _: usize, _: u8, _: usize, _: &Digits) {}
+    #[inline(always)]
+    fn slow_word(&mut self) {}
+    #[inline(always)]
+    fn comment(&mut self, _: &[u8], _: usize, _: usize) {}
+}
+
+/// Builds the line's [`Block`] from the words read, so that each number is
+/// read once for the record and the block. A number the byte-at-a-time
+/// reader took leaves the block to [`Block::decode_into`] (see
+/// [`ToBlock::finish`]).
+pub(in crate::eval) struct ToBlock<'a> {
+    block: &'a mut Block,
+    /// Offset of the line's start.
+    start: usize,
+    ok: bool,
+    slow: bool,
+}
+
+impl<'a> ToBlock<'a> {
+    #[inline(always)]
+    pub(in crate::eval) fn new(block: &'a mut Block, start: usize) -> ToBlock<'a> {
+        block.begin();
+        ToBlock {
+            block,
+            start,
+            ok: true,
+            slow: false,
+        }
+    }
+
+    /// After a successful read of the line `text` (up to the record's
+    /// `text_end`): whether the block holds the decoded line, as
+    /// [`Block::decode_into`] would.
+    #[inline(always)]
+    pub(in crate::eval) fn finish(self, text: &[u8]) -> bool {
+        if self.slow {
+            self.block.decode_into(text).is_ok()
+        } else {
+            self.ok
+        }
+    }
+}
+
+impl WordSink for ToBlock<'_> {
+    #[inline(always)]
+    fn line_number(&mut self, at: usize, value: f64, end: usize) {
+        self.block
+            .read_line_number(value, at - self.start, end - self.start);
+    }
+
+    #[inline(always)]
+    fn word(&mut self, buf: &[u8], at: usize, sign: u8, num: usize, d: &Digits) {
+        if !self.ok || self.slow {
+            return;
+        }
+        let (neg, plus) = (sign == b'-', sign == b'+');
+        let shape = Shape::of(d, buf, num, neg, plus);
+        let v = d.value();
+        self.ok = self
+            .block
+            .read_word(
+                buf[at],
+                if neg { -v } else { v },
+                at - self.start,
+                d.end - self.start,
+                shape,
+            )
+            .is_ok();
+    }
+
+    #[inline(always)]
+    fn slow_word(&mut self) {
+        self.slow = true;
+    }
+
+    #[inline(always)]
+    fn comment(&mut self, buf: &[u8], start: usize, end: usize) {
+        if !self.slow {
+            self.block
+                .read_comment(&buf[self.start..], start - self.start, end - self.start);
+        }
+    }
+}
+
+/// [`read_line`], handing the words to `sink` as they are read.
+#[inline(always)]
+pub(in crate::eval) fn read_line_into(
+    buf: &[u8],
+    line: usize,
+    p: &mut Plain,
+    comments: bool,
+    sink: &mut impl WordSink,
+) -> bool {
     let at = |j: usize| buf.get(j).copied().unwrap_or(0);
     let mut i = line;
     p.mask = 0;
@@ -138,12 +252,15 @@ pub(in crate::eval) fn read_line(buf: &[u8], line: usize, p: &mut Plain, comment
     if at(i) | 0x20 == b'n' {
         i += 1;
         let s = i;
+        let mut n = 0u32;
         while at(i).is_ascii_digit() {
+            n = n.wrapping_mul(10).wrapping_add(u32::from(at(i) - b'0'));
             i += 1;
         }
         if i == s || i - s > 5 || !matches!(at(i), b' ' | b'\t') {
             return false;
         }
+        sink.line_number(s - 1, f64::from(n), i);
         while matches!(at(i), b' ' | b'\t') {
             i += 1;
         }
@@ -151,23 +268,27 @@ pub(in crate::eval) fn read_line(buf: &[u8], line: usize, p: &mut Plain, comment
     loop {
         let slot = SLOT[at(i) as usize];
         if slot == NONE {
-            return comments && at(i) == b'(' && read_comment(buf, line, i, p);
+            return comments && at(i) == b'(' && read_comment(buf, line, i, p, sink);
         }
+        let letter_at = i;
         i += 1;
-        let neg = at(i) == b'-';
-        if matches!(at(i), b'-' | b'+') {
+        let sign = at(i);
+        let neg = sign == b'-';
+        if matches!(sign, b'-' | b'+') {
             i += 1;
         }
-        let v = match number(buf, i) {
-            Some((v, end)) => {
-                i = end;
-                v
+        let v = match digits_in(buf, i) {
+            Some(d) => {
+                sink.word(buf, letter_at, sign, i, &d);
+                i = d.end;
+                d.value()
             }
             None => {
                 let (v, end) = match number_slow(buf, i) {
                     Some(r) => r,
                     None => return false,
                 };
+                sink.slow_word();
                 i = end;
                 v
             }
@@ -200,8 +321,15 @@ pub(in crate::eval) fn read_line(buf: &[u8], line: usize, p: &mut Plain, comment
 /// ASCII without a nested `(`, not starting like an active comment (`msg`,
 /// `debug`, `print`, `log...`, `abort`, `py...`), then blanks and a newline.
 #[inline(always)]
-fn read_comment(buf: &[u8], line: usize, mut i: usize, p: &mut Plain) -> bool {
+fn read_comment(
+    buf: &[u8],
+    line: usize,
+    mut i: usize,
+    p: &mut Plain,
+    sink: &mut impl WordSink,
+) -> bool {
     let at = |j: usize| buf.get(j).copied().unwrap_or(0);
+    let open = i;
     i += 1;
     let mut first = i;
     while matches!(at(first), b' ' | b'\t') {
@@ -226,6 +354,7 @@ fn read_comment(buf: &[u8], line: usize, mut i: usize, p: &mut Plain) -> bool {
     if at(i) != b'\n' || i - line > crate::parse::MAX_LINE {
         return false;
     }
+    sink.comment(buf, open, text_end);
     p.text_end = text_end;
     p.next = i + 1;
     true
@@ -619,6 +748,80 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The block a straight read builds, and whether it holds the line,
+    /// against the block decoder's on the same text.
+    fn same_block_both_ways(text: &str) -> Result<(), TestCaseError> {
+        let buf = text.as_bytes();
+        let mut p = Plain::default();
+        let mut built = Block::default();
+        let mut sink = ToBlock::new(&mut built, 0);
+        if !read_line_into(buf, 0, &mut p, true, &mut sink) {
+            return Ok(());
+        }
+        let ok = sink.finish(&buf[..p.text_end]);
+        let mut decoded = Block::default();
+        let want = decoded.decode_into(&buf[..p.text_end]).is_ok();
+        prop_assert_eq!(ok, want, "{:?}", text);
+        if want {
+            prop_assert_eq!(&built, &decoded, "{:?}", text);
+        }
+        Ok(())
+    }
+
+    proptest! {
+        /// Lines the straight reader takes give the block the decoder
+        /// gives: words in order with their spans and shapes, the line
+        /// number, the comment, and the same refusals (an unknown G).
+        #[test]
+        fn straight_reads_decode_as_the_block_decoder(
+            n in "([Nn][0-9]{1,6}[ \t]{0,2})?",
+            words in prop::collection::vec(
+                ("[GgXxYyZzAaFfSsIiJjRrPpKk]", "[-+]?", "0{0,2}[0-9]{0,9}(\\.[0-9]{0,9})?", "[ \t]{0,2}"),
+                0..7,
+            ),
+            comment in "(\\([ a-zA-Z0-9,.()]{0,12}\\))?",
+            end in "[ \t\r]{0,2}\n[ -~]{0,20}",
+        ) {
+            let mut text = n.clone();
+            for (l, sign, num, blank) in &words {
+                text.push_str(&format!("{l}{sign}{num}{blank}"));
+            }
+            text.push_str(&comment);
+            text.push_str(&end);
+            same_block_both_ways(&text)?;
+        }
+    }
+
+    #[test]
+    fn straight_reads_build_blocks() {
+        for l in [
+            "G1 X1.5 Y-2 F300\n",
+            "N0010 g2 x+1.25 y-0.500 i0 j.5 (cut)\n",
+            "G1 X123456789.5 Y2\n",
+            "G0 X1 Y2 Z3 A4 B5 C6 F7 S8 I9 J10 K11 R12 P13\n",
+            "G7.5 X1\n",
+            "(only a comment)   \n",
+        ] {
+            let mut p = Plain::default();
+            let mut built = Block::default();
+            let mut sink = ToBlock::new(&mut built, 0);
+            assert!(
+                read_line_into(l.as_bytes(), 0, &mut p, true, &mut sink),
+                "{l:?}"
+            );
+            let ok = sink.finish(&l.as_bytes()[..p.text_end]);
+            let mut decoded = Block::default();
+            let want = decoded.decode_into(&l.as_bytes()[..p.text_end]).is_ok();
+            // G7.5 is no G code: both refuse it.
+            assert_eq!(ok, !l.starts_with("G7.5"), "{l:?}");
+            assert_eq!(ok, want, "{l:?}");
+            if ok {
+                assert_eq!(built, decoded, "{l:?}");
+            }
+        }
+        same_block_both_ways("G1 X1\n").expect("same");
     }
 
     #[test]
