@@ -50,10 +50,13 @@ pub enum Plane {
     VW,
 }
 
+/// Distance mode (group 3). Of two-way groups the variant the hot paths
+/// test for is declared second (discriminant 1): `d == Distance::Absolute`
+/// is then a plain load, as a bool was.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Distance {
-    Absolute,
     Incremental,
+    Absolute,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -63,6 +66,7 @@ pub enum FeedMode {
     PerRev,
 }
 
+/// Units (group 6); Mm second, as in [`Distance`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Units {
     Inch,
@@ -89,6 +93,14 @@ pub enum ToolLength {
     Add,
     /// G49
     Cancel,
+}
+
+impl ToolLength {
+    /// A tool length offset is in effect (G43, G43.1, G43.2; not G49), as
+    /// `#<_tool_offset>` reads it.
+    pub fn in_effect(self) -> bool {
+        self != ToolLength::Cancel
+    }
 }
 
 /// G54–G59.3 as 1–9.
@@ -154,12 +166,13 @@ pub enum SpindleMode {
     Rpm,
 }
 
+/// Lathe diameter mode (group 15); Diameter second, as in [`Distance`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LatheMode {
-    /// G7
-    Diameter,
     /// G8
     Radius,
+    /// G7
+    Diameter,
 }
 
 /// Non-modal G codes (group 0).
@@ -185,12 +198,13 @@ pub enum NonModal {
     RestoreG92,
 }
 
+/// Arc distance mode (group 4); Absolute second, as in [`Distance`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ArcDistance {
-    /// G90.1
-    Absolute,
     /// G91.1
     Incremental,
+    /// G90.1
+    Absolute,
 }
 
 /// A G code by modal group.

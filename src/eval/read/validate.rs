@@ -627,7 +627,8 @@ fn check_cycle(d: &Decoded<'_>, cycle: &Cycle) -> Check {
         // depth is relative to R, so it must not be positive).
         let cc = d.value(depth).unwrap_or(cycle.depth);
         let absolute = d.has_g(GCode::Distance(Distance::Absolute))
-            || (d.modal.absolute && !d.has_g(GCode::Distance(Distance::Incremental)));
+            || (d.modal.distance == Distance::Absolute
+                && !d.has_g(GCode::Distance(Distance::Incremental)));
         let below = if absolute { r < cc } else { cc > 0.0 };
         if below {
             return bad(BlockError::CycleRBelowDepth { axis: name }, d.has_at(b'r'));
@@ -881,7 +882,8 @@ fn check_whole_numbers(d: &Decoded<'_>) -> Check {
             return bad(BlockError::G53NeedsG0G1, Some(at));
         }
         let incremental = d.has_g(GCode::Distance(Distance::Incremental))
-            || (!d.modal.absolute && !d.has_g(GCode::Distance(Distance::Absolute)));
+            || (d.modal.distance == Distance::Incremental
+                && !d.has_g(GCode::Distance(Distance::Absolute)));
         if incremental {
             return bad(BlockError::G53Incremental, Some(at));
         }

@@ -13,7 +13,7 @@
 use crate::diag::{ErrorKind, WarningKind};
 use crate::geom::comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
 
-use crate::codes::{CutterComp, MotionMode, Plane};
+use crate::codes::{ArcDistance, CutterComp, Distance, MotionMode, Plane, Units};
 use crate::eval::Interp;
 use crate::eval::state::Machine;
 
@@ -106,7 +106,7 @@ impl Interp<'_> {
             }
         };
         let pos = self.mach.comp_pos();
-        let tol = Tolerances::default_for(self.mach.modal.metric);
+        let tol = Tolerances::default_for(self.mach.modal.units == Units::Mm);
         let run = self.mach.comp.get_or_insert_with(|| {
             Box::new(CompRun {
                 comp: Comp::new(tol),
@@ -162,10 +162,9 @@ impl Interp<'_> {
             0.03937007874016
         };
         let mm = v / ext;
-        if self.mach.modal.metric {
-            mm
-        } else {
-            mm / 25.4
+        match self.mach.modal.units {
+            Units::Mm => mm,
+            Units::Inch => mm / 25.4,
         }
     }
 }
@@ -198,7 +197,7 @@ impl Machine {
             self.comp_pending = run.comp.off(&mut run.out).map_err(geom)?;
             run.out.clear();
         } else {
-            run.comp = Comp::new(Tolerances::default_for(self.modal.metric));
+            run.comp = Comp::new(Tolerances::default_for(self.modal.units == Units::Mm));
         }
         run.known = false;
         Ok(())
@@ -227,7 +226,7 @@ impl Machine {
         }
         let end = self.comp_pos();
         let xz = self.modal.plane == Plane::XZ;
-        let ijk_absolute = self.modal.ijk_absolute;
+        let ijk_absolute = self.modal.arc_distance == ArcDistance::Absolute;
         let Some(run) = self.comp.as_mut().filter(|r| r.known) else {
             return Ok(());
         };
@@ -340,7 +339,7 @@ impl Machine {
             Written::AfterOff => {
                 let has = |l: u8| words.iter().any(|w| w.0 == l);
                 if self.modal.ccomp != CutterComp::Off
-                    || !self.modal.absolute
+                    || self.modal.distance != Distance::Absolute
                     || !has(b'x')
                     || !has(b'z')
                     || !matches!(motion, MotionMode::Rapid | MotionMode::Linear)
@@ -378,7 +377,7 @@ impl Machine {
             run.out.clear();
         }
         if end {
-            run.comp = Comp::new(Tolerances::default_for(self.modal.metric));
+            run.comp = Comp::new(Tolerances::default_for(self.modal.units == Units::Mm));
             run.known = false;
         }
         Ok(())

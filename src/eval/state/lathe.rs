@@ -14,7 +14,9 @@ use crate::parse::ast::{Item, Line, LineKind};
 use crate::program::{FileIndex, Window, next_line};
 
 use super::ccomp::Written;
-use crate::codes::{CutterComp, GCode, MotionMode, Plane};
+use crate::codes::{
+    ArcDistance, CutterComp, Distance, FeedMode, GCode, LatheMode, MotionMode, Plane, Units,
+};
 use crate::eval::flow::{FrameKind, SubRec};
 use crate::eval::{Interp, file_key, read_error};
 
@@ -39,8 +41,8 @@ pub(crate) struct LatheRun {
     short_radius: bool,
     /// Motion mode the contour lines take.
     motion: MotionMode,
-    absolute: bool,
-    ijk_absolute: bool,
+    distance: Distance,
+    arc_distance: ArcDistance,
     /// Where the machine is while the contour is read (after the rapid).
     at: (
         Result<f64, crate::eval::state::Unknown>,
@@ -137,7 +139,7 @@ impl Interp<'_> {
             Some([a, b, _]) => (b, a),
             None => (cx, cz),
         };
-        if self.mach.modal.absolute {
+        if self.mach.modal.distance == Distance::Absolute {
             x = word(b'x').unwrap_or(x);
             z = word(b'z').unwrap_or(z);
         } else {
@@ -176,8 +178,8 @@ impl Interp<'_> {
             moved: false,
             short_radius: false,
             motion: self.mach.modal.motion,
-            absolute: self.mach.modal.absolute,
-            ijk_absolute: self.mach.modal.ijk_absolute,
+            distance: self.mach.modal.distance,
+            arc_distance: self.mach.modal.arc_distance,
             at: (self.mach.pos.axes[0].clone(), self.mach.pos.axes[2].clone()),
         }));
         Ok(())
@@ -386,11 +388,13 @@ impl Interp<'_> {
         let len = line_len(file, start);
         let bad = |s: &Self, k: LatheError| s.lathe_err(k, file, start, len);
         let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
-        let diameter = self.mach.modal.lathe_diameter;
+        let diameter = self.mach.modal.lathe == LatheMode::Diameter;
         let Some(run) = self.mach.lathe.as_deref() else {
             return Ok(());
         };
-        let (absolute, ijk_absolute, point) = (run.absolute, run.ijk_absolute, run.point);
+        let absolute = run.distance == Distance::Absolute;
+        let ijk_absolute = run.arc_distance == ArcDistance::Absolute;
+        let point = run.point;
         let mut end = contour_end(&word, point, absolute, diameter).map_err(|k| bad(self, k))?;
         let (iw, kw) = (word(b'i'), word(b'k'));
         let mut center = C::new(kw.unwrap_or(0.0), iw.unwrap_or(0.0));
@@ -560,10 +564,10 @@ impl Interp<'_> {
         !self.consumer_computes_comp()
             && self.mach.comp_entry_next()
             && self.mach.comp_written == Written::No
-            && m.absolute
-            && !m.ijk_absolute
-            && !m.lathe_diameter
-            && m.feed_mode != crate::codes::FeedMode::InverseTime
+            && m.distance == Distance::Absolute
+            && m.arc_distance == ArcDistance::Incremental
+            && m.lathe == LatheMode::Radius
+            && m.feed_mode != FeedMode::InverseTime
     }
 
     /// Writes the moves the compensation released while a G70's path is
@@ -574,7 +578,7 @@ impl Interp<'_> {
             return Ok(());
         };
         for m in self.mach.comp_take_out() {
-            let (words, end) = match comp_line(m, at, self.mach.modal.metric) {
+            let (words, end) = match comp_line(m, at, self.mach.modal.units == Units::Mm) {
                 Ok(w) => w,
                 Err(why) => {
                     let k = LatheError::G70Comp { why };
@@ -627,16 +631,16 @@ impl Interp<'_> {
             Move::Feed(e) => (1.0, e, None),
             Move::Arc { ccw, center, end } => (if ccw { 3.0 } else { 2.0 }, end, Some(center)),
         };
-        let (xw, zw) = if self.mach.modal.absolute {
+        let (xw, zw) = if self.mach.modal.distance == Distance::Absolute {
             (end.im, end.re)
-        } else if self.mach.modal.lathe_diameter {
+        } else if self.mach.modal.lathe == LatheMode::Diameter {
             (end.im - 2.0 * cx, end.re - cz)
         } else {
             (end.im - cx, end.re - cz)
         };
         let mut words = vec![(b'g', g), (b'x', xw), (b'z', zw)];
         if let Some(c) = center {
-            if self.mach.modal.ijk_absolute {
+            if self.mach.modal.arc_distance == ArcDistance::Absolute {
                 words.push((b'i', c.im));
                 words.push((b'k', c.re));
             } else {

@@ -10,8 +10,10 @@ pub(super) mod nurbs;
 pub(super) mod restore;
 pub mod tools;
 
-use crate::codes::SpindleDir;
-use crate::codes::{CoordSystem, CutterComp, FeedMode, MotionMode, PathMode, Plane};
+use crate::codes::{
+    ArcDistance, CoordSystem, CutterComp, Distance, FeedMode, LatheMode, MotionMode, PathMode,
+    Plane, Retract, SpindleDir, SpindleMode, ToolLength, Units,
+};
 use crate::eval::Settings;
 use crate::fx_hasher::FxMap;
 
@@ -20,9 +22,9 @@ pub(crate) const AXES: [u8; 9] = *b"xyzabcuvw";
 
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Modal {
-    pub metric: bool,
-    pub absolute: bool,
-    pub ijk_absolute: bool,
+    pub units: Units,
+    pub distance: Distance,
+    pub arc_distance: ArcDistance,
     pub plane: Plane,
     pub feed_mode: FeedMode,
     pub feed: f64,
@@ -30,11 +32,10 @@ pub(crate) struct Modal {
     /// The motion mode; G5.3 (`NurbsEnd`) is none, as G5.3 leaves it.
     pub motion: MotionMode,
     pub coord: CoordSystem,
-    pub tool_offset: bool,
-    /// G98 (true) / G99
-    pub retract_r: bool,
-    /// G96 (css) / G97 (rpm)
-    pub css: bool,
+    /// G49 (`Cancel`) or the code that put the offset in effect.
+    pub tool_length: ToolLength,
+    pub retract: Retract,
+    pub spindle_mode: SpindleMode,
     pub spindle: SpindleDir,
     pub mist: bool,
     pub flood: bool,
@@ -44,7 +45,7 @@ pub(crate) struct Modal {
     /// Off, Left or Right (G41.1 and G42.1 are kept as the side they
     /// compensate on, as `#<_ccomp>` reads them).
     pub ccomp: CutterComp,
-    pub lathe_diameter: bool,
+    pub lathe: LatheMode,
     pub speed_override: bool,
     pub feed_override: bool,
     pub adaptive_feed: bool,
@@ -54,18 +55,19 @@ pub(crate) struct Modal {
 impl Default for Modal {
     fn default() -> Modal {
         Modal {
-            metric: true,
-            absolute: true,
-            ijk_absolute: false,
+            units: Units::Mm,
+            distance: Distance::Absolute,
+            arc_distance: ArcDistance::Incremental,
             plane: Plane::XY,
             feed_mode: FeedMode::PerMinute,
             feed: 0.0,
             speed: 0.0,
             motion: MotionMode::CancelCycle,
             coord: CoordSystem::G54,
-            tool_offset: false,
-            retract_r: true,
-            css: false,
+            tool_length: ToolLength::Cancel,
+            // LinuxCNC starts in G99 (`#<_retract_r_plane>` reads 1).
+            retract: Retract::R,
+            spindle_mode: SpindleMode::Rpm,
             spindle: SpindleDir::Off,
             mist: false,
             flood: false,
@@ -73,7 +75,7 @@ impl Default for Modal {
             path_p: None,
             path_q: None,
             ccomp: CutterComp::Off,
-            lathe_diameter: false,
+            lathe: LatheMode::Radius,
             speed_override: true,
             feed_override: true,
             adaptive_feed: false,
@@ -87,7 +89,7 @@ impl Modal {
     pub(crate) fn reset_at_end(&mut self) {
         self.coord = CoordSystem::G54;
         self.plane = Plane::XY;
-        self.absolute = true;
+        self.distance = Distance::Absolute;
         self.feed_mode = FeedMode::PerMinute;
         self.feed = 0.0;
         self.spindle = SpindleDir::Off;

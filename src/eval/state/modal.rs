@@ -8,7 +8,7 @@ use crate::program::FileIndex;
 
 use crate::codes::{
     ArcDistance, CoordSystem, CutterComp, Distance, GCode, LatheMode, MCode, MotionMode, NonModal,
-    Plane, Retract, SpindleMode, ToolLength, Units,
+    Plane, ToolLength, Units,
 };
 use crate::eval::Interp;
 use crate::eval::read::block::Words;
@@ -42,7 +42,7 @@ impl Interp<'_> {
 
     /// Factor from machine units (parameter storage) to program units.
     pub(in crate::eval) fn to_prog(&self, axis: usize) -> f64 {
-        if !LINEAR[axis] || self.s.machine_metric == self.mach.modal.metric {
+        if !LINEAR[axis] || self.s.machine_metric == (self.mach.modal.units == Units::Mm) {
             1.0
         } else if self.s.machine_metric {
             1.0 / 25.4
@@ -115,7 +115,11 @@ impl Interp<'_> {
     /// G43 (`add` false) or G43.2 (true) with the tool of `h` or the
     /// current one.
     fn g43(&mut self, add: bool, h: Option<f64>) {
-        self.mach.modal.tool_offset = true;
+        self.mach.modal.tool_length = if add {
+            ToolLength::Add
+        } else {
+            ToolLength::Apply
+        };
         let tool = h.or(self.mach.current_tool);
         let data = tool.and_then(|t| self.tool(t));
         let new = match (add, data) {
@@ -138,7 +142,7 @@ impl Interp<'_> {
         if on {
             self.g43(false, None);
         } else {
-            self.mach.modal.tool_offset = false;
+            self.mach.modal.tool_length = ToolLength::Cancel;
             self.set_tlo(Some([0.0; 9]), "G49");
         }
     }
@@ -181,7 +185,7 @@ impl Interp<'_> {
         // RETAIN_G43: a tool change while G43 is in effect applies the new
         // tool's offset, and unloading the tool (T0) cancels G43, before the
         // line's own G43/G49. The output says so in a line of its own.
-        if w.tool_changed && self.s.retain_g43 && self.mach.modal.tool_offset {
+        if w.tool_changed && self.s.retain_g43 && self.mach.modal.tool_length.in_effect() {
             let on = self.mach.current_tool != Some(0.0);
             self.tool_offset_words(on);
             if !w.gs().iter().any(|g| matches!(g, GCode::ToolLength(_))) {
@@ -365,15 +369,15 @@ impl Interp<'_> {
                 GCode::Motion(MotionMode::NurbsEnd) => {}
                 GCode::Motion(m) => self.mach.modal.motion = m,
                 GCode::Plane(p) => self.mach.modal.plane = p,
-                GCode::Units(u) => self.set_units(u == Units::Mm),
-                GCode::Distance(d) => self.mach.modal.absolute = d == Distance::Absolute,
-                GCode::ArcDistance(d) => self.mach.modal.ijk_absolute = d == ArcDistance::Absolute,
+                GCode::Units(u) => self.set_units(u),
+                GCode::Distance(d) => self.mach.modal.distance = d,
+                GCode::ArcDistance(d) => self.mach.modal.arc_distance = d,
                 GCode::FeedMode(f) => self.mach.modal.feed_mode = f,
                 GCode::CutterComp(c) => self.mach.modal.ccomp = c.side(),
                 GCode::ToolLength(ToolLength::Apply) => self.g43(false, w.h),
                 GCode::ToolLength(ToolLength::Add) => self.g43(true, w.h),
                 GCode::ToolLength(ToolLength::Dynamic) => {
-                    self.mach.modal.tool_offset = true;
+                    self.mach.modal.tool_length = ToolLength::Dynamic;
                     let mut new = [0.0; 9];
                     for &(a, v) in w.axis_words() {
                         new[a] = v / self.to_prog(a);
@@ -383,9 +387,9 @@ impl Interp<'_> {
                 }
                 GCode::ToolLength(ToolLength::Cancel) => self.tool_offset_words(false),
                 GCode::Path(p) => self.mach.modal.path = p,
-                GCode::Retract(r) => self.mach.modal.retract_r = r == Retract::R,
-                GCode::SpindleMode(m) => self.mach.modal.css = m == SpindleMode::ConstantSurface,
-                GCode::Lathe(l) => self.mach.modal.lathe_diameter = l == LatheMode::Diameter,
+                GCode::Retract(r) => self.mach.modal.retract = r,
+                GCode::SpindleMode(m) => self.mach.modal.spindle_mode = m,
+                GCode::Lathe(l) => self.mach.modal.lathe = l,
                 GCode::Coord(cs) => self.select_cs(cs),
                 // G4 acts in the output alone.
                 GCode::NonModal(NonModal::Dwell) => {}
@@ -587,10 +591,11 @@ impl Interp<'_> {
         }
     }
 
-    pub(in crate::eval) fn set_units(&mut self, metric: bool) {
-        if self.mach.modal.metric == metric {
+    pub(in crate::eval) fn set_units(&mut self, units: Units) {
+        if self.mach.modal.units == units {
             return;
         }
+        let metric = units == Units::Mm;
         if self.mach.tlo.is_some_and(|t| t.iter().any(|&v| v != 0.0)) {
             let line = self.line_no();
             self.mach.standalone_drift = Some((
@@ -604,7 +609,7 @@ impl Interp<'_> {
                 *p *= f;
             }
         }
-        self.mach.modal.metric = metric;
+        self.mach.modal.units = units;
         self.mach.comp_units(metric);
     }
 
@@ -677,13 +682,16 @@ impl Interp<'_> {
             .collect();
         let mut target = start.clone();
         for &(a, v) in axis_words {
-            target[a] = if self.mach.modal.absolute {
+            target[a] = if self.mach.modal.distance == Distance::Absolute {
                 Some(v)
             } else {
                 start[a].map(|s| s + v)
             };
         }
-        let backoff = if self.mach.modal.metric { 0.254 } else { 0.01 };
+        let backoff = match self.mach.modal.units {
+            Units::Mm => 0.254,
+            Units::Inch => 0.01,
+        };
         let dist: f64 = (0..3)
             .map(|a| match (start[a], target[a]) {
                 (Some(s), Some(t)) => (t - s) * (t - s),
@@ -833,7 +841,7 @@ impl Machine {
     /// diameter mode (G7), and the position is a radius.
     #[inline(always)]
     fn radius_word(&self, axis: usize, v: f64) -> f64 {
-        if axis == 0 && self.modal.lathe_diameter {
+        if axis == 0 && self.modal.lathe == LatheMode::Diameter {
             v / 2.0
         } else {
             v
@@ -844,7 +852,7 @@ impl Machine {
     /// (G91).
     pub(in crate::eval) fn axis_end(&self, axis: usize, v: f64) -> Result<f64, Unknown> {
         let v = self.radius_word(axis, v);
-        if self.modal.absolute {
+        if self.modal.distance == Distance::Absolute {
             Ok(v)
         } else {
             self.pos.axes[axis].clone().map(|p| p + v)
@@ -857,7 +865,7 @@ impl Machine {
     pub(in crate::eval) fn move_axis(&mut self, axis: usize, v: f64) {
         self.tlo_moved = false;
         let v = self.radius_word(axis, v);
-        if self.modal.absolute {
+        if self.modal.distance == Distance::Absolute {
             self.pos.axes[axis] = Ok(v);
         } else if let Ok(p) = &mut self.pos.axes[axis] {
             *p += v;
@@ -901,7 +909,7 @@ impl Machine {
                     None => ArcCenter::Offsets {
                         i: word(c0).unwrap_or(0.0),
                         j: word(c1).unwrap_or(0.0),
-                        absolute: self.modal.ijk_absolute,
+                        absolute: self.modal.arc_distance == ArcDistance::Absolute,
                     },
                 };
                 let arc = Arc {
@@ -909,7 +917,7 @@ impl Machine {
                     center,
                     turns: 1,
                 };
-                let tol = Tolerances::default_for(self.modal.metric);
+                let tol = Tolerances::default_for(self.modal.units == Units::Mm);
                 match arc_center(&tol, arc, [sx, sy], [ex, ey]) {
                     Ok(_) => {}
                     Err(CompError::ArcSamePoint) => return Err(bad(BlockError::ArcSamePoint)),
@@ -919,7 +927,7 @@ impl Machine {
                     Err(CompError::ZeroRadiusArc) => return Err(bad(BlockError::ZeroRadiusArc)),
                     Err(_) => {
                         let (ci, cj) = (word(c0).unwrap_or(0.0), word(c1).unwrap_or(0.0));
-                        let (cx, cy) = if self.modal.ijk_absolute {
+                        let (cx, cy) = if self.modal.arc_distance == ArcDistance::Absolute {
                             (ci, cj)
                         } else {
                             (sx + ci, sy + cj)
@@ -938,9 +946,9 @@ impl Machine {
                     .filter_map(|w| Some((end(w.0)? - start(w.0)?).powi(2)))
                     .sum::<f64>()
                     .sqrt();
-                let known = axis_words
-                    .iter()
-                    .all(|w| start(w.0).is_some() || (self.modal.absolute && w.0 >= 3));
+                let known = axis_words.iter().all(|w| {
+                    start(w.0).is_some() || (self.modal.distance == Distance::Absolute && w.0 >= 3)
+                });
                 if known && d < 1e-7 {
                     return Err(bad(BlockError::ProbeTooClose));
                 }

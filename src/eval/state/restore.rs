@@ -7,8 +7,7 @@ use crate::diag::{Error, ErrorKind};
 use crate::parse::ast::Span;
 use crate::program::FileIndex;
 
-use crate::codes::SpindleDir;
-use crate::codes::{CutterComp, GCode};
+use crate::codes::{CutterComp, GCode, SpindleDir, SpindleMode};
 use crate::eval::Interp;
 use crate::eval::state::Modal;
 
@@ -77,8 +76,8 @@ impl Interp<'_> {
         } = saved;
         let cur = self.mach.modal.clone();
         // Units come first, on their own line, as in the reference.
-        if cur.metric != saved.metric {
-            self.emit_raw(if saved.metric { b"G21" } else { b"G20" })?;
+        if cur.units != saved.units {
+            self.emit_raw(GCode::Units(saved.units).name().as_bytes())?;
         }
         let mut words: Vec<String> = Vec::new();
         if cur.plane != saved.plane {
@@ -87,19 +86,11 @@ impl Interp<'_> {
         if cur.ccomp != saved.ccomp && saved.ccomp == CutterComp::Off {
             words.push("G40".into());
         }
-        if cur.absolute != saved.absolute {
-            words.push(if saved.absolute {
-                "G90".into()
-            } else {
-                "G91".into()
-            });
+        if cur.distance != saved.distance {
+            words.push(GCode::Distance(saved.distance).name());
         }
-        if cur.ijk_absolute != saved.ijk_absolute {
-            words.push(if saved.ijk_absolute {
-                "G90.1".into()
-            } else {
-                "G91.1".into()
-            });
+        if cur.arc_distance != saved.arc_distance {
+            words.push(GCode::ArcDistance(saved.arc_distance).name());
         }
         if cur.feed_mode != saved.feed_mode {
             words.push(GCode::FeedMode(saved.feed_mode).name());
@@ -107,19 +98,16 @@ impl Interp<'_> {
         if cur.coord != saved.coord {
             words.push(GCode::Coord(saved.coord).name());
         }
-        if cur.tool_offset != saved.tool_offset {
+        let tool_offset = saved.tool_length.in_effect();
+        if cur.tool_length.in_effect() != tool_offset {
             // G43 takes the current tool's offset, as the reference restores.
-            words.push(if saved.tool_offset { "G43" } else { "G49" }.into());
+            words.push(if tool_offset { "G43" } else { "G49" }.into());
         }
-        if cur.retract_r != saved.retract_r {
-            words.push(if saved.retract_r {
-                "G99".into()
-            } else {
-                "G98".into()
-            });
+        if cur.retract != saved.retract {
+            words.push(GCode::Retract(saved.retract).name());
         }
-        if cur.css != saved.css && !saved.css {
-            words.push("G97".into());
+        if cur.spindle_mode != saved.spindle_mode && saved.spindle_mode == SpindleMode::Rpm {
+            words.push(GCode::SpindleMode(SpindleMode::Rpm).name());
         }
         if cur.path != saved.path {
             // The reference restores G64 without its P and Q.
@@ -155,12 +143,12 @@ impl Interp<'_> {
             self.emit_raw(if *g92_applied { b"G92.3" } else { b"G92.2" })?;
         }
         // The position model follows what those words do.
-        self.set_units(saved.metric);
+        self.set_units(saved.units);
         if cur.coord != saved.coord {
             self.select_cs(saved.coord);
         }
-        if cur.tool_offset != saved.tool_offset {
-            self.tool_offset_words(saved.tool_offset);
+        if cur.tool_length.in_effect() != tool_offset {
+            self.tool_offset_words(tool_offset);
         }
         if *g92_applied != g92_now {
             self.g92_switch(*g92_applied);
