@@ -521,6 +521,109 @@ impl PathMode {
     }
 }
 
+/// The modal state a program puts the machine in, as the evaluator and the
+/// machine model both keep it: the code in effect in each modal group, the
+/// feed and speed, the spindle, the coolant and the override switches.
+/// `default()` is LinuxCNC's power-on state. A new modal code needs its
+/// decoding above, its field here and the updates of the two owners.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Modes {
+    /// Group 1. The evaluator keeps `NurbsEnd` after G5.3 (no motion mode).
+    pub motion: MotionMode,
+    pub plane: Plane,
+    pub distance: Distance,
+    pub arc_distance: ArcDistance,
+    pub feed_mode: FeedMode,
+    pub units: Units,
+    /// As written: G41.1 and G42.1 stay dynamic (`#<_ccomp>` reads the
+    /// side, [`CutterComp::side`]).
+    pub cutter_comp: CutterComp,
+    /// `Cancel` (G49), or the code that put an offset in effect.
+    pub tool_length: ToolLength,
+    /// G54 … G59.3
+    pub coord: CoordSystem,
+    pub path: PathMode,
+    pub retract: Retract,
+    pub spindle_mode: SpindleMode,
+    pub lathe: LatheMode,
+    /// In program units (per minute, per rev or inverse time).
+    pub feed: f64,
+    pub speed: f64,
+    pub spindle: SpindleDir,
+    pub mist: bool,
+    pub flood: bool,
+    /// M48–M53: speed and feed override, adaptive feed, feed hold.
+    pub speed_override: bool,
+    pub feed_override: bool,
+    pub adaptive_feed: bool,
+    pub feed_hold: bool,
+}
+
+impl Default for Modes {
+    fn default() -> Modes {
+        Modes {
+            motion: MotionMode::CancelCycle,
+            plane: Plane::XY,
+            distance: Distance::Absolute,
+            arc_distance: ArcDistance::Incremental,
+            feed_mode: FeedMode::PerMinute,
+            units: Units::Mm,
+            cutter_comp: CutterComp::Off,
+            tool_length: ToolLength::Cancel,
+            coord: CoordSystem::G54,
+            path: PathMode::Blend,
+            // LinuxCNC starts in G99 (`#<_retract_r_plane>` reads 1).
+            retract: Retract::R,
+            spindle_mode: SpindleMode::Rpm,
+            lathe: LatheMode::Radius,
+            feed: 0.0,
+            speed: 0.0,
+            spindle: SpindleDir::Off,
+            mist: false,
+            flood: false,
+            speed_override: true,
+            feed_override: true,
+            adaptive_feed: false,
+            feed_hold: true,
+        }
+    }
+}
+
+impl Modes {
+    /// M48–M53 (`n`) with the line's P word: M48 turns both overrides on,
+    /// M49 off; M50–M53 turn their switch off with P0, on otherwise.
+    pub fn set_override(&mut self, n: u8, p: Option<f64>) {
+        let on = p.is_none_or(|p| p != 0.0);
+        match n {
+            48 | 49 => {
+                self.speed_override = n == 48;
+                self.feed_override = n == 48;
+            }
+            50 => self.feed_override = on,
+            51 => self.speed_override = on,
+            52 => self.adaptive_feed = on,
+            53 => self.feed_hold = on,
+            _ => {}
+        }
+    }
+
+    /// What M2 and M30 reset, as LinuxCNC documents it: G54, G17, G90, G94,
+    /// M48, G40, M5, G1, M9.
+    pub fn end_of_program(&mut self) {
+        self.coord = CoordSystem::G54;
+        self.plane = Plane::XY;
+        self.distance = Distance::Absolute;
+        self.feed_mode = FeedMode::PerMinute;
+        self.speed_override = true;
+        self.feed_override = true;
+        self.cutter_comp = CutterComp::Off;
+        self.spindle = SpindleDir::Off;
+        self.motion = MotionMode::Linear;
+        self.mist = false;
+        self.flood = false;
+    }
+}
+
 /// M codes by what they do.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MCode {
@@ -645,6 +748,34 @@ mod tests {
         assert_eq!(CoordSystem(9).parameters(), 5381);
         assert_eq!(CoordSystem(6).code10(), 590);
         assert_eq!(CoordSystem(7).code10(), 591);
+    }
+
+    #[test]
+    fn override_switches_and_program_end() {
+        let mut m = Modes::default();
+        m.set_override(49, None);
+        assert!(!m.speed_override && !m.feed_override);
+        m.set_override(50, None);
+        assert!(m.feed_override && !m.speed_override);
+        m.set_override(53, Some(0.0));
+        m.set_override(52, Some(2.0));
+        assert!(!m.feed_hold && m.adaptive_feed);
+        m.set_override(51, Some(0.0));
+        m.set_override(48, Some(0.0));
+        assert!(m.speed_override && m.feed_override);
+        m.set_override(49, None);
+        (m.plane, m.distance, m.motion) = (Plane::YZ, Distance::Incremental, MotionMode::Rapid);
+        (m.cutter_comp, m.spindle, m.mist) = (CutterComp::Left, SpindleDir::Cw, true);
+        (m.coord, m.feed, m.units) = (CoordSystem(3), 5.0, Units::Inch);
+        m.end_of_program();
+        let mut want = Modes {
+            motion: MotionMode::Linear,
+            ..Modes::default()
+        };
+        (want.feed, want.units) = (5.0, Units::Inch);
+        // M2 leaves adaptive feed and feed hold as they were.
+        (want.adaptive_feed, want.feed_hold) = (true, false);
+        assert_eq!(m, want);
     }
 
     #[test]

@@ -17,10 +17,10 @@ use crate::fx_hasher::FxMap;
 
 use super::motion::{Feed, Motion, MoveKind, Point};
 use crate::block::{
-    AXIS_LETTERS, ArcDistance, Block, CoordSystem, CutterComp, Distance, FeedMode, LatheMode,
-    MCode, MotionMode, NonModal, PathMode, Plane, Retract, SpindleDir, SpindleMode, ToolLength,
-    Units,
+    AXIS_LETTERS, ArcDistance, Block, CoordSystem, Distance, FeedMode, LatheMode, MCode,
+    MotionMode, NonModal, PathMode, Plane, Retract, SpindleDir, SpindleMode, ToolLength, Units,
 };
+use crate::codes::Modes;
 
 const MM_PER_INCH: f64 = 25.4;
 
@@ -29,58 +29,6 @@ pub(crate) type MaybeAxes = [Option<f64>; 9];
 
 const UNKNOWN: MaybeAxes = [None; 9];
 const ZERO: MaybeAxes = [Some(0.0); 9];
-
-/// The modal state, power-on values as LinuxCNC's.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Modes {
-    pub motion: MotionMode,
-    pub plane: Plane,
-    pub distance: Distance,
-    pub arc_distance: ArcDistance,
-    pub feed_mode: FeedMode,
-    pub units: Units,
-    pub cutter_comp: CutterComp,
-    /// A tool length offset is in effect (G43, G43.1, G43.2).
-    pub tool_length: Option<ToolLength>,
-    /// G54 … G59.3
-    pub coord: CoordSystem,
-    pub path: PathMode,
-    pub retract: Retract,
-    pub spindle_mode: SpindleMode,
-    pub lathe: LatheMode,
-    /// In program units (per minute, per rev or inverse time).
-    pub feed: f64,
-    pub speed: f64,
-    pub spindle: SpindleDir,
-    pub mist: bool,
-    pub flood: bool,
-}
-
-impl Default for Modes {
-    fn default() -> Modes {
-        Modes {
-            motion: MotionMode::CancelCycle,
-            plane: Plane::XY,
-            distance: Distance::Absolute,
-            arc_distance: ArcDistance::Incremental,
-            feed_mode: FeedMode::PerMinute,
-            units: Units::Mm,
-            cutter_comp: CutterComp::Off,
-            tool_length: None,
-            coord: CoordSystem::G54,
-            path: PathMode::Blend,
-            // LinuxCNC starts in G99 (`#<_retract_r_plane>` reads 1).
-            retract: Retract::R,
-            spindle_mode: SpindleMode::Rpm,
-            lathe: LatheMode::Radius,
-            feed: 0.0,
-            speed: 0.0,
-            spindle: SpindleDir::Off,
-            mist: false,
-            flood: false,
-        }
-    }
-}
 
 /// The machine state a flat program runs on.
 #[derive(Debug, Clone)]
@@ -420,6 +368,7 @@ impl Machine {
                         flood: self.modes.flood,
                     });
                 }
+                MCode::Override(n) => self.modes.set_override(n, b.value(b'P')),
                 _ => {
                     let _ = w;
                 }
@@ -536,7 +485,7 @@ impl Machine {
             }
             ToolLength::Cancel => self.tlo = ZERO,
         }
-        self.modes.tool_length = (t != ToolLength::Cancel).then_some(t);
+        self.modes.tool_length = t;
         self.shift(before);
     }
 
@@ -900,17 +849,8 @@ impl Machine {
 
     fn end(&mut self) {
         let before = self.offset();
-        let m = &mut self.modes;
-        m.coord = CoordSystem::G54;
-        m.plane = Plane::XY;
-        m.distance = Distance::Absolute;
-        m.feed_mode = FeedMode::PerMinute;
-        m.cutter_comp = CutterComp::Off;
-        m.motion = MotionMode::Linear;
-        m.spindle = SpindleDir::Off;
-        m.mist = false;
-        m.flood = false;
-        m.path = PathMode::Blend;
+        self.modes.end_of_program();
+        self.modes.path = PathMode::Blend;
         if self.g92_applied == Some(true) {
             // M2 keeps G92 offsets in LinuxCNC 2.9 (DISABLE_G92_PERSISTENCE
             // aside); nothing to change.

@@ -160,7 +160,7 @@ impl Interp<'_> {
                 motion => motion.code10() as f64,
             },
             Predef::Plane => m.plane.code10() as f64,
-            Predef::Ccomp => m.ccomp.code10() as f64,
+            Predef::Ccomp => m.cutter_comp.side().code10() as f64,
             Predef::ToolOffset => flag(m.tool_length.in_effect()),
             Predef::RetractRPlane => flag(m.retract == code::Retract::R),
             Predef::RetractOldZ => flag(m.retract == code::Retract::Initial),
@@ -273,7 +273,7 @@ impl Interp<'_> {
 
     /// Current position on an axis, or why it is unknown.
     pub(crate) fn position(&self, axis: usize, span: Span) -> EvalResult {
-        if self.mach.modal.ccomp != code::CutterComp::Off {
+        if self.mach.modal.cutter_comp != code::CutterComp::Off {
             let why = "cutter radius compensation is on".to_string();
             return Err(fault(
                 ErrorKind::UnknownPosition {

@@ -374,7 +374,7 @@ impl Interp<'_> {
     ) -> Result<u32, Error> {
         if !self.s.plain_runs
             || self.mach.rotated
-            || (self.mach.modal.ccomp != CutterComp::Off || self.mach.comp_pending)
+            || (self.mach.modal.cutter_comp != CutterComp::Off || self.mach.comp_pending)
             || self.out.ended
         {
             return Ok(0);
@@ -488,7 +488,7 @@ impl Interp<'_> {
                 *batch_start = p.next;
                 if self.out.ended
                     || self.mach.rotated
-                    || (self.mach.modal.ccomp != CutterComp::Off || self.mach.comp_pending)
+                    || (self.mach.modal.cutter_comp != CutterComp::Off || self.mach.comp_pending)
                 {
                     *last_start = *i;
                     *i = p.next;
@@ -592,7 +592,7 @@ impl Interp<'_> {
     /// to leave them to the general checks.
     pub(in crate::eval) fn fast_words(&mut self, words: &[(u8, f64)]) -> bool {
         if self.mach.rotated
-            || (self.mach.modal.ccomp != CutterComp::Off || self.mach.comp_pending)
+            || (self.mach.modal.cutter_comp != CutterComp::Off || self.mach.comp_pending)
             || !self.s.plain_runs
         {
             return false;

@@ -5,12 +5,12 @@
 
 use crate::diag::ErrorKind;
 
+use crate::codes::Modes;
 use crate::codes::{
     CutterComp, Distance, FeedMode, GCode, MCode, MotionMode, NonModal, PathMode, Plane,
     SpindleDir, SpindleMode, ToolLength,
 };
 use crate::diag::BlockError;
-use crate::eval::state::Modal;
 use crate::eval::state::cycle::{Cycle, depth_axis};
 use crate::eval::state::nurbs::{NO_MOTION, NURBS, Nurbs};
 
@@ -73,7 +73,7 @@ fn rough(m: MotionMode) -> bool {
 /// a lathe cycle (G70–G72).
 pub(crate) fn check_block(
     words: &[(u8, f64)],
-    modal: &Modal,
+    modal: &Modes,
     points: &Nurbs,
     cycle: &Cycle,
     user_m: u128,
@@ -95,7 +95,7 @@ const fn bit(c: u8) -> u32 {
 /// Fast acceptance of the most common blocks (G0/G1 moves with axis, F and
 /// S words). Anything it does not clearly accept goes to the full check.
 #[inline]
-fn simple_block_ok(words: &[(u8, f64)], modal: &Modal) -> bool {
+fn simple_block_ok(words: &[(u8, f64)], modal: &Modes) -> bool {
     const SIMPLE: u32 = bit(b'g')
         | bit(b'x')
         | bit(b'y')
@@ -154,7 +154,7 @@ fn bad<T>(e: BlockError, at: Option<usize>) -> Result<T, (ErrorKind, Option<usiz
 /// from them in the modal state the block meets.
 struct Decoded<'a> {
     words: &'a [(u8, f64)],
-    modal: &'a Modal,
+    modal: &'a Modes,
     gs: &'a [(GCode, usize)],
     ms: &'a [(MCode, usize)],
     has: &'a [Option<u8>; 128],
@@ -178,7 +178,7 @@ struct Decoded<'a> {
 impl<'a> Decoded<'a> {
     fn new(
         words: &'a [(u8, f64)],
-        modal: &'a Modal,
+        modal: &'a Modes,
         gs: &'a [(GCode, usize)],
         ms: &'a [(MCode, usize)],
         has: &'a [Option<u8>; 128],
@@ -270,7 +270,7 @@ impl<'a> Decoded<'a> {
 
 fn full_check(
     words: &[(u8, f64)],
-    modal: &Modal,
+    modal: &Modes,
     points: &Nurbs,
     cycle: &Cycle,
     user_m: u128,
@@ -375,7 +375,7 @@ fn full_check(
     check_g10(&d)?;
     check_required_words(&d)?;
     check_feed(&d)?;
-    if modal.ccomp != CutterComp::Off || d.g_on(comp_on) {
+    if modal.cutter_comp != CutterComp::Off || d.g_on(comp_on) {
         check_comp(&d)?;
     }
     Ok(lathe)
@@ -392,7 +392,7 @@ fn check_comp(d: &Decoded<'_>) -> Check {
         GCode::Plane(p) => Some((p, i)),
         _ => None,
     });
-    let before = d.modal.ccomp != CutterComp::Off;
+    let before = d.modal.cutter_comp != CutterComp::Off;
     let turning_on = d.gs.iter().find_map(|&(g, i)| match g {
         GCode::CutterComp(c) if c != CutterComp::Off => Some((c, i)),
         _ => None,
@@ -620,7 +620,7 @@ fn check_cycle(d: &Decoded<'_>, cycle: &Cycle) -> Check {
         if d.feed_mode == FeedMode::InverseTime {
             return bad(BlockError::CycleInverseTime, None);
         }
-        if d.modal.ccomp != CutterComp::Off && !d.has_g(G40) || d.g_on(comp_on) {
+        if d.modal.cutter_comp != CutterComp::Off && !d.has_g(G40) || d.g_on(comp_on) {
             return bad(BlockError::CycleWithComp, None);
         }
         // The R plane must not be below the bottom of the hole (in G91 the

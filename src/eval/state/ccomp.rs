@@ -213,7 +213,7 @@ impl Machine {
         if matches!(self.comp_written, Written::After | Written::AfterOff) {
             self.written_move(words, motion)?;
         }
-        if self.modal.ccomp == CutterComp::Off {
+        if self.modal.cutter_comp == CutterComp::Off {
             if self.comp_pending {
                 use MotionMode as M;
                 match motion {
@@ -285,7 +285,7 @@ impl Machine {
     pub(in crate::eval) fn comp_offsets(&self) -> Option<bool> {
         self.comp
             .as_ref()
-            .filter(|r| r.known && self.modal.ccomp != CutterComp::Off)
+            .filter(|r| r.known && self.modal.cutter_comp != CutterComp::Off)
             .map(|r| r.comp.is_offsetting())
     }
 
@@ -338,7 +338,7 @@ impl Machine {
             Written::After => refuse(WRITTEN_AFTER),
             Written::AfterOff => {
                 let has = |l: u8| words.iter().any(|w| w.0 == l);
-                if self.modal.ccomp != CutterComp::Off
+                if self.modal.cutter_comp != CutterComp::Off
                     || self.modal.distance != Distance::Absolute
                     || !has(b'x')
                     || !has(b'z')
@@ -355,7 +355,7 @@ impl Machine {
 
     /// Whether G53 would move with an offset path (the reference refuses it).
     pub(in crate::eval) fn comp_offsetting(&self) -> bool {
-        self.modal.ccomp != CutterComp::Off
+        self.modal.cutter_comp != CutterComp::Off
             && self
                 .comp
                 .as_ref()

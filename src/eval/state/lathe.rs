@@ -108,7 +108,7 @@ impl Interp<'_> {
         let Some(q) = word(b'q') else {
             return Err(self.lathe_err(LatheError::NoQ { code: name }, file, start, len));
         };
-        let comp = self.mach.modal.ccomp != CutterComp::Off;
+        let comp = self.mach.modal.cutter_comp != CutterComp::Off;
         if comp && number != 70 {
             return Err(self.lathe_err(LatheError::WithComp { code: name }, file, start, len));
         }
@@ -503,7 +503,7 @@ impl Interp<'_> {
         // compensation reads is the contour's end (set while reading it),
         // the programmed position the rapid's end.
         let offsets = self.mach.comp_offsets() == Some(true);
-        if self.mach.modal.ccomp != CutterComp::Off && run.moved {
+        if self.mach.modal.cutter_comp != CutterComp::Off && run.moved {
             let p = [run.point.re, run.point.im];
             self.mach.comp_set_current(p);
             self.consumer_comp_position(p);

@@ -194,7 +194,7 @@ impl Interp<'_> {
         }
         let (special, dynamic_tlo) = self.apply_g_modes(&w);
         let _ = self.line_no();
-        if self.mach.comp.is_some() || self.mach.modal.ccomp != CutterComp::Off {
+        if self.mach.comp.is_some() || self.mach.modal.cutter_comp != CutterComp::Off {
             for &g in w.gs() {
                 let r = match g {
                     GCode::CutterComp(CutterComp::Off) => self.mach.comp_off(),
@@ -223,7 +223,7 @@ impl Interp<'_> {
             }
         }
         if w.ends {
-            self.mach.modal.reset_at_end();
+            super::reset_at_end(&mut self.mach.modal);
         }
         Ok(w.ends)
     }
@@ -307,18 +307,7 @@ impl Interp<'_> {
                 self.mach.modal.mist = false;
                 self.mach.modal.flood = false;
             }
-            MCode::Override(48) => {
-                self.mach.modal.speed_override = true;
-                self.mach.modal.feed_override = true;
-            }
-            MCode::Override(49) => {
-                self.mach.modal.speed_override = false;
-                self.mach.modal.feed_override = false;
-            }
-            MCode::Override(50) => self.mach.modal.feed_override = w.p.is_none_or(|p| p != 0.0),
-            MCode::Override(51) => self.mach.modal.speed_override = w.p.is_none_or(|p| p != 0.0),
-            MCode::Override(52) => self.mach.modal.adaptive_feed = w.p.is_none_or(|p| p != 0.0),
-            MCode::Override(53) => self.mach.modal.feed_hold = w.p.is_none_or(|p| p != 0.0),
+            MCode::Override(n) => self.mach.modal.set_override(n, w.p),
             _ => {}
         }
     }
@@ -329,12 +318,8 @@ impl Interp<'_> {
     fn apply_m_p_words(&mut self, words: &Words, w: &mut LineWords) {
         for &(l, v) in words {
             if l == b'm' {
-                let on = w.p.is_none_or(|p| p != 0.0);
                 match MCode::decode(v) {
-                    MCode::Override(50) => self.mach.modal.feed_override = on,
-                    MCode::Override(51) => self.mach.modal.speed_override = on,
-                    MCode::Override(52) => self.mach.modal.adaptive_feed = on,
-                    MCode::Override(53) => self.mach.modal.feed_hold = on,
+                    MCode::Override(n @ 50..=53) => self.mach.modal.set_override(n, w.p),
                     // M61's Q may come after it on the line.
                     MCode::SetTool => {
                         if self.mach.m61.is_none() {
@@ -373,7 +358,7 @@ impl Interp<'_> {
                 GCode::Distance(d) => self.mach.modal.distance = d,
                 GCode::ArcDistance(d) => self.mach.modal.arc_distance = d,
                 GCode::FeedMode(f) => self.mach.modal.feed_mode = f,
-                GCode::CutterComp(c) => self.mach.modal.ccomp = c.side(),
+                GCode::CutterComp(c) => self.mach.modal.cutter_comp = c,
                 GCode::ToolLength(ToolLength::Apply) => self.g43(false, w.h),
                 GCode::ToolLength(ToolLength::Add) => self.g43(true, w.h),
                 GCode::ToolLength(ToolLength::Dynamic) => {
@@ -484,7 +469,7 @@ impl Interp<'_> {
                     let k = ErrorKind::CompForbids { action: "use G53" };
                     return Err(self.error(k, file, start, start));
                 }
-                if self.mach.modal.ccomp != CutterComp::Off {
+                if self.mach.modal.cutter_comp != CutterComp::Off {
                     self.forget(&[0, 1, 2], "cutter radius compensation");
                 }
                 for &(a, v) in w.axis_words() {
@@ -533,7 +518,7 @@ impl Interp<'_> {
                     self.mach.note_cycle(words);
                 }
                 self.move_to(axis_words);
-                if (self.mach.comp.is_some() || self.mach.modal.ccomp != CutterComp::Off)
+                if (self.mach.comp.is_some() || self.mach.modal.cutter_comp != CutterComp::Off)
                     && let Err(k) = self.mach.comp_move(words, self.mach.modal.motion)
                 {
                     return Err(self.error(k, file, start, start));
@@ -801,7 +786,7 @@ impl Machine {
     /// a plain state: as the general update below, in a few steps. False
     /// leaves the state untouched.
     fn apply_simple(&mut self, words: &[(u8, f64)]) -> bool {
-        if self.rotated || self.modal.ccomp != CutterComp::Off || self.comp_pending {
+        if self.rotated || self.modal.cutter_comp != CutterComp::Off || self.comp_pending {
             return false;
         }
         let mut motion = self.modal.motion;

@@ -54,7 +54,7 @@ impl Interp<'_> {
         );
         self.mach.nurbs.points = 0;
         self.mach.modal.motion = NO_MOTION;
-        if self.mach.rotated || self.mach.modal.ccomp != CutterComp::Off {
+        if self.mach.rotated || self.mach.modal.cutter_comp != CutterComp::Off {
             self.forget(&[0, 1], "a NURBS block");
         } else {
             self.mach.pos.axes[0] = x;

@@ -7,15 +7,15 @@ use crate::diag::{Error, ErrorKind};
 use crate::parse::ast::Span;
 use crate::program::FileIndex;
 
+use crate::codes::Modes;
 use crate::codes::{CutterComp, GCode, SpindleDir, SpindleMode};
 use crate::eval::Interp;
-use crate::eval::state::Modal;
 
 /// The state M70 or M73 saves: the modal state, and whether G92 offsets
 /// were applied (M72 turns them on or off again).
 #[derive(Clone)]
 pub(crate) struct Saved {
-    pub modal: Modal,
+    pub modal: Modes,
     pub g92_applied: bool,
 }
 
@@ -83,7 +83,7 @@ impl Interp<'_> {
         if cur.plane != saved.plane {
             words.push(GCode::Plane(saved.plane).name());
         }
-        if cur.ccomp != saved.ccomp && saved.ccomp == CutterComp::Off {
+        if cur.cutter_comp != saved.cutter_comp && saved.cutter_comp == CutterComp::Off {
             words.push("G40".into());
         }
         if cur.distance != saved.distance {
