@@ -15,7 +15,7 @@ use std::sync::mpsc::{self, Receiver, Sender, SyncSender};
 use std::thread::JoinHandle;
 
 use super::edit::{Edit, EditRef, max_edited_len, write_edited, write_edits};
-use super::sink::Sink;
+use super::sink::{Destination, Sink};
 use crate::source::SourceFile;
 use crate::source::Span;
 
@@ -104,6 +104,14 @@ impl Output {
             out.start_thread();
         }
         out
+    }
+
+    /// An output that throws everything away: the stand-in while the real
+    /// one is on another thread.
+    pub(crate) fn discarding() -> Option<Output> {
+        Sink::new(Destination::Discard)
+            .ok()
+            .map(|s| Output::new(s, None, usize::MAX))
     }
 
     /// Moves the sink to a second thread; if none can be started, output

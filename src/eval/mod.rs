@@ -121,7 +121,7 @@ pub(crate) fn output_error(e: std::io::Error) -> Error {
 
 /// `e` placed at the line starting at `at` in `file` with the calls
 /// `stack`, if it is the output byte limit without a place.
-fn place_limit(
+pub(in crate::eval) fn place_limit(
     mut e: Error,
     file: &Arc<SourceFile>,
     at: u32,
@@ -192,6 +192,7 @@ impl<'s> Interp<'s> {
     /// Hands every output line to `consumer` instead of the output.
     pub fn with_consumer(mut self, consumer: Box<dyn LineConsumer + 's>) -> Interp<'s> {
         self.out.consumer = Some(consumer);
+        self.out.apart_after = self.s.format_thread_after;
         self
     }
 
@@ -376,8 +377,76 @@ impl<'s> Interp<'s> {
         }
         while !self.out.ended {
             self.step()?;
+            if self.out.handed >= self.out.apart_after {
+                return self.run_apart();
+            }
         }
         Ok(())
+    }
+
+    /// Runs the rest of the program with the consumer (and the output) on
+    /// a second thread (see [`out::apart`]); stays on this one if no thread
+    /// can be had.
+    fn run_apart(&mut self) -> Result<(), Error> {
+        use std::sync::atomic::AtomicBool;
+        use std::sync::mpsc;
+        self.out.apart_after = usize::MAX;
+        let rest = |i: &mut Interp<'s>| {
+            while !i.out.ended {
+                i.step()?;
+            }
+            Ok(())
+        };
+        let Some(placeholder) = crate::emit::Output::discarding() else {
+            return rest(self);
+        };
+        let Some(consumer) = self.out.consumer.take() else {
+            return rest(self);
+        };
+        let output = std::mem::replace(&mut self.out.output, placeholder);
+        let computes_comp = consumer.computes_comp();
+        // The consumer and the output reach the thread through a shared
+        // slot, so that they stay here if no thread starts.
+        let slot = std::sync::Mutex::new(Some((consumer, output)));
+        let failed = Arc::new(AtomicBool::new(false));
+        std::thread::scope(|sc| {
+            let (to, from) = mpsc::sync_channel(out::apart::QUEUE);
+            let (give_back, back) = mpsc::channel();
+            let flag = failed.clone();
+            let slot = &slot;
+            let spawned = std::thread::Builder::new().spawn_scoped(sc, move || {
+                let (c, o) = slot.lock().ok()?.take()?;
+                Some(out::apart::serve(c, o, from, give_back, &flag))
+            });
+            let Ok(thread) = spawned else {
+                if let Some((c, o)) = slot.lock().ok().and_then(|mut s| s.take()) {
+                    self.out.consumer = Some(c);
+                    self.out.output = o;
+                }
+                return rest(self);
+            };
+            self.out.apart = Some(out::apart::Apart::new(to, back, failed, computes_comp));
+            let r = rest(self);
+            if let Some(a) = self.out.apart.take() {
+                a.close();
+            }
+            let served = match thread.join() {
+                Ok(s) => s,
+                Err(p) => std::panic::resume_unwind(p),
+            };
+            let Some((c, o, failure)) = served else {
+                return r;
+            };
+            self.out.consumer = Some(c);
+            self.out.output = o;
+            match failure {
+                Some(f) => {
+                    self.diags.warnings.truncate(f.warnings);
+                    Err(f.error)
+                }
+                None => r,
+            }
+        })
     }
 
     /// Warns of code after the end that never runs; returns the subs
@@ -699,7 +768,7 @@ impl<'s> Interp<'s> {
     /// Writes one finished output line.
     fn emit_raw(&mut self, bytes: &[u8]) -> Result<(), Error> {
         self.count_line()?;
-        if self.out.consumer.is_some() {
+        if self.out.consuming() {
             let file = self.flow.cur.file.file.clone();
             return self.consume(&file, self.reader.line_start, bytes, false);
         }
@@ -713,7 +782,7 @@ impl<'s> Interp<'s> {
     /// blanks, starting at `start` in `file`).
     fn emit_source(&mut self, file: &Rc<FileIndex>, start: u32, bytes: &[u8]) -> Result<(), Error> {
         self.count_line()?;
-        if self.out.consumer.is_some() {
+        if self.out.consuming() {
             let file = file.file.clone();
             return self.consume(&file, start, bytes, true);
         }

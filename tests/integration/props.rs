@@ -1125,3 +1125,97 @@ proptest! {
         target_output_fits("fluidnc", &lines)?;
     }
 }
+
+/// Diagnostics and output (or error) of `prog` flattened for `target`,
+/// with the consumer moving to its own thread after `after` lines.
+fn run_for_target(prog: &str, target: &str, check: bool, after: usize) -> (Vec<String>, String) {
+    use ngcflat::target::{TargetOptions, find};
+    let settings = Settings {
+        zero_start: true,
+        format_thread_after: after,
+        ..small_limits()
+    };
+    let mut opts = TargetOptions::new(find(target).expect("profile"));
+    opts.check = check;
+    let consumer = ngcflat::lowering(&settings, Some(opts));
+    let (diags, r) = ngcflat::flatten_memory(
+        prog.as_bytes().to_vec(),
+        Default::default(),
+        &settings,
+        consumer,
+    );
+    let shown = diags
+        .iter()
+        .map(|d| render(d, MessageFormat::Short, false))
+        .collect();
+    let out = match r {
+        Ok(o) => String::from_utf8_lossy(&o).into_owned(),
+        Err(e) => format!("error: {}", render(&e, MessageFormat::Short, false)),
+    };
+    (shown, out)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    /// The consumer on its own thread (from the first line, or after a
+    /// few) gives the output, the diagnostics and the error it gives on the
+    /// evaluator's thread: lines it refuses stop the run at the same line,
+    /// with the evaluator's later warnings and errors not reported, and in
+    /// check mode every problem is kept.
+    #[test]
+    fn consumer_apart_matches_consumer_here(
+        lines in proptest::collection::vec(target_line(), 1..16),
+        repeat in 0u32..40,
+        tail in proptest::collection::vec(
+            prop_oneof![
+                3 => target_line(),
+                // A warning of the evaluator (a parameter read unset).
+                1 => Just("#2 = [#55 + 1]".to_string()),
+            ],
+            0..4,
+        ),
+        check in any::<bool>(),
+    ) {
+        // A loop makes many lines; the tail may warn or fail after it.
+        let prog = format!(
+            "{}\no9 repeat [{repeat}]\n{}\no9 endrepeat\n{}\nM2\n",
+            lines.join("\n"),
+            lines.last().map_or("", String::as_str),
+            tail.join("\n"),
+        );
+        let here = run_for_target(&prog, "grbl", check, usize::MAX);
+        for after in [0, 3] {
+            let apart = run_for_target(&prog, "grbl", check, after);
+            prop_assert_eq!(&apart, &here, "apart after {} lines, program:\n{}", after, prog);
+        }
+    }
+}
+
+/// A refused line stops the run where it is, whichever thread the target
+/// runs on: warnings and errors of the evaluator after it are not reported.
+#[test]
+fn consumer_apart_stops_at_the_refused_line() {
+    // Line 3 is refused for grbl (an axis it lacks); line 5 reads an unset
+    // parameter (an evaluator warning), line 6 divides by zero (an
+    // evaluator error).
+    let prog = "G21 G90\nG1 X1 F100\nG1 A5\nG1 X2\n#1 = [#55 + 1]\n#1 = [1 / 0]\nM2\n";
+    let here = run_for_target(prog, "grbl", false, usize::MAX);
+    assert!(here.1.contains(":3:"), "{here:?}");
+    for after in [0, 1, 2] {
+        assert_eq!(
+            run_for_target(prog, "grbl", false, after),
+            here,
+            "after {after}"
+        );
+    }
+    // In check mode both problems are reported.
+    let here = run_for_target(prog, "grbl", true, usize::MAX);
+    for after in [0, 1, 2] {
+        assert_eq!(
+            run_for_target(prog, "grbl", true, after),
+            here,
+            "after {after}"
+        );
+    }
+}

@@ -28,8 +28,9 @@ pub struct Origin<'a> {
     pub stack: &'a dyn Fn() -> Vec<Site>,
 }
 
-/// Reads the flattened program line by line.
-pub trait LineConsumer {
+/// Reads the flattened program line by line. It may run on a second
+/// thread once a run has handed it many lines (see `apart`).
+pub trait LineConsumer: Send {
     /// One output line (no terminator). An error stops the run, unless the
     /// consumer keeps it to report at the end (check mode).
     fn line(&mut self, text: &[u8], origin: &Origin<'_>, out: &mut Output) -> Result<(), Error>;
@@ -105,9 +106,23 @@ impl Interp<'_> {
         verbatim: bool,
         block: Option<&Block>,
     ) -> Result<(), Error> {
+        if let Some(a) = self.out.apart.as_mut() {
+            // A block decoded ahead is the same line: the text carries it.
+            let frames = &self.flow.frames;
+            let stack = (frames.len() > 1).then(|| crate::eval::flow::stack_of(frames));
+            return a.line(
+                file,
+                line_start,
+                text,
+                verbatim,
+                stack,
+                self.diags.warnings.len(),
+            );
+        }
         let Some(mut c) = self.out.consumer.take() else {
             return Ok(());
         };
+        self.out.handed += 1;
         let frames = &self.flow.frames;
         let stack = || crate::eval::flow::stack_of(frames);
         let origin = Origin {
@@ -128,16 +143,22 @@ impl Interp<'_> {
     /// Whether the consumer computes cutter radius compensation into the
     /// path.
     pub(in crate::eval) fn consumer_computes_comp(&self) -> bool {
-        self.out
-            .consumer
-            .as_ref()
-            .is_some_and(|c| c.computes_comp())
+        match &self.out.apart {
+            Some(a) => a.computes_comp,
+            None => self
+                .out
+                .consumer
+                .as_ref()
+                .is_some_and(|c| c.computes_comp()),
+        }
     }
 
     /// Tells the consumer where LinuxCNC's compensation now reads the
     /// tool's position (see [`LineConsumer::comp_position`]).
     pub(in crate::eval) fn consumer_comp_position(&mut self, p: [f64; 2]) {
-        if let Some(c) = self.out.consumer.as_mut() {
+        if let Some(a) = self.out.apart.as_mut() {
+            a.comp_position(p);
+        } else if let Some(c) = self.out.consumer.as_mut() {
             c.comp_position(p);
         }
     }

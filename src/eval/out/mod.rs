@@ -1,6 +1,7 @@
 //! The output: lines written, their count against the limits, progress, and
 //! the consumer that may take them instead.
 
+pub(super) mod apart;
 pub(super) mod hook;
 pub(super) mod progress;
 
@@ -26,6 +27,14 @@ pub(super) struct Writer<'s> {
     pub(super) ended: bool,
     /// Reads every output line instead of the output (see [`hook`]).
     pub(super) consumer: Option<Box<dyn hook::LineConsumer + 's>>,
+    /// The consumer moved to a second thread: lines go to it through this
+    /// queue (see [`apart`]).
+    pub(super) apart: Option<apart::Apart>,
+    /// Lines handed to the consumer on this thread.
+    pub(super) handed: usize,
+    /// Lines handed after which the consumer moves to a thread
+    /// (`usize::MAX`: never, or not again).
+    pub(super) apart_after: usize,
 }
 
 impl<'s> Writer<'s> {
@@ -45,7 +54,16 @@ impl<'s> Writer<'s> {
             progress: s.progress.map(progress::Progress::new),
             ended: false,
             consumer: None,
+            apart: None,
+            handed: 0,
+            apart_after: usize::MAX,
         }
+    }
+
+    /// Lines go to a consumer (on this thread or apart), not the output.
+    #[inline]
+    pub(super) fn consuming(&self) -> bool {
+        self.consumer.is_some() || self.apart.is_some()
     }
 
     /// Counts a line about to be written; true when the limit or a

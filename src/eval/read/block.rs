@@ -436,7 +436,7 @@ impl Interp<'_> {
         raw: &[u8],
         repl: &[(Span, Edit)],
     ) -> Result<(), crate::diag::Error> {
-        if self.out.consumer.is_none()
+        if !self.out.consuming()
             && max_edited_len(raw.len(), repl, self.s.precision).is_some_and(|n| n <= MAX_LINE)
         {
             self.count_line()?;
@@ -463,7 +463,7 @@ impl Interp<'_> {
             let end = start + trimmed_len as u32;
             return Err(self.error(ErrorKind::OutputLineTooLong { len }, file, start, end));
         }
-        let r = if self.out.consumer.is_some() {
+        let r = if self.out.consuming() {
             let f = file.file.clone();
             self.count_line()
                 .and_then(|_| self.consume(&f, start, &out, repl.is_empty()))

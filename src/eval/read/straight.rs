@@ -507,7 +507,7 @@ impl Interp<'_> {
                 if p.text_end + 1 != p.next {
                     // Trailing blanks: the line is written trimmed.
                     self.flush_input(file, base, &buf[*batch_start..*i], *batch_start)?;
-                    if self.out.consumer.is_some() {
+                    if self.out.consuming() {
                         let start = base + *i as u32;
                         self.consume(&file.file, start, &buf[*i..p.text_end], true)?;
                     } else {
@@ -653,7 +653,7 @@ impl Interp<'_> {
             return Ok(());
         }
         let start = base as u64 + at as u64;
-        if self.out.consumer.is_some() {
+        if self.out.consuming() {
             return self.consume_input(&file.file, start, bytes);
         }
         self.out
