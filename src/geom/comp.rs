@@ -31,6 +31,8 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::fmt;
 
+use crate::codes::Units;
+
 /// The side of the path the tool keeps to, seen in the direction of motion.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Side {
@@ -207,20 +209,19 @@ pub struct Tolerances {
 }
 
 impl Tolerances {
-    /// The reference's defaults for millimetres (`mm`) or inches.
-    pub fn default_for(mm: bool) -> Self {
-        if mm {
-            Tolerances {
+    /// The reference's defaults for the program's units.
+    pub fn default_for(units: Units) -> Self {
+        match units {
+            Units::Mm => Tolerances {
                 radius: 0.00005 * 25.4,
                 spiral_abs: 2.0 * 0.01 * std::f64::consts::SQRT_2,
                 arc_growth: 0.0254,
-            }
-        } else {
-            Tolerances {
+            },
+            Units::Inch => Tolerances {
                 radius: 0.00005,
                 spiral_abs: 2.0 * 0.001 * std::f64::consts::SQRT_2,
                 arc_growth: 0.001,
-            }
+            },
         }
     }
 }
@@ -1127,7 +1128,7 @@ mod tests {
     use super::*;
 
     fn inch() -> Comp<u32> {
-        Comp::new(Tolerances::default_for(false))
+        Comp::new(Tolerances::default_for(Units::Inch))
     }
 
     fn line_end(o: &Out<u32>) -> [f64; 3] {

@@ -18,7 +18,7 @@ use crate::fx_hasher::FxMap;
 use super::motion::{Feed, Motion, MoveKind, Point};
 use crate::block::{
     AXIS_LETTERS, ArcDistance, Block, CoordSystem, Distance, FeedMode, LatheMode, MCode,
-    MotionMode, NonModal, PathMode, Plane, Retract, SpindleDir, SpindleMode, ToolLength, Units,
+    MotionMode, NonModal, PathMode, Plane, Retract, SpindleDir, ToolLength, Units,
 };
 use crate::codes::Modes;
 
@@ -442,7 +442,7 @@ impl Machine {
         self.push(Motion::Spindle {
             dir: self.modes.spindle,
             speed: self.modes.speed,
-            css: self.modes.spindle_mode == SpindleMode::ConstantSurface,
+            mode: self.modes.spindle_mode,
         });
     }
 

@@ -6,7 +6,7 @@
 //! mm/min (or mm/rev, see [`FeedMode`]), times in seconds, whatever units
 //! the program was written in.
 
-use crate::codes::{FeedMode, Plane, SpindleDir};
+use crate::codes::{FeedMode, Plane, SpindleDir, SpindleMode};
 
 /// Axis values in parameter order: X Y Z A B C U V W.
 pub(crate) type Axes = [f64; 9];
@@ -74,9 +74,9 @@ pub enum Motion {
     },
     Spindle {
         dir: SpindleDir,
-        /// rev/min, or surface speed under G96 (`css`).
+        /// rev/min (G97), or surface speed (G96).
         speed: f64,
-        css: bool,
+        mode: SpindleMode,
     },
     Coolant {
         mist: bool,

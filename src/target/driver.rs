@@ -2133,7 +2133,7 @@ impl Lowering {
             c.plane,
             c.at,
             released,
-            lower::comp::arc_radius_tolerance(self.m.modes.units == Units::Mm),
+            lower::comp::arc_radius_tolerance(self.m.modes.units),
         )
         .map_err(|e| Problem {
             span,
@@ -2252,7 +2252,7 @@ impl Lowering {
         };
         let xyz = [x / s, y / s, z / s];
         let pos = if xz { [xyz[2], xyz[0], xyz[1]] } else { xyz };
-        let mut comp = Comp::new(Tolerances::default_for(metric));
+        let mut comp = Comp::new(Tolerances::default_for(self.m.modes.units));
         comp.start(side, radius, orientation, xz, pos);
         if self.after_off.is_none() {
             self.comp_f = self.f_before;

@@ -15,6 +15,7 @@
 //! `NGCFLAT_COMP_CASES=N` sets the number of programs (default 300),
 //! `NGCFLAT_COMP_SEED=S` the first seed.
 
+use ngcflat::block::Units;
 use ngcflat::geom::comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
 
 use crate::oracle;
@@ -56,6 +57,10 @@ struct Case {
 }
 
 impl Case {
+    fn units(&self) -> Units {
+        if self.mm { Units::Mm } else { Units::Inch }
+    }
+
     fn text(&self) -> String {
         let mut s = self.lines.join("\n");
         s.push('\n');
@@ -475,7 +480,7 @@ fn model(case: &Case) -> (Vec<String>, Option<(usize, CompError)>) {
 /// The moves the model releases (up to an error), and the error's line.
 #[allow(clippy::type_complexity)]
 fn model_moves(case: &Case) -> (Option<(usize, CompError)>, Vec<Out<usize>>) {
-    let mut comp: Comp<usize> = Comp::new(Tolerances::default_for(case.mm));
+    let mut comp: Comp<usize> = Comp::new(Tolerances::default_for(case.units()));
     let mut out: Vec<Out<usize>> = Vec::new();
     let mut pos = [0.0f64; 3];
     let mut straight_next = false;
@@ -514,7 +519,7 @@ fn model_moves(case: &Case) -> (Option<(usize, CompError)>, Vec<Out<usize>>) {
                 if comp.is_on() {
                     comp.arc(*arc, *end, *line, &mut out)
                 } else {
-                    let c = Comp::<usize>::new(Tolerances::default_for(case.mm));
+                    let c = Comp::<usize>::new(Tolerances::default_for(case.units()));
                     let mut c = c;
                     c.start(Side::Left, 0.0, 0, case.xz, pos);
                     c.arc(*arc, *end, *line, &mut out)
@@ -715,7 +720,7 @@ fn lowered_matches(case: &Case, original: &[String]) -> Result<bool, String> {
     use ngcflat::target::lower::comp::lower_comp_moves;
     let (_, out) = model_moves(case);
     let plane = if case.xz { Plane::XZ } else { Plane::XY };
-    let tolerance = ngcflat::target::lower::comp::arc_radius_tolerance(case.mm);
+    let tolerance = ngcflat::target::lower::comp::arc_radius_tolerance(case.units());
     let lines = match lower_comp_moves(plane, [0.0; 3], &out, tolerance) {
         Ok((lines, _)) => lines,
         // An arc released off its circle (a stop in a concave corner):

@@ -106,7 +106,7 @@ impl Interp<'_> {
             }
         };
         let pos = self.mach.comp_pos();
-        let tol = Tolerances::default_for(self.mach.modal.units == Units::Mm);
+        let tol = Tolerances::default_for(self.mach.modal.units);
         let run = self.mach.comp.get_or_insert_with(|| {
             Box::new(CompRun {
                 comp: Comp::new(tol),
@@ -197,7 +197,7 @@ impl Machine {
             self.comp_pending = run.comp.off(&mut run.out).map_err(geom)?;
             run.out.clear();
         } else {
-            run.comp = Comp::new(Tolerances::default_for(self.modal.units == Units::Mm));
+            run.comp = Comp::new(Tolerances::default_for(self.modal.units));
         }
         run.known = false;
         Ok(())
@@ -377,17 +377,20 @@ impl Machine {
             run.out.clear();
         }
         if end {
-            run.comp = Comp::new(Tolerances::default_for(self.modal.units == Units::Mm));
+            run.comp = Comp::new(Tolerances::default_for(self.modal.units));
             run.known = false;
         }
         Ok(())
     }
 
     /// G20/G21 while compensation state exists.
-    pub(in crate::eval) fn comp_units(&mut self, metric: bool) {
+    pub(in crate::eval) fn comp_units(&mut self, units: Units) {
         if let Some(run) = self.comp.as_mut() {
-            run.comp.scale(if metric { 25.4 } else { 1.0 / 25.4 });
-            run.comp.set_tolerances(Tolerances::default_for(metric));
+            run.comp.scale(match units {
+                Units::Mm => 25.4,
+                Units::Inch => 1.0 / 25.4,
+            });
+            run.comp.set_tolerances(Tolerances::default_for(units));
         }
     }
 }

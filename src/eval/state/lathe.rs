@@ -578,7 +578,7 @@ impl Interp<'_> {
             return Ok(());
         };
         for m in self.mach.comp_take_out() {
-            let (words, end) = match comp_line(m, at, self.mach.modal.units == Units::Mm) {
+            let (words, end) = match comp_line(m, at, self.mach.modal.units) {
                 Ok(w) => w,
                 Err(why) => {
                     let k = LatheError::G70Comp { why };
@@ -685,7 +685,7 @@ type PathLine = (Vec<(u8, f64)>, [f64; 3]);
 fn comp_line(
     m: crate::geom::comp::Out<()>,
     at: [f64; 3],
-    metric: bool,
+    units: Units,
 ) -> Result<PathLine, &'static str> {
     use crate::geom::comp::Out;
     match m {
@@ -704,7 +704,10 @@ fn comp_line(
             let e = [end[1], end3, end[0]];
             let r1 = (center[0] - at[2]).hypot(center[1] - at[0]);
             let r2 = (center[0] - end[0]).hypot(center[1] - end[1]);
-            let tol = if metric { 0.005 } else { 0.005 / 25.4 };
+            let tol = match units {
+                Units::Mm => 0.005,
+                Units::Inch => 0.005 / 25.4,
+            };
             if (r1 - r2).abs() > tol {
                 return Err(
                     "an arc of the compensated path starts and ends at different distances from its centre (a corner LinuxCNC cuts off its circle), which no G2/G3 writes",

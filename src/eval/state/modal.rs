@@ -580,7 +580,6 @@ impl Interp<'_> {
         if self.mach.modal.units == units {
             return;
         }
-        let metric = units == Units::Mm;
         if self.mach.tlo.is_some_and(|t| t.iter().any(|&v| v != 0.0)) {
             let line = self.line_no();
             self.mach.standalone_drift = Some((
@@ -588,14 +587,17 @@ impl Interp<'_> {
                 line,
             ));
         }
-        let f = if metric { 25.4 } else { 1.0 / 25.4 };
+        let f = match units {
+            Units::Mm => 25.4,
+            Units::Inch => 1.0 / 25.4,
+        };
         for (a, lin) in LINEAR.iter().enumerate() {
             if *lin && let Ok(p) = &mut self.mach.pos.axes[a] {
                 *p *= f;
             }
         }
         self.mach.modal.units = units;
-        self.mach.comp_units(metric);
+        self.mach.comp_units(units);
     }
 
     pub(in crate::eval) fn select_cs(&mut self, cs: CoordSystem) {
@@ -902,7 +904,7 @@ impl Machine {
                     center,
                     turns: 1,
                 };
-                let tol = Tolerances::default_for(self.modal.units == Units::Mm);
+                let tol = Tolerances::default_for(self.modal.units);
                 match arc_center(&tol, arc, [sx, sy], [ex, ey]) {
                     Ok(_) => {}
                     Err(CompError::ArcSamePoint) => return Err(bad(BlockError::ArcSamePoint)),

@@ -24,7 +24,7 @@
 
 use super::arc::{ArcInput, lower_arc};
 use super::{LowerError, PlainLine, push};
-use crate::codes::Plane;
+use crate::codes::{Plane, Units};
 use crate::geom::comp::Out;
 
 /// XYZ indices of the compensation plane's coordinates (first, second,
@@ -43,8 +43,11 @@ fn axes(plane: Plane) -> Result<[usize; 3], LowerError> {
 /// The largest difference between the start and end radius of an arc
 /// written as one (program units): 0.005 mm, which GRBL takes whatever the
 /// radius, and below LinuxCNC's own arc tolerance.
-pub fn arc_radius_tolerance(mm: bool) -> f64 {
-    if mm { 0.005 } else { 0.005 / 25.4 }
+pub fn arc_radius_tolerance(units: Units) -> f64 {
+    match units {
+        Units::Mm => 0.005,
+        Units::Inch => 0.005 / 25.4,
+    }
 }
 
 /// Blocks with the tag of the move each comes from, and the position after
