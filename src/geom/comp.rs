@@ -31,7 +31,7 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::fmt;
 
-use crate::codes::Units;
+use crate::codes::{ArcDistance, Units};
 
 /// The side of the path the tool keeps to, seen in the direction of motion.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -54,9 +54,13 @@ impl Side {
 /// How an arc's centre is given.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ArcCenter {
-    /// I/J (or K/I in G18) offsets, relative to the arc's start unless
-    /// `absolute` (G90.1).
-    Offsets { i: f64, j: f64, absolute: bool },
+    /// I/J (or K/I in G18) offsets, relative to the arc's start (G91.1)
+    /// or absolute (G90.1).
+    Offsets {
+        i: f64,
+        j: f64,
+        distance: ArcDistance,
+    },
     /// An R word (negative: more than half a circle).
     Radius(f64),
 }
@@ -313,13 +317,12 @@ fn arc_ijk(
     end: [f64; 2],
     i: f64,
     j: f64,
-    absolute: bool,
+    distance: ArcDistance,
     turns: i32,
 ) -> Result<([f64; 2], f64, i32), CompError> {
-    let c = if absolute {
-        [i, j]
-    } else {
-        [start[0] + i, start[1] + j]
+    let c = match distance {
+        ArcDistance::Absolute => [i, j],
+        ArcDistance::Incremental => [start[0] + i, start[1] + j],
     };
     let r1 = hypot(c[0] - start[0], c[1] - start[1]);
     let r2 = hypot(c[0] - end[0], c[1] - end[1]);
@@ -377,8 +380,8 @@ pub fn arc_center(
 ) -> Result<([f64; 2], i32), CompError> {
     match arc.center {
         ArcCenter::Radius(rr) => arc_r(tol, arc.ccw, start, end, rr, arc.turns),
-        ArcCenter::Offsets { i, j, absolute } => {
-            let (c, _, t) = arc_ijk(tol, arc.ccw, start, end, i, j, absolute, arc.turns)?;
+        ArcCenter::Offsets { i, j, distance } => {
+            let (c, _, t) = arc_ijk(tol, arc.ccw, start, end, i, j, distance, arc.turns)?;
             Ok((c, t))
         }
     }
@@ -847,9 +850,9 @@ impl<T: Clone> Comp<T> {
                 }
                 arc_r(&self.tol, arc.ccw, start, pe, rr, arc.turns)?
             }
-            ArcCenter::Offsets { i, j, absolute } => {
+            ArcCenter::Offsets { i, j, distance } => {
                 let (cc, r1, t) =
-                    arc_ijk(&self.tol, arc.ccw, start, pe, i, j, absolute, arc.turns)?;
+                    arc_ijk(&self.tol, arc.ccw, start, pe, i, j, distance, arc.turns)?;
                 if r1 <= r && inside_by_move {
                     return Err(CompError::ToolTooBigForArc);
                 }
@@ -1227,7 +1230,7 @@ mod tests {
             center: ArcCenter::Offsets {
                 i: 0.5,
                 j: 0.0,
-                absolute: false,
+                distance: ArcDistance::Incremental,
             },
             turns: 1,
         };

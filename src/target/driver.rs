@@ -2328,7 +2328,7 @@ impl Lowering {
                     ArcCenter::Offsets {
                         i: i.unwrap_or(0.0),
                         j: j.unwrap_or(0.0),
-                        absolute: self.m.modes.arc_distance == ArcDistance::Absolute,
+                        distance: self.m.modes.arc_distance,
                     }
                 }
             };

@@ -15,7 +15,7 @@
 //! `NGCFLAT_COMP_CASES=N` sets the number of programs (default 300),
 //! `NGCFLAT_COMP_SEED=S` the first seed.
 
-use ngcflat::block::Units;
+use ngcflat::block::{ArcDistance, Units};
 use ngcflat::geom::comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
 
 use crate::oracle;
@@ -159,7 +159,7 @@ impl Gen {
                 ArcCenter::Offsets {
                     i: iv,
                     j: jv,
-                    absolute: false,
+                    distance: ArcDistance::Incremental,
                 },
                 words,
             )

@@ -13,7 +13,7 @@
 use crate::diag::{ErrorKind, WarningKind};
 use crate::geom::comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
 
-use crate::codes::{ArcDistance, CutterComp, Distance, MotionMode, Plane, Units};
+use crate::codes::{CutterComp, Distance, MotionMode, Plane, Units};
 use crate::eval::Interp;
 use crate::eval::state::Machine;
 
@@ -226,7 +226,7 @@ impl Machine {
         }
         let end = self.comp_pos();
         let xz = self.modal.plane == Plane::XZ;
-        let ijk_absolute = self.modal.arc_distance == ArcDistance::Absolute;
+        let arc_distance = self.modal.arc_distance;
         let Some(run) = self.comp.as_mut().filter(|r| r.known) else {
             return Ok(());
         };
@@ -255,7 +255,7 @@ impl Machine {
                         ArcCenter::Offsets {
                             i: i.unwrap_or(0.0),
                             j: j.unwrap_or(0.0),
-                            absolute: ijk_absolute,
+                            distance: arc_distance,
                         }
                     }
                 };

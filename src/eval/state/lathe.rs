@@ -388,17 +388,16 @@ impl Interp<'_> {
         let len = line_len(file, start);
         let bad = |s: &Self, k: LatheError| s.lathe_err(k, file, start, len);
         let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
-        let diameter = self.mach.modal.lathe == LatheMode::Diameter;
+        let lathe = self.mach.modal.lathe;
         let Some(run) = self.mach.lathe.as_deref() else {
             return Ok(());
         };
-        let absolute = run.distance == Distance::Absolute;
-        let ijk_absolute = run.arc_distance == ArcDistance::Absolute;
+        let (distance, arc_distance) = (run.distance, run.arc_distance);
         let point = run.point;
-        let mut end = contour_end(&word, point, absolute, diameter).map_err(|k| bad(self, k))?;
+        let mut end = contour_end(&word, point, distance, lathe).map_err(|k| bad(self, k))?;
         let (iw, kw) = (word(b'i'), word(b'k'));
         let mut center = C::new(kw.unwrap_or(0.0), iw.unwrap_or(0.0));
-        if !absolute {
+        if distance == Distance::Incremental {
             end = end + point;
         }
         let mut motion = run.motion;
@@ -429,7 +428,7 @@ impl Interp<'_> {
                         if iw.is_none() && kw.is_none() {
                             return Err(bad(self, LatheError::ArcNoIk));
                         }
-                        if !ijk_absolute {
+                        if arc_distance == ArcDistance::Incremental {
                             center = center + point;
                         }
                     }
@@ -769,9 +768,10 @@ fn lathe_cycle(number: u8, sub: u8, word: impl Fn(u8) -> Option<f64>) -> Cycle {
 fn contour_end(
     word: &impl Fn(u8) -> Option<f64>,
     point: C,
-    absolute: bool,
-    diameter: bool,
+    distance: Distance,
+    lathe: LatheMode,
 ) -> Result<C, LatheError> {
+    let absolute = distance == Distance::Absolute;
     let mut end = if absolute { point } else { C::new(0.0, 0.0) };
     if let Some(u) = word(b'u') {
         if !absolute {
@@ -780,7 +780,10 @@ fn contour_end(
         if word(b'x').is_some() {
             return Err(LatheError::UAndX);
         }
-        end.im += if diameter { u / 2.0 } else { u };
+        end.im += match lathe {
+            LatheMode::Diameter => u / 2.0,
+            LatheMode::Radius => u,
+        };
     } else if let Some(x) = word(b'x') {
         end.im = x;
     }

@@ -896,7 +896,7 @@ impl Machine {
                     None => ArcCenter::Offsets {
                         i: word(c0).unwrap_or(0.0),
                         j: word(c1).unwrap_or(0.0),
-                        absolute: self.modal.arc_distance == ArcDistance::Absolute,
+                        distance: self.modal.arc_distance,
                     },
                 };
                 let arc = Arc {
