@@ -90,6 +90,11 @@ pub fn flatten(data: &[u8]) {
     if more & 32 != 0 {
         settings.max_output_bytes = 500 + u64::from(more >> 6) * 4000;
     }
+    // Bit 6: the output, or the target with it, moves to its own thread
+    // after a few lines.
+    if more & 64 != 0 {
+        settings.format_thread_after = 3;
+    }
     if target.is_some() {
         // As the command line sets it for a target.
         settings.user_m = (1u128 << 100) - 1;
@@ -110,7 +115,9 @@ pub fn flatten(data: &[u8]) {
 
 /// `straight`: a flag byte and a program (UTF-8). The straight-line loop
 /// (lines read in place or ahead on a second thread) and the line-by-line
-/// path give the same output, or the same error.
+/// path give the same output, or the same error; with the high bit, for
+/// the grbl target too (lines read ahead then arrive decoded), diagnostics
+/// included.
 pub fn straight(data: &[u8]) {
     let Some((&flags, text)) = data.split_first() else {
         return;
@@ -143,6 +150,23 @@ pub fn straight(data: &[u8]) {
         Err(e) => format!("error: {}", render(&e, MessageFormat::Short, false)),
     };
     assert_eq!(show(&fast), show(&slow), "program:\n{text}");
+    if flags & 0x80 != 0 {
+        let grbl = |s: &Settings| {
+            let consumer = ngcflat::lowering(s, Some(TargetOptions::new(PROFILES[1])));
+            let (diags, r) =
+                ngcflat::flatten_memory(text.as_bytes().to_vec(), HashMap::new(), s, consumer);
+            let shown: Vec<String> = diags
+                .iter()
+                .map(|d| render(d, MessageFormat::Short, false))
+                .collect();
+            let out = match r {
+                Ok(o) => String::from_utf8_lossy(&o).into_owned(),
+                Err(e) => format!("error: {}", render(&e, MessageFormat::Short, false)),
+            };
+            (shown, out)
+        };
+        assert_eq!(grbl(&fast), grbl(&slow), "grbl, program:\n{text}");
+    }
 }
 
 /// `parse_line`: one raw line, any bytes, with and without a terminating
