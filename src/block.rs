@@ -79,6 +79,85 @@ impl Shape {
     }
 }
 
+/// A word as the straight-line reader read it (letter as written), kept
+/// for a block made only where one is needed (see [`RawLine`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RawWord {
+    pub letter: u8,
+    pub value: f64,
+    pub span: Span,
+    pub shape: Shape,
+}
+
+/// A plain line's words, line number and comment as the straight-line
+/// reader read them: [`Block::replay`] makes the block [`Block::decode_into`]
+/// makes of the line; a line of moves alone may be taken without one (see
+/// [`RawLine::moves_only`]).
+#[derive(Debug, Clone, Default)]
+pub struct RawLine {
+    words: [RawWord; 14],
+    len: u8,
+    line_number: Option<(f64, Span)>,
+    comment: Option<Span>,
+}
+
+impl RawLine {
+    pub fn clear(&mut self) {
+        self.len = 0;
+        self.line_number = None;
+        self.comment = None;
+    }
+
+    /// Keeps a word (at most 14, as a plain line has at most one of each
+    /// of its 14 letters; a 15th is dropped and the line never replays).
+    #[inline(always)]
+    pub fn push(&mut self, w: RawWord) {
+        if let Some(slot) = self.words.get_mut(self.len as usize) {
+            *slot = w;
+            self.len += 1;
+        }
+    }
+
+    pub fn set_line_number(&mut self, value: f64, span: Span) {
+        self.line_number = Some((value, span));
+    }
+
+    pub fn set_comment(&mut self, span: Span) {
+        self.comment = Some(span);
+    }
+
+    pub fn words(&self) -> &[RawWord] {
+        &self.words[..self.len as usize]
+    }
+
+    /// The words of a line of `text_len` bytes if it is a move and nothing
+    /// else, written the plainest way: at most G X Y Z F, each letter upper
+    /// case, G0 or G1, one blank between words and none around them, no
+    /// line number, no comment. Such a line decodes into a block of those
+    /// words alone (no other modal group), so it can be taken without one.
+    #[inline]
+    pub fn moves_only(&self, text: &[u8]) -> Option<&[RawWord]> {
+        if self.line_number.is_some() || self.comment.is_some() || self.len == 0 || self.len > 5 {
+            return None;
+        }
+        let words = self.words();
+        let mut at = 0usize;
+        for w in words {
+            let ok = match w.letter {
+                b'G' => w.value == 0.0 || w.value == 1.0,
+                b'X' | b'Y' | b'Z' | b'F' => true,
+                _ => false,
+            };
+            let (start, end) = (w.span.start as usize, w.span.end as usize);
+            if !ok || start != at || (end < text.len() && text[end] != b' ') {
+                return None;
+            }
+            at = end + 1;
+        }
+        (at == text.len() + 1).then_some(words)
+    }
+}
+
 /// What a comment is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CommentKind {
@@ -348,46 +427,32 @@ impl Block {
         Ok(())
     }
 
-    /// Starts the block of a line that another reader splits into words
-    /// (the straight-line reader, which reads each number once for both):
-    /// it hands them in order to [`Block::read_word`], the line number to
-    /// [`Block::read_line_number`] and comments to [`Block::read_comment`],
-    /// which keep them as [`Block::decode_into`] does. Offsets are from the
-    /// line's start.
-    #[inline]
-    pub(crate) fn begin(&mut self) {
+    /// The block of a line the straight-line reader read into `raw` (the
+    /// same words, line number and comment, in the same order, through the
+    /// same steps as [`Block::decode_into`]); `line` is the line's text.
+    pub fn replay(&mut self, raw: &RawLine, line: &[u8]) -> Result<(), DecodeError> {
         self.clear();
+        if let Some((v, s)) = raw.line_number {
+            self.line_number = Some((v, s));
+        }
+        self.push_words(raw.words())?;
+        if let Some(c) = raw.comment {
+            self.comment(line, c.start as usize, c.end as usize);
+        }
+        Ok(())
     }
 
-    /// The line's N word, first on the line.
-    #[inline]
-    pub(crate) fn read_line_number(&mut self, value: f64, start: usize, end: usize) {
-        self.line_number = Some((value, span16(start, end)));
+    /// [`Block::replay`] of a line of these words alone.
+    pub fn replay_words(&mut self, words: &[RawWord]) -> Result<(), DecodeError> {
+        self.clear();
+        self.push_words(words)
     }
 
-    /// A word: `letter` as written, its number's value and shape, the span
-    /// from the letter to the number's end.
-    #[inline]
-    pub(crate) fn read_word(
-        &mut self,
-        letter: u8,
-        value: f64,
-        start: usize,
-        end: usize,
-        shape: Shape,
-    ) -> Result<(), DecodeError> {
-        self.push_word(
-            letter.to_ascii_uppercase(),
-            value,
-            span16(start, end),
-            shape,
-        )
-    }
-
-    /// A comment `line[start..end]` (parentheses or `;` included).
-    #[inline]
-    pub(crate) fn read_comment(&mut self, line: &[u8], start: usize, end: usize) {
-        self.comment(line, start, end);
+    fn push_words(&mut self, words: &[RawWord]) -> Result<(), DecodeError> {
+        for w in words {
+            self.push_word(w.letter.to_ascii_uppercase(), w.value, w.span, w.shape)?;
+        }
+        Ok(())
     }
 
     fn clear(&mut self) {
@@ -607,15 +672,6 @@ impl Block {
             shape,
         });
         Ok(())
-    }
-}
-
-/// A span of a line of at most `u16::MAX` bytes.
-#[inline(always)]
-fn span16(start: usize, end: usize) -> Span {
-    Span {
-        start: start as u16,
-        end: end as u16,
     }
 }
 

@@ -291,17 +291,52 @@ impl Machine {
     /// steps of [`Machine::apply_any`] such a block reaches (a test runs
     /// both on random blocks).
     fn apply_plain_move(&mut self, b: &Block) {
-        if let Some(f) = b.value(b'F') {
+        let axes = AXIS_LETTERS.map(|l| b.value(l));
+        self.apply_plain_values(b.motion, b.value(b'F'), b.value(b'S'), &axes);
+    }
+
+    /// [`Machine::apply`] for a block of G0 or G1 (or none, in G0 or G1)
+    /// with X, Y, Z and F words alone, given as values: false (nothing
+    /// done) when the model records motion, which such a block then needs
+    /// [`Machine::apply`] for.
+    pub fn apply_move_values(
+        &mut self,
+        motion: Option<MotionMode>,
+        f: Option<f64>,
+        xyz: [Option<f64>; 3],
+    ) -> bool {
+        if self.record
+            || !matches!(
+                motion.unwrap_or(self.modes.motion),
+                MotionMode::Rapid | MotionMode::Linear
+            )
+        {
+            return false;
+        }
+        self.apply_plain_values(motion, f, None, &xyz);
+        true
+    }
+
+    /// The steps of [`Machine::apply_plain_move`], from the block's values.
+    #[inline]
+    fn apply_plain_values(
+        &mut self,
+        motion: Option<MotionMode>,
+        f: Option<f64>,
+        s: Option<f64>,
+        axes: &[Option<f64>],
+    ) {
+        if let Some(f) = f {
             self.modes.feed = f;
         }
-        if let Some(s) = b.value(b'S') {
+        if let Some(s) = s {
             // The spindle event is a motion event: none are recorded.
             self.modes.speed = s;
         }
-        if let Some(m) = b.motion {
+        if let Some(m) = motion {
             self.modes.motion = m;
         }
-        if !b.has_axis() {
+        if axes.iter().all(Option::is_none) {
             return;
         }
         if self.rotated {
@@ -309,8 +344,8 @@ impl Machine {
             return;
         }
         let s = self.scale();
-        for (a, &l) in AXIS_LETTERS.iter().enumerate() {
-            if let Some(v) = b.value(l) {
+        for (a, v) in axes.iter().enumerate() {
+            if let Some(v) = *v {
                 self.pos[a] = self.axis_target(a, v, s);
             }
         }

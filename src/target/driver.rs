@@ -325,6 +325,28 @@ impl LineConsumer for Lowering {
         self.report(problems, text, origin)
     }
 
+    fn moves_line(
+        &mut self,
+        text: &[u8],
+        words: &[crate::block::RawWord],
+        origin: &Origin<'_>,
+        out: &mut Output,
+    ) -> Result<(), Error> {
+        if self.p.passthrough {
+            return out.line(text).map_err(io_error);
+        }
+        if self.write_moves(text, words, out)? {
+            return Ok(());
+        }
+        let mut block = self.block.take().unwrap_or_default();
+        let problems = match block.replay_words(words) {
+            Ok(()) => self.run_block(&block, text, origin, out),
+            Err(e) => Ok(vec![decode_problem(e)]),
+        };
+        self.block = Some(block);
+        self.report(problems?, text, origin)
+    }
+
     fn computes_comp(&self) -> bool {
         !self.p.passthrough && !self.p.has_g(410)
     }

@@ -7,7 +7,14 @@
 
 use std::sync::Arc;
 
-use crate::block::Block;
+use crate::block::{Block, RawWord};
+
+/// What comes with a line handed over besides its text.
+enum Payload<'a> {
+    Text,
+    Block(&'a Block),
+    Moves(&'a [RawWord]),
+}
 use crate::diag::{Diagnostic, Error, Site};
 use crate::emit::Output;
 use crate::program::SourceFile;
@@ -55,6 +62,20 @@ pub trait LineConsumer: Send {
         self.line(text, origin, out)
     }
 
+    /// One output line that is a move and nothing else (see
+    /// [`crate::block::RawLine::moves_only`]), and its words: a block of
+    /// them alone is the line decoded. What [`LineConsumer::line`] does.
+    fn moves_line(
+        &mut self,
+        text: &[u8],
+        words: &[RawWord],
+        origin: &Origin<'_>,
+        out: &mut Output,
+    ) -> Result<(), Error> {
+        let _ = words;
+        self.line(text, origin, out)
+    }
+
     /// The program ended; returns diagnostics gathered on the way (warnings,
     /// and in check mode errors kept to report them all).
     fn finish(&mut self, out: &mut Output) -> Result<Vec<Diagnostic>, Error>;
@@ -81,7 +102,7 @@ impl Interp<'_> {
         text: &[u8],
         verbatim: bool,
     ) -> Result<(), Error> {
-        self.hand_over(file, line_start, text, verbatim, None)
+        self.hand_over(file, line_start, text, verbatim, Payload::Text)
     }
 
     /// Hands a line and its decoded block to the consumer (there is one).
@@ -93,7 +114,18 @@ impl Interp<'_> {
         text: &[u8],
         block: &Block,
     ) -> Result<(), Error> {
-        self.hand_over(file, line_start, text, true, Some(block))
+        self.hand_over(file, line_start, text, true, Payload::Block(block))
+    }
+
+    /// Hands a line that is a move alone, and its words, to the consumer.
+    pub(in crate::eval) fn consume_moves(
+        &mut self,
+        file: &Arc<SourceFile>,
+        line_start: u32,
+        text: &[u8],
+        words: &[RawWord],
+    ) -> Result<(), Error> {
+        self.hand_over(file, line_start, text, true, Payload::Moves(words))
     }
 
     /// [`LineConsumer::line`], or with `block` [`LineConsumer::decoded_line`],
@@ -104,7 +136,7 @@ impl Interp<'_> {
         line_start: u32,
         text: &[u8],
         verbatim: bool,
-        block: Option<&Block>,
+        payload: Payload<'_>,
     ) -> Result<(), Error> {
         if let Some(a) = self.out.apart.as_mut() {
             // A block decoded ahead is the same line: the text carries it.
@@ -132,9 +164,10 @@ impl Interp<'_> {
             stack: &stack,
         };
         let out = &mut self.out.output;
-        let r = match block {
-            Some(b) => c.decoded_line(text, b, &origin, out),
-            None => c.line(text, &origin, out),
+        let r = match payload {
+            Payload::Text => c.line(text, &origin, out),
+            Payload::Block(b) => c.decoded_line(text, b, &origin, out),
+            Payload::Moves(w) => c.moves_line(text, w, &origin, out),
         };
         self.out.consumer = Some(c);
         r.map_err(|e| self.placed(e, file, line_start))

@@ -19,8 +19,8 @@
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Condvar, Mutex};
 
-use crate::block::Block;
-use crate::eval::read::straight::{Plain, ToBlock, read_line, read_line_into};
+use crate::block::{Block, RawLine, RawWord};
+use crate::eval::read::straight::{Plain, ToRaw, read_line, read_line_into};
 
 /// Chunks read ahead of the one being applied, at most.
 const AHEAD: usize = 4;
@@ -32,7 +32,7 @@ pub(super) enum Read<'p> {
     Blank,
     /// A plain line, and its text decoded when the source decodes lines
     /// and could.
-    Line(&'p Plain, Option<&'p Block>),
+    Line(&'p Plain, Option<Decoded<'p>>),
     /// Not a plain line (or the end of the buffer): the run ends here.
     Stop,
     /// The source has no more lines for this run; another one goes on.
@@ -69,6 +69,25 @@ impl Lines for InPlace<'_> {
     }
 }
 
+/// A line read ahead, decoded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Decoded<'p> {
+    Block(&'p Block),
+    /// A move and nothing else (see [`RawLine::moves_only`]): its words,
+    /// for a consumer that takes such a line without a block.
+    Moves(&'p [RawWord]),
+}
+
+/// How a chunk's line was decoded.
+#[derive(Clone, Copy)]
+enum Kind {
+    No,
+    /// Its block is the chunk's `blocks[k]`.
+    Block,
+    /// Its words are the chunk's `moves[at..at + len]`.
+    Moves(u32, u8),
+}
+
 /// One line of a chunk read ahead.
 #[derive(Clone, Copy)]
 enum Rec {
@@ -77,13 +96,16 @@ enum Rec {
     Stop,
 }
 
-/// The lines of a chunk read ahead, and with `decode` their blocks: the
-/// block of `recs[k]` is `blocks[k]` when `decoded[k]`.
+/// The lines of a chunk read ahead, and with `decode` how each decoded
+/// (`kinds[k]` for `recs[k]`).
 #[derive(Default)]
 struct Chunk {
     recs: Vec<Rec>,
     blocks: Vec<Block>,
-    decoded: Vec<bool>,
+    moves: Vec<RawWord>,
+    kinds: Vec<Kind>,
+    /// The words of the line being read.
+    raw: RawLine,
 }
 
 /// Chunk boundaries: line starts about `size` bytes apart, from the line
@@ -198,7 +220,8 @@ impl<'b> Shared<'b> {
             .unwrap_or_default();
         let v = &mut chunk.recs;
         v.clear();
-        chunk.decoded.clear();
+        chunk.kinds.clear();
+        chunk.moves.clear();
         let (mut i, end) = (self.cuts[c], self.cuts[c + 1]);
         while i < end {
             if self.buf[i] == b'\n' {
@@ -220,19 +243,38 @@ impl<'b> Shared<'b> {
                 i = p.next;
                 continue;
             }
-            // The block from the same reading of the line.
-            if chunk.blocks.len() <= k {
-                chunk.blocks.resize_with(k + 1, Block::default);
-            }
-            chunk.decoded.resize(k, false);
-            let mut sink = ToBlock::new(&mut chunk.blocks[k], i);
+            // The words from the same reading of the line.
+            let mut sink = ToRaw::new(&mut chunk.raw, i);
             if !read_line_into(self.buf, i, p, self.comments, &mut sink) {
                 *v.last_mut().expect("pushed") = Rec::Stop;
                 return chunk;
             }
-            let ok = sink.finish(&self.buf[i..p.text_end]);
+            let kept = sink.finish();
+            let text = &self.buf[i..p.text_end];
             i = p.next;
-            chunk.decoded.push(ok);
+            chunk.kinds.resize(k, Kind::No);
+            let moves = if kept {
+                chunk.raw.moves_only(text)
+            } else {
+                None
+            };
+            let kind = if let Some(words) = moves {
+                let at = chunk.moves.len() as u32;
+                chunk.moves.extend_from_slice(words);
+                Kind::Moves(at, words.len() as u8)
+            } else {
+                if chunk.blocks.len() <= k {
+                    chunk.blocks.resize_with(k + 1, Block::default);
+                }
+                let b = &mut chunk.blocks[k];
+                let ok = if kept {
+                    b.replay(&chunk.raw, text).is_ok()
+                } else {
+                    b.decode_into(text).is_ok()
+                };
+                if ok { Kind::Block } else { Kind::No }
+            };
+            chunk.kinds.push(kind);
         }
         chunk
     }
@@ -373,8 +415,15 @@ impl Lines for Ahead<'_, '_> {
                 return match &l.recs[k] {
                     Rec::Blank => Read::Blank,
                     Rec::Line(q) => {
-                        let decoded = l.decoded.get(k) == Some(&true);
-                        Read::Line(q, decoded.then(|| &l.blocks[k]))
+                        let decoded = match l.kinds.get(k) {
+                            Some(Kind::Block) => Some(Decoded::Block(&l.blocks[k])),
+                            Some(&Kind::Moves(at, n)) => {
+                                let at = at as usize;
+                                Some(Decoded::Moves(&l.moves[at..at + n as usize]))
+                            }
+                            _ => None,
+                        };
+                        Read::Line(q, decoded)
                     }
                     Rec::Stop => Read::Stop,
                 };
@@ -465,10 +514,19 @@ mod tests {
                             for s in (0..14).filter(|s| p.mask >> s & 1 == 1) {
                                 assert_eq!(p.vals[s].to_bits(), q.vals[s].to_bits());
                             }
-                            // The block is the line's text decoded.
+                            // The block is the line's text decoded; a move
+                            // alone comes as its words, which make it.
                             let mut want = Block::default();
                             want.decode_into(&buf[i..p.text_end]).expect("decodes");
-                            assert_eq!(block, decode.then_some(&want), "{chunk} {decode}");
+                            let got = block.map(|d| match d {
+                                Decoded::Block(b) => b.clone(),
+                                Decoded::Moves(w) => {
+                                    let mut b = Block::default();
+                                    b.replay_words(w).expect("replays");
+                                    b
+                                }
+                            });
+                            assert_eq!(got.as_ref(), decode.then_some(&want), "{chunk} {decode}");
                             i = p.next;
                         }
                         (Read::Stop, Read::Stop) => break,

@@ -9,14 +9,14 @@
 
 use std::rc::Rc;
 
-use crate::block::{Block, Shape};
+use crate::block::{RawLine, RawWord, Shape, Span};
 use crate::diag::Error;
 use crate::number::{Digits, POW10, digits_in};
 use crate::program::FileIndex;
 
 use crate::codes::{CutterComp, FeedMode, MotionMode, Plane};
 use crate::eval::Interp;
-use crate::eval::read::scan_ahead::{Ahead, InPlace, Lines, Read, Shared};
+use crate::eval::read::scan_ahead::{Ahead, Decoded, InPlace, Lines, Read, Shared};
 
 /// Word slots: G, X, Y, Z, A, B, C, F, S (the fast set), then I, J, K, R, P
 /// (lines with these take the block checks).
@@ -157,68 +157,66 @@ impl WordSink for () {
     fn comment(&mut self, _: &[u8], _: usize, _: usize) {}
 }
 
-/// Builds the line's [`Block`] from the words read, so that each number is
-/// read once for the record and the block. A number the byte-at-a-time
-/// reader took leaves the block to [`Block::decode_into`] (see
-/// [`ToBlock::finish`]).
-pub(in crate::eval) struct ToBlock<'a> {
-    block: &'a mut Block,
+/// Keeps the words read (with their spans and shapes) in a [`RawLine`],
+/// so that each number is read once for the record and for the line's
+/// block, which [`Block::replay`] makes from it where one is needed. A
+/// number the byte-at-a-time reader took leaves the line to
+/// [`Block::decode_into`] (see [`ToRaw::finish`]).
+pub(in crate::eval) struct ToRaw<'a> {
+    raw: &'a mut RawLine,
     /// Offset of the line's start.
     start: usize,
-    ok: bool,
     slow: bool,
 }
 
-impl<'a> ToBlock<'a> {
+impl<'a> ToRaw<'a> {
     #[inline(always)]
-    pub(in crate::eval) fn new(block: &'a mut Block, start: usize) -> ToBlock<'a> {
-        block.begin();
-        ToBlock {
-            block,
+    pub(in crate::eval) fn new(raw: &'a mut RawLine, start: usize) -> ToRaw<'a> {
+        raw.clear();
+        ToRaw {
+            raw,
             start,
-            ok: true,
             slow: false,
         }
     }
 
-    /// After a successful read of the line `text` (up to the record's
-    /// `text_end`): whether the block holds the decoded line, as
-    /// [`Block::decode_into`] would.
+    /// After a successful read of the line: whether the raw line holds it
+    /// (false: decode its text instead).
     #[inline(always)]
-    pub(in crate::eval) fn finish(self, text: &[u8]) -> bool {
-        if self.slow {
-            self.block.decode_into(text).is_ok()
-        } else {
-            self.ok
+    pub(in crate::eval) fn finish(self) -> bool {
+        !self.slow
+    }
+
+    #[inline(always)]
+    fn span(&self, a: usize, b: usize) -> Span {
+        Span {
+            start: (a - self.start) as u16,
+            end: (b - self.start) as u16,
         }
     }
 }
 
-impl WordSink for ToBlock<'_> {
+impl WordSink for ToRaw<'_> {
     #[inline(always)]
     fn line_number(&mut self, at: usize, value: f64, end: usize) {
-        self.block
-            .read_line_number(value, at - self.start, end - self.start);
+        let span = self.span(at, end);
+        self.raw.set_line_number(value, span);
     }
 
     #[inline(always)]
     fn word(&mut self, buf: &[u8], at: usize, sign: u8, num: usize, d: &Digits) {
-        if !self.ok || self.slow {
+        if self.slow {
             return;
         }
         let (neg, plus) = (sign == b'-', sign == b'+');
-        let shape = Shape::of(d, buf, num, neg, plus);
         let v = d.value();
-        self.ok = self
-            .block
-            .read_word(
-                buf[at],
-                if neg { -v } else { v },
-                at - self.start,
-                d.end - self.start,
-                shape,
-            )
-            .is_ok();
+        let w = RawWord {
+            letter: buf[at],
+            value: if neg { -v } else { v },
+            span: self.span(at, d.end),
+            shape: Shape::of(d, buf, num, neg, plus),
+        };
+        self.raw.push(w);
     }
 
     #[inline(always)]
@@ -227,11 +225,9 @@ impl WordSink for ToBlock<'_> {
     }
 
     #[inline(always)]
-    fn comment(&mut self, buf: &[u8], start: usize, end: usize) {
-        if !self.slow {
-            self.block
-                .read_comment(&buf[self.start..], start - self.start, end - self.start);
-        }
+    fn comment(&mut self, _buf: &[u8], start: usize, end: usize) {
+        let span = self.span(start, end);
+        self.raw.set_comment(span);
     }
 }
 
@@ -495,12 +491,16 @@ impl Interp<'_> {
                     *lines += 1;
                     break;
                 }
-            } else if let Some(block) = block {
+            } else if let Some(decoded) = block {
                 // Decoded ahead for the consumer: handed over line by line.
                 *emitted += 1;
                 self.flush_input(file, base, &buf[*batch_start..*i], *batch_start)?;
                 let start = base + *i as u32;
-                self.consume_decoded(&file.file, start, &buf[*i..p.text_end], block)?;
+                let text = &buf[*i..p.text_end];
+                match decoded {
+                    Decoded::Block(b) => self.consume_decoded(&file.file, start, text, b)?,
+                    Decoded::Moves(w) => self.consume_moves(&file.file, start, text, w)?,
+                }
                 *batch_start = p.next;
             } else {
                 *emitted += 1;
@@ -666,6 +666,7 @@ impl Interp<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::block::Block;
 
     fn read(l: &[u8]) -> Option<Plain> {
         let mut p = Plain {
@@ -750,22 +751,40 @@ mod tests {
         }
     }
 
-    /// The block a straight read builds, and whether it holds the line,
-    /// against the block decoder's on the same text.
+    /// The block made from a straight read's words, and whether it holds
+    /// the line, against the block decoder's on the same text; a line of
+    /// moves alone gives that block from its words alone.
     fn same_block_both_ways(text: &str) -> Result<(), TestCaseError> {
         let buf = text.as_bytes();
         let mut p = Plain::default();
-        let mut built = Block::default();
-        let mut sink = ToBlock::new(&mut built, 0);
+        let mut raw = RawLine::default();
+        let mut sink = ToRaw::new(&mut raw, 0);
         if !read_line_into(buf, 0, &mut p, true, &mut sink) {
             return Ok(());
         }
-        let ok = sink.finish(&buf[..p.text_end]);
+        let line = &buf[..p.text_end];
+        let mut built = Block::default();
+        let ok = if sink.finish() {
+            built.replay(&raw, line).is_ok()
+        } else {
+            built.decode_into(line).is_ok()
+        };
         let mut decoded = Block::default();
-        let want = decoded.decode_into(&buf[..p.text_end]).is_ok();
+        let want = decoded.decode_into(line).is_ok();
         prop_assert_eq!(ok, want, "{:?}", text);
         if want {
             prop_assert_eq!(&built, &decoded, "{:?}", text);
+        }
+        if let Some(words) = raw.moves_only(line) {
+            let mut alone = Block::default();
+            prop_assert!(alone.replay_words(words).is_ok(), "{:?}", text);
+            prop_assert_eq!(&alone, &decoded, "{:?}", text);
+            // Nothing but a motion code and value words.
+            prop_assert!(
+                decoded.is_plain_move() && decoded.value(b'I').is_none(),
+                "{:?}",
+                text
+            );
         }
         Ok(())
     }
@@ -804,24 +823,42 @@ mod tests {
             "G7.5 X1\n",
             "(only a comment)   \n",
         ] {
+            same_block_both_ways(l).expect("same");
+        }
+    }
+
+    #[test]
+    fn moves_alone_are_told_apart() {
+        let moves = |l: &str| {
+            // Bytes after the line: the numbers are read eight at a time.
+            let buf = format!("{l}{}", " ".repeat(24));
             let mut p = Plain::default();
-            let mut built = Block::default();
-            let mut sink = ToBlock::new(&mut built, 0);
+            let mut raw = RawLine::default();
+            let mut sink = ToRaw::new(&mut raw, 0);
             assert!(
-                read_line_into(l.as_bytes(), 0, &mut p, true, &mut sink),
+                read_line_into(buf.as_bytes(), 0, &mut p, true, &mut sink),
                 "{l:?}"
             );
-            let ok = sink.finish(&l.as_bytes()[..p.text_end]);
-            let mut decoded = Block::default();
-            let want = decoded.decode_into(&l.as_bytes()[..p.text_end]).is_ok();
-            // G7.5 is no G code: both refuse it.
-            assert_eq!(ok, !l.starts_with("G7.5"), "{l:?}");
-            assert_eq!(ok, want, "{l:?}");
-            if ok {
-                assert_eq!(built, decoded, "{l:?}");
-            }
+            assert!(sink.finish());
+            raw.moves_only(&buf.as_bytes()[..p.text_end])
+                .map(<[RawWord]>::len)
+        };
+        assert_eq!(moves("G1 X1.5 Y-2 Z3 F300\n"), Some(5));
+        assert_eq!(moves("X1 Y2   \n"), Some(2));
+        assert_eq!(moves("G0 Z5\n"), Some(2));
+        for l in [
+            "G2 X1 Y2 I1\n",
+            "G1 X1 S100\n",
+            "g1 X1\n",
+            "G1  X1\n",
+            "G1\tX1\n",
+            "N1 G1 X1\n",
+            "G1 X1 (c)\n",
+            "G1.5 X1\n",
+            "G1X1\n",
+        ] {
+            assert_eq!(moves(l), None, "{l:?}");
         }
-        same_block_both_ways("G1 X1\n").expect("same");
     }
 
     #[test]

@@ -9,9 +9,12 @@
 //! add nothing for such a block, are not gone through. The tests below run
 //! random lines both ways and compare output, state and diagnostics.
 
-use crate::block::{Block, Distance, GCode, LatheMode, MCode, MotionMode, Plane, Units, WordKind};
+use crate::block::{
+    Block, Distance, GCode, LatheMode, MCode, MotionMode, Plane, RawWord, Units, WordKind,
+};
 use crate::diag::Error;
 use crate::emit::Output;
+use crate::target::format::written_as_is;
 
 use super::{Lowering, Problem, Profile, io_error};
 
@@ -24,6 +27,9 @@ pub(super) struct Codes {
     /// Value word letters and axis letters, by their byte.
     words: u128,
     axes: u128,
+    /// Which words of a line of moves alone the short way keeps: G0, G1,
+    /// X, Y, Z, F (the same answers as the bits above).
+    moves: [bool; 6],
 }
 
 impl Codes {
@@ -33,11 +39,24 @@ impl Codes {
                 .filter(|&n| has(n))
                 .fold(0u128, |b, n| b | 1 << n)
         };
+        let g = bits(&|n| p.has_g(n * 10));
+        let words = bits(&|n| p.has_word(n as u8));
+        let axes = bits(&|n| p.has_axis(n as u8));
+        let value = |l: u8| words & 1 << l != 0;
+        let axis = |l: u8| value(l) && axes & 1 << l != 0;
         Codes {
-            g: bits(&|n| p.has_g(n * 10)),
+            g,
             m: bits(&|n| p.has_m(n)),
-            words: bits(&|n| p.has_word(n as u8)),
-            axes: bits(&|n| p.has_axis(n as u8)),
+            words,
+            axes,
+            moves: [
+                g & 1 != 0,
+                g & 2 != 0,
+                axis(b'X'),
+                axis(b'Y'),
+                axis(b'Z'),
+                value(b'F'),
+            ],
         }
     }
 }
@@ -45,15 +64,7 @@ impl Codes {
 impl Lowering {
     /// Whether `b` is such a line in the current state.
     pub(super) fn is_plain(&self, b: &Block) -> bool {
-        if b.percent
-            || b.block_delete
-            || self.comp.is_some()
-            || self.after_off.is_some()
-            || self.feed_rewrite
-            // Positions in a coordinate system the target lacks are moved.
-            || self.m.modes.coord != self.target_coord
-            || self.m.modes.lathe == LatheMode::Diameter && !self.p.has_g(70)
-        {
+        if b.percent || b.block_delete || !self.plain_state() {
             return false;
         }
         let motion = b.motion.unwrap_or(self.m.modes.motion);
@@ -115,6 +126,87 @@ impl Lowering {
         !(arc && ijk && !axis)
     }
 
+    /// Whether the state lets a line through the short way: nothing is
+    /// being lowered (compensation, G95, G7 on a target without it) and the
+    /// target is in the program's coordinate system.
+    fn plain_state(&self) -> bool {
+        !(self.comp.is_some()
+            || self.after_off.is_some()
+            || self.feed_rewrite
+            // Positions in a coordinate system the target lacks are moved.
+            || self.m.modes.coord != self.target_coord
+            || self.m.modes.lathe == LatheMode::Diameter && !self.p.has_g(70))
+    }
+
+    /// A line that is a move alone (G0 or G1, X Y Z F, see
+    /// [`crate::block::RawLine::moves_only`]) written as it is, without
+    /// its block: true when it was (what [`Lowering::is_plain`] and
+    /// [`Lowering::write_plain`] decide and do for its block, which a test
+    /// compares), false to take the block's way.
+    pub(super) fn write_moves(
+        &mut self,
+        text: &[u8],
+        words: &[RawWord],
+        out: &mut Output,
+    ) -> Result<bool, Error> {
+        if !self.plain
+            || !self.plain_state()
+            || self
+                .p
+                .line_limit
+                .is_some_and(|(limit, _)| text.len() >= limit)
+        {
+            return Ok(false);
+        }
+        let decimals = match self.m.modes.units {
+            Units::Mm => self.p.decimals_mm,
+            Units::Inch => self.p.decimals_inch,
+        };
+        let mut motion = None;
+        let mut f = None;
+        let mut xyz = [None; 3];
+        for w in words {
+            let code = w.letter == b'G';
+            let k = match w.letter {
+                b'G' => {
+                    let linear = w.value == 1.0;
+                    motion = Some(if linear {
+                        MotionMode::Linear
+                    } else {
+                        MotionMode::Rapid
+                    });
+                    usize::from(linear)
+                }
+                b'F' => {
+                    f = Some(w.value);
+                    5
+                }
+                l => {
+                    let a = usize::from(l - b'X');
+                    xyz[a] = Some(w.value);
+                    2 + a
+                }
+            };
+            if !self.codes.moves[k] || !written_as_is(w.shape, code, decimals, self.p.max_digits) {
+                return Ok(false);
+            }
+        }
+        if !self.m.apply_move_values(motion, f, xyz) {
+            return Ok(false);
+        }
+        self.seen_words = true;
+        let _ = self.m.take_events();
+        if xyz.iter().any(Option::is_some) {
+            self.cycles.end();
+        }
+        self.f_before = self.last_f;
+        if f.is_some() {
+            self.last_f = f;
+        }
+        out.line(text).map_err(io_error)?;
+        Ok(true)
+    }
+
     /// Runs and writes a line [`Lowering::is_plain`] accepted, as the
     /// general path does for it.
     pub(super) fn write_plain(
@@ -173,6 +265,41 @@ mod tests {
     /// Output, state after each line and diagnostics of `lines` run
     /// through a lowering for profile `p`, the short way on or off.
     fn run(lines: &[String], p: usize, zero_start: bool, plain: bool) -> (String, Vec<String>) {
+        run_with(lines, p, zero_start, plain, false)
+    }
+
+    /// The words of `line` as the straight-line reader keeps them, if it
+    /// is a move alone (see `RawLine::moves_only`).
+    fn moves_of(line: &str) -> Option<Vec<crate::block::RawWord>> {
+        let b = crate::block::Block::decode(line.as_bytes()).ok()?;
+        let mut raw = crate::block::RawLine::default();
+        if let Some((v, s)) = b.line_number {
+            raw.set_line_number(v, s);
+        }
+        if let Some(c) = b.comments.first() {
+            raw.set_comment(c.span);
+        }
+        for w in &b.words {
+            raw.push(crate::block::RawWord {
+                letter: line.as_bytes()[w.span.start as usize],
+                value: w.value,
+                span: w.span,
+                shape: w.shape,
+            });
+        }
+        let text = line.trim_end_matches([' ', '\t', '\r']);
+        raw.moves_only(text.as_bytes()).map(<[_]>::to_vec)
+    }
+
+    /// [`run`]; with `moves`, each line that is a move alone goes the
+    /// way of lines read ahead (`moves_line`, its words without a block).
+    fn run_with(
+        lines: &[String],
+        p: usize,
+        zero_start: bool,
+        plain: bool,
+        moves: bool,
+    ) -> (String, Vec<String>) {
         let settings = Settings {
             zero_start,
             ..Settings::default()
@@ -202,7 +329,13 @@ mod tests {
                 stack: &stack,
             };
             at += line.len() as u32 + 1;
-            let r = l.line(line.as_bytes(), &origin, &mut out);
+            let r = match moves.then(|| moves_of(line)).flatten() {
+                Some(words) => {
+                    let text = line.trim_end_matches([' ', '\t', '\r']);
+                    l.moves_line(text.as_bytes(), &words, &origin, &mut out)
+                }
+                None => l.line(line.as_bytes(), &origin, &mut out),
+            };
             states.push(format!(
                 "{r:?} {:?} {:?} {:?} {} {:?} {:?} {:?}",
                 l.m, l.last_f, l.f_before, l.seen_words, l.cycles, l.written_feed, l.last_pq
@@ -348,6 +481,12 @@ mod tests {
             prop_assert_eq!(&fast.0, &slow.0, "output of {:?}", lines);
             for (i, (a, b)) in fast.1.iter().zip(slow.1.iter()).enumerate() {
                 prop_assert_eq!(a, b, "state after line {} of {:?}", i, lines);
+            }
+            // Moves alone taken without their block: the same again.
+            let moves = run_with(&lines, p, zero_start, true, true);
+            prop_assert_eq!(&moves.0, &slow.0, "output of {:?} (moves)", lines);
+            for (i, (a, b)) in moves.1.iter().zip(slow.1.iter()).enumerate() {
+                prop_assert_eq!(a, b, "state after line {} of {:?} (moves)", i, lines);
             }
         }
     }
