@@ -335,8 +335,12 @@ impl LineConsumer for Lowering {
         if self.p.passthrough {
             return out.line(text).map_err(io_error);
         }
-        if self.write_moves(text, words, out)? {
-            return Ok(());
+        match self.write_moves(text, words, out)? {
+            plain::Moves::Done => return Ok(()),
+            plain::Moves::Problem(kind) => {
+                return self.report(vec![Problem { span: None, kind }], text, origin);
+            }
+            plain::Moves::NotTaken => {}
         }
         let mut block = self.block.take().unwrap_or_default();
         let problems = match block.replay_words(words) {

@@ -28,13 +28,18 @@ impl LineWriter {
 
     /// Starts a line for block `b` (its units decide the decimals).
     pub(super) fn begin(&mut self, b: &Block, units: Units) {
-        self.buf.clear();
-        self.units = units;
+        self.begin_words(units);
         if let Some((n, _)) = b.line_number
             && n <= self.p.max_line_number
         {
             self.push_word(b'N', n, true);
         }
+    }
+
+    /// [`LineWriter::begin`] for a line of words alone (no line number).
+    pub(super) fn begin_words(&mut self, units: Units) {
+        self.buf.clear();
+        self.units = units;
     }
 
     fn push_word(&mut self, letter: u8, v: f64, code: bool) {

@@ -10,7 +10,7 @@
 //! random lines both ways and compare output, state and diagnostics.
 
 use crate::block::{
-    Block, Distance, GCode, LatheMode, MCode, MotionMode, Plane, RawWord, Units, WordKind,
+    Block, Distance, GCode, LatheMode, MCode, MotionMode, Plane, RawWord, Units, Word, WordKind,
 };
 use crate::diag::Error;
 use crate::emit::Output;
@@ -59,6 +59,14 @@ impl Codes {
             ],
         }
     }
+}
+
+/// What became of a line of moves alone (see [`Lowering::write_moves`]).
+pub(super) enum Moves {
+    NotTaken,
+    Done,
+    /// Run, but the line as the target writes it is too long.
+    Problem(crate::diag::ErrorKind),
 }
 
 impl Lowering {
@@ -139,24 +147,18 @@ impl Lowering {
     }
 
     /// A line that is a move alone (G0 or G1, X Y Z F, see
-    /// [`crate::block::RawLine::moves_only`]) written as it is, without
-    /// its block: true when it was (what [`Lowering::is_plain`] and
-    /// [`Lowering::write_plain`] decide and do for its block, which a test
-    /// compares), false to take the block's way.
+    /// [`crate::block::RawLine::moves_only`]) run and written without its
+    /// block where [`Lowering::is_plain`] and [`Lowering::write_plain`]
+    /// would take its block (they decide and do the same, which a test
+    /// compares); [`Moves::NotTaken`] leaves it to the block's way.
     pub(super) fn write_moves(
         &mut self,
         text: &[u8],
         words: &[RawWord],
         out: &mut Output,
-    ) -> Result<bool, Error> {
-        if !self.plain
-            || !self.plain_state()
-            || self
-                .p
-                .line_limit
-                .is_some_and(|(limit, _)| text.len() >= limit)
-        {
-            return Ok(false);
+    ) -> Result<Moves, Error> {
+        if !self.plain || !self.plain_state() {
+            return Ok(Moves::NotTaken);
         }
         let decimals = match self.m.modes.units {
             Units::Mm => self.p.decimals_mm,
@@ -165,6 +167,10 @@ impl Lowering {
         let mut motion = None;
         let mut f = None;
         let mut xyz = [None; 3];
+        let mut as_is = self
+            .p
+            .line_limit
+            .is_none_or(|(limit, _)| text.len() < limit);
         for w in words {
             let code = w.letter == b'G';
             let k = match w.letter {
@@ -187,12 +193,13 @@ impl Lowering {
                     2 + a
                 }
             };
-            if !self.codes.moves[k] || !written_as_is(w.shape, code, decimals, self.p.max_digits) {
-                return Ok(false);
+            if !self.codes.moves[k] {
+                return Ok(Moves::NotTaken);
             }
+            as_is &= written_as_is(w.shape, code, decimals, self.p.max_digits);
         }
         if !self.m.apply_move_values(motion, f, xyz) {
-            return Ok(false);
+            return Ok(Moves::NotTaken);
         }
         self.seen_words = true;
         let _ = self.m.take_events();
@@ -203,8 +210,32 @@ impl Lowering {
         if f.is_some() {
             self.last_f = f;
         }
-        out.line(text).map_err(io_error)?;
-        Ok(true)
+        if as_is {
+            out.line(text).map_err(io_error)?;
+            return Ok(Moves::Done);
+        }
+        // Numbers to write the target's way, as write_plain does.
+        self.w.begin_words(self.m.modes.units);
+        for w in words {
+            let kind = match (w.letter, motion) {
+                (b'G', Some(m)) => WordKind::G(GCode::Motion(m)),
+                _ => WordKind::Value,
+            };
+            let word = Word {
+                letter: w.letter,
+                value: w.value,
+                kind,
+                span: w.span,
+                shape: w.shape,
+            };
+            self.w.word_of(&word, text);
+        }
+        match self.w.finished_line() {
+            Ok(Some(line)) => out.write(line).map_err(io_error)?,
+            Ok(None) => {}
+            Err(kind) => return Ok(Moves::Problem(kind)),
+        }
+        Ok(Moves::Done)
     }
 
     /// Runs and writes a line [`Lowering::is_plain`] accepted, as the
