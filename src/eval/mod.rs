@@ -435,7 +435,10 @@ impl<'s> Interp<'s> {
                 Err(p) => std::panic::resume_unwind(p),
             };
             let Some((c, o, failure)) = served else {
-                return r;
+                // The thread never had the consumer and the output (it
+                // cannot happen: nothing else takes them from the slot).
+                // Nothing is written rather than a partial program.
+                return Err(out::apart::lost());
             };
             self.out.consumer = Some(c);
             self.out.output = o;

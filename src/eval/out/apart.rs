@@ -86,6 +86,18 @@ fn stopped() -> Error {
     )
 }
 
+/// The error of a run whose consumer and output did not come back from
+/// the thread (see `run_apart`).
+pub(in crate::eval) fn lost() -> Error {
+    Diagnostic::error(
+        ErrorKind::Io {
+            path: "<output>".into(),
+            message: "the output thread lost the output".into(),
+        },
+        None,
+    )
+}
+
 impl Apart {
     pub(in crate::eval) fn new(
         to: SyncSender<Batch>,
