@@ -293,18 +293,33 @@ fn g_name(w: &Word) -> String {
     }
 }
 
-impl LineConsumer for Lowering {
-    fn line(&mut self, text: &[u8], origin: &Origin<'_>, out: &mut Output) -> Result<(), Error> {
-        if self.p.passthrough {
-            return out.line(text).map_err(io_error);
-        }
+impl Lowering {
+    /// Runs the line `text` through the reused block that `decode` fills
+    /// (from the text, or from words read ahead), reporting a line it
+    /// cannot decode as a problem.
+    fn run_decoded(
+        &mut self,
+        text: &[u8],
+        origin: &Origin<'_>,
+        out: &mut Output,
+        decode: impl FnOnce(&mut Block) -> Result<(), DecodeError>,
+    ) -> Result<(), Error> {
         let mut block = self.block.take().unwrap_or_default();
-        let problems = match block.decode_into(text) {
+        let problems = match decode(&mut block) {
             Ok(()) => self.run_block(&block, text, origin, out),
             Err(e) => Ok(vec![decode_problem(e)]),
         };
         self.block = Some(block);
         self.report(problems?, text, origin)
+    }
+}
+
+impl LineConsumer for Lowering {
+    fn line(&mut self, text: &[u8], origin: &Origin<'_>, out: &mut Output) -> Result<(), Error> {
+        if self.p.passthrough {
+            return out.line(text).map_err(io_error);
+        }
+        self.run_decoded(text, origin, out, |b| b.decode_into(text))
     }
 
     fn reads_blocks(&self) -> bool {
@@ -342,13 +357,7 @@ impl LineConsumer for Lowering {
             }
             plain::Moves::NotTaken => {}
         }
-        let mut block = self.block.take().unwrap_or_default();
-        let problems = match block.replay_words(words) {
-            Ok(()) => self.run_block(&block, text, origin, out),
-            Err(e) => Ok(vec![decode_problem(e)]),
-        };
-        self.block = Some(block);
-        self.report(problems?, text, origin)
+        self.run_decoded(text, origin, out, |b| b.replay_words(words))
     }
 
     fn computes_comp(&self) -> bool {

@@ -740,18 +740,7 @@ proptest! {
         // For a target the lines read ahead arrive decoded (one reading of
         // each line for its record and its block): the same output and
         // diagnostics as lines decoded one at a time.
-        let grbl = |s: &Settings| {
-            let profile = ngcflat::target::find("grbl").expect("profile");
-            let consumer =
-                ngcflat::lowering(s, Some(ngcflat::target::TargetOptions::new(profile)));
-            let (diags, r) =
-                ngcflat::flatten_memory(prog.clone().into_bytes(), Default::default(), s, consumer);
-            let shown: Vec<String> = diags
-                .iter()
-                .map(|d| render(d, MessageFormat::Short, false))
-                .collect();
-            (shown, show(r.map(|o| String::from_utf8_lossy(&o).into_owned())))
-        };
+        let grbl = |s: &Settings| flatten_for_target(&prog, s, "grbl", false);
         let slow = grbl(&off);
         prop_assert_eq!(&grbl(&on), &slow, "program:\n{}", prog);
         prop_assert_eq!(&grbl(&ahead), &slow, "program:\n{}", prog);
@@ -1129,19 +1118,30 @@ proptest! {
 /// Diagnostics and output (or error) of `prog` flattened for `target`,
 /// with the consumer moving to its own thread after `after` lines.
 fn run_for_target(prog: &str, target: &str, check: bool, after: usize) -> (Vec<String>, String) {
-    use ngcflat::target::{TargetOptions, find};
     let settings = Settings {
         zero_start: true,
         format_thread_after: after,
         ..small_limits()
     };
+    flatten_for_target(prog, &settings, target, check)
+}
+
+/// Diagnostics and output (or error) of `prog` flattened with `settings`
+/// for `target` (in check mode with `check`).
+fn flatten_for_target(
+    prog: &str,
+    settings: &Settings,
+    target: &str,
+    check: bool,
+) -> (Vec<String>, String) {
+    use ngcflat::target::{TargetOptions, find};
     let mut opts = TargetOptions::new(find(target).expect("profile"));
     opts.check = check;
-    let consumer = ngcflat::lowering(&settings, Some(opts));
+    let consumer = ngcflat::lowering(settings, Some(opts));
     let (diags, r) = ngcflat::flatten_memory(
         prog.as_bytes().to_vec(),
         Default::default(),
-        &settings,
+        settings,
         consumer,
     );
     let shown = diags

@@ -77,22 +77,20 @@ pub(in crate::eval) struct Apart {
 /// The error the evaluator stops with once the consumer failed (replaced
 /// by the consumer's own when the thread is joined).
 fn stopped() -> Error {
-    Diagnostic::error(
-        ErrorKind::Io {
-            path: "<output>".into(),
-            message: "the consumer stopped".into(),
-        },
-        None,
-    )
+    output_error("the consumer stopped")
 }
 
 /// The error of a run whose consumer and output did not come back from
 /// the thread (see `run_apart`).
 pub(in crate::eval) fn lost() -> Error {
+    output_error("the output thread lost the output")
+}
+
+fn output_error(message: &str) -> Error {
     Diagnostic::error(
         ErrorKind::Io {
             path: "<output>".into(),
-            message: "the output thread lost the output".into(),
+            message: message.into(),
         },
         None,
     )
