@@ -175,6 +175,8 @@ struct Seg {
 struct Out {
     flip: u8,
     moves: Vec<Move>,
+    /// Most moves to make: [`MAX_MOVES`], or fewer for the output's limit.
+    cap: usize,
 }
 
 impl Out {
@@ -191,7 +193,7 @@ impl Out {
         }
     }
     fn push(&mut self, m: Move) -> R<()> {
-        if self.moves.len() >= MAX_MOVES {
+        if self.moves.len() >= self.cap {
             return Err(LatheError::TooManyMoves);
         }
         self.moves.push(m);
@@ -1105,7 +1107,7 @@ pub(crate) fn cut_partial(
     start: C,
     cycle: &Cycle,
 ) -> (Vec<Move>, Option<LatheError>) {
-    let (mut moves, err) = cut_moves(contour, start, cycle);
+    let (mut moves, err) = cut_moves(contour, start, cycle, MAX_MOVES);
     let mut cur = contour.last;
     moves.retain(|m| {
         if arc_in_place(m, cur) {
@@ -1128,14 +1130,20 @@ pub(crate) fn arc_in_place(m: &Move, cur: C) -> bool {
 
 /// The moves of a cycle, with the error that stopped it; arcs in place
 /// ([`arc_in_place`]) are still among them.
+///
+/// `cap` below [`MAX_MOVES`] stops the cycle after its first `cap` moves
+/// with [`LatheError::TooManyMoves`]: the moves made are then the first
+/// `cap` moves of the whole cycle, as moves are made in order.
 pub(crate) fn cut_moves(
     contour: &Contour,
     start: C,
     cycle: &Cycle,
+    cap: usize,
 ) -> (Vec<Move>, Option<LatheError>) {
     let mut out = Out {
         flip: 0,
         moves: Vec::new(),
+        cap: cap.min(MAX_MOVES),
     };
     if contour.segs.len() <= 1 {
         return (Vec::new(), None);
@@ -1263,5 +1271,40 @@ mod tests {
             &rough(false, 0, 0.0, 0.01, 0.0),
         );
         assert!(m.is_ok_and(|m| m.len() > 100));
+    }
+
+    /// A cycle stopped by a cap has made the first moves of the whole
+    /// cycle, as many as the cap, and says it made too many; a cap above
+    /// its count changes nothing.
+    #[test]
+    fn a_capped_cycle_makes_the_first_moves() {
+        let contours = [step_contour(), {
+            let mut c = Contour::new(C::new(2.0, 12.0));
+            c.line(C::new(0.0, 6.0));
+            c.arc(false, C::new(-3.0, 6.0), C::new(-6.0, 6.0));
+            c.line(C::new(-9.0, 11.0));
+            c
+        }];
+        let cycles: Vec<Cycle> = (0..6)
+            .map(|k| rough(k >= 3, k % 3, 0.0, 0.05, 0.1))
+            .collect();
+        let mut checked = 0;
+        for c in &contours {
+            for cy in &cycles {
+                let (all, e) = cut_moves(c, C::new(2.0, 12.0), cy, MAX_MOVES);
+                if all.len() < 20 {
+                    continue;
+                }
+                checked += 1;
+                for cap in [0, 1, 7, all.len() / 2, all.len() - 1] {
+                    let (some, e) = cut_moves(c, C::new(2.0, 12.0), cy, cap);
+                    assert_eq!(e, Some(LatheError::TooManyMoves));
+                    assert_eq!(some[..], all[..cap]);
+                }
+                let again = cut_moves(c, C::new(2.0, 12.0), cy, all.len());
+                assert_eq!((again.0, again.1), (all.clone(), e.clone()));
+            }
+        }
+        assert!(checked >= 4, "{checked}");
     }
 }

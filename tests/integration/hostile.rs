@@ -426,6 +426,35 @@ fn the_output_line_guard_counts_generated_lines_only() {
     assert!(out.is_empty() && err.contains("[E0403]"), "{err}");
 }
 
+/// A lathe cycle with a tiny depth of cut under a small output bound: it
+/// fails at that bound, at the contour's `endsub`, whether the bound falls
+/// within the moves it makes or after them; under the bound it runs.
+#[test]
+fn a_lathe_cycle_stops_at_the_output_line_guard() {
+    let d = tmp();
+    let prog = "G18 G21 G90 F300\n\
+                o500 sub\nG1 X4 Z0\nG1 X4 Z-5\nG1 X9 Z-10\no500 endsub\n\
+                G0 X12 Z2\nG71 Q500 X12 Z2 D0.01 I0.01 R0.3\nM2\n";
+    put(d.path(), "cut.ngc", prog);
+    let (code, out, _) = run(d.path(), &["cut.ngc"]);
+    assert_eq!(code, 0);
+    let lines = out.lines().count();
+    assert!(lines > 1000, "{lines}");
+    for limit in [0, 10, lines / 2, lines - 12] {
+        let l = limit.to_string();
+        let (code, out, err) = run(d.path(), &["--max-output-lines", &l, "cut.ngc"]);
+        assert_eq!(code, 1, "{limit} {err}");
+        assert!(out.is_empty(), "{limit}");
+        assert!(
+            err.contains(&format!("more than {limit} output lines")) && err.contains("cut.ngc:6:1"),
+            "{limit} {err}"
+        );
+    }
+    let l = lines.to_string();
+    let (code, again, err) = run(d.path(), &["--max-output-lines", &l, "cut.ngc"]);
+    assert_eq!((code, again), (0, out), "{err}");
+}
+
 #[test]
 fn the_output_cannot_be_the_program() {
     let d = tmp();

@@ -73,6 +73,11 @@ impl<'s> Writer<'s> {
         self.count_lines(1)
     }
 
+    /// Lines that may still be written before the output's limit.
+    pub(super) fn lines_left(&self) -> u64 {
+        self.budget.saturating_sub(self.lines)
+    }
+
     /// Counts `n` lines written at once (see [`Writer::count_line`]).
     #[inline]
     pub(super) fn count_lines(&mut self, n: u64) -> bool {

@@ -8,7 +8,7 @@ use std::rc::Rc;
 
 use crate::diag::{Error, ErrorKind, LatheError, Site};
 use crate::emit::number_string;
-use crate::geom::lathe::{C, Contour, Cycle, Move, arc_in_place, cut_moves};
+use crate::geom::lathe::{self, C, Contour, Cycle, MAX_MOVES, Move, arc_in_place, cut_moves};
 use crate::parse::Name;
 use crate::parse::ast::{Item, Line, LineKind};
 use crate::program::{FileIndex, Window, next_line};
@@ -497,7 +497,13 @@ impl Interp<'_> {
         }
         // The moves made before a geometry error are checked first: the
         // reference makes them before it stops.
-        let (moves, failed) = cut_moves(&run.contour, run.begin, &run.cycle);
+        // A cycle making many more moves than the output has lines left
+        // stops early: the output's limit is met within its first `cap`
+        // moves unless most of them write nothing (then see below).
+        let cap = self.out.lines_left().saturating_mul(2).saturating_add(64);
+        let cap = usize::try_from(cap).unwrap_or(usize::MAX).min(MAX_MOVES);
+        let (moves, failed) = cut_moves(&run.contour, run.begin, &run.cycle, cap);
+        let capped = cap < MAX_MOVES && failed == Some(lathe::LatheError::TooManyMoves);
         // With compensation offsetting the path, the position LinuxCNC's
         // compensation reads is the contour's end (set while reading it),
         // the programmed position the rapid's end.
@@ -522,18 +528,20 @@ impl Interp<'_> {
             if arc_in_place(&m, cur) {
                 continue;
             }
-            if let Err(mut e) = self.lathe_move(&cf, cs, clen, m) {
-                // The reference makes the moves after reading the `endsub`
-                // line, and reports a move it refuses there.
-                (self.reader.line_start, self.reader.line_idx) = saved;
-                e.site = Some(Site::new(&file.file, start, start + len));
-                e.stack = self.stack();
-                return Err(e);
+            if let Err(e) = self.lathe_move(&cf, cs, clen, m) {
+                return Err(self.at_endsub(e, saved, file, start, len));
             }
             cur = match self.mach.comp_current().filter(|_| offsets) {
                 Some([a, b, _]) => C::new(a, b),
                 None => m.end(),
             };
+        }
+        if capped {
+            // Stopped early and the output's limit was not met: more than
+            // half of the moves made wrote no line (arcs in place). The
+            // rest of the cycle is not made; it fails at the limit.
+            let e = self.output_limit();
+            return Err(self.at_endsub(e, saved, file, start, len));
         }
         if matches!(self.mach.comp_written, Written::Cycle { .. }) {
             // The cycle's last moves, held by the compensation until G40
@@ -552,6 +560,22 @@ impl Interp<'_> {
             Some(g) => Err(self.lathe_err(LatheError::Geometry(g), file, start, len)),
             None => Ok(()),
         }
+    }
+
+    /// An error of the cycle's moves, reported where the reference makes
+    /// them: after reading the `endsub` line (`saved`: the reader there).
+    fn at_endsub(
+        &mut self,
+        mut e: Error,
+        saved: (u32, u32),
+        file: &Rc<FileIndex>,
+        start: u32,
+        len: u32,
+    ) -> Error {
+        (self.reader.line_start, self.reader.line_idx) = saved;
+        e.site = Some(Site::new(&file.file, start, start + len));
+        e.stack = self.stack();
+        e
     }
 
     /// Whether the evaluator writes the compensated path of this G70 itself
