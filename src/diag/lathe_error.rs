@@ -41,6 +41,8 @@ pub enum LatheError {
     /// compensates the cycle's moves from the contour's end, which written
     /// G0/G1/G2/G3 lines under G41/G42 do not reproduce.
     G70Comp { why: &'static str },
+    /// A contour of more elements than a cycle may make moves (`limit`).
+    ContourTooLong { limit: usize },
 }
 
 impl LatheError {
@@ -71,6 +73,7 @@ impl LatheError {
                 Geom::TooManyMoves => "E1320",
             },
             G70Comp { .. } => "E1321",
+            ContourTooLong { .. } => "E1322",
         }
     }
 }
@@ -104,6 +107,9 @@ impl fmt::Display for LatheError {
                 f.write_str("lathe cycle contour: arc radius too small to reach the end point")
             }
             Geometry(g) => write!(f, "lathe cycle: {g}"),
+            ContourTooLong { limit } => {
+                write!(f, "lathe cycle contour: more than {limit} elements")
+            }
             G70Comp { why } => write!(
                 f,
                 "G70 with cutter compensation on is not flattened here: {why}"

@@ -22,6 +22,10 @@ pub struct Settings {
     pub strip_comments: bool,
     pub max_steps: u64,
     pub max_output_lines: u64,
+    /// Most elements a lathe cycle's contour may have (E1322): the
+    /// cycle's move bound, so that a contour subroutine that never ends
+    /// fails before it fills the memory. Smaller in tests.
+    pub max_contour: usize,
     /// Start like the reference's standalone interpreter: position, offsets,
     /// tool data and probe results all zero and known.
     pub zero_start: bool,
@@ -96,6 +100,7 @@ impl Default for Settings {
             strip_comments: false,
             max_steps: 100_000_000,
             max_output_lines: 50_000_000,
+            max_contour: crate::geom::lathe::MAX_MOVES,
             zero_start: false,
             start_position: Vec::new(),
             fanuc_disabled: false,

@@ -455,6 +455,36 @@ fn a_lathe_cycle_stops_at_the_output_line_guard() {
     assert_eq!((code, again), (0, out), "{err}");
 }
 
+/// A contour subroutine that never ends fails at the element past the
+/// contour bound (E1322, at the line adding it), not after filling the
+/// memory; a contour within the bound is cut.
+#[test]
+fn a_contour_that_never_ends_stops_at_its_bound() {
+    let s = ngcflat::eval::Settings {
+        max_contour: 50,
+        ..Default::default()
+    };
+    let prog = |cond: &str| {
+        format!(
+            "G18 G21 G90 F150\nG0 X30 Z5\no300 sub\nG1 X10 Z0\n#1=0\n\
+             o301 while [{cond}]\nG1 Z[#<_z> - 1]\nG1 X[#<_x> + 0.1]\n#1=[#1+1]\n\
+             o301 endwhile\n\
+             o300 endsub\nG71 Q300 X30 Z5 D0.4 I2 R0.5\nM2\n"
+        )
+    };
+    let e = ngcflat::flatten_str(&prog("1"), &s).expect_err("endless contour");
+    let shown = ngcflat::diag::render(&e, ngcflat::diag::MessageFormat::Short, false);
+    assert!(
+        shown.contains(":8:1: error: lathe cycle contour: more than 50 elements [E1322]"),
+        "{shown}"
+    );
+    // 1 + 2 * 24 elements: cut; 1 + 2 * 25: one too many.
+    let ok = ngcflat::flatten_str(&prog("#1 LT 24"), &s);
+    assert!(ok.is_ok_and(|o| o.lines().count() > 50));
+    let e = ngcflat::flatten_str(&prog("#1 LT 25"), &s).expect_err("one too many");
+    assert_eq!(e.code(), "E1322");
+}
+
 #[test]
 fn the_output_cannot_be_the_program() {
     let d = tmp();

@@ -461,6 +461,13 @@ impl Interp<'_> {
         run.motion = motion;
         run.short_radius |= short_radius;
         if end != point {
+            if run.contour.len() >= self.s.max_contour {
+                // Every element is at least one move of the cycle: a
+                // longer contour (a loop in its subroutine that never
+                // ends) fails now, not after filling the memory.
+                let limit = self.s.max_contour;
+                return Err(bad(self, LatheError::ContourTooLong { limit }));
+            }
             match add {
                 Some(Element::Line(e)) => run.contour.line(e),
                 Some(Element::Arc(ccw, c, e)) => run.contour.arc(ccw, c, e),
