@@ -51,6 +51,9 @@ pub struct Shape {
     /// trailing zero after it, not `-0`, and at most 15 digits besides a
     /// lone leading zero.
     pub plain: bool,
+    /// Written as `plain` says but for zeros ending the digits after the
+    /// point (`1.2500`, `3.000`): the same number without them may be.
+    pub trail: bool,
     pub neg: bool,
     /// Digits before the point (0 for a lone zero).
     pub int: u8,
@@ -66,12 +69,12 @@ impl Shape {
         let first = line[start];
         let last = line[d.end - 1];
         let lone_zero = d.int == 1 && first == b'0';
+        let lead = !plus && d.int > 0 && (d.int == 1 || first != b'0');
         Shape {
-            plain: !plus
-                && d.int > 0
-                && (d.int == 1 || first != b'0')
+            plain: lead
                 && (!d.point || d.frac > 0 && last != b'0')
                 && !(neg && lone_zero && d.frac == 0),
+            trail: lead && d.frac > 0 && last == b'0',
             neg,
             int: if lone_zero { 0 } else { d.int as u8 },
             frac: d.frac as u8,
@@ -755,13 +758,12 @@ fn read_number(line: &[u8], start: usize) -> Option<(f64, usize, Shape)> {
             let v = mant as i64 as f64 / POW10[frac as usize];
             let lone_zero = int == 1 && first == b'0';
             let int_digits = if lone_zero { 0 } else { int };
+            let lead = !plus && int > 0 && (int == 1 || first != b'0') && int_digits + frac <= 15;
             let shape = Shape {
-                plain: !plus
-                    && int > 0
-                    && (int == 1 || first != b'0')
+                plain: lead
                     && (!point || frac > 0 && last != b'0')
-                    && !(neg && lone_zero && frac == 0)
-                    && int_digits + frac <= 15,
+                    && !(neg && lone_zero && frac == 0),
+                trail: lead && frac > 0 && last == b'0',
                 neg,
                 int: int_digits.min(255) as u8,
                 frac: frac.min(255) as u8,

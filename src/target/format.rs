@@ -92,15 +92,22 @@ impl LineWriter {
         let number = text
             .get(w.span.start as usize + 1..w.span.end as usize)
             .unwrap_or_default();
-        if written_as_is(w.shape, code, self.decimals(), self.p.max_digits) {
-            if !self.buf.is_empty() {
-                self.buf.push(b' ');
-            }
-            self.buf.push(w.letter);
-            self.buf.extend_from_slice(number);
+        let kept = if written_as_is(w.shape, code, self.decimals(), self.p.max_digits) {
+            number
+        } else if let Some(n) = (!code)
+            .then(|| without_trailing_zeros(w.shape, number, self.decimals(), self.p.max_digits))
+            .flatten()
+        {
+            n
         } else {
             self.word(w.letter, w.value, w.kind);
+            return;
+        };
+        if !self.buf.is_empty() {
+            self.buf.push(b' ');
         }
+        self.buf.push(w.letter);
+        self.buf.extend_from_slice(kept);
     }
 
     /// Whether the line `text`, whose decoded block is `b`, is already what
@@ -323,6 +330,39 @@ pub(super) fn written_as_is(shape: Shape, code: bool, decimals: u8, max_digits: 
     shape.frac <= max_digits.saturating_sub(shape.int).min(decimals)
 }
 
+/// The number `text` (of a value word, written as `shape` says) without
+/// the zeros ending its digits after the point (and the point, when no
+/// digit is left after it), when that is how the target's rules write its
+/// value: [`written_as_is`] of the number so shortened (same value, fewer
+/// decimals). `None` when it is not, or `shape` is not such a number.
+fn without_trailing_zeros(
+    shape: Shape,
+    text: &[u8],
+    decimals: u8,
+    max_digits: u8,
+) -> Option<&[u8]> {
+    if !shape.trail {
+        return None;
+    }
+    let zeros = text.iter().rev().take_while(|&&c| c == b'0').count();
+    let frac = usize::from(shape.frac).checked_sub(zeros)?;
+    // `-0.00` is 0, which the rules write without the sign.
+    if shape.neg && shape.int == 0 && frac == 0 {
+        return None;
+    }
+    let short = Shape {
+        plain: true,
+        trail: false,
+        frac: frac as u8,
+        ..shape
+    };
+    if !written_as_is(short, false, decimals, max_digits) {
+        return None;
+    }
+    let end = text.len() - zeros - usize::from(frac == 0);
+    Some(&text[..end])
+}
+
 /// `x.round()` (halves away from zero) for `0 <= x < 2^53`: the part
 /// after the point is exact, so comparing it with one half decides.
 #[inline]
@@ -510,6 +550,47 @@ mod tests {
                 };
                 proptest::prop_assert_eq!(t, want);
             }
+        }
+    }
+
+    proptest::proptest! {
+        /// A number whose decimals end in zeros, written without them, is
+        /// what the rules write for its value; blanks anywhere in it, or a
+        /// sign or zero the rules do not write, leave it to them.
+        #[test]
+        fn numbers_without_trailing_zeros_are_formatted_so(
+            t in "[-+]?[0-9 ]{0,7}(\\.[0-9 ]{0,7}0{1,3})?",
+            decimals in 0u8..7,
+            max_digits in 1u8..12,
+        ) {
+            if let Some(s) = shape(&t)
+                && let Some(n) = without_trailing_zeros(s, t.as_bytes(), decimals, max_digits)
+            {
+                let v: f64 = t.replace(' ', "").parse().unwrap();
+                proptest::prop_assert_eq!(String::from_utf8_lossy(n), f(v, decimals, max_digits));
+            }
+        }
+    }
+
+    #[test]
+    fn numbers_without_their_trailing_zeros() {
+        for (t, want) in [
+            ("1.50", Some("1.5")),
+            ("-2.000", Some("-2")),
+            ("0.000", Some("0")),
+            ("10.0", Some("10")),
+            ("-0.0", None),
+            ("1.5", None),
+            ("1.23450", Some("1.2345")),
+            ("1.234560", None),
+            ("+1.50", None),
+            ("01.50", None),
+            ("1234567.50", Some("1234567.5")),
+            ("12345678.50", None),
+        ] {
+            let s = shape(t).unwrap();
+            let got = without_trailing_zeros(s, t.as_bytes(), 4, 8);
+            assert_eq!(got, want.map(str::as_bytes), "{t}");
         }
     }
 
