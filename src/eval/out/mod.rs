@@ -30,7 +30,8 @@ pub(super) struct Writer<'s> {
     /// The consumer moved to a second thread: lines go to it through this
     /// queue (see [`apart`]).
     pub(super) apart: Option<apart::Apart>,
-    /// Lines handed to the consumer on this thread.
+    /// Lines handed to the consumer on this thread, but for those of
+    /// straight runs (see `Interp::straight_run`).
     pub(super) handed: usize,
     /// Lines handed after which the consumer moves to a thread
     /// (`usize::MAX`: never, or not again).
