@@ -19,6 +19,8 @@ pub(super) struct Reader {
     pub(super) fast_words: Vec<fast::FastWord>,
     pub(super) words_buf: Vec<(u8, f64)>,
     pub(super) scratch: Option<Box<block::Scratch>>,
+    /// Chunks of lines read ahead, kept from one straight run to the next.
+    pub(super) chunks: scan_ahead::ChunkPool,
     /// Byte offset and 0-based index of the line being run.
     pub(super) line_start: u32,
     pub(super) line_idx: u32,

@@ -108,6 +108,12 @@ struct Chunk {
     raw: RawLine,
 }
 
+/// Spent chunks kept between straight runs: a long file read in windows
+/// makes a run per window, and chunks made anew each time grew their lists
+/// (and each block its words) from nothing again.
+#[derive(Default)]
+pub(in crate::eval) struct ChunkPool(Vec<Chunk>);
+
 /// Chunk boundaries: line starts about `size` bytes apart, from the line
 /// start `from` to the buffer's end.
 pub(super) fn cut(buf: &[u8], from: usize, size: usize) -> Vec<usize> {
@@ -161,6 +167,7 @@ impl<'b> Shared<'b> {
         comments: bool,
         decode: bool,
         chunk: usize,
+        pool: ChunkPool,
     ) -> Shared<'b> {
         let cuts = cut(buf, from, chunk);
         let n = cuts.len() - 1;
@@ -174,10 +181,15 @@ impl<'b> Shared<'b> {
             done: AtomicBool::new(false),
             helper_gone: AtomicBool::new(false),
             slots: (0..n).map(|_| Mutex::new(None)).collect(),
-            pool: Mutex::new(Vec::new()),
+            pool: Mutex::new(pool.0),
             changes: Mutex::new(0),
             changed: Condvar::new(),
         }
+    }
+
+    /// The spent chunks, for the next run.
+    pub(super) fn into_pool(self) -> ChunkPool {
+        ChunkPool(self.pool.into_inner().unwrap_or_default())
     }
 
     /// The change count, read before testing what a wait would wait for.
@@ -491,7 +503,7 @@ mod tests {
                 (c, false, true),
             ]
         }) {
-            let shared = Shared::new(buf, 0, true, decode, chunk);
+            let shared = Shared::new(buf, 0, true, decode, chunk, ChunkPool::default());
             std::thread::scope(|s| {
                 if helper {
                     s.spawn(|| shared.help());

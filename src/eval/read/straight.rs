@@ -418,14 +418,17 @@ impl Interp<'_> {
         let paused = self.run_lines(&at, &mut here, &mut run)?;
         if paused {
             let decode = self.out.consumer.as_ref().is_some_and(|c| c.reads_blocks());
-            let shared = Shared::new(buf, run.i, comments, decode, chunk);
-            std::thread::scope(|s| {
+            let pool = std::mem::take(&mut self.reader.chunks);
+            let shared = Shared::new(buf, run.i, comments, decode, chunk, pool);
+            let r = std::thread::scope(|s| {
                 // Without a second thread (none can be started) the loop
                 // reads every chunk itself.
                 let _ = std::thread::Builder::new().spawn_scoped(s, || shared.help());
                 let mut ahead = Ahead::new(&shared);
                 self.run_lines(&at, &mut ahead, &mut run)
-            })?;
+            });
+            self.reader.chunks = shared.into_pool();
+            r?;
         }
         self.flush_input(file, base, &buf[run.batch_start..run.i], run.batch_start)?;
         if self.out.count_lines(run.emitted) {
