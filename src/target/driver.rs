@@ -429,10 +429,13 @@ impl Lowering {
         origin: &Origin<'_>,
         out: &mut Output,
     ) -> Result<Vec<Problem>, Error> {
-        if b.percent && !self.p.percent {
-            // A program ended by `%` alone ends there: the target gets M2
-            // (the opening `%` is simply dropped).
-            if self.seen_words && !self.m.ended {
+        if b.percent {
+            if self.p.percent {
+                // The target reads `%` lines as LinuxCNC does.
+                out.line(b"%").map_err(io_error)?;
+            } else if self.seen_words && !self.m.ended {
+                // A program ended by `%` alone ends there: the target gets
+                // M2 (the opening `%` is simply dropped).
                 self.m.ended = true;
                 out.line(b"M2").map_err(io_error)?;
             }
