@@ -73,8 +73,8 @@ pub struct Lowering {
     written_feed: Option<f64>,
     /// The target is in G93 (inverse time) as written.
     target_inverse: bool,
-    /// A line with words was read (a `%` after it ends the program).
-    seen_words: bool,
+    /// The program's opening `%` was read: the next `%` ends the program.
+    percent_open: bool,
     /// P and Q of the last G5 (a G5 without I J continues from them).
     last_pq: Option<[f64; 2]>,
     /// Warnings of the line being lowered, waiting for its site.
@@ -164,7 +164,7 @@ impl Lowering {
             feed_rewrite: false,
             written_feed: None,
             target_inverse: false,
-            seen_words: false,
+            percent_open: false,
             last_pq: None,
             pending: Vec::new(),
             comp: None,
@@ -433,16 +433,16 @@ impl Lowering {
             if self.p.percent {
                 // The target reads `%` lines as LinuxCNC does.
                 out.line(b"%").map_err(io_error)?;
-            } else if self.seen_words && !self.m.ended {
+            } else if !self.percent_open {
+                // The opening `%` is simply dropped.
+                self.percent_open = true;
+            } else if !self.m.ended {
                 // A program ended by `%` alone ends there: the target gets
-                // M2 (the opening `%` is simply dropped).
+                // M2, also when it has no words at all.
                 self.m.ended = true;
                 out.line(b"M2").map_err(io_error)?;
             }
             return Ok(Vec::new());
-        }
-        if !b.words.is_empty() {
-            self.seen_words = true;
         }
         if b.block_delete && self.opts.block_delete {
             // The switch is on: LinuxCNC skips the line.

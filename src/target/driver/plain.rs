@@ -201,7 +201,6 @@ impl Lowering {
         if !self.m.apply_move_values(motion, f, xyz) {
             return Ok(Moves::NotTaken);
         }
-        self.seen_words = true;
         let _ = self.m.take_events();
         if xyz.iter().any(Option::is_some) {
             self.cycles.end();
@@ -246,9 +245,6 @@ impl Lowering {
         text: &[u8],
         out: &mut Output,
     ) -> Result<Vec<Problem>, Error> {
-        if !b.words.is_empty() {
-            self.seen_words = true;
-        }
         let motion = b.motion.unwrap_or(self.m.modes.motion);
         // G7 is not in effect (or the target has it): values as written.
         self.m.apply(b);
@@ -369,7 +365,7 @@ mod tests {
             };
             states.push(format!(
                 "{r:?} {:?} {:?} {:?} {} {:?} {:?} {:?}",
-                l.m, l.last_f, l.f_before, l.seen_words, l.cycles, l.written_feed, l.last_pq
+                l.m, l.last_f, l.f_before, l.percent_open, l.cycles, l.written_feed, l.last_pq
             ));
         }
         let diags = l.finish(&mut out).expect("finish");
