@@ -587,9 +587,13 @@ mod tests {
             ("01.50", None),
             ("1234567.50", Some("1234567.5")),
             ("12345678.50", None),
+            ("1.5 0", None),
+            ("1 .50", None),
+            ("1. 50", None),
+            ("1.50 ", None),
         ] {
-            let s = shape(t).unwrap();
-            let got = without_trailing_zeros(s, t.as_bytes(), 4, 8);
+            // A number with blanks in it may not be read whole (no shape).
+            let got = shape(t).and_then(|s| without_trailing_zeros(s, t.as_bytes(), 4, 8));
             assert_eq!(got, want.map(str::as_bytes), "{t}");
         }
     }
