@@ -632,6 +632,11 @@ impl<'s> Interp<'s> {
                 .olines
                 .get(self.flow.cur.next_o)
                 .map_or(u32::MAX, |o| o.line_idx);
+            // The lines of a straight run do not count toward moving the
+            // consumer to a thread of its own: the run reads (and decodes
+            // for the consumer) on the second core already, and on the
+            // consumer's thread each line would be decoded again.
+            let handed = self.out.handed;
             let run = match file.file.memory() {
                 Some(data) => {
                     self.straight_run(&file, &data[start as usize..], start, line_idx, stop)
@@ -641,6 +646,7 @@ impl<'s> Interp<'s> {
                     Err(e) => Err(read_error(&file, e)),
                 },
             };
+            self.out.handed = handed;
             match run {
                 Ok(0) => {}
                 other => {

@@ -31,7 +31,7 @@ pub(super) struct Writer<'s> {
     /// queue (see [`apart`]).
     pub(super) apart: Option<apart::Apart>,
     /// Lines handed to the consumer on this thread, but for those of
-    /// straight runs (see `Interp::straight_run`).
+    /// straight runs (see `Interp::step`).
     pub(super) handed: usize,
     /// Lines handed after which the consumer moves to a thread
     /// (`usize::MAX`: never, or not again).

@@ -376,25 +376,6 @@ impl Interp<'_> {
             return Ok(0);
         }
         let max_lines = stop_line.saturating_sub(first_line);
-        // The lines of a straight run do not count toward moving the
-        // consumer to a thread of its own: the run reads (and decodes for
-        // the consumer) on the second core already, and on the consumer's
-        // thread each line would be decoded again from its text.
-        let handed = self.out.handed;
-        let r = self.straight_stretch(file, buf, base, first_line, max_lines);
-        self.out.handed = handed;
-        r
-    }
-
-    /// [`Interp::straight_run`] of at most `max_lines` lines.
-    fn straight_stretch(
-        &mut self,
-        file: &Rc<FileIndex>,
-        buf: &[u8],
-        base: u32,
-        first_line: u32,
-        max_lines: u32,
-    ) -> Result<u32, Error> {
         // Comments are copied unless they are to be stripped.
         let comments = !self.s.strip_comments;
         let mut run = Run::default();
