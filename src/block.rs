@@ -82,6 +82,140 @@ impl Shape {
     }
 }
 
+/// Whether a number written with `shape` is exactly what the target's
+/// rules write for its value (`code`: a G or M number, whole or with one
+/// decimal; otherwise a target's number format with `decimals` and
+/// `max_digits`, `crate::target::format::format_number`).
+///
+/// So it is when it is written plainly (see [`Shape::plain`]: the form
+/// those rules write, at most 15 significant digits) with no more decimals
+/// than the rules keep for a number with its digits before the point. Then
+/// the double read from it is within 2^-52 of it relatively; scaled by
+/// `10^d` it is within a quarter of the integer the number scaled is
+/// (below 10^15), so rounding gives back exactly its digits, which are
+/// written without trailing zeros: the number as written. The digits
+/// before the point of the double are those written, since the number is
+/// at least 10^-15 relatively below the next power of ten.
+pub(crate) fn written_as_is(shape: Shape, code: bool, decimals: u8, max_digits: u8) -> bool {
+    if !shape.plain {
+        return false;
+    }
+    if code {
+        return !shape.neg && shape.frac <= 1;
+    }
+    shape.frac <= max_digits.saturating_sub(shape.int).min(decimals)
+}
+
+/// The number `text` (of a value word, written as `shape` says) without
+/// the zeros ending its digits after the point (and the point, when no
+/// digit is left after it), when that is how the target's rules write its
+/// value: [`written_as_is`] of the number so shortened (same value, fewer
+/// decimals). `None` when it is not, or `shape` is not such a number.
+pub(crate) fn without_trailing_zeros(
+    shape: Shape,
+    text: &[u8],
+    decimals: u8,
+    max_digits: u8,
+) -> Option<&[u8]> {
+    if !shape.trail {
+        return None;
+    }
+    let zeros = text.iter().rev().take_while(|&&c| c == b'0').count();
+    let frac = usize::from(shape.frac).checked_sub(zeros)?;
+    // `-0.00` is 0, which the rules write without the sign.
+    if shape.neg && shape.int == 0 && frac == 0 {
+        return None;
+    }
+    let short = Shape {
+        plain: true,
+        trail: false,
+        frac: frac as u8,
+        ..shape
+    };
+    if !written_as_is(short, false, decimals, max_digits) {
+        return None;
+    }
+    let end = text.len() - zeros - usize::from(frac == 0);
+    Some(&text[..end])
+}
+
+/// Where a line of moves alone is written otherwise than as its text: the
+/// `n` bytes ending at `end` (offsets in the line) are dropped for each of
+/// the first `count` cuts (a number's trailing zeros).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Cuts {
+    at: [(u16, u8); 5],
+    count: u8,
+}
+
+impl Cuts {
+    /// Written as its text.
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+
+    /// Adds a cut; false if there is no room (a line of moves alone has
+    /// at most five words).
+    #[inline(always)]
+    pub fn push(&mut self, end: usize, n: usize) -> bool {
+        match self.at.get_mut(usize::from(self.count)) {
+            Some(slot) => {
+                *slot = (end as u16, n as u8);
+                self.count += 1;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Bytes dropped.
+    pub fn dropped(&self) -> usize {
+        self.at[..usize::from(self.count)]
+            .iter()
+            .map(|&(_, n)| usize::from(n))
+            .sum()
+    }
+
+    /// Appends `text` so written to `out`.
+    pub fn write(&self, text: &[u8], out: &mut Vec<u8>) {
+        let mut from = 0;
+        for &(end, n) in &self.at[..usize::from(self.count)] {
+            let end = usize::from(end);
+            out.extend_from_slice(&text[from..end - usize::from(n)]);
+            from = end;
+        }
+        out.extend_from_slice(&text[from..]);
+    }
+}
+
+/// What a writer of lines of moves alone (G0 or G1 with X, Y, Z, F, as
+/// [`RawLine::moves_only`] has them; with `arcs` also G2 or G3 with I, J,
+/// K) needs to know to write one as its own rules would, from the line's
+/// words as they are read: numbers of at most `decimals` decimals and
+/// `max_digits` digits are kept as written ([`written_as_is`]) or without
+/// their trailing zeros ([`without_trailing_zeros`]), and a line so written
+/// shorter than `max_len` bytes fits its line limit however it is counted.
+/// A consumer gives it when a straight run starts; the reader then works
+/// out each such line's output, and the consumer checks that the rule is
+/// still its own when it takes the line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MovesRule {
+    pub decimals: u8,
+    pub max_digits: u8,
+    pub max_len: usize,
+    pub arcs: bool,
+}
+
+/// The values of a line of moves alone: its motion code (G0–G3), X, Y, Z,
+/// F, and whether it has arc centre words (I, J, K).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MoveValues {
+    pub motion: Option<MotionMode>,
+    pub xyz: [Option<f64>; 3],
+    pub f: Option<f64>,
+    pub ijk: bool,
+}
+
 /// A word as the straight-line reader read it (letter as written), kept
 /// for a block made only where one is needed (see [`RawLine`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

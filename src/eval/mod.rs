@@ -29,7 +29,7 @@ use crate::parse::ast::{Line, LineKind, OKind, Span};
 use crate::parse::{LineParser, Name};
 use crate::program::{FileIndex, Loader, SourceFile, Window, next_line};
 
-pub use out::hook::{LineConsumer, Origin};
+pub use out::hook::{FormLine, FormLines, LineConsumer, Origin};
 pub use settings::{
     Define, Settings, parse_axis_word, parse_define, read_tool_table, read_var_file,
 };

@@ -317,6 +317,24 @@ impl Machine {
         true
     }
 
+    /// [`Machine::apply`] for a block of G0–G3 (or none, in G0–G3) with X,
+    /// Y, Z, F and arc centre words alone, given as values (the centre
+    /// changes nothing the model keeps when it records no motion): false
+    /// (nothing done) when the model records motion or the motion is
+    /// another.
+    pub fn apply_plain_motion(
+        &mut self,
+        motion: Option<MotionMode>,
+        f: Option<f64>,
+        xyz: [Option<f64>; 3],
+    ) -> bool {
+        if self.record || !self.plain_motion(motion) {
+            return false;
+        }
+        self.apply_plain_values(motion, f, None, &xyz);
+        true
+    }
+
     /// The steps of [`Machine::apply_plain_move`], from the block's values.
     #[inline]
     fn apply_plain_values(

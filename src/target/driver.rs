@@ -360,6 +360,19 @@ impl LineConsumer for Lowering {
         self.run_decoded(text, origin, out, |b| b.replay_words(words))
     }
 
+    fn moves_rule(&self) -> Option<crate::block::MovesRule> {
+        Lowering::moves_rule(self)
+    }
+
+    fn form_lines(
+        &mut self,
+        batch: &crate::eval::FormLines<'_>,
+        origin: &Origin<'_>,
+        out: &mut Output,
+    ) -> Result<(), (usize, Error)> {
+        self.write_forms(batch, origin, out)
+    }
+
     fn computes_comp(&self) -> bool {
         !self.p.passthrough && !self.p.has_g(410)
     }

@@ -2,7 +2,9 @@
 //! with an exponent, comments stripped or cleaned, every line measured as
 //! the firmware measures it and checked for bytes it acts on in real time.
 
-use crate::block::{Block, CommentKind, Shape, Units, Word, WordKind};
+use crate::block::{
+    Block, CommentKind, Units, Word, WordKind, without_trailing_zeros, written_as_is,
+};
 use crate::diag::ErrorKind;
 
 use super::lower::PlainLine;
@@ -307,62 +309,6 @@ fn write_number(out: &mut Vec<u8>, v: f64, decimals: u8, max_digits: u8) {
     out.extend_from_slice(s.as_bytes());
 }
 
-/// Whether a number written with `shape` is exactly what the target's
-/// rules write for its value (`code`: a G or M number, whole or with one
-/// decimal; otherwise [`format_number`] with `decimals` and `max_digits`).
-///
-/// So it is when it is written plainly (see [`Shape::plain`]: the form
-/// those rules write, at most 15 significant digits) with no more decimals
-/// than the rules keep for a number with its digits before the point. Then
-/// the double read from it is within 2^-52 of it relatively; scaled by
-/// `10^d` it is within a quarter of the integer the number scaled is
-/// (below 10^15), so rounding gives back exactly its digits, which are
-/// written without trailing zeros: the number as written. The digits
-/// before the point of the double are those written, since the number is
-/// at least 10^-15 relatively below the next power of ten.
-pub(super) fn written_as_is(shape: Shape, code: bool, decimals: u8, max_digits: u8) -> bool {
-    if !shape.plain {
-        return false;
-    }
-    if code {
-        return !shape.neg && shape.frac <= 1;
-    }
-    shape.frac <= max_digits.saturating_sub(shape.int).min(decimals)
-}
-
-/// The number `text` (of a value word, written as `shape` says) without
-/// the zeros ending its digits after the point (and the point, when no
-/// digit is left after it), when that is how the target's rules write its
-/// value: [`written_as_is`] of the number so shortened (same value, fewer
-/// decimals). `None` when it is not, or `shape` is not such a number.
-fn without_trailing_zeros(
-    shape: Shape,
-    text: &[u8],
-    decimals: u8,
-    max_digits: u8,
-) -> Option<&[u8]> {
-    if !shape.trail {
-        return None;
-    }
-    let zeros = text.iter().rev().take_while(|&&c| c == b'0').count();
-    let frac = usize::from(shape.frac).checked_sub(zeros)?;
-    // `-0.00` is 0, which the rules write without the sign.
-    if shape.neg && shape.int == 0 && frac == 0 {
-        return None;
-    }
-    let short = Shape {
-        plain: true,
-        trail: false,
-        frac: frac as u8,
-        ..shape
-    };
-    if !written_as_is(short, false, decimals, max_digits) {
-        return None;
-    }
-    let end = text.len() - zeros - usize::from(frac == 0);
-    Some(&text[..end])
-}
-
 /// `x.round()` (halves away from zero) for `0 <= x < 2^53`: the part
 /// after the point is exact, so comparing it with one half decides.
 #[inline]
@@ -522,7 +468,7 @@ mod tests {
     }
 
     /// The shape the decoder gives the number `t` (written after an X).
-    fn shape(t: &str) -> Option<Shape> {
+    fn shape(t: &str) -> Option<crate::block::Shape> {
         let b = Block::decode(format!("X{t}").as_bytes()).ok()?;
         let w = b.words.first()?;
         (w.span.end as usize == t.len() + 1).then_some(w.shape)

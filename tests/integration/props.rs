@@ -705,6 +705,11 @@ fn plain_line() -> impl Strategy<Value = String> {
             Just("X1.1234567890123456"), Just("X-.5 Y+2"), Just("G1 K1"), Just("G1 I1"),
             Just("(segment 3, depth -1.5)"), Just("G0 X1 ( note ) "), Just("G1 X2 (msg, m)"),
             Just("(debug, #5420)"), Just("N5 (c)"), Just("G1 X1 (a (b))"), Just("(c) G1"),
+            // Numbers a target writes shortened, or not as written at all.
+            Just("G1 X-0.000 Y1.50"), Just("G1 X1.5000 Y-2.10 F300.0"), Just("X0.0 Y-0.10"),
+            Just("G0 X1.23456789 Y2"), Just("G1 X+1.0"), Just("G1 X01.5"), Just("G1 X.50"),
+            Just("G2 X1.000 Y0 I0.50 J0"), Just("G3 X0 Y1.0 I-1.00 J0.0"), Just("G1 X1 F1.0"),
+            Just("G1 X12345678.9"), Just("G1 X1.25 Y2.5 Z-3.75 F1200 "),
         ].prop_map(String::from),
     ]
 }
@@ -744,6 +749,95 @@ proptest! {
         let slow = grbl(&off);
         prop_assert_eq!(&grbl(&on), &slow, "program:\n{}", prog);
         prop_assert_eq!(&grbl(&ahead), &slow, "program:\n{}", prog);
+    }
+}
+
+/// Lines of moves alone read ahead are written by the rule of the units in
+/// effect when their run started; a change of units within the run (G21
+/// after G20 here, where millimetres keep fewer decimals than inches) makes
+/// the consumer write the lines after it by its own rule again: the same
+/// output as without the straight-line loop, for runs cut anywhere.
+#[test]
+fn lines_read_ahead_under_other_units_are_written_by_the_present_ones() {
+    let mut prog = String::from("F500\nG20\n");
+    for k in 0..40 {
+        prog.push_str(&format!("G1 X1.{k:02}456 Y-0.{k:02}500\nG0 X0 Y0\n"));
+        prog.push_str("G2 X2.0000 Y0 I1.00001 J0\n");
+        if k == 20 {
+            prog.push_str("G21\n");
+        }
+    }
+    prog.push_str("M2\n");
+    let off = Settings {
+        plain_runs: false,
+        ..small_limits()
+    };
+    let want = flatten_for_target(&prog, &off, "grbl", false);
+    assert!(want.1.contains("X1.20456"), "{}", want.1);
+    assert!(want.1.contains("X1.2146 Y-0.215"), "{}", want.1);
+    assert!(want.1.contains("G2 X2 Y0 I1.00001 J0"), "{}", want.1);
+    assert!(want.1.contains("G2 X2 Y0 I1 J0"), "{}", want.1);
+    for chunk in [1, 8, 24, 64, 200] {
+        let on = Settings {
+            scan_ahead: chunk,
+            ..small_limits()
+        };
+        assert_eq!(
+            flatten_for_target(&prog, &on, "grbl", false),
+            want,
+            "chunks of {chunk}"
+        );
+    }
+}
+
+/// Lines of moves alone handed over together leave the target's machine
+/// model where they would one by one: the lowerings that start from the
+/// current position (a full circle, a canned cycle's clear plane) after
+/// them write the same lines, with positions absolute and incremental.
+#[test]
+fn lines_handed_over_together_leave_the_model_where_they_would_one_by_one() {
+    let mut prog = String::from("G21 G90 G17 F500\nG0 X0 Y0 Z5\n");
+    for (k, mode) in ["G90", "G91", "G90"].iter().enumerate() {
+        prog.push_str(&format!("{mode}\n"));
+        for j in 0..30 {
+            let line = match j % 6 {
+                0 => format!("G1 X{}.5 Y{}.25 F{}", j + k, j, 300 + j),
+                1 => format!("X{}.10", j + 1),
+                2 => format!("G0 Z{}.500", j % 4 + 1),
+                3 => format!("G0 X10 Y-{}.75", j),
+                // An arc from there, in either mode.
+                4 if k == 1 => "G2 X1 Y0 I0.5 J0".to_string(),
+                4 => format!("G2 X11 Y-{}.75 I0.5 J0", j - 1),
+                _ => format!("G1 Y{}", j + 2),
+            };
+            prog.push_str(&line);
+            prog.push('\n');
+        }
+        // From the current position: a full circle, a drilling cycle with
+        // its initial level, and the cycle again after moves.
+        prog.push_str("G2 I1 J0\nG98 G81 X3 Y3 Z-1 R1 F100\nG80\nG1 Z2.5 F200\n");
+        prog.push_str("G81 X4 Y4 Z-1 R1\nG80\n");
+    }
+    prog.push_str("M2\n");
+    let off = Settings {
+        plain_runs: false,
+        zero_start: true,
+        ..small_limits()
+    };
+    let want = flatten_for_target(&prog, &off, "grbl", false);
+    assert!(want.0.is_empty(), "{:?}", want.0);
+    assert!(!want.1.starts_with("error"), "{}", want.1);
+    for chunk in [1, 8, 40, 200] {
+        let on = Settings {
+            plain_runs: true,
+            scan_ahead: chunk,
+            ..off.clone()
+        };
+        assert_eq!(
+            flatten_for_target(&prog, &on, "grbl", false),
+            want,
+            "chunks of {chunk}"
+        );
     }
 }
 

@@ -7,7 +7,7 @@
 
 use std::sync::Arc;
 
-use crate::block::{Block, RawWord};
+use crate::block::{Block, MoveValues, MovesRule, RawWord};
 
 /// What comes with a line handed over besides its text.
 enum Payload<'a> {
@@ -22,6 +22,7 @@ use crate::program::SourceFile;
 use crate::eval::Interp;
 
 /// Where an output line came from.
+#[derive(Clone, Copy)]
 pub struct Origin<'a> {
     /// The file holding the line that produced it.
     pub file: &'a Arc<SourceFile>,
@@ -76,6 +77,35 @@ pub trait LineConsumer: Send {
         self.line(text, origin, out)
     }
 
+    /// How the consumer writes lines of moves alone, in its present state,
+    /// if it writes them by such a rule: the straight-line loop then works
+    /// out their output where it reads them and hands them over in batches
+    /// through [`LineConsumer::form_lines`].
+    fn moves_rule(&self) -> Option<MovesRule> {
+        None
+    }
+
+    /// Lines of moves alone handed over at once, in order, each with its
+    /// values and as written by the batch's [`MovesRule`] (the consumer's
+    /// when their run started; its state may have changed since): what
+    /// [`LineConsumer::line`] does with each (`origin` with each line's
+    /// start). An error comes with the index of its line.
+    fn form_lines(
+        &mut self,
+        batch: &FormLines<'_>,
+        origin: &Origin<'_>,
+        out: &mut Output,
+    ) -> Result<(), (usize, Error)> {
+        for (k, l) in batch.lines.iter().enumerate() {
+            let o = Origin {
+                line_start: l.line_start,
+                ..*origin
+            };
+            self.line(batch.text(l), &o, out).map_err(|e| (k, e))?;
+        }
+        Ok(())
+    }
+
     /// The program ended; returns diagnostics gathered on the way (warnings,
     /// and in check mode errors kept to report them all).
     fn finish(&mut self, out: &mut Output) -> Result<Vec<Diagnostic>, Error>;
@@ -92,7 +122,135 @@ pub trait LineConsumer: Send {
     fn comp_position(&mut self, _p: [f64; 2]) {}
 }
 
+/// A line of moves alone waiting in a [`FormBatch`].
+#[derive(Clone, Copy)]
+pub struct FormLine {
+    /// Offset of its start in its file.
+    pub line_start: u32,
+    /// Its text: offsets in the batch's input.
+    pub text: (u32, u32),
+    pub values: MoveValues,
+    /// End of its written bytes, and their newline, in the batch's
+    /// `written`.
+    pub written_end: u32,
+}
+
+/// Lines of moves alone handed over at once (see
+/// [`LineConsumer::form_lines`]): all read from `input` and written by
+/// `rule` (the consumer's rule when their run started), their written
+/// bytes one after another, each with its newline.
+pub struct FormLines<'a> {
+    pub rule: MovesRule,
+    pub input: &'a [u8],
+    pub lines: &'a [FormLine],
+    pub written: &'a [u8],
+}
+
+impl FormLines<'_> {
+    /// The text of `line`.
+    pub fn text(&self, line: &FormLine) -> &[u8] {
+        &self.input[line.text.0 as usize..line.text.1 as usize]
+    }
+}
+
+/// Lines of moves alone a straight-line run has read and not yet handed
+/// over: handed over together, before any other line.
+#[derive(Default)]
+pub(in crate::eval) struct FormBatch {
+    rule: Option<MovesRule>,
+    lines: Vec<FormLine>,
+    written: Vec<u8>,
+}
+
+/// Lines a batch holds at most.
+const FORM_BATCH: usize = 256;
+
+impl FormBatch {
+    pub(in crate::eval) fn is_empty(&self) -> bool {
+        self.lines.is_empty()
+    }
+
+    /// Adds a line (text at `text` in the run's input) written as
+    /// `written` by `rule`; true when the batch is full.
+    #[inline]
+    pub(in crate::eval) fn push(
+        &mut self,
+        line_start: u32,
+        text: (usize, usize),
+        values: MoveValues,
+        (rule, written): (MovesRule, &[u8]),
+    ) -> bool {
+        // One rule for the batch: lines read under another (a new run)
+        // come after it is handed over.
+        debug_assert!(self.lines.is_empty() || self.rule == Some(rule));
+        if self.lines.is_empty() {
+            self.rule = Some(rule);
+        }
+        self.written.extend_from_slice(written);
+        self.written.push(b'\n');
+        self.lines.push(FormLine {
+            line_start,
+            text: (text.0 as u32, text.1 as u32),
+            values,
+            written_end: self.written.len() as u32,
+        });
+        self.lines.len() >= FORM_BATCH
+    }
+}
+
 impl Interp<'_> {
+    /// Hands the lines of `batch`, read from `input` (`file`'s text), to
+    /// the consumer, and empties it.
+    pub(in crate::eval) fn flush_forms(
+        &mut self,
+        batch: &mut FormBatch,
+        file: &Arc<SourceFile>,
+        input: &[u8],
+    ) -> Result<(), Error> {
+        let Some(rule) = batch.rule.filter(|_| !batch.lines.is_empty()) else {
+            return Ok(());
+        };
+        let r = match self.out.consumer.take() {
+            Some(mut c) if self.out.apart.is_none() => {
+                self.out.handed += batch.lines.len();
+                let frames = &self.flow.frames;
+                let stack = || crate::eval::flow::stack_of(frames);
+                let origin = Origin {
+                    file,
+                    line_start: 0,
+                    verbatim: true,
+                    stack: &stack,
+                };
+                let lines = FormLines {
+                    rule,
+                    input,
+                    lines: &batch.lines,
+                    written: &batch.written,
+                };
+                let r = c.form_lines(&lines, &origin, &mut self.out.output);
+                self.out.consumer = Some(c);
+                r
+            }
+            c => {
+                // No consumer on this thread: each line as any other.
+                self.out.consumer = c;
+                let mut r = Ok(());
+                for (k, l) in batch.lines.iter().enumerate() {
+                    let text = &input[l.text.0 as usize..l.text.1 as usize];
+                    if let Err(e) = self.hand_over(file, l.line_start, text, true, Payload::Text) {
+                        r = Err((k, e));
+                        break;
+                    }
+                }
+                r
+            }
+        };
+        let placed = r.map_err(|(k, e)| self.placed(e, file, batch.lines[k].line_start));
+        batch.lines.clear();
+        batch.written.clear();
+        placed
+    }
+
     /// Hands a line to the consumer (there is one).
     #[cold]
     pub(in crate::eval) fn consume(

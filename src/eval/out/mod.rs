@@ -36,6 +36,8 @@ pub(super) struct Writer<'s> {
     /// Lines handed after which the consumer moves to a thread
     /// (`usize::MAX`: never, or not again).
     pub(super) apart_after: usize,
+    /// Lines of moves alone a straight run holds back to hand over at once.
+    pub(in crate::eval) forms: hook::FormBatch,
 }
 
 impl<'s> Writer<'s> {
@@ -58,6 +60,7 @@ impl<'s> Writer<'s> {
             apart: None,
             handed: 0,
             apart_after: usize::MAX,
+            forms: hook::FormBatch::default(),
         }
     }
 

@@ -19,8 +19,8 @@
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Condvar, Mutex};
 
-use crate::block::{Block, RawLine, RawWord};
-use crate::eval::read::straight::{Plain, ToRaw, read_line, read_line_into};
+use crate::block::{Block, Cuts, MovesRule, RawLine, RawWord};
+use crate::eval::read::straight::{Plain, ToForm, ToRaw, read_line, read_line_into};
 
 /// Chunks read ahead of the one being applied, at most.
 const AHEAD: usize = 4;
@@ -76,6 +76,12 @@ pub(super) enum Decoded<'p> {
     /// A move and nothing else (see [`RawLine::moves_only`]): its words,
     /// for a consumer that takes such a line without a block.
     Moves(&'p [RawWord]),
+    /// A move and nothing else that the consumer's `rule` writes as
+    /// `written` (`None`: as the line's text).
+    Form {
+        written: Option<&'p [u8]>,
+        rule: MovesRule,
+    },
 }
 
 /// How a chunk's line was decoded.
@@ -86,6 +92,10 @@ enum Kind {
     Block,
     /// Its words are the chunk's `moves[at..at + len]`.
     Moves(u32, u8),
+    /// A line of moves alone written as its text, or as the chunk's
+    /// `out[at..at + len]`.
+    Form,
+    FormOut(u32, u16),
 }
 
 /// One line of a chunk read ahead.
@@ -104,6 +114,9 @@ struct Chunk {
     blocks: Vec<Block>,
     moves: Vec<RawWord>,
     kinds: Vec<Kind>,
+    /// Lines of moves alone as the consumer writes them, where that is not
+    /// their text.
+    out: Vec<u8>,
     /// The words of the line being read.
     raw: RawLine,
 }
@@ -133,12 +146,25 @@ pub(super) fn cut(buf: &[u8], from: usize, size: usize) -> Vec<usize> {
     cuts
 }
 
+/// A line of moves alone, `text`, as its consumer writes it (see
+/// [`Cuts`]): as its text, or as bytes put at the end of `out`.
+fn written(out: &mut Vec<u8>, text: &[u8], cuts: &Cuts) -> Kind {
+    if cuts.is_empty() {
+        return Kind::Form;
+    }
+    let at = out.len();
+    cuts.write(text, out);
+    Kind::FormOut(at as u32, (out.len() - at) as u16)
+}
+
 /// State both threads share.
 pub(super) struct Shared<'b> {
     buf: &'b [u8],
     comments: bool,
     /// Decode each plain line into a block too.
     decode: bool,
+    /// How the consumer writes lines of moves alone, if it says.
+    rule: Option<MovesRule>,
     cuts: Vec<usize>,
     /// Next chunk to claim.
     next: AtomicUsize,
@@ -166,6 +192,7 @@ impl<'b> Shared<'b> {
         from: usize,
         comments: bool,
         decode: bool,
+        rule: Option<MovesRule>,
         chunk: usize,
         pool: ChunkPool,
     ) -> Shared<'b> {
@@ -175,6 +202,7 @@ impl<'b> Shared<'b> {
             buf,
             comments,
             decode,
+            rule: rule.filter(|_| decode),
             cuts,
             next: AtomicUsize::new(0),
             applied: AtomicUsize::new(0),
@@ -234,6 +262,7 @@ impl<'b> Shared<'b> {
         v.clear();
         chunk.kinds.clear();
         chunk.moves.clear();
+        chunk.out.clear();
         let (mut i, end) = (self.cuts[c], self.cuts[c + 1]);
         while i < end {
             if self.buf[i] == b'\n' {
@@ -255,7 +284,26 @@ impl<'b> Shared<'b> {
                 i = p.next;
                 continue;
             }
-            // The words from the same reading of the line.
+            // A line of moves alone the consumer writes by its rule: its
+            // output worked out as it is read.
+            if let Some(rule) = self.rule.filter(|_| ToForm::may_take(self.buf, i)) {
+                let mut sink = ToForm::new(i, rule);
+                if !read_line_into(self.buf, i, p, self.comments, &mut sink) {
+                    *v.last_mut().expect("pushed") = Rec::Stop;
+                    return chunk;
+                }
+                if let Some(cuts) = sink.finish(p.text_end) {
+                    let kind = written(&mut chunk.out, &self.buf[i..p.text_end], &cuts);
+                    i = p.next;
+                    if chunk.kinds.len() < k {
+                        chunk.kinds.resize(k, Kind::No);
+                    }
+                    chunk.kinds.push(kind);
+                    continue;
+                }
+            }
+            // The words from the same reading of the line (again for a
+            // line that might have been one of moves alone).
             let mut sink = ToRaw::new(&mut chunk.raw, i);
             if !read_line_into(self.buf, i, p, self.comments, &mut sink) {
                 *v.last_mut().expect("pushed") = Rec::Stop;
@@ -264,7 +312,9 @@ impl<'b> Shared<'b> {
             let kept = sink.finish();
             let text = &self.buf[i..p.text_end];
             i = p.next;
-            chunk.kinds.resize(k, Kind::No);
+            if chunk.kinds.len() < k {
+                chunk.kinds.resize(k, Kind::No);
+            }
             let moves = if kept {
                 chunk.raw.moves_only(text)
             } else {
@@ -386,7 +436,12 @@ impl<'s, 'b> Ahead<'s, 'b> {
                 && s.next.load(Ordering::Acquire) > c
                 && !s.helper_gone.load(Ordering::Acquire)
             {
-                s.wait(seen);
+                if let Some(k) = s.claim() {
+                    let v = s.read_chunk(k);
+                    s.store(k, v);
+                } else {
+                    s.wait(seen);
+                }
                 continue;
             }
             match s.claim() {
@@ -432,6 +487,17 @@ impl Lines for Ahead<'_, '_> {
                             Some(&Kind::Moves(at, n)) => {
                                 let at = at as usize;
                                 Some(Decoded::Moves(&l.moves[at..at + n as usize]))
+                            }
+                            Some(Kind::Form) => self.shared.rule.map(|rule| Decoded::Form {
+                                written: None,
+                                rule,
+                            }),
+                            Some(&Kind::FormOut(at, n)) => {
+                                let at = at as usize;
+                                self.shared.rule.map(|rule| Decoded::Form {
+                                    written: Some(&l.out[at..at + n as usize]),
+                                    rule,
+                                })
                             }
                             _ => None,
                         };
@@ -483,7 +549,10 @@ mod tests {
     fn chunks_give_the_lines_read_in_place() {
         let mut text = String::new();
         for k in 0..3000 {
-            text.push_str(&format!("G1 X{k}.5 Y-{k}\n"));
+            text.push_str(&format!("G1 X{k}.5 Y-{}\n", k + 1));
+            if k % 5 == 0 {
+                text.push_str(&format!("X{k}.50\n"));
+            }
             if k % 7 == 0 {
                 text.push('\n');
             }
@@ -491,19 +560,31 @@ mod tests {
                 text.push_str("(note)\n");
             }
         }
-        text.push_str("M2\nG1 X1\n");
+        // Lines far enough from the end for numbers read eight bytes at a
+        // time.
+        text.push_str("M2\nG1 X1\n(the end of the buffer is some way off)\n");
         let buf = text.as_bytes();
         // Without a helper thread too (when none can be started); with and
         // without blocks.
-        for (chunk, helper, decode) in [1, 64, 1000, 1 << 20].into_iter().flat_map(|c| {
+        // With a rule, the moves come as written by it: as their text, or
+        // (with one decimal) without the trailing zero of `.50`.
+        let rule = Some(MovesRule {
+            decimals: 1,
+            max_digits: 8,
+            max_len: 80,
+            arcs: false,
+        });
+        for (chunk, helper, decode, rule) in [1, 64, 1000, 1 << 20].into_iter().flat_map(|c| {
             [
-                (c, true, false),
-                (c, false, false),
-                (c, true, true),
-                (c, false, true),
+                (c, true, false, None),
+                (c, false, false, None),
+                (c, true, true, None),
+                (c, false, true, None),
+                (c, true, true, rule),
+                (c, false, true, rule),
             ]
         }) {
-            let shared = Shared::new(buf, 0, true, decode, chunk, ChunkPool::default());
+            let shared = Shared::new(buf, 0, true, decode, rule, chunk, ChunkPool::default());
             std::thread::scope(|s| {
                 if helper {
                     s.spawn(|| shared.help());
@@ -530,7 +611,20 @@ mod tests {
                             // alone comes as its words, which make it.
                             let mut want = Block::default();
                             want.decode_into(&buf[i..p.text_end]).expect("decodes");
+                            let text = &buf[i..p.text_end];
+                            if rule.is_some() && text[0] != b'(' {
+                                let want = String::from_utf8_lossy(text).replace(".50", ".5");
+                                let Some(Decoded::Form { written, .. }) = block else {
+                                    panic!("not written by the rule: {want}");
+                                };
+                                let got = String::from_utf8_lossy(written.unwrap_or(text));
+                                assert_eq!(got, want);
+                                i = p.next;
+                                lines += 1;
+                                continue;
+                            }
                             let got = block.map(|d| match d {
+                                Decoded::Form { .. } => panic!("no rule"),
                                 Decoded::Block(b) => b.clone(),
                                 Decoded::Moves(w) => {
                                     let mut b = Block::default();

@@ -9,13 +9,17 @@
 
 use std::rc::Rc;
 
-use crate::block::{RawLine, RawWord, Shape, Span};
+use crate::block::{
+    Cuts, MoveValues, MovesRule, RawLine, RawWord, Shape, Span, without_trailing_zeros,
+    written_as_is,
+};
 use crate::diag::Error;
 use crate::number::{Digits, POW10, digits_in};
 use crate::program::FileIndex;
 
 use crate::codes::{CutterComp, FeedMode, MotionMode, Plane};
 use crate::eval::Interp;
+use crate::eval::out::hook::FormBatch;
 use crate::eval::read::scan_ahead::{Ahead, Decoded, InPlace, Lines, Read, Shared};
 
 /// Word slots: G, X, Y, Z, A, B, C, F, S (the fast set), then I, J, K, R, P
@@ -28,6 +32,7 @@ const AXIS_MASK: u32 = 0b111_1110;
 const FAST_MASK: u32 = 0b1_1111_1111;
 const I: usize = 9;
 const J: usize = 10;
+const K: usize = 11;
 const R: usize = 12;
 /// Words a G2/G3 line in the XY plane may have on the fast path.
 const ARC_MASK: u32 =
@@ -231,6 +236,120 @@ impl WordSink for ToRaw<'_> {
     }
 }
 
+/// Works out, as a line is read, how a consumer writing by `rule` writes
+/// it, if it is a line of moves alone as [`RawLine::moves_only`] has it
+/// (G0 or G1, X, Y, Z, F, upper case, one blank apart, no line number or
+/// comment) and the rule keeps each of its numbers as written or without
+/// its trailing zeros: the writer's own tests ([`written_as_is`],
+/// [`without_trailing_zeros`]) on the shape [`Shape::of`] gives each
+/// number, as for a word handed to a block.
+pub(in crate::eval) struct ToForm {
+    rule: MovesRule,
+    /// Offset of the line's start, and where its next word must start.
+    start: usize,
+    next: usize,
+    words: u8,
+    ok: bool,
+    cuts: Cuts,
+}
+
+impl ToForm {
+    #[inline(always)]
+    pub(in crate::eval) fn new(start: usize, rule: MovesRule) -> ToForm {
+        ToForm {
+            rule,
+            start,
+            next: start,
+            words: 0,
+            ok: true,
+            cuts: Cuts::default(),
+        }
+    }
+
+    /// Whether the line at `buf[i..]` may be one (its first word is G0–G3,
+    /// X, Y, Z, F, I, J or K): lines that are not are left to [`ToRaw`] at
+    /// once.
+    #[inline(always)]
+    pub(in crate::eval) fn may_take(buf: &[u8], i: usize) -> bool {
+        match buf.get(i) {
+            Some(b'G') => matches!(buf.get(i + 1), Some(b'0'..=b'3')),
+            Some(b'X' | b'Y' | b'Z' | b'F' | b'I' | b'J' | b'K') => true,
+            _ => false,
+        }
+    }
+
+    /// After a successful read of the line ending its text at `text_end`:
+    /// where it is written otherwise than as its text, if it is such a line.
+    #[inline(always)]
+    pub(in crate::eval) fn finish(&self, text_end: usize) -> Option<Cuts> {
+        let fits = text_end - self.start - self.cuts.dropped() < self.rule.max_len;
+        (self.ok && self.words > 0 && self.next == text_end + 1 && fits).then_some(self.cuts)
+    }
+
+    #[inline(always)]
+    fn take(&mut self, buf: &[u8], at: usize, sign: u8, num: usize, d: &Digits) -> bool {
+        let letter = buf[at];
+        let code = letter == b'G';
+        let arc_word = matches!(letter, b'I' | b'J' | b'K');
+        if !(code || matches!(letter, b'X' | b'Y' | b'Z' | b'F') || arc_word && self.rule.arcs)
+            || at != self.next
+            || self.words > 0 && buf[at - 1] != b' '
+        {
+            return false;
+        }
+        let shape = Shape::of(d, buf, num, sign == b'-', sign == b'+');
+        let (decimals, digits) = (self.rule.decimals, self.rule.max_digits);
+        if written_as_is(shape, code, decimals, digits) {
+            // A G word so written is G0–G3 when its digits are 0–3 (G2 and
+            // G3 where the rule takes arcs).
+            let top = if self.rule.arcs { 3 } else { 1 };
+            if code && !(d.frac == 0 && d.mant <= top) {
+                return false;
+            }
+        } else {
+            let number = &buf[at + 1..d.end];
+            match without_trailing_zeros(shape, number, decimals, digits) {
+                Some(kept) if !code => {
+                    if !self
+                        .cuts
+                        .push(d.end - self.start, number.len() - kept.len())
+                    {
+                        return false;
+                    }
+                }
+                _ => return false,
+            }
+        }
+        self.words += 1;
+        self.next = d.end + 1;
+        true
+    }
+}
+
+impl WordSink for ToForm {
+    #[inline(always)]
+    fn line_number(&mut self, _: usize, _: f64, _: usize) {
+        self.ok = false;
+    }
+
+    #[inline(always)]
+    fn word(&mut self, buf: &[u8], at: usize, sign: u8, num: usize, d: &Digits) {
+        if self.ok {
+            self.ok = self.take(buf, at, sign, num, d);
+        }
+    }
+
+    #[inline(always)]
+    fn slow_word(&mut self) {
+        self.ok = false;
+    }
+
+    #[inline(always)]
+    fn comment(&mut self, _: &[u8], _: usize, _: usize) {
+        self.ok = false;
+    }
+}
+
 /// [`read_line`], handing the words to `sink` as they are read.
 #[inline(always)]
 pub(in crate::eval) fn read_line_into(
@@ -356,6 +475,25 @@ fn read_comment(
     true
 }
 
+/// The values of a line of moves alone (G0–G3, X, Y, Z, F, I, J, K) read
+/// into `p`.
+#[inline(always)]
+fn move_values(p: &Plain) -> MoveValues {
+    let has = |slot: usize| p.mask & (1 << slot) != 0;
+    let value = |slot: usize| has(slot).then(|| p.vals[slot]);
+    MoveValues {
+        motion: has(G).then(|| match p.vals[G] {
+            0.0 => MotionMode::Rapid,
+            1.0 => MotionMode::Linear,
+            2.0 => MotionMode::ArcCw,
+            _ => MotionMode::ArcCcw,
+        }),
+        xyz: [value(1), value(2), value(3)],
+        f: value(F),
+        ijk: p.mask & (1 << I | 1 << J | 1 << K) != 0,
+    }
+}
+
 impl Interp<'_> {
     /// Runs plain lines from `buf` (the file's bytes from offset `base`),
     /// stopping before line `stop_line`. Returns the number of lines run; 0
@@ -398,9 +536,11 @@ impl Interp<'_> {
         };
         let paused = self.run_lines(&at, &mut here, &mut run)?;
         if paused {
-            let decode = self.out.consumer.as_ref().is_some_and(|c| c.reads_blocks());
+            let consumer = self.out.consumer.as_ref();
+            let decode = consumer.is_some_and(|c| c.reads_blocks());
+            let rule = consumer.and_then(|c| c.moves_rule());
             let pool = std::mem::take(&mut self.reader.chunks);
-            let shared = Shared::new(buf, run.i, comments, decode, chunk, pool);
+            let shared = Shared::new(buf, run.i, comments, decode, rule, chunk, pool);
             let r = std::thread::scope(|s| {
                 // Without a second thread (none can be started) the loop
                 // reads every chunk itself.
@@ -426,13 +566,32 @@ impl Interp<'_> {
     }
 
     /// The loop over lines from `src`, from where `run` stands. True: `src`
-    /// paused (the run goes on with another source).
+    /// paused (the run goes on with another source). Lines of moves alone
+    /// are held back and handed over together (see [`FormBatch`]), all
+    /// before the loop ends.
     #[inline(always)]
     fn run_lines(
         &mut self,
         at: &Stretch<'_>,
         src: &mut impl Lines,
         run: &mut Run,
+    ) -> Result<bool, Error> {
+        let mut forms = std::mem::take(&mut self.out.forms);
+        let r = self.run_lines_with(at, src, run, &mut forms);
+        let flushed = self.flush_forms(&mut forms, &at.file.file, at.buf);
+        self.out.forms = forms;
+        let paused = r?;
+        flushed?;
+        Ok(paused)
+    }
+
+    #[inline(always)]
+    fn run_lines_with(
+        &mut self,
+        at: &Stretch<'_>,
+        src: &mut impl Lines,
+        run: &mut Run,
+        forms: &mut FormBatch,
     ) -> Result<bool, Error> {
         let &Stretch {
             file,
@@ -449,7 +608,12 @@ impl Interp<'_> {
             last_start,
         } = run;
         while *lines < max_lines && self.out.lines + *emitted < self.out.budget {
-            let (p, block) = match src.read(*i) {
+            let read = src.read(*i);
+            if !forms.is_empty() && !matches!(read, Read::Line(_, Some(Decoded::Form { .. }))) {
+                // Any other line after those held back.
+                self.flush_forms(forms, &file.file, buf)?;
+            }
+            let (p, block) = match read {
                 Read::Pause => return Ok(true),
                 Read::Stop => break,
                 Read::Blank => {
@@ -466,6 +630,7 @@ impl Interp<'_> {
             if !self.fast_line(p) {
                 // Other words or modes: the block checks and the full
                 // state update, still without the grammar.
+                self.flush_forms(forms, &file.file, buf)?;
                 self.flush_input(file, base, &buf[*batch_start..*i], *batch_start)?;
                 *batch_start = *i;
                 self.out.lines += *emitted;
@@ -497,12 +662,21 @@ impl Interp<'_> {
             } else if let Some(decoded) = block {
                 // Decoded ahead for the consumer: handed over line by line.
                 *emitted += 1;
-                self.flush_input(file, base, &buf[*batch_start..*i], *batch_start)?;
+                if *batch_start < *i {
+                    self.flush_forms(forms, &file.file, buf)?;
+                    self.flush_input(file, base, &buf[*batch_start..*i], *batch_start)?;
+                }
                 let start = base + *i as u32;
                 let text = &buf[*i..p.text_end];
                 match decoded {
                     Decoded::Block(b) => self.consume_decoded(&file.file, start, text, b)?,
                     Decoded::Moves(w) => self.consume_moves(&file.file, start, text, w)?,
+                    Decoded::Form { written, rule } => {
+                        let written = (rule, written.unwrap_or(text));
+                        if forms.push(start, (*i, p.text_end), move_values(p), written) {
+                            self.flush_forms(forms, &file.file, buf)?;
+                        }
+                    }
                 }
                 *batch_start = p.next;
             } else {
@@ -680,6 +854,77 @@ mod tests {
             next: 0,
         };
         read_line(l, 0, &mut p, true).then_some(p)
+    }
+
+    /// How lines are written by a rule with 4 decimals and 8 digits (GRBL's
+    /// in millimetres), as the reader works it out: `None` for lines left
+    /// to their words.
+    fn formed(line: &str, arcs: bool, max_len: usize) -> Option<String> {
+        let rule = MovesRule {
+            decimals: 4,
+            max_digits: 8,
+            max_len,
+            arcs,
+        };
+        // Room after the line for the eight-byte number reads.
+        let buf = format!("{line}\n{}", " ".repeat(32));
+        let buf = buf.as_bytes();
+        let mut p = Plain::default();
+        let mut sink = ToForm::new(0, rule);
+        if !ToForm::may_take(buf, 0) || !read_line_into(buf, 0, &mut p, true, &mut sink) {
+            return None;
+        }
+        let cuts = sink.finish(p.text_end)?;
+        let mut out = Vec::new();
+        cuts.write(&buf[..p.text_end], &mut out);
+        Some(String::from_utf8(out).expect("ASCII"))
+    }
+
+    #[test]
+    fn lines_of_moves_alone_are_written_by_the_rule() {
+        let cases: &[(&str, Option<&str>)] = &[
+            ("G1 X1.5 Y-2 F300", Some("G1 X1.5 Y-2 F300")),
+            ("G1 X1.2500 Y2.0 Z-0.10", Some("G1 X1.25 Y2 Z-0.1")),
+            ("X0.000 Y5", Some("X0 Y5")),
+            ("F1000", Some("F1000")),
+            ("G0 Z5.", None),
+            ("G1 X1234567.80", Some("G1 X1234567.8")),
+            ("G2 X1 Y1 I0.50 J0", Some("G2 X1 Y1 I0.5 J0")),
+            ("G3 X1 Z-1 K0.25", Some("G3 X1 Z-1 K0.25")),
+            // Numbers the rule does not keep as written or shortened.
+            ("G1 X-0.000", None),
+            ("G1 X1.23456", None),
+            ("G1 X123456789", None),
+            ("G1 X+1", None),
+            ("G1 X01", None),
+            ("G1 X.5", None),
+            // Codes, letters and layouts the writer does not copy.
+            ("G01 X1", None),
+            ("G1.0 X1", None),
+            ("g1 x1", None),
+            ("G1 x1", None),
+            ("G1  X1", None),
+            ("G1 X1 (c)", None),
+            ("N1 G1 X1", None),
+            ("G4 P1", None),
+            ("G1 X1 A2", None),
+            ("G1 X1 S100", None),
+            ("G2 X1 Y1 R1", None),
+            ("(only a comment)", None),
+        ];
+        for &(line, want) in cases {
+            assert_eq!(formed(line, true, 80).as_deref(), want, "{line}");
+        }
+        // Without arcs in the rule, arc lines are left to their words.
+        assert_eq!(formed("G2 X1 Y1 I0.5 J0", false, 80), None);
+        assert_eq!(formed("I0.5 J0", false, 80), None);
+        assert_eq!(formed("G1 X1", false, 80).as_deref(), Some("G1 X1"));
+        // Shorter than the line limit as written (after the cuts).
+        assert_eq!(
+            formed("G1 X1.2500 Y2.0000", true, 12).as_deref(),
+            Some("G1 X1.25 Y2")
+        );
+        assert_eq!(formed("G1 X1.2500 Y2.0000", true, 11), None);
     }
 
     #[test]

@@ -9,12 +9,14 @@
 //! add nothing for such a block, are not gone through. The tests below run
 //! random lines both ways and compare output, state and diagnostics.
 
+use crate::block::written_as_is;
 use crate::block::{
-    Block, Distance, GCode, LatheMode, MCode, MotionMode, Plane, RawWord, Units, Word, WordKind,
+    Block, Distance, GCode, LatheMode, MCode, MotionMode, MoveValues, MovesRule, Plane, RawWord,
+    Units, Word, WordKind,
 };
 use crate::diag::Error;
 use crate::emit::Output;
-use crate::target::format::written_as_is;
+use crate::eval::{FormLine, FormLines, Origin};
 
 use super::{Lowering, Problem, Profile, io_error};
 
@@ -235,6 +237,155 @@ impl Lowering {
             Err(kind) => return Ok(Moves::Problem(kind)),
         }
         Ok(Moves::Done)
+    }
+
+    /// The rule by which [`Lowering::write_moves`] writes a line of moves
+    /// alone in the present state, when it takes such lines (see
+    /// [`MovesRule`]).
+    pub(super) fn moves_rule(&self) -> Option<MovesRule> {
+        if self.p.passthrough
+            || !self.plain
+            || !self.plain_state()
+            || !self.codes.moves.iter().all(|&m| m)
+        {
+            return None;
+        }
+        let decimals = match self.m.modes.units {
+            Units::Mm => self.p.decimals_mm,
+            Units::Inch => self.p.decimals_inch,
+        };
+        let word = |l: u8| self.codes.words & 1 << l != 0;
+        Some(MovesRule {
+            decimals,
+            max_digits: self.p.max_digits,
+            max_len: self.p.line_limit.map_or(usize::MAX, |(limit, _)| limit),
+            arcs: self.codes.g & 0b1100 == 0b1100 && word(b'I') && word(b'J') && word(b'K'),
+        })
+    }
+
+    /// Runs a line of moves alone as [`Lowering::write_plain`] does with
+    /// its block (which [`Lowering::is_plain`] accepts: G0 or G1 without I,
+    /// J, K, or an arc with them and an axis word); false leaves any other
+    /// untouched.
+    #[inline]
+    fn run_form(&mut self, v: &MoveValues) -> bool {
+        let arc = matches!(
+            v.motion.unwrap_or(self.m.modes.motion),
+            MotionMode::ArcCw | MotionMode::ArcCcw
+        );
+        let axis = v.xyz.iter().any(Option::is_some);
+        if v.ijk != arc || arc && !axis || !self.m.apply_plain_motion(v.motion, v.f, v.xyz) {
+            return false;
+        }
+        let _ = self.m.take_events();
+        if arc || axis {
+            self.cycles.end();
+        }
+        self.f_before = self.last_f;
+        if v.f.is_some() {
+            self.last_f = v.f;
+        }
+        true
+    }
+
+    /// Lines of moves alone handed over at once: while the batch's rule is
+    /// the present one, each is run as [`Lowering::write_plain`] runs its
+    /// block, and their written bytes, which are what it writes for them,
+    /// are written together; a line not so taken goes the way of its
+    /// block, after the lines before it.
+    pub(super) fn write_forms(
+        &mut self,
+        batch: &FormLines<'_>,
+        origin: &Origin<'_>,
+        out: &mut Output,
+    ) -> Result<(), (usize, Error)> {
+        let lines = batch.lines;
+        let mut taken = self.moves_rule() == Some(batch.rule);
+        // Written bytes before `from` are written.
+        let mut from = 0;
+        let mut k = 0;
+        while k < lines.len() {
+            if taken {
+                k += self.run_forms(&lines[k..]);
+                if k == lines.len() {
+                    break;
+                }
+            }
+            // Line `k` goes the way of its block, after the lines before it.
+            let start = k
+                .checked_sub(1)
+                .map_or(0, |j| lines[j].written_end as usize);
+            out.write(&batch.written[from..start])
+                .map_err(|e| (k, io_error(e)))?;
+            let l = &lines[k];
+            from = l.written_end as usize;
+            let text = batch.text(l);
+            let o = Origin {
+                line_start: l.line_start,
+                ..*origin
+            };
+            self.run_decoded(text, &o, out, |b| b.decode_into(text))
+                .map_err(|e| (k, e))?;
+            taken = self.moves_rule() == Some(batch.rule);
+            k += 1;
+        }
+        let last = lines.len().saturating_sub(1);
+        out.write(&batch.written[from..])
+            .map_err(|e| (last, io_error(e)))
+    }
+
+    /// Runs the longest run of `lines` from the first that
+    /// [`Lowering::run_form`] would take one by one, as it would, and
+    /// returns how many. Where positions are absolute the state after them
+    /// depends only on the last of each word (the model keeps no motion:
+    /// each move sets the axes it names from their values alone), so they
+    /// are applied at once.
+    fn run_forms(&mut self, lines: &[FormLine]) -> usize {
+        if self.m.modes.distance != Distance::Absolute {
+            let mut n = 0;
+            while n < lines.len() && self.run_form(&lines[n].values) {
+                n += 1;
+            }
+            return n;
+        }
+        // The motion each line runs in, and the last of each word.
+        let mut motion = self.m.modes.motion;
+        let mut last = MoveValues::default();
+        let (mut f_before, mut last_f) = (self.last_f, self.last_f);
+        let mut ends_cycle = false;
+        let mut n = 0;
+        for l in lines {
+            let v = &l.values;
+            let m = v.motion.unwrap_or(motion);
+            let arc = matches!(m, MotionMode::ArcCw | MotionMode::ArcCcw);
+            let axis = v.xyz.iter().any(Option::is_some);
+            let plain = arc || matches!(m, MotionMode::Rapid | MotionMode::Linear);
+            if !plain || v.ijk != arc || arc && !axis {
+                break;
+            }
+            motion = m;
+            last.motion = v.motion.or(last.motion);
+            for (to, from) in last.xyz.iter_mut().zip(v.xyz) {
+                *to = from.or(*to);
+            }
+            f_before = last_f;
+            if v.f.is_some() {
+                last.f = v.f;
+                last_f = v.f;
+            }
+            ends_cycle |= arc || axis;
+            n += 1;
+        }
+        if n == 0 || !self.m.apply_plain_motion(last.motion, last.f, last.xyz) {
+            return 0;
+        }
+        let _ = self.m.take_events();
+        if ends_cycle {
+            self.cycles.end();
+        }
+        self.f_before = f_before;
+        self.last_f = last_f;
+        n
     }
 
     /// Runs and writes a line [`Lowering::is_plain`] accepted, as the
