@@ -192,8 +192,8 @@ impl Cuts {
 /// [`RawLine::moves_only`] has them; with `arcs` also G2 or G3 with I, J,
 /// K) needs to know to write one as its own rules would, from the line's
 /// words as they are read: numbers of at most `decimals` decimals and
-/// `max_digits` digits are kept as written ([`written_as_is`]) or without
-/// their trailing zeros ([`without_trailing_zeros`]), and a line so written
+/// `max_digits` digits are kept as written (`written_as_is`) or without
+/// their trailing zeros (`without_trailing_zeros`), and a line so written
 /// shorter than `max_len` bytes fits its line limit however it is counted.
 /// A consumer gives it when a straight run starts; the reader then works
 /// out each such line's output, and the consumer checks that the rule is
