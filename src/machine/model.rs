@@ -295,28 +295,6 @@ impl Machine {
         self.apply_plain_values(b.motion, b.value(b'F'), b.value(b'S'), &axes);
     }
 
-    /// [`Machine::apply`] for a block of G0 or G1 (or none, in G0 or G1)
-    /// with X, Y, Z and F words alone, given as values: false (nothing
-    /// done) when the model records motion, which such a block then needs
-    /// [`Machine::apply`] for.
-    pub fn apply_move_values(
-        &mut self,
-        motion: Option<MotionMode>,
-        f: Option<f64>,
-        xyz: [Option<f64>; 3],
-    ) -> bool {
-        if self.record
-            || !matches!(
-                motion.unwrap_or(self.modes.motion),
-                MotionMode::Rapid | MotionMode::Linear
-            )
-        {
-            return false;
-        }
-        self.apply_plain_values(motion, f, None, &xyz);
-        true
-    }
-
     /// [`Machine::apply`] for a block of G0–G3 (or none, in G0–G3) with X,
     /// Y, Z, F and arc centre words alone, given as values (the centre
     /// changes nothing the model keeps when it records no motion): false

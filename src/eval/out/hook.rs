@@ -210,6 +210,12 @@ impl Interp<'_> {
         let Some(rule) = batch.rule.filter(|_| !batch.lines.is_empty()) else {
             return Ok(());
         };
+        let lines = FormLines {
+            rule,
+            input,
+            lines: &batch.lines,
+            written: &batch.written,
+        };
         let r = match self.out.consumer.take() {
             Some(mut c) if self.out.apart.is_none() => {
                 self.out.handed += batch.lines.len();
@@ -221,12 +227,6 @@ impl Interp<'_> {
                     verbatim: true,
                     stack: &stack,
                 };
-                let lines = FormLines {
-                    rule,
-                    input,
-                    lines: &batch.lines,
-                    written: &batch.written,
-                };
                 let r = c.form_lines(&lines, &origin, &mut self.out.output);
                 self.out.consumer = Some(c);
                 r
@@ -236,7 +236,7 @@ impl Interp<'_> {
                 self.out.consumer = c;
                 let mut r = Ok(());
                 for (k, l) in batch.lines.iter().enumerate() {
-                    let text = &input[l.text.0 as usize..l.text.1 as usize];
+                    let text = lines.text(l);
                     if let Err(e) = self.hand_over(file, l.line_start, text, true, Payload::Text) {
                         r = Err((k, e));
                         break;

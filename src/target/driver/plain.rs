@@ -200,16 +200,14 @@ impl Lowering {
             }
             as_is &= written_as_is(w.shape, code, decimals, self.p.max_digits);
         }
-        if !self.m.apply_move_values(motion, f, xyz) {
+        let values = MoveValues {
+            motion,
+            xyz,
+            f,
+            ijk: false,
+        };
+        if !self.run_form(&values) {
             return Ok(Moves::NotTaken);
-        }
-        let _ = self.m.take_events();
-        if xyz.iter().any(Option::is_some) {
-            self.cycles.end();
-        }
-        self.f_before = self.last_f;
-        if f.is_some() {
-            self.last_f = f;
         }
         if as_is {
             out.line(text).map_err(io_error)?;
@@ -264,17 +262,14 @@ impl Lowering {
     }
 
     /// Runs a line of moves alone as [`Lowering::write_plain`] does with
-    /// its block (which [`Lowering::is_plain`] accepts: G0 or G1 without I,
-    /// J, K, or an arc with them and an axis word); false leaves any other
-    /// untouched.
+    /// its block, if [`plain_form`] takes it; false leaves it untouched.
     #[inline]
     fn run_form(&mut self, v: &MoveValues) -> bool {
-        let arc = matches!(
-            v.motion.unwrap_or(self.m.modes.motion),
-            MotionMode::ArcCw | MotionMode::ArcCcw
-        );
-        let axis = v.xyz.iter().any(Option::is_some);
-        if v.ijk != arc || arc && !axis || !self.m.apply_plain_motion(v.motion, v.f, v.xyz) {
+        let motion = v.motion.unwrap_or(self.m.modes.motion);
+        let Some((arc, axis)) = plain_form(v, motion) else {
+            return false;
+        };
+        if !self.m.apply_plain_motion(v.motion, v.f, v.xyz) {
             return false;
         }
         let _ = self.m.take_events();
@@ -357,12 +352,9 @@ impl Lowering {
         for l in lines {
             let v = &l.values;
             let m = v.motion.unwrap_or(motion);
-            let arc = matches!(m, MotionMode::ArcCw | MotionMode::ArcCcw);
-            let axis = v.xyz.iter().any(Option::is_some);
-            let plain = arc || matches!(m, MotionMode::Rapid | MotionMode::Linear);
-            if !plain || v.ijk != arc || arc && !axis {
+            let Some((arc, axis)) = plain_form(v, m) else {
                 break;
-            }
+            };
             motion = m;
             last.motion = v.motion.or(last.motion);
             for (to, from) in last.xyz.iter_mut().zip(v.xyz) {
@@ -424,6 +416,17 @@ impl Lowering {
         }
         Ok(Vec::new())
     }
+}
+
+/// Whether a line of moves alone with values `v`, run in `motion` (its
+/// own or the modal one), is one [`Lowering::is_plain`] accepts with its
+/// block: G0 or G1 without I, J, K, or G2/G3 with them and an axis word.
+/// If so, whether it is an arc and whether it names an axis.
+fn plain_form(v: &MoveValues, motion: MotionMode) -> Option<(bool, bool)> {
+    let arc = matches!(motion, MotionMode::ArcCw | MotionMode::ArcCcw);
+    let axis = v.xyz.iter().any(Option::is_some);
+    let plain = arc || matches!(motion, MotionMode::Rapid | MotionMode::Linear);
+    (plain && v.ijk == arc && (!arc || axis)).then_some((arc, axis))
 }
 
 #[cfg(test)]
