@@ -139,6 +139,68 @@ pub(crate) fn without_trailing_zeros(
     Some(&text[..end])
 }
 
+/// [`Shape::of`] with [`written_as_is`] or [`without_trailing_zeros`] in
+/// one step, for a value word (not G or M) read as `d` at `line[start..]`
+/// after its sign byte `sign` (`-`, `+` or any other for none): `Some(n)`
+/// when the target's rules write its value as the number written without
+/// its last `n` bytes (0: as written; else its trailing zeros, and the
+/// point when no digit is left after it), `None` when they write it
+/// otherwise. The straight-line reader decides each word of a line of
+/// moves alone with it (`block::tests` checks it against the three).
+#[inline(always)]
+pub(crate) fn kept_digits(
+    d: &Digits,
+    line: &[u8],
+    start: usize,
+    sign: u8,
+    decimals: u8,
+    max_digits: u8,
+) -> Option<usize> {
+    // A `+`, no digit before the point, or a point with none after it.
+    if sign == b'+' || d.int == 0 || d.point && d.frac == 0 {
+        return None;
+    }
+    let lone_zero = line[start] == b'0';
+    if lone_zero && d.int > 1 {
+        // A leading zero.
+        return None;
+    }
+    let int = if lone_zero { 0 } else { d.int };
+    let zeros = trailing_zeros(line, d.end, d.frac);
+    let kept = d.frac - zeros;
+    // `-0`, `-0.00`: 0, which the rules write without the sign.
+    if sign == b'-' && int == 0 && kept == 0 {
+        return None;
+    }
+    if kept
+        > u32::from(max_digits)
+            .saturating_sub(int)
+            .min(u32::from(decimals))
+    {
+        return None;
+    }
+    Some((zeros + u32::from(zeros > 0 && kept == 0)) as usize)
+}
+
+/// How many of the `frac` digits ending at `line[end - 1]` are zeros at
+/// their end (the point before them ends the count): eight bytes at once
+/// where eight precede `end`.
+#[inline(always)]
+fn trailing_zeros(line: &[u8], end: usize, frac: u32) -> u32 {
+    if frac == 0 {
+        return 0;
+    }
+    let Some(bytes) = end.checked_sub(8).and_then(|a| line.get(a..end)) else {
+        return line[..end].iter().rev().take_while(|&&c| c == b'0').count() as u32;
+    };
+    let mut b = [0u8; 8];
+    b.copy_from_slice(bytes);
+    // Zero bytes where the text has `0`; the last byte is the highest. At
+    // most seven digits follow the point, so the eight bytes reach it.
+    let x = u64::from_le_bytes(b) ^ 0x3030_3030_3030_3030;
+    x.leading_zeros() / 8
+}
+
 /// Where a line of moves alone is written otherwise than as its text: the
 /// `n` bytes ending at `end` (offsets in the line) are dropped for each of
 /// the first `count` cuts (a number's trailing zeros).
@@ -960,6 +1022,40 @@ mod tests {
     use super::*;
 
     proptest::proptest! {
+        /// The one-step rule of the straight-line reader gives what the
+        /// shape of the number and the writer's two tests give, for value
+        /// words at any place in a line (the eight-byte read of their end
+        /// and the byte-by-byte one).
+        #[test]
+        fn kept_digits_is_the_shape_rule(
+            lead in 0usize..10,
+            sign in "[-+]?",
+            text in "[0-9]{0,8}(\\.[0-9]{0,8})?",
+            decimals in 0u8..7,
+            max_digits in 1u8..10,
+        ) {
+            let line = format!("{}X{sign}{text} Y1{}", " ".repeat(lead), " ".repeat(16));
+            let b = line.as_bytes();
+            let num = lead + 1 + sign.len();
+            if let Some(d) = digits_at(b, num) {
+                let (neg, plus) = (sign == "-", sign == "+");
+                let shape = Shape::of(&d, b, num, neg, plus);
+                let want = if written_as_is(shape, false, decimals, max_digits) {
+                    Some(0)
+                } else {
+                    let number = &b[lead + 1..d.end];
+                    without_trailing_zeros(shape, number, decimals, max_digits)
+                        .map(|kept| number.len() - kept.len())
+                };
+                let sign_byte = sign.bytes().next().unwrap_or(b'X');
+                proptest::prop_assert_eq!(
+                    kept_digits(&d, b, num, sign_byte, decimals, max_digits),
+                    want,
+                    "{:?} decimals {} digits {}", line, decimals, max_digits
+                );
+            }
+        }
+
         /// The one-pass number reader gives what the general one gives
         /// (value, end, or no number) on any text of number characters.
         #[test]

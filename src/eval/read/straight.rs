@@ -9,10 +9,7 @@
 
 use std::rc::Rc;
 
-use crate::block::{
-    Cuts, MoveValues, MovesRule, RawLine, RawWord, Shape, Span, without_trailing_zeros,
-    written_as_is,
-};
+use crate::block::{Cuts, MoveValues, MovesRule, RawLine, RawWord, Shape, Span, kept_digits};
 use crate::diag::Error;
 use crate::number::{Digits, POW10, digits_in};
 use crate::program::FileIndex;
@@ -297,27 +294,23 @@ impl ToForm {
         {
             return false;
         }
-        let shape = Shape::of(d, buf, num, sign == b'-', sign == b'+');
-        let (decimals, digits) = (self.rule.decimals, self.rule.max_digits);
-        if written_as_is(shape, code, decimals, digits) {
-            // A G word so written is G0–G3 when its digits are 0–3 (G2 and
-            // G3 where the rule takes arcs).
+        if code {
+            // G0–G3 as the rules write them (G2 and G3 where the rule
+            // takes arcs): one digit, no sign, no point.
             let top = if self.rule.arcs { 3 } else { 1 };
-            if code && !(d.frac == 0 && d.mant <= top) {
+            if matches!(sign, b'-' | b'+') || d.point || d.int != 1 || d.mant > top {
                 return false;
             }
         } else {
-            let number = &buf[at + 1..d.end];
-            match without_trailing_zeros(shape, number, decimals, digits) {
-                Some(kept) if !code => {
-                    if !self
-                        .cuts
-                        .push(d.end - self.start, number.len() - kept.len())
-                    {
+            let (decimals, digits) = (self.rule.decimals, self.rule.max_digits);
+            match kept_digits(d, buf, num, sign, decimals, digits) {
+                Some(0) => {}
+                Some(n) => {
+                    if !self.cuts.push(d.end - self.start, n) {
                         return false;
                     }
                 }
-                _ => return false,
+                None => return false,
             }
         }
         self.words += 1;
