@@ -313,15 +313,16 @@ fn full_check(
                     continue;
                 }
                 if g80_pair {
-                    // Replace the G80 recorded before.
+                    // The other code takes the place of the G80 recorded
+                    // before: the list stays in line order, without it.
                     if let Some(k) = gbuf[..gn].iter().position(|x| x.0 == G80) {
-                        gbuf[k] = (g, i);
-                        gseen[1] = Some(i);
-                        continue;
+                        gbuf.copy_within(k + 1..gn, k);
+                        gn -= 1;
                     }
                 }
                 if matches!(g, GCode::Motion(M::LatheCycle { .. })) {
-                    // The lathe cycles run a contour subroutine named by Q.
+                    // The lathe cycles run a contour subroutine named by Q
+                    // (after a G80 on their line too).
                     lathe = true;
                 }
                 gseen[grp] = Some(i);
