@@ -343,10 +343,9 @@ impl Lowering {
             }
             return n;
         }
-        // The motion each line runs in, and the last of each word.
+        // How many lines from the first are taken, in the motion each runs
+        // in, and whether one ends a canned cycle's run.
         let mut motion = self.m.modes.motion;
-        let mut last = MoveValues::default();
-        let (mut f_before, mut last_f) = (self.last_f, self.last_f);
         let mut ends_cycle = false;
         let mut n = 0;
         for l in lines {
@@ -356,18 +355,27 @@ impl Lowering {
                 break;
             };
             motion = m;
-            last.motion = v.motion.or(last.motion);
-            for (to, from) in last.xyz.iter_mut().zip(v.xyz) {
-                *to = from.or(*to);
-            }
-            f_before = last_f;
-            if v.f.is_some() {
-                last.f = v.f;
-                last_f = v.f;
-            }
             ends_cycle |= arc || axis;
             n += 1;
         }
+        let taken = &lines[..n];
+        // The last of each word among them: found from the end.
+        let last_of = |of: fn(&MoveValues) -> Option<f64>, lines: &[FormLine]| {
+            lines.iter().rev().find_map(|l| of(&l.values))
+        };
+        let last = MoveValues {
+            motion: taken.iter().rev().find_map(|l| l.values.motion),
+            xyz: [
+                last_of(|v| v.xyz[0], taken),
+                last_of(|v| v.xyz[1], taken),
+                last_of(|v| v.xyz[2], taken),
+            ],
+            f: last_of(|v| v.f, taken),
+            ijk: false,
+        };
+        // The feed before the last line, as a line-by-line run leaves it.
+        let f_before = last_of(|v| v.f, &taken[..n.saturating_sub(1)]).or(self.last_f);
+        let last_f = last.f.or(self.last_f);
         if n == 0 || !self.m.apply_plain_motion(last.motion, last.f, last.xyz) {
             return 0;
         }
