@@ -237,28 +237,48 @@ impl WordSink for ToRaw<'_> {
 /// it, if it is a line of moves alone as [`RawLine::moves_only`] has it
 /// (G0 or G1, X, Y, Z, F, upper case, one blank apart, no line number or
 /// comment) and the rule keeps each of its numbers as written or without
-/// its trailing zeros: the writer's own tests ([`written_as_is`],
-/// [`without_trailing_zeros`]) on the shape [`Shape::of`] gives each
-/// number, as for a word handed to a block.
+/// its trailing zeros: the writer's own tests on the shape of each number
+/// (`written_as_is` and `without_trailing_zeros` after [`Shape::of`], in
+/// one step: [`kept_digits`]), as for a word handed to a block.
 pub(in crate::eval) struct ToForm {
     rule: MovesRule,
-    /// Offset of the line's start, and where its next word must start.
+    /// Offset of the line's start.
     start: usize,
+    /// Where its next word must start ([`ToForm::NOT`] once it is not such
+    /// a line).
     next: usize,
-    words: u8,
-    ok: bool,
     cuts: Cuts,
 }
 
+/// What a letter is to [`ToForm`]: not taken, G, X Y Z F, or I J K.
+const FORM_NONE: u8 = 0;
+const FORM_G: u8 = 1;
+const FORM_VALUE: u8 = 2;
+const FORM_ARC: u8 = 3;
+
+static FORM_LETTER: [u8; 256] = {
+    let mut t = [FORM_NONE; 256];
+    t[b'G' as usize] = FORM_G;
+    t[b'X' as usize] = FORM_VALUE;
+    t[b'Y' as usize] = FORM_VALUE;
+    t[b'Z' as usize] = FORM_VALUE;
+    t[b'F' as usize] = FORM_VALUE;
+    t[b'I' as usize] = FORM_ARC;
+    t[b'J' as usize] = FORM_ARC;
+    t[b'K' as usize] = FORM_ARC;
+    t
+};
+
 impl ToForm {
+    /// `next` of a line that is not one.
+    const NOT: usize = usize::MAX;
+
     #[inline(always)]
     pub(in crate::eval) fn new(start: usize, rule: MovesRule) -> ToForm {
         ToForm {
             rule,
             start,
             next: start,
-            words: 0,
-            ok: true,
             cuts: Cuts::default(),
         }
     }
@@ -276,25 +296,28 @@ impl ToForm {
     }
 
     /// After a successful read of the line ending its text at `text_end`:
-    /// where it is written otherwise than as its text, if it is such a line.
+    /// where it is written otherwise than as its text, if it is such a line
+    /// (its last word ends the text).
     #[inline(always)]
     pub(in crate::eval) fn finish(&self, text_end: usize) -> Option<Cuts> {
         let fits = text_end - self.start - self.cuts.dropped() < self.rule.max_len;
-        (self.ok && self.words > 0 && self.next == text_end + 1 && fits).then_some(self.cuts)
+        (self.next == text_end + 1 && fits).then_some(self.cuts)
     }
 
+    /// Whether the word at `at` keeps the line one: a letter the rule
+    /// takes, at the line's start or one blank after the word before, and
+    /// its number as the rule writes it.
     #[inline(always)]
     fn take(&mut self, buf: &[u8], at: usize, sign: u8, num: usize, d: &Digits) -> bool {
-        let letter = buf[at];
-        let code = letter == b'G';
-        let arc_word = matches!(letter, b'I' | b'J' | b'K');
-        if !(code || matches!(letter, b'X' | b'Y' | b'Z' | b'F') || arc_word && self.rule.arcs)
+        let kind = FORM_LETTER[usize::from(buf[at])];
+        if kind == FORM_NONE
+            || kind == FORM_ARC && !self.rule.arcs
             || at != self.next
-            || self.words > 0 && buf[at - 1] != b' '
+            || at != self.start && buf[at - 1] != b' '
         {
             return false;
         }
-        if code {
+        if kind == FORM_G {
             // G0–G3 as the rules write them (G2 and G3 where the rule
             // takes arcs): one digit, no sign, no point.
             let top = if self.rule.arcs { 3 } else { 1 };
@@ -313,8 +336,6 @@ impl ToForm {
                 None => return false,
             }
         }
-        self.words += 1;
-        self.next = d.end + 1;
         true
     }
 }
@@ -322,24 +343,26 @@ impl ToForm {
 impl WordSink for ToForm {
     #[inline(always)]
     fn line_number(&mut self, _: usize, _: f64, _: usize) {
-        self.ok = false;
+        self.next = ToForm::NOT;
     }
 
     #[inline(always)]
     fn word(&mut self, buf: &[u8], at: usize, sign: u8, num: usize, d: &Digits) {
-        if self.ok {
-            self.ok = self.take(buf, at, sign, num, d);
-        }
+        self.next = if self.take(buf, at, sign, num, d) {
+            d.end + 1
+        } else {
+            ToForm::NOT
+        };
     }
 
     #[inline(always)]
     fn slow_word(&mut self) {
-        self.ok = false;
+        self.next = ToForm::NOT;
     }
 
     #[inline(always)]
     fn comment(&mut self, _: &[u8], _: usize, _: usize) {
-        self.ok = false;
+        self.next = ToForm::NOT;
     }
 }
 
@@ -897,6 +920,8 @@ mod tests {
             ("g1 x1", None),
             ("G1 x1", None),
             ("G1  X1", None),
+            ("G1\tX1", None),
+            ("G1 X1\tY2", None),
             ("G1 X1 (c)", None),
             ("N1 G1 X1", None),
             ("G4 P1", None),
