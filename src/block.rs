@@ -269,13 +269,82 @@ pub struct MovesRule {
 }
 
 /// The values of a line of moves alone: its motion code (G0–G3), X, Y, Z,
-/// F, and whether it has arc centre words (I, J, K).
+/// F, and whether it has arc centre words (I, J, K). Kept small: a batch
+/// of such lines holds one per line.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct MoveValues {
     pub motion: Option<MotionMode>,
-    pub xyz: [Option<f64>; 3],
-    pub f: Option<f64>,
+    /// X, Y, Z and F, each where `has` has its bit (1, 2, 4, 8).
+    vals: [f64; 4],
+    has: u8,
     pub ijk: bool,
+}
+
+impl MoveValues {
+    pub fn new(
+        motion: Option<MotionMode>,
+        xyz: [Option<f64>; 3],
+        f: Option<f64>,
+        ijk: bool,
+    ) -> MoveValues {
+        let mut v = MoveValues {
+            motion,
+            ijk,
+            ..MoveValues::default()
+        };
+        for (k, x) in xyz.into_iter().chain([f]).enumerate() {
+            if let Some(x) = x {
+                v.vals[k] = x;
+                v.has |= 1 << k;
+            }
+        }
+        v
+    }
+
+    /// From X, Y, Z and F as `vals` and which of them there are as the
+    /// bits of `has` (1, 2, 4, 8; the others are ignored).
+    #[inline(always)]
+    pub(crate) fn from_parts(
+        motion: Option<MotionMode>,
+        vals: [f64; 4],
+        has: u8,
+        ijk: bool,
+    ) -> MoveValues {
+        MoveValues {
+            motion,
+            vals,
+            has: has & 0b1111,
+            ijk,
+        }
+    }
+
+    #[inline(always)]
+    fn value(&self, k: usize) -> Option<f64> {
+        (self.has >> k & 1 != 0).then(|| self.vals[k])
+    }
+
+    /// X, Y and Z.
+    #[inline(always)]
+    pub fn xyz(&self) -> [Option<f64>; 3] {
+        [self.value(0), self.value(1), self.value(2)]
+    }
+
+    /// X (0), Y (1) or Z (2); `None` for any other `k`.
+    #[inline(always)]
+    pub fn axis(&self, k: usize) -> Option<f64> {
+        if k < 3 { self.value(k) } else { None }
+    }
+
+    #[inline(always)]
+    pub fn f(&self) -> Option<f64> {
+        self.value(3)
+    }
+
+    /// An axis word is on the line.
+    #[inline(always)]
+    pub fn has_axis(&self) -> bool {
+        self.has & 0b111 != 0
+    }
 }
 
 /// A word as the straight-line reader read it (letter as written), kept

@@ -495,19 +495,17 @@ fn read_comment(
 /// into `p`.
 #[inline(always)]
 fn move_values(p: &Plain) -> MoveValues {
-    let has = |slot: usize| p.mask & (1 << slot) != 0;
-    let value = |slot: usize| has(slot).then(|| p.vals[slot]);
-    MoveValues {
-        motion: has(G).then(|| match p.vals[G] {
-            0.0 => MotionMode::Rapid,
-            1.0 => MotionMode::Linear,
-            2.0 => MotionMode::ArcCw,
-            _ => MotionMode::ArcCcw,
-        }),
-        xyz: [value(1), value(2), value(3)],
-        f: value(F),
-        ijk: p.mask & (1 << I | 1 << J | 1 << K) != 0,
-    }
+    let motion = (p.mask & 1 << G != 0).then(|| match p.vals[G] {
+        0.0 => MotionMode::Rapid,
+        1.0 => MotionMode::Linear,
+        2.0 => MotionMode::ArcCw,
+        _ => MotionMode::ArcCcw,
+    });
+    // Slots 1–3 are X, Y, Z: their bits, and F's as the fourth.
+    let has = (p.mask >> 1 & 0b111 | (p.mask >> F & 1) << 3) as u8;
+    let vals = [p.vals[1], p.vals[2], p.vals[3], p.vals[F]];
+    let ijk = p.mask & (1 << I | 1 << J | 1 << K) != 0;
+    MoveValues::from_parts(motion, vals, has, ijk)
 }
 
 impl Interp<'_> {

@@ -200,12 +200,7 @@ impl Lowering {
             }
             as_is &= written_as_is(w.shape, code, decimals, self.p.max_digits);
         }
-        let values = MoveValues {
-            motion,
-            xyz,
-            f,
-            ijk: false,
-        };
+        let values = MoveValues::new(motion, xyz, f, false);
         if !self.run_form(&values) {
             return Ok(Moves::NotTaken);
         }
@@ -269,7 +264,7 @@ impl Lowering {
         let Some((arc, axis)) = plain_form(v, motion) else {
             return false;
         };
-        if !self.m.apply_plain_motion(v.motion, v.f, v.xyz) {
+        if !self.m.apply_plain_motion(v.motion, v.f(), v.xyz()) {
             return false;
         }
         let _ = self.m.take_events();
@@ -277,8 +272,8 @@ impl Lowering {
             self.cycles.end();
         }
         self.f_before = self.last_f;
-        if v.f.is_some() {
-            self.last_f = v.f;
+        if v.f().is_some() {
+            self.last_f = v.f();
         }
         true
     }
@@ -363,20 +358,17 @@ impl Lowering {
         let last_of = |of: fn(&MoveValues) -> Option<f64>, lines: &[FormLine]| {
             lines.iter().rev().find_map(|l| of(&l.values))
         };
-        let last = MoveValues {
-            motion: taken.iter().rev().find_map(|l| l.values.motion),
-            xyz: [
-                last_of(|v| v.xyz[0], taken),
-                last_of(|v| v.xyz[1], taken),
-                last_of(|v| v.xyz[2], taken),
-            ],
-            f: last_of(|v| v.f, taken),
-            ijk: false,
-        };
+        let motion = taken.iter().rev().find_map(|l| l.values.motion);
+        let xyz = [
+            last_of(|v| v.axis(0), taken),
+            last_of(|v| v.axis(1), taken),
+            last_of(|v| v.axis(2), taken),
+        ];
+        let f = last_of(MoveValues::f, taken);
         // The feed before the last line, as a line-by-line run leaves it.
-        let f_before = last_of(|v| v.f, &taken[..n.saturating_sub(1)]).or(self.last_f);
-        let last_f = last.f.or(self.last_f);
-        if n == 0 || !self.m.apply_plain_motion(last.motion, last.f, last.xyz) {
+        let f_before = last_of(MoveValues::f, &taken[..n.saturating_sub(1)]).or(self.last_f);
+        let last_f = f.or(self.last_f);
+        if n == 0 || !self.m.apply_plain_motion(motion, f, xyz) {
             return 0;
         }
         let _ = self.m.take_events();
@@ -432,7 +424,7 @@ impl Lowering {
 /// If so, whether it is an arc and whether it names an axis.
 fn plain_form(v: &MoveValues, motion: MotionMode) -> Option<(bool, bool)> {
     let arc = matches!(motion, MotionMode::ArcCw | MotionMode::ArcCcw);
-    let axis = v.xyz.iter().any(Option::is_some);
+    let axis = v.has_axis();
     let plain = arc || matches!(motion, MotionMode::Rapid | MotionMode::Linear);
     (plain && v.ijk == arc && (!arc || axis)).then_some((arc, axis))
 }
