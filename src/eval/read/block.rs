@@ -13,6 +13,7 @@ use crate::program::FileIndex;
 use crate::eval::Interp;
 use crate::eval::expr::message::{is_stable, stabilize};
 use crate::eval::expr::params::is_read_only;
+use crate::eval::read::validate::{Checked, check_block};
 
 /// Evaluated words of the line: (letter, value).
 pub(crate) type Words = Vec<(u8, f64)>;
@@ -131,28 +132,34 @@ impl Interp<'_> {
                 }
             }
         }
-        // The reference checks the block before acting on it.
-        if !words.is_empty() {
-            match crate::eval::read::validate::check_block(
+        // The reference checks the block before acting on it (a line
+        // without words has no codes).
+        let result = if words.is_empty() {
+            Ok(Checked::Simple)
+        } else {
+            check_block(
                 words,
                 &self.mach.modal,
                 &self.mach.nurbs,
                 &self.mach.cycle,
                 self.s.user_m,
-            ) {
-                Err((k, at)) => {
-                    let span = at
-                        .and_then(|i| word_spans.get(i).copied())
-                        .unwrap_or(Span::new(0, raw.len() as u32));
-                    return Err(self.error_in_line(k, file, start, span));
-                }
-                Ok(true) => {
-                    self.apply_assigns(num_set, named_set);
-                    return self.lathe_block(file, start, raw.len() as u32, words);
-                }
-                Ok(false) => {}
+            )
+        };
+        // Borrowed where it is: the codes are not copied.
+        let checked = match result {
+            Ok(Checked::Simple) => &Checked::Simple,
+            Err((k, at)) => {
+                let span = at
+                    .and_then(|i| word_spans.get(i).copied())
+                    .unwrap_or(Span::new(0, raw.len() as u32));
+                return Err(self.error_in_line(k, file, start, span));
             }
-        }
+            Ok(Checked::Lathe(ref codes, at)) => {
+                self.apply_assigns(num_set, named_set);
+                return self.lathe_block(file, start, raw.len() as u32, words, codes, at);
+            }
+            Ok(ref c) => c,
+        };
         // 2. Assignments: numbered in order, then named in order.
         self.apply_assigns(num_set, named_set);
         // 3. The active comment, after the assignments.
@@ -187,7 +194,7 @@ impl Interp<'_> {
             self.write_line(file, start, raw, repl)?;
         }
         // 6. State.
-        let ends = self.apply_words(file, start, words, m99)?;
+        let ends = self.apply_words(file, start, words, checked, m99)?;
         for &(op, span) in context_ops.iter() {
             self.context_op(op, file, start, span)?;
         }
@@ -378,7 +385,7 @@ impl Interp<'_> {
             // Checked and applied: a plain move.
             return self.write_line(file, start, raw, repl);
         }
-        match crate::eval::read::validate::check_block(
+        let checked = match check_block(
             words,
             &self.mach.modal,
             &self.mach.nurbs,
@@ -392,11 +399,13 @@ impl Interp<'_> {
                 };
                 return Err(self.error_in_line(k, file, start, span));
             }
-            Ok(true) => return self.lathe_block(file, start, raw.len() as u32, words),
-            Ok(false) => {}
-        }
+            Ok(Checked::Lathe(codes, at)) => {
+                return self.lathe_block(file, start, raw.len() as u32, words, &codes, at);
+            }
+            Ok(c) => c,
+        };
         self.write_line(file, start, raw, repl)?;
-        if self.apply_words(file, start, words, false)? {
+        if self.apply_words(file, start, words, &checked, false)? {
             self.end_program()?;
         }
         Ok(())
@@ -513,7 +522,7 @@ impl Interp<'_> {
             words.push((w.letter, w.value));
         }
         let r = (|| {
-            match crate::eval::read::validate::check_block(
+            let checked = match check_block(
                 &words,
                 &self.mach.modal,
                 &self.mach.nurbs,
@@ -527,15 +536,18 @@ impl Interp<'_> {
                         .unwrap_or(Span::new(0, raw.len() as u32));
                     return Err(self.error_in_line(k, file, start, span));
                 }
-                Ok(true) => return self.lathe_block(file, start, raw.len() as u32, &words),
-                Ok(false) => {}
-            }
+                Ok(Checked::Lathe(codes, at)) => {
+                    let len = raw.len() as u32;
+                    return self.lathe_block(file, start, len, &words, &codes, at);
+                }
+                Ok(c) => c,
+            };
             let trimmed = raw
                 .iter()
                 .rposition(|b| !b.is_ascii_whitespace())
                 .map_or(0, |p| p + 1);
             self.emit_source(file, start, &raw[..trimmed])?;
-            if self.apply_words(file, start, &words, false)? {
+            if self.apply_words(file, start, &words, &checked, false)? {
                 self.end_program()?;
             }
             Ok(())

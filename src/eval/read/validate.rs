@@ -69,20 +69,123 @@ fn rough(m: MotionMode) -> bool {
 }
 
 /// Checks a block. `words` are (letter, value) in line order; returns the
-/// error and the index of the word it concerns, or whether the block runs
-/// a lathe cycle (G70–G72).
-pub(crate) fn check_block(
+/// error and the index of the word it concerns, or the block's codes as
+/// the checks decoded them (and whether it runs a lathe cycle, G70–G72).
+pub(in crate::eval) fn check_block(
     words: &[(u8, f64)],
     modal: &Modes,
     points: &Nurbs,
     cycle: &Cycle,
     user_m: u128,
-) -> Result<bool, (ErrorKind, Option<usize>)> {
+) -> Result<Checked, (ErrorKind, Option<usize>)> {
     if simple_block_ok(words, modal) {
-        return Ok(false);
+        return Ok(Checked::Simple);
     }
     full_check(words, modal, points, cycle, user_m)
 }
+
+/// What the checks hand on with a block they accept: its G and M codes,
+/// decoded once, for the state update to act on.
+#[derive(Clone, Copy)]
+pub(in crate::eval) enum Checked {
+    /// The fast acceptance took it: G0/G1 moves with axis, F and S words,
+    /// whose one code is in its G word (read only when the state update
+    /// needs it, off the common path).
+    Simple,
+    /// The block's codes.
+    Line(LineCodes),
+    /// A lathe cycle block: its codes, and the index of the cycle's G word.
+    Lathe(LineCodes, usize),
+}
+
+/// A block's G and M codes in line order, as the checks decoded and
+/// accepted them. A G80 that gave way to another motion code on its line
+/// is left out: it changes nothing there.
+#[derive(Clone, Copy)]
+pub(in crate::eval) struct LineCodes {
+    g: [GCode; 16],
+    gn: u8,
+    m: [MCode; 16],
+    mn: u8,
+    /// A G80 of the line was left out beside another motion code (the
+    /// one that wins, or another G80).
+    g80_gave_way: bool,
+}
+
+impl LineCodes {
+    fn empty() -> LineCodes {
+        LineCodes {
+            g: [G80; 16],
+            gn: 0,
+            m: [MCode::Other(0); 16],
+            mn: 0,
+            g80_gave_way: false,
+        }
+    }
+
+    /// The codes the full check accepted (at most 16 of each, as its
+    /// lists), without their word indices.
+    fn of(gs: &[(GCode, usize)], ms: &[(MCode, usize)], g80_gave_way: bool) -> LineCodes {
+        let mut c = LineCodes::empty();
+        for (k, &(g, _)) in gs.iter().enumerate() {
+            c.g[k] = g;
+        }
+        for (k, &(m, _)) in ms.iter().enumerate() {
+            c.m[k] = m;
+        }
+        c.gn = gs.len() as u8;
+        c.mn = ms.len() as u8;
+        c.g80_gave_way = g80_gave_way;
+        c
+    }
+
+    /// The codes of a block the fast acceptance took: G0 or G1 from its G
+    /// word (the only values it takes), no M code.
+    pub(in crate::eval) fn simple(words: &[(u8, f64)]) -> LineCodes {
+        let mut c = LineCodes::empty();
+        for &(l, v) in words {
+            if l == b'g' {
+                let m = if v == 0.0 { M::Rapid } else { M::Linear };
+                c.g[0] = GCode::Motion(m);
+                c.gn = 1;
+            }
+        }
+        c
+    }
+
+    /// The G codes, in line order.
+    #[inline]
+    pub(in crate::eval) fn gs(&self) -> &[GCode] {
+        &self.g[..self.gn as usize]
+    }
+
+    /// The M codes, in line order (one for each M word).
+    #[inline]
+    pub(in crate::eval) fn ms(&self) -> &[MCode] {
+        &self.m[..self.mn as usize]
+    }
+
+    /// The codes of a lathe cycle block's other words, which act before
+    /// the cycle: without the cycle's code, with a G80 that gave way to it
+    /// in its place.
+    pub(in crate::eval) fn without_lathe_cycle(&self) -> LineCodes {
+        let mut c = *self;
+        let cycle = |g: &GCode| matches!(g, GCode::Motion(M::LatheCycle { .. }));
+        if let Some(k) = c.gs().iter().position(cycle) {
+            if c.g80_gave_way {
+                c.g[k] = G80;
+                c.g80_gave_way = false;
+            } else {
+                c.g.copy_within(k + 1..c.gn as usize, k);
+                c.gn -= 1;
+            }
+        }
+        c
+    }
+}
+
+/// G80: it may share a line with another motion code (which wins).
+const G80: GCode = GCode::Motion(M::CancelCycle);
 
 /// Modal group of the user M-codes M100-M199 (one group: two on a line are
 /// refused, as by the reference).
@@ -274,9 +377,7 @@ fn full_check(
     points: &Nurbs,
     cycle: &Cycle,
     user_m: u128,
-) -> Result<bool, (ErrorKind, Option<usize>)> {
-    // G80 may share a line with another motion code (which wins).
-    const G80: GCode = GCode::Motion(M::CancelCycle);
+) -> Result<Checked, (ErrorKind, Option<usize>)> {
     let mut gseen: [Option<usize>; 16] = [None; 16];
     let mut mseen: [Option<usize>; 16] = [None; 16];
     // Fixed-size scratch: this runs for every line.
@@ -285,7 +386,9 @@ fn full_check(
     let mut mbuf = [(MCode::Other(0), 0usize); 16];
     let mut mn = 0;
     let mut has = [None::<u8>; 128];
-    let mut lathe = false;
+    // The lathe cycle's G word.
+    let mut lathe = None;
+    let mut g80_gave_way = false;
     for (i, &(l, v)) in words.iter().enumerate() {
         match l {
             b'g' => {
@@ -309,10 +412,11 @@ fn full_check(
                 if gseen[grp].is_some() && !g80_pair {
                     return bad(BlockError::SameGroupG, Some(i));
                 }
-                if g80_pair && g == G80 {
-                    continue;
-                }
                 if g80_pair {
+                    g80_gave_way = true;
+                    if g == G80 {
+                        continue;
+                    }
                     // The other code takes the place of the G80 recorded
                     // before: the list stays in line order, without it.
                     if let Some(k) = gbuf[..gn].iter().position(|x| x.0 == G80) {
@@ -323,7 +427,7 @@ fn full_check(
                 if matches!(g, GCode::Motion(M::LatheCycle { .. })) {
                     // The lathe cycles run a contour subroutine named by Q
                     // (after a G80 on their line too).
-                    lathe = true;
+                    lathe = Some(i);
                 }
                 gseen[grp] = Some(i);
                 gbuf[gn] = (g, i);
@@ -379,7 +483,11 @@ fn full_check(
     if modal.cutter_comp != CutterComp::Off || d.g_on(comp_on) {
         check_comp(&d)?;
     }
-    Ok(lathe)
+    let codes = LineCodes::of(d.gs, d.ms, g80_gave_way);
+    Ok(match lathe {
+        Some(at) => Checked::Lathe(codes, at),
+        None => Checked::Line(codes),
+    })
 }
 
 /// What the reference refuses while cutter compensation is on, and the
@@ -979,4 +1087,64 @@ fn check_feed(d: &Decoded<'_>) -> Check {
         return bad(BlockError::G33KMissing, None);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn checked(words: &[(u8, f64)]) -> Checked {
+        let m = Modes::default();
+        check_block(words, &m, &Nurbs::default(), &Cycle::default(), 0).expect("accepted")
+    }
+
+    fn gs(c: &LineCodes) -> Vec<GCode> {
+        c.gs().to_vec()
+    }
+
+    /// A lathe cycle's other words keep the line's codes without the
+    /// cycle's, and a G80 that gave way to it (before it or after it).
+    #[test]
+    fn lathe_cycle_codes_and_the_other_words_codes() {
+        const G71: GCode = GCode::Motion(M::LatheCycle { number: 71, sub: 0 });
+        const G18: GCode = GCode::Plane(Plane::XZ);
+        let rest = [(b'q', 10.0), (b'x', 12.0), (b'z', 2.0), (b'd', 1.0)];
+        // The G words, the cycle's index, the codes, the other words' codes.
+        type Case = (&'static [f64], usize, &'static [GCode], &'static [GCode]);
+        let cases: &[Case] = &[
+            (&[71.0], 0, &[G71], &[]),
+            (&[18.0, 71.0], 1, &[G18, G71], &[G18]),
+            (&[71.0, 80.0], 0, &[G71], &[G80]),
+            (&[80.0, 71.0, 18.0], 1, &[G71, G18], &[G80, G18]),
+        ];
+        for &(g, at, codes, others) in cases {
+            let mut words: Vec<(u8, f64)> = g.iter().map(|&v| (b'g', v)).collect();
+            words.extend(rest);
+            let Checked::Lathe(c, i) = checked(&words) else {
+                panic!("{g:?}: not a lathe cycle");
+            };
+            assert_eq!((i, gs(&c)), (at, codes.to_vec()), "{g:?}");
+            assert_eq!(gs(&c.without_lathe_cycle()), others.to_vec(), "{g:?}");
+        }
+    }
+
+    /// Codes come in line order, a G80 beside another motion code left
+    /// out; the fast acceptance hands on its G0/G1 in the G word.
+    #[test]
+    fn codes_in_line_order() {
+        let Checked::Line(c) = checked(&[(b'g', 80.0), (b'g', 17.0), (b'g', 0.0), (b'm', 8.0)])
+        else {
+            panic!("not a checked line");
+        };
+        let want = [GCode::Plane(Plane::XY), GCode::Motion(M::Rapid)];
+        assert_eq!(gs(&c), want.to_vec());
+        assert_eq!(c.ms().to_vec(), vec![MCode::Flood]);
+        let simple = [(b'x', 1.0), (b'g', 1.0), (b'f', 5.0)];
+        assert!(matches!(checked(&simple), Checked::Simple));
+        assert_eq!(
+            gs(&LineCodes::simple(&simple)),
+            vec![GCode::Motion(M::Linear)]
+        );
+        assert!(LineCodes::simple(&[(b'x', 1.0)]).gs().is_empty());
+    }
 }

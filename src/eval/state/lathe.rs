@@ -18,6 +18,7 @@ use crate::codes::{
     ArcDistance, CutterComp, Distance, FeedMode, GCode, LatheMode, MotionMode, Plane, Units,
 };
 use crate::eval::flow::{FrameKind, SubRec};
+use crate::eval::read::validate::{Checked, LineCodes, check_block};
 use crate::eval::{Interp, file_key, read_error};
 
 /// A cycle whose contour subroutine is running.
@@ -65,31 +66,36 @@ impl Interp<'_> {
         self.error(lathe(k), file, start, start + len)
     }
 
-    /// A block with G70–G72 (checked): its other words act first, then the
-    /// rapid to the cycle's start and the contour subroutine's call.
+    /// A block with G70–G72 (checked: its `codes`, and `at` the index of
+    /// the cycle's G word): its other words act first, then the rapid to
+    /// the cycle's start and the contour subroutine's call.
     pub(in crate::eval) fn lathe_block(
         &mut self,
         file: &Rc<FileIndex>,
         start: u32,
         len: u32,
         words: &[(u8, f64)],
+        codes: &LineCodes,
+        at: usize,
     ) -> Result<(), Error> {
         // G70 (70, 0) or G71/G72 and their .1 and .2 (71, 1).
-        let mut code = (0, 0);
+        let (number, sub) = codes
+            .gs()
+            .iter()
+            .find_map(|&g| match g {
+                GCode::Motion(MotionMode::LatheCycle { number, sub }) => Some((number, sub)),
+                _ => None,
+            })
+            .unwrap_or((0, 0));
         let mut others: Vec<(u8, f64)> = Vec::new();
         let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
-        for &(l, v) in words {
+        for (i, &(l, v)) in words.iter().enumerate() {
             match l {
-                b'g' if let Some(GCode::Motion(MotionMode::LatheCycle { number, sub })) =
-                    GCode::nearest(v) =>
-                {
-                    code = (number, sub)
-                }
+                _ if i == at => {}
                 b'q' | b'd' | b'e' | b'i' | b'p' | b'r' | b'u' | b'w' | b'x' | b'z' => {}
                 _ => others.push((l, v)),
             }
         }
-        let (number, sub) = code;
         let name = GCode::Motion(MotionMode::LatheCycle { number, sub }).name();
         // The block's other words act before its motion.
         let mut ends = false;
@@ -103,7 +109,8 @@ impl Interp<'_> {
                 text.push_str(&number_string(v, self.s.precision));
             }
             self.emit_raw(text.as_bytes())?;
-            ends = self.apply_words(file, start, &others, false)?;
+            let checked = Checked::Line(codes.without_lathe_cycle());
+            ends = self.apply_words(file, start, &others, &checked, false)?;
         }
         let Some(q) = word(b'q') else {
             return Err(self.lathe_err(LatheError::NoQ { code: name }, file, start, len));
@@ -678,15 +685,16 @@ impl Interp<'_> {
                 words.push((b'k', c.re - cz));
             }
         }
-        if let Err((k, _)) = crate::eval::read::validate::check_block(
+        let checked = match check_block(
             &words,
             &self.mach.modal,
             &self.mach.nurbs,
             &self.mach.cycle,
             self.s.user_m,
         ) {
-            return Err(self.error(k, file, start, start + len));
-        }
+            Ok(c) => c,
+            Err((k, _)) => return Err(self.error(k, file, start, start + len)),
+        };
         let mut text = String::with_capacity(64);
         for &(l, v) in &words {
             if !text.is_empty() {
@@ -696,11 +704,11 @@ impl Interp<'_> {
             text.push_str(&number_string(v, self.s.precision));
         }
         if matches!(self.mach.comp_written, Written::Cycle { .. }) {
-            self.apply_words(file, start, &words, false)?;
+            self.apply_words(file, start, &words, &checked, false)?;
             return self.write_comp_out(file, start, len);
         }
         self.emit_raw(text.as_bytes())?;
-        self.apply_words(file, start, &words, false)?;
+        self.apply_words(file, start, &words, &checked, false)?;
         Ok(())
     }
 }

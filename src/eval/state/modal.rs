@@ -12,6 +12,7 @@ use crate::codes::{
 };
 use crate::eval::Interp;
 use crate::eval::read::block::Words;
+use crate::eval::read::validate::{Checked, LineCodes};
 use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
 use crate::eval::state::nurbs::{NO_MOTION, NURBS};
@@ -165,23 +166,33 @@ impl Interp<'_> {
         self.set_from_machine(axis, m.zip(tlo).map(|(m, t)| m - t), what);
     }
 
-    /// Applies the line's words to the model. Returns true when the line ends
+    /// Applies the line's words to the model, with its G and M codes as
+    /// the checks decoded them (`checked`). Returns true when the line ends
     /// the program.
     pub(in crate::eval) fn apply_words(
         &mut self,
         file: &Rc<FileIndex>,
         start: u32,
         words: &Words,
+        checked: &Checked,
         m99: bool,
     ) -> Result<bool, Error> {
         if !m99 && self.mach.apply_simple(words) {
             return Ok(false);
         }
+        let simple;
+        let codes = match checked {
+            Checked::Line(c) | Checked::Lathe(c, _) => c,
+            Checked::Simple => {
+                simple = LineCodes::simple(words);
+                &simple
+            }
+        };
         let motion_before = self.mach.modal.motion;
         // Filled in place: returning it would copy it.
-        let mut w = LineWords::new(m99);
+        let mut w = LineWords::new(m99, codes);
         self.read_words(file, start, words, &mut w)?;
-        self.apply_m_p_words(words, &mut w);
+        self.apply_m_p_words(&mut w);
         // RETAIN_G43: a tool change while G43 is in effect applies the new
         // tool's offset, and unloading the tool (T0) cancels G43, before the
         // line's own G43/G49. The output says so in a line of its own.
@@ -215,9 +226,10 @@ impl Interp<'_> {
         }
         if self.mach.comp.is_some() {
             let stop = w.ends
-                || words
+                || w.codes
+                    .ms()
                     .iter()
-                    .any(|&(l, v)| l == b'm' && matches!(v, 0.0 | 1.0 | 60.0));
+                    .any(|m| matches!(m, MCode::Pause { .. } | MCode::PalletPause));
             if stop && let Err(k) = self.mach.comp_stop(w.ends) {
                 return Err(self.error(k, file, start, start));
             }
@@ -228,8 +240,9 @@ impl Interp<'_> {
         Ok(w.ends)
     }
 
-    /// First pass over the line's words: F, S, T and M words act in order;
-    /// G codes, axis words and the P, H, Q, L, R values are gathered.
+    /// First pass over the line's words: F, S, T and M words act in order
+    /// (each M word with its code as the checks decoded it); axis words and
+    /// the P, H, Q, L, R values are gathered.
     // One call site, on the hot path: kept inline as before the split.
     #[inline(always)]
     fn read_words(
@@ -237,19 +250,13 @@ impl Interp<'_> {
         file: &Rc<FileIndex>,
         start: u32,
         words: &Words,
-        w: &mut LineWords,
+        w: &mut LineWords<'_>,
     ) -> Result<(), Error> {
+        // One code for each M word, in line order.
+        let codes = w.codes;
+        let mut ms = codes.ms().iter();
         for &(l, v) in words {
             match l {
-                b'g' => {
-                    // The block checks have refused unknown codes.
-                    if w.gn < w.g.len()
-                        && let Some(g) = GCode::nearest(v)
-                    {
-                        w.g[w.gn] = g;
-                        w.gn += 1;
-                    }
-                }
                 b'f' => self.mach.modal.feed = v,
                 b's' => self.mach.modal.speed = v,
                 b't' => {
@@ -270,7 +277,11 @@ impl Interp<'_> {
                 b'q' => w.q = Some(v),
                 b'l' => w.l = Some(v),
                 b'r' => w.r = Some(v),
-                b'm' => self.apply_m(MCode::decode(v), w),
+                b'm' => {
+                    if let Some(&m) = ms.next() {
+                        self.apply_m(m, w);
+                    }
+                }
                 _ => {
                     if let Some(a) = axis_index(l)
                         && w.an < w.axes.len()
@@ -288,7 +299,7 @@ impl Interp<'_> {
     /// overrides; M2/M30 end the program.
     // One call site, on the hot path: kept inline as before the split.
     #[inline(always)]
-    fn apply_m(&mut self, m: MCode, w: &mut LineWords) {
+    fn apply_m(&mut self, m: MCode, w: &mut LineWords<'_>) {
         match m {
             MCode::End { .. } => w.ends = true,
             MCode::Spindle(d) => self.mach.modal.spindle = d,
@@ -315,41 +326,39 @@ impl Interp<'_> {
     /// P words after M50.. on the same line (and M61's Q): a second pass.
     // One call site, on the hot path: kept inline as before the split.
     #[inline(always)]
-    fn apply_m_p_words(&mut self, words: &Words, w: &mut LineWords) {
-        for &(l, v) in words {
-            if l == b'm' {
-                match MCode::decode(v) {
-                    MCode::Override(n @ 50..=53) => self.mach.modal.set_override(n, w.p),
-                    // M61's Q may come after it on the line.
-                    MCode::SetTool => {
-                        if self.mach.m61.is_none() {
-                            self.mach.m61 = Some((self.line_no(), self.mach.current_tool));
-                        }
-                        self.mach.current_tool = w.q;
-                        if let (Some(p), Some(q)) = (&mut self.mach.pockets, w.q) {
-                            p.0 = q;
-                        }
-                        self.tool_change_sync();
-                        w.tool_changed = true;
+    fn apply_m_p_words(&mut self, w: &mut LineWords<'_>) {
+        let codes = w.codes;
+        for &m in codes.ms() {
+            match m {
+                MCode::Override(n @ 50..=53) => self.mach.modal.set_override(n, w.p),
+                // M61's Q may come after it on the line.
+                MCode::SetTool => {
+                    if self.mach.m61.is_none() {
+                        self.mach.m61 = Some((self.line_no(), self.mach.current_tool));
                     }
-                    _ => {}
+                    self.mach.current_tool = w.q;
+                    if let (Some(p), Some(q)) = (&mut self.mach.pockets, w.q) {
+                        p.0 = q;
+                    }
+                    self.tool_change_sync();
+                    w.tool_changed = true;
                 }
+                _ => {}
             }
         }
     }
 
     /// The line's modal G codes, group by group. Returns the non-modal code
     /// (G10, G28, G30, G53, G92.x, G52) if any, and whether G43.1 set a
-    /// tool length offset from axis words.
+    /// tool length offset from axis words. (A G80 beside another motion
+    /// code is not among the codes: the checks left it out.)
     // One call site, on the hot path: kept inline as before the split.
     #[inline(always)]
-    fn apply_g_modes(&mut self, w: &LineWords) -> (Option<NonModal>, bool) {
+    fn apply_g_modes(&mut self, w: &LineWords<'_>) -> (Option<NonModal>, bool) {
         let mut special = None;
         let mut dynamic_tlo = false;
-        let other_motion = w.gs().iter().any(|&g| is_moving_code(g));
         for &g in w.gs() {
             match g {
-                GCode::Motion(MotionMode::CancelCycle) if other_motion => {}
                 // G5.3 ends a NURBS block without choosing a motion.
                 GCode::Motion(MotionMode::NurbsEnd) => {}
                 GCode::Motion(m) => self.mach.modal.motion = m,
@@ -392,7 +401,7 @@ impl Interp<'_> {
         start: u32,
         special: NonModal,
         words: &Words,
-        w: &LineWords,
+        w: &LineWords<'_>,
     ) -> Result<(), Error> {
         match special {
             NonModal::SetG92 => {
@@ -490,7 +499,7 @@ impl Interp<'_> {
         file: &Rc<FileIndex>,
         start: u32,
         words: &Words,
-        w: &LineWords,
+        w: &LineWords<'_>,
         motion_before: MotionMode,
         dynamic_tlo: bool,
     ) -> Result<(), Error> {
@@ -736,11 +745,10 @@ impl Interp<'_> {
     }
 }
 
-/// A line's words as `apply_words` gathers them in its first pass.
-struct LineWords {
-    /// G codes, in order.
-    g: [GCode; 16],
-    gn: usize,
+/// A line's words as `apply_words` gathers them in its first pass, with
+/// its codes as the checks decoded them.
+struct LineWords<'c> {
+    codes: &'c LineCodes,
     /// Axis words: (axis index, value).
     axes: [(usize, f64); 9],
     an: usize,
@@ -754,12 +762,11 @@ struct LineWords {
     tool_changed: bool,
 }
 
-impl LineWords {
+impl LineWords<'_> {
     #[inline]
-    fn new(ends: bool) -> LineWords {
+    fn new(ends: bool, codes: &LineCodes) -> LineWords<'_> {
         LineWords {
-            g: [GCode::Motion(MotionMode::Rapid); 16],
-            gn: 0,
+            codes,
             axes: [(0, 0.0); 9],
             an: 0,
             p: None,
@@ -772,9 +779,10 @@ impl LineWords {
         }
     }
 
+    /// The line's G codes, in line order.
     #[inline]
     fn gs(&self) -> &[GCode] {
-        &self.g[..self.gn]
+        self.codes.gs()
     }
 
     #[inline]
@@ -943,5 +951,132 @@ impl Machine {
             _ => {}
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::rc::Rc;
+    use std::sync::Arc;
+
+    use crate::codes::{
+        ArcDistance, CutterComp, Distance, FeedMode, Modes, MotionMode, Plane, SpindleDir, Units,
+    };
+    use crate::emit::{Destination, MemoryOut, Sink};
+    use crate::eval::read::validate::check_block;
+    use crate::eval::{Interp, Settings};
+    use crate::program::{FileIndex, Loader, SearchPath, SourceFile};
+
+    /// A line's words: `G80 G1 X1` → g 80, g 1, x 1.
+    fn words(line: &str) -> Vec<(u8, f64)> {
+        line.split_whitespace()
+            .map(|w| {
+                let v = w[1..].parse().expect("a number");
+                (w.as_bytes()[0].to_ascii_lowercase(), v)
+            })
+            .collect()
+    }
+
+    /// Checks and applies each line in a fresh evaluator, as the reader
+    /// does; returns the modes before and after, and whether the last line
+    /// ended the program.
+    fn run(s: &Settings, lines: &[&str], see: impl FnOnce(&Interp<'_>)) -> (Modes, Modes, bool) {
+        let src = SourceFile::new("<t>".into(), "<t>".into(), Vec::new());
+        let main = Rc::new(FileIndex::build(Arc::new(src)));
+        let sink = Sink::new(Destination::Memory(MemoryOut::default())).expect("sink");
+        let loader = Loader::new(SearchPath::default(), None);
+        let mut it = Interp::new(s, loader, main.clone(), sink);
+        let before = it.mach.modal.clone();
+        let mut ends = false;
+        for line in lines {
+            let w = words(line);
+            let m = &it.mach;
+            let checked = check_block(&w, &m.modal, &m.nurbs, &m.cycle, s.user_m)
+                .unwrap_or_else(|e| panic!("{line}: {e:?}"));
+            ends = it
+                .apply_words(&main, 0, &w, &checked, false)
+                .unwrap_or_else(|e| panic!("{line}: {e:?}"));
+        }
+        see(&it);
+        (before, it.mach.modal.clone(), ends)
+    }
+
+    /// The state after lines whose G and M codes the checks decode (G80
+    /// beside another motion code, several codes of a line, M codes in
+    /// order, the fast acceptance's G0/G1 applied on the general path)
+    /// is the one their codes give: the update acts on the checks' codes.
+    #[test]
+    fn the_update_acts_on_the_codes_the_checks_decoded() {
+        type Want = fn(&mut Modes);
+        let cases: &[(&[&str], bool, Want)] = &[
+            (&["G80 G1 X1 F10"], false, |m| {
+                m.motion = MotionMode::Linear;
+                m.feed = 10.0;
+            }),
+            (&["G1 G80 X1 F10"], false, |m| {
+                m.motion = MotionMode::Linear;
+                m.feed = 10.0;
+            }),
+            (&["G80 G0 X2"], false, |m| m.motion = MotionMode::Rapid),
+            (&["G1 F5", "G80"], false, |m| {
+                m.motion = MotionMode::CancelCycle;
+                m.feed = 5.0;
+            }),
+            (&["G0 G90.1 X1"], false, |m| {
+                m.motion = MotionMode::Rapid;
+                m.arc_distance = ArcDistance::Absolute;
+            }),
+            (&["G91 G0 Z1"], false, |m| {
+                m.motion = MotionMode::Rapid;
+                m.distance = Distance::Incremental;
+            }),
+            (&["G18 G20 G93 G1 X1 F2"], false, |m| {
+                m.motion = MotionMode::Linear;
+                m.plane = Plane::XZ;
+                m.units = Units::Inch;
+                m.feed_mode = FeedMode::InverseTime;
+                m.feed = 2.0;
+            }),
+            (&["M3 M8"], false, |m| {
+                m.spindle = SpindleDir::Cw;
+                m.flood = true;
+            }),
+            (&["M4 M7", "M9 M5"], false, |_| {}),
+            (&["M50 P0"], false, |m| m.feed_override = false),
+            (&["G91 M4 M7 S100", "M2"], true, |m| {
+                m.speed = 100.0;
+                crate::eval::state::reset_at_end(m);
+            }),
+            // G0 taken by the fast acceptance and applied by the general
+            // update (compensation is on).
+            (&["G41.1 D1 G1 X1 F10", "G0 X5"], false, |m| {
+                m.motion = MotionMode::Rapid;
+                m.cutter_comp = CutterComp::DynamicLeft;
+                m.feed = 10.0;
+            }),
+        ];
+        let s = Settings::default();
+        for &(lines, want_end, want) in cases {
+            let (before, after, ends) = run(&s, lines, |_| {});
+            let mut expected = before;
+            want(&mut expected);
+            assert_eq!(after, expected, "{lines:?}");
+            assert_eq!(ends, want_end, "{lines:?}");
+        }
+    }
+
+    /// T before M6 on a line selects the tool M6 loads; M61 Q sets it.
+    #[test]
+    fn tool_codes_act_in_line_order() {
+        let s = Settings::default();
+        let tool = |lines: &[&str]| {
+            let mut t = None;
+            run(&s, lines, |it| t = it.mach.current_tool);
+            t
+        };
+        assert_eq!(tool(&["T2 M6"]), Some(2.0));
+        assert_eq!(tool(&["T2", "M6"]), Some(2.0));
+        assert_eq!(tool(&["M61 Q3"]), Some(3.0));
+        assert_eq!(tool(&["T4 M8"]), None);
     }
 }
