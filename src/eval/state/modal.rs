@@ -192,7 +192,13 @@ impl Interp<'_> {
         // Filled in place: returning it would copy it.
         let mut w = LineWords::new(m99, codes);
         self.read_words(file, start, words, &mut w)?;
-        self.apply_m_p_words(&mut w);
+        // The M codes act after the F, S and T words, whatever their place
+        // on the line (the reference's order: a T word selects the tool an
+        // M6 on its line loads), with the line's P and Q.
+        let codes = w.codes;
+        for &m in codes.ms() {
+            self.apply_m(m, &mut w);
+        }
         // RETAIN_G43: a tool change while G43 is in effect applies the new
         // tool's offset, and unloading the tool (T0) cancels G43, before the
         // line's own G43/G49. The output says so in a line of its own.
@@ -240,9 +246,8 @@ impl Interp<'_> {
         Ok(w.ends)
     }
 
-    /// First pass over the line's words: F, S, T and M words act in order
-    /// (each M word with its code as the checks decoded it); axis words and
-    /// the P, H, Q, L, R values are gathered.
+    /// First pass over the line's words: F, S and T words act in order;
+    /// axis words and the P, H, Q, L, R values are gathered.
     // One call site, on the hot path: kept inline as before the split.
     #[inline(always)]
     fn read_words(
@@ -252,9 +257,6 @@ impl Interp<'_> {
         words: &Words,
         w: &mut LineWords<'_>,
     ) -> Result<(), Error> {
-        // One code for each M word, in line order.
-        let codes = w.codes;
-        let mut ms = codes.ms().iter();
         for &(l, v) in words {
             match l {
                 b'f' => self.mach.modal.feed = v,
@@ -277,11 +279,6 @@ impl Interp<'_> {
                 b'q' => w.q = Some(v),
                 b'l' => w.l = Some(v),
                 b'r' => w.r = Some(v),
-                b'm' => {
-                    if let Some(&m) = ms.next() {
-                        self.apply_m(m, w);
-                    }
-                }
                 _ => {
                     if let Some(a) = axis_index(l)
                         && w.an < w.axes.len()
@@ -295,8 +292,9 @@ impl Interp<'_> {
         Ok(())
     }
 
-    /// One M code in the first pass: spindle, tool change, coolant,
-    /// overrides; M2/M30 end the program.
+    /// One M code, after the line's other words: spindle, tool change
+    /// (M6, M61 with its Q), coolant, overrides (with their P); M2/M30 end
+    /// the program.
     // One call site, on the hot path: kept inline as before the split.
     #[inline(always)]
     fn apply_m(&mut self, m: MCode, w: &mut LineWords<'_>) {
@@ -318,33 +316,19 @@ impl Interp<'_> {
                 self.mach.modal.mist = false;
                 self.mach.modal.flood = false;
             }
+            MCode::SetTool => {
+                if self.mach.m61.is_none() {
+                    self.mach.m61 = Some((self.line_no(), self.mach.current_tool));
+                }
+                self.mach.current_tool = w.q;
+                if let (Some(p), Some(q)) = (&mut self.mach.pockets, w.q) {
+                    p.0 = q;
+                }
+                self.tool_change_sync();
+                w.tool_changed = true;
+            }
             MCode::Override(n) => self.mach.modal.set_override(n, w.p),
             _ => {}
-        }
-    }
-
-    /// P words after M50.. on the same line (and M61's Q): a second pass.
-    // One call site, on the hot path: kept inline as before the split.
-    #[inline(always)]
-    fn apply_m_p_words(&mut self, w: &mut LineWords<'_>) {
-        let codes = w.codes;
-        for &m in codes.ms() {
-            match m {
-                MCode::Override(n @ 50..=53) => self.mach.modal.set_override(n, w.p),
-                // M61's Q may come after it on the line.
-                MCode::SetTool => {
-                    if self.mach.m61.is_none() {
-                        self.mach.m61 = Some((self.line_no(), self.mach.current_tool));
-                    }
-                    self.mach.current_tool = w.q;
-                    if let (Some(p), Some(q)) = (&mut self.mach.pockets, w.q) {
-                        p.0 = q;
-                    }
-                    self.tool_change_sync();
-                    w.tool_changed = true;
-                }
-                _ => {}
-            }
         }
     }
 
@@ -1065,7 +1049,8 @@ mod tests {
         }
     }
 
-    /// T before M6 on a line selects the tool M6 loads; M61 Q sets it.
+    /// A T word selects the tool an M6 on its line loads, before or after
+    /// it; M61 sets the tool of its Q.
     #[test]
     fn tool_codes_act_in_line_order() {
         let s = Settings::default();
@@ -1075,7 +1060,9 @@ mod tests {
             t
         };
         assert_eq!(tool(&["T2 M6"]), Some(2.0));
+        assert_eq!(tool(&["M6 T2"]), Some(2.0));
         assert_eq!(tool(&["T2", "M6"]), Some(2.0));
+        assert_eq!(tool(&["Q3 M61"]), Some(3.0));
         assert_eq!(tool(&["M61 Q3"]), Some(3.0));
         assert_eq!(tool(&["T4 M8"]), None);
     }
