@@ -409,20 +409,62 @@ impl RawLine {
             return None;
         }
         let words = self.words();
-        let mut at = 0usize;
+        let mut spacing = Spacing::new(0);
         for w in words {
             let ok = match w.letter {
                 b'G' => w.value == 0.0 || w.value == 1.0,
                 b'X' | b'Y' | b'Z' | b'F' => true,
                 _ => false,
             };
-            let (start, end) = (w.span.start as usize, w.span.end as usize);
-            if !ok || start != at || (end < text.len() && text[end] != b' ') {
+            if !ok || !spacing.word(text, w.span.start as usize, w.span.end as usize) {
                 return None;
             }
-            at = end + 1;
         }
-        (at == text.len() + 1).then_some(words)
+        spacing.ends_at(text.len()).then_some(words)
+    }
+}
+
+/// The plainest layout of a line's words, which a writer may copy: from
+/// the line's start, each word one blank (a space) after the one before,
+/// the last ending the line. Fed the words' offsets in order, it keeps
+/// where the next must start; the reader of lines of moves alone, the
+/// straight-line reader's [`RawLine::moves_only`] and the target's
+/// writer all test the layout with it.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Spacing {
+    start: usize,
+    next: usize,
+}
+
+impl Spacing {
+    /// `next` once a word is out of place: no word starts there.
+    const OFF: usize = usize::MAX;
+
+    /// For a line starting at `start` in its text.
+    #[inline(always)]
+    pub(crate) fn new(start: usize) -> Spacing {
+        Spacing { start, next: start }
+    }
+
+    /// The word `text[start..end]` is where the layout has it; if not,
+    /// no later word is.
+    #[inline(always)]
+    pub(crate) fn word(&mut self, text: &[u8], start: usize, end: usize) -> bool {
+        let ok = start == self.next && (start == self.start || text[start - 1] == b' ');
+        self.next = if ok { end + 1 } else { Spacing::OFF };
+        ok
+    }
+
+    /// The line is out of the layout, whatever follows.
+    #[inline(always)]
+    pub(crate) fn break_off(&mut self) {
+        self.next = Spacing::OFF;
+    }
+
+    /// The words read are in place and the last ends the line at `end`.
+    #[inline(always)]
+    pub(crate) fn ends_at(&self, end: usize) -> bool {
+        self.next == end + 1
     }
 }
 

@@ -3,7 +3,7 @@
 //! the firmware measures it and checked for bytes it acts on in real time.
 
 use crate::block::{
-    Block, CommentKind, Units, Word, WordKind, without_trailing_zeros, written_as_is,
+    Block, CommentKind, Spacing, Units, Word, WordKind, without_trailing_zeros, written_as_is,
 };
 use crate::diag::ErrorKind;
 
@@ -133,23 +133,19 @@ impl LineWriter {
             Units::Mm => self.p.decimals_mm,
             Units::Inch => self.p.decimals_inch,
         };
-        // The next word starts here.
-        let mut at = 0;
+        let mut spacing = Spacing::new(0);
         for w in &b.words {
             let (start, end) = (w.span.start as usize, w.span.end as usize);
-            if start != at || text.get(start) != Some(&w.letter) {
+            // Upper case: the letter as the block has it.
+            if !spacing.word(text, start, end) || text.get(start) != Some(&w.letter) {
                 return false;
             }
             let code = matches!(w.kind, WordKind::G(_) | WordKind::M(_));
             if !written_as_is(w.shape, code, decimals, self.p.max_digits) {
                 return false;
             }
-            at = end + 1;
-            if end < text.len() && text[end] != b' ' {
-                return false;
-            }
         }
-        at == text.len() + 1
+        spacing.ends_at(text.len())
     }
 
     /// Appends the comments of `b` (read from `text`) the target keeps.

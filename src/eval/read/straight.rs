@@ -9,7 +9,9 @@
 
 use std::rc::Rc;
 
-use crate::block::{Cuts, MoveValues, MovesRule, RawLine, RawWord, Shape, Span, kept_digits};
+use crate::block::{
+    Cuts, MoveValues, MovesRule, RawLine, RawWord, Shape, Spacing, Span, kept_digits,
+};
 use crate::diag::Error;
 use crate::number::{Digits, POW10, digits_in};
 use crate::program::FileIndex;
@@ -244,9 +246,8 @@ pub(in crate::eval) struct ToForm {
     rule: MovesRule,
     /// Offset of the line's start.
     start: usize,
-    /// Where its next word must start ([`ToForm::NOT`] once it is not such
-    /// a line).
-    next: usize,
+    /// Its words' layout so far (broken off once it is not such a line).
+    spacing: Spacing,
     cuts: Cuts,
 }
 
@@ -270,15 +271,12 @@ static FORM_LETTER: [u8; 256] = {
 };
 
 impl ToForm {
-    /// `next` of a line that is not one.
-    const NOT: usize = usize::MAX;
-
     #[inline(always)]
     pub(in crate::eval) fn new(start: usize, rule: MovesRule) -> ToForm {
         ToForm {
             rule,
             start,
-            next: start,
+            spacing: Spacing::new(start),
             cuts: Cuts::default(),
         }
     }
@@ -301,20 +299,16 @@ impl ToForm {
     #[inline(always)]
     pub(in crate::eval) fn finish(&self, text_end: usize) -> Option<Cuts> {
         let fits = text_end - self.start - self.cuts.dropped() < self.rule.max_len;
-        (self.next == text_end + 1 && fits).then_some(self.cuts)
+        (self.spacing.ends_at(text_end) && fits).then_some(self.cuts)
     }
 
-    /// Whether the word at `at` keeps the line one: a letter the rule
-    /// takes, at the line's start or one blank after the word before, and
-    /// its number as the rule writes it.
+    /// Whether the word at `at` (in its place: see [`Spacing`]) keeps the
+    /// line one: a letter the rule takes, and its number as the rule
+    /// writes it.
     #[inline(always)]
     fn take(&mut self, buf: &[u8], at: usize, sign: u8, num: usize, d: &Digits) -> bool {
         let kind = FORM_LETTER[usize::from(buf[at])];
-        if kind == FORM_NONE
-            || kind == FORM_ARC && !self.rule.arcs
-            || at != self.next
-            || at != self.start && buf[at - 1] != b' '
-        {
+        if kind == FORM_NONE || kind == FORM_ARC && !self.rule.arcs {
             return false;
         }
         if kind == FORM_G {
@@ -343,26 +337,24 @@ impl ToForm {
 impl WordSink for ToForm {
     #[inline(always)]
     fn line_number(&mut self, _: usize, _: f64, _: usize) {
-        self.next = ToForm::NOT;
+        self.spacing.break_off();
     }
 
     #[inline(always)]
     fn word(&mut self, buf: &[u8], at: usize, sign: u8, num: usize, d: &Digits) {
-        self.next = if self.take(buf, at, sign, num, d) {
-            d.end + 1
-        } else {
-            ToForm::NOT
-        };
+        if !self.spacing.word(buf, at, d.end) || !self.take(buf, at, sign, num, d) {
+            self.spacing.break_off();
+        }
     }
 
     #[inline(always)]
     fn slow_word(&mut self) {
-        self.next = ToForm::NOT;
+        self.spacing.break_off();
     }
 
     #[inline(always)]
     fn comment(&mut self, _: &[u8], _: usize, _: usize) {
-        self.next = ToForm::NOT;
+        self.spacing.break_off();
     }
 }
 
