@@ -45,13 +45,28 @@ pub(super) trait Lines {
     fn read(&mut self, i: usize) -> Read<'_>;
 }
 
-/// Reads each line when the loop asks for it, up to a byte offset.
+/// Reads each line when the loop asks for it, up to a byte offset; for a
+/// consumer that reads blocks (`decode`), decodes it as a chunk read ahead
+/// does (see [`decode_line`]), into room of its own.
 pub(super) struct InPlace<'b> {
     pub buf: &'b [u8],
     pub comments: bool,
     /// Lines starting here or later are left to another source.
     pub limit: usize,
     pub line: Plain,
+    pub decode: bool,
+    /// The consumer's rule for lines of moves alone (with `decode` only).
+    pub rule: Option<MovesRule>,
+    pub room: LineRoom,
+}
+
+/// Room to decode one line at a time in: its words, its block, and its
+/// output where a rule writes it otherwise than as its text.
+#[derive(Default)]
+pub(super) struct LineRoom {
+    raw: RawLine,
+    block: Block,
+    out: Vec<u8>,
 }
 
 impl Lines for InPlace<'_> {
@@ -61,11 +76,103 @@ impl Lines for InPlace<'_> {
             Read::Pause
         } else if self.buf.get(i) == Some(&b'\n') {
             Read::Blank
-        } else if read_line(self.buf, i, &mut self.line, self.comments) {
-            Read::Line(&self.line, None)
+        } else if !self.decode {
+            if read_line(self.buf, i, &mut self.line, self.comments) {
+                Read::Line(&self.line, None)
+            } else {
+                Read::Stop
+            }
         } else {
-            Read::Stop
+            self.read_decoded(i)
         }
+    }
+}
+
+impl InPlace<'_> {
+    fn read_decoded(&mut self, i: usize) -> Read<'_> {
+        let room = &mut self.room;
+        room.out.clear();
+        let p = &mut self.line;
+        let read = decode_line(
+            self.buf,
+            i,
+            p,
+            self.comments,
+            self.rule,
+            &mut room.raw,
+            &mut room.out,
+        );
+        let decoded = match read {
+            None => return Read::Stop,
+            Some(LineRead::Form(kind)) => Decoded::form(kind, self.rule, &room.out),
+            Some(LineRead::Words { kept }) => {
+                let text = &self.buf[i..p.text_end];
+                match kept.then(|| room.raw.moves_only(text)).flatten() {
+                    Some(words) => Some(Decoded::Moves(words)),
+                    None => block_of(&room.raw, text, kept, &mut room.block)
+                        .then_some(Decoded::Block(&room.block)),
+                }
+            }
+        };
+        Read::Line(&self.line, decoded)
+    }
+}
+
+/// How a plain line read for a consumer that reads blocks came out.
+enum LineRead {
+    /// A line of moves alone the rule writes: [`Kind::Form`] or
+    /// [`Kind::FormOut`] into the room's output.
+    Form(Kind),
+    /// Any other: its words are in the room's [`RawLine`] if `kept` (see
+    /// [`ToRaw::finish`]).
+    Words { kept: bool },
+}
+
+/// Reads the plain line at `buf[i..]` into `p` for a consumer that reads
+/// blocks: a line of moves alone its `rule` writes is worked out to the
+/// bytes written (appended to `out` where they are not its text); any
+/// other keeps its words in `raw` from the same reading. `None`: not a
+/// plain line. The one step
+/// chunks read ahead and lines read in place share.
+#[inline(always)]
+fn decode_line(
+    buf: &[u8],
+    i: usize,
+    p: &mut Plain,
+    comments: bool,
+    rule: Option<MovesRule>,
+    raw: &mut RawLine,
+    out: &mut Vec<u8>,
+) -> Option<LineRead> {
+    if let Some(rule) = rule.filter(|_| ToForm::may_take(buf, i)) {
+        let mut sink = ToForm::new(i, rule);
+        if !read_line_into(buf, i, p, comments, &mut sink) {
+            return None;
+        }
+        if let Some(cuts) = sink.finish(p.text_end) {
+            return Some(LineRead::Form(written(out, &buf[i..p.text_end], &cuts)));
+        }
+    }
+    // The words from the same reading of the line (again for a line that
+    // might have been one of moves alone).
+    let mut sink = ToRaw::new(raw, i);
+    if !read_line_into(buf, i, p, comments, &mut sink) {
+        return None;
+    }
+    Some(LineRead::Words {
+        kept: sink.finish(),
+    })
+}
+
+/// The block of a line [`decode_line`] read as [`LineRead::Words`] (text
+/// `text`): made from its words where they were kept, else decoded from
+/// its text. False if it does not decode.
+#[inline(always)]
+fn block_of(raw: &RawLine, text: &[u8], kept: bool, block: &mut Block) -> bool {
+    if kept {
+        block.replay(raw, text).is_ok()
+    } else {
+        block.decode_into(text).is_ok()
     }
 }
 
@@ -82,6 +189,20 @@ pub(super) enum Decoded<'p> {
         written: Option<&'p [u8]>,
         rule: MovesRule,
     },
+}
+
+impl<'p> Decoded<'p> {
+    /// A line of moves alone of kind `kind`, its bytes (for
+    /// [`Kind::FormOut`]) in `out`, written by `rule`.
+    #[inline(always)]
+    fn form(kind: Kind, rule: Option<MovesRule>, out: &'p [u8]) -> Option<Decoded<'p>> {
+        let written = match kind {
+            Kind::Form => None,
+            Kind::FormOut(at, n) => Some(&out[at as usize..at as usize + n as usize]),
+            _ => return None,
+        };
+        rule.map(|rule| Decoded::Form { written, rule })
+    }
 }
 
 /// How a chunk's line was decoded.
@@ -284,16 +405,14 @@ impl<'b> Shared<'b> {
                 i = p.next;
                 continue;
             }
-            // A line of moves alone the consumer writes by its rule: its
-            // output worked out as it is read.
-            if let Some(rule) = self.rule.filter(|_| ToForm::may_take(self.buf, i)) {
-                let mut sink = ToForm::new(i, rule);
-                if !read_line_into(self.buf, i, p, self.comments, &mut sink) {
+            let (raw, out) = (&mut chunk.raw, &mut chunk.out);
+            let read = decode_line(self.buf, i, p, self.comments, self.rule, raw, out);
+            let kept = match read {
+                None => {
                     *v.last_mut().expect("pushed") = Rec::Stop;
                     return chunk;
                 }
-                if let Some(cuts) = sink.finish(p.text_end) {
-                    let kind = written(&mut chunk.out, &self.buf[i..p.text_end], &cuts);
+                Some(LineRead::Form(kind)) => {
                     i = p.next;
                     if chunk.kinds.len() < k {
                         chunk.kinds.resize(k, Kind::No);
@@ -301,15 +420,8 @@ impl<'b> Shared<'b> {
                     chunk.kinds.push(kind);
                     continue;
                 }
-            }
-            // The words from the same reading of the line (again for a
-            // line that might have been one of moves alone).
-            let mut sink = ToRaw::new(&mut chunk.raw, i);
-            if !read_line_into(self.buf, i, p, self.comments, &mut sink) {
-                *v.last_mut().expect("pushed") = Rec::Stop;
-                return chunk;
-            }
-            let kept = sink.finish();
+                Some(LineRead::Words { kept }) => kept,
+            };
             let text = &self.buf[i..p.text_end];
             i = p.next;
             if chunk.kinds.len() < k {
@@ -328,13 +440,11 @@ impl<'b> Shared<'b> {
                 if chunk.blocks.len() <= k {
                     chunk.blocks.resize_with(k + 1, Block::default);
                 }
-                let b = &mut chunk.blocks[k];
-                let ok = if kept {
-                    b.replay(&chunk.raw, text).is_ok()
+                if block_of(&chunk.raw, text, kept, &mut chunk.blocks[k]) {
+                    Kind::Block
                 } else {
-                    b.decode_into(text).is_ok()
-                };
-                if ok { Kind::Block } else { Kind::No }
+                    Kind::No
+                }
             };
             chunk.kinds.push(kind);
         }
@@ -543,8 +653,21 @@ mod tests {
         }
     }
 
+    /// A decoded line as the bytes written by a rule or as its block.
+    fn same_terms(d: Option<Decoded<'_>>, text: &[u8]) -> Option<Result<Vec<u8>, Block>> {
+        d.map(|d| match d {
+            Decoded::Form { written, .. } => Ok(written.unwrap_or(text).to_vec()),
+            Decoded::Block(b) => Err(b.clone()),
+            Decoded::Moves(w) => {
+                let mut b = Block::default();
+                b.replay_words(w).expect("replays");
+                Err(b)
+            }
+        })
+    }
+
     /// Lines read through chunks on two threads are the lines read in
-    /// place, in order, with the same stop.
+    /// place, in order, with the same stop, decoded alike.
     #[test]
     fn chunks_give_the_lines_read_in_place() {
         let mut text = String::new();
@@ -590,19 +713,25 @@ mod tests {
                     s.spawn(|| shared.help());
                 }
                 let mut ahead = Ahead::new(&shared);
+                // Lines read in place are decoded alike.
                 let mut here = InPlace {
                     buf,
                     comments: true,
                     limit: usize::MAX,
                     line: Plain::default(),
+                    decode,
+                    rule: rule.filter(|_| decode),
+                    room: LineRoom::default(),
                 };
                 let mut i = 0;
                 let mut lines = 0;
                 loop {
                     match (ahead.read(i), here.read(i)) {
                         (Read::Blank, Read::Blank) => i += 1,
-                        (Read::Line(p, block), Read::Line(q, None)) => {
+                        (Read::Line(p, block), Read::Line(q, mine)) => {
                             assert_eq!((p.mask, p.next, p.text_end), (q.mask, q.next, q.text_end));
+                            let text = &buf[i..p.text_end];
+                            assert_eq!(same_terms(block, text), same_terms(mine, text));
                             // Only the slots of the line's words are read.
                             for s in (0..14).filter(|s| p.mask >> s & 1 == 1) {
                                 assert_eq!(p.vals[s].to_bits(), q.vals[s].to_bits());

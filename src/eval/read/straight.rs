@@ -19,7 +19,7 @@ use crate::program::FileIndex;
 use crate::codes::{CutterComp, FeedMode, MotionMode, Plane};
 use crate::eval::Interp;
 use crate::eval::out::hook::FormBatch;
-use crate::eval::read::scan_ahead::{Ahead, Decoded, InPlace, Lines, Read, Shared};
+use crate::eval::read::scan_ahead::{Ahead, Decoded, InPlace, LineRoom, Lines, Read, Shared};
 
 /// Word slots: G, X, Y, Z, A, B, C, F, S (the fast set), then I, J, K, R, P
 /// (lines with these take the block checks).
@@ -527,11 +527,19 @@ impl Interp<'_> {
         // The first bytes are read in place; a run that goes on past them
         // reads the rest on two cores (a short run does not start a thread).
         let limit = if chunk == 0 { usize::MAX } else { 2 * chunk };
+        // A consumer that reads blocks gets its lines decoded where they
+        // are read, in place as ahead.
+        let consumer = self.out.consumer.as_ref();
+        let decode = consumer.is_some_and(|c| c.reads_blocks());
+        let rule = consumer.and_then(|c| c.moves_rule()).filter(|_| decode);
         let mut here = InPlace {
             buf,
             comments,
             limit,
             line: Plain::default(),
+            decode,
+            rule,
+            room: LineRoom::default(),
         };
         let at = Stretch {
             file,
