@@ -654,14 +654,20 @@ mod tests {
     }
 
     /// A decoded line as the bytes written by a rule or as its block.
-    fn same_terms(d: Option<Decoded<'_>>, text: &[u8]) -> Option<Result<Vec<u8>, Block>> {
+    #[derive(Debug, PartialEq)]
+    enum Terms {
+        Written(Vec<u8>),
+        Block(Box<Block>),
+    }
+
+    fn same_terms(d: Option<Decoded<'_>>, text: &[u8]) -> Option<Terms> {
         d.map(|d| match d {
-            Decoded::Form { written, .. } => Ok(written.unwrap_or(text).to_vec()),
-            Decoded::Block(b) => Err(b.clone()),
+            Decoded::Form { written, .. } => Terms::Written(written.unwrap_or(text).to_vec()),
+            Decoded::Block(b) => Terms::Block(Box::new(b.clone())),
             Decoded::Moves(w) => {
                 let mut b = Block::default();
                 b.replay_words(w).expect("replays");
-                Err(b)
+                Terms::Block(Box::new(b))
             }
         })
     }
