@@ -496,8 +496,10 @@ impl Interp<'_> {
                 self.mach.nurbs_point(NO_MOTION, axis_words, w.l);
             }
         } else if w.gs().contains(&GCode::Motion(NURBS))
-            || (motion_before == NURBS && !axis_words.is_empty())
+            || (motion_before == NURBS && self.mach.modal.motion == NURBS && !axis_words.is_empty())
         {
+            // (Axis words in a G5.2 block are a control point; a line with
+            // another motion code, G3 say, moves in that mode instead.)
             self.mach.nurbs_point(motion_before, axis_words, w.l);
         } else {
             // G43.1's axis words are a move too when the line has a
