@@ -4,6 +4,7 @@
 
 use std::rc::Rc;
 
+use crate::codes::MCode;
 use crate::diag::{ErrorKind, WarningKind};
 use crate::emit::{Edit, max_edited_len, write_edited};
 use crate::parse::MAX_LINE;
@@ -110,11 +111,7 @@ impl Interp<'_> {
                     let v = self.read_word(file, start, w, &mut counts)?;
                     words.push((w.letter, v));
                     word_spans.push(w.span);
-                    if w.letter == b'm' && matches!(v, 70.0 | 71.0 | 72.0 | 73.0) {
-                        // Context save/restore: replaced by explicit words.
-                        context_ops.push((v as u8, w.span));
-                        repl.push((w.span, Edit::Remove));
-                    } else if !w.literal {
+                    if !w.literal {
                         repl.push((w.value.span, Edit::Number(v)));
                     }
                 }
@@ -160,21 +157,35 @@ impl Interp<'_> {
             }
             Ok(ref c) => c,
         };
+        // Context save/restore (M70-M73), from the checked codes: each
+        // word is replaced by explicit words.
+        let ms = checked.ms();
+        if ms.iter().any(|m| matches!(m, MCode::State(_))) {
+            for (k, &m) in ms.iter().enumerate() {
+                if let (MCode::State(op), Some(w)) = (m, m_word(items, k)) {
+                    repl.retain(|(s, _)| *s != w.value.span);
+                    repl.push((w.span, Edit::Remove));
+                    context_ops.push((op, w.span));
+                }
+            }
+        }
         // 2. Assignments: numbered in order, then named in order.
         self.apply_assigns(num_set, named_set);
         // 3. The active comment, after the assignments.
         if let Some(c) = active {
             self.active_comment(file, start, raw, c, repl)?;
         }
-        // 4. Program flow words.
-        let m99 = words.iter().any(|&(l, v)| l == b'm' && v == 99.0);
-        if m99 && self.flow.level() > 0 {
+        // 4. Program flow words: M99, from the checked codes.
+        let m99_at = ms.iter().position(|&m| m == MCode::Other(99));
+        if m99_at.is_some() && self.flow.level() > 0 {
             return self.return_m99(file, start, raw.len() as u32);
         }
-        if m99 {
+        if let Some(w) = m99_at.and_then(|k| m_word(items, k)) {
             // M99 in the main program ends it like M2 in the reference.
-            m99_as_m2(items, words, repl);
+            repl.retain(|(s, _)| *s != w.value.span);
+            repl.push((w.span, Edit::Text("M2".into())));
         }
+        let m99 = m99_at.is_some();
         // 5. Write the line.
         repl.sort_by_key(|(s, _)| s.start);
         let kept = items
@@ -557,17 +568,77 @@ impl Interp<'_> {
     }
 }
 
-/// Rewrites the line's `M99` (ending the main program) as `M2`.
-fn m99_as_m2(items: &[Item], words: &[(u8, f64)], repl: &mut Vec<(Span, Edit)>) {
-    let mut k = 0;
-    for item in items {
-        if let Item::Word(w) = item {
-            if words[k] == (b'm', 99.0) {
-                repl.retain(|(s, _)| *s != w.value.span);
-                repl.push((w.span, Edit::Text("M2".into())));
-                break;
-            }
-            k += 1;
+/// The line's `k`-th M word (the one of its `k`-th M code: the checks
+/// decode every M word they accept, in line order).
+fn m_word(items: &[Item], k: usize) -> Option<&Word> {
+    items
+        .iter()
+        .filter_map(|i| match i {
+            Item::Word(w) if w.letter == b'm' => Some(w),
+            _ => None,
+        })
+        .nth(k)
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::eval::Settings;
+    use crate::flatten::flatten_str;
+
+    fn flat(text: &str) -> String {
+        flatten_str(text, &Settings::default()).unwrap_or_else(|e| panic!("{text}: {e:?}"))
+    }
+
+    /// A subprogram called with M98 whose middle line is `line`.
+    fn sub(line: &str) -> String {
+        format!("M98 P100\nG0 X3\nM2\nO100\n  G0 X1\n{line}\n  G0 X2\nM99\n")
+    }
+
+    /// M99 is found in the line's checked codes, written or computed, and
+    /// nothing else is taken for it: it ends an M98 subprogram (or, in the
+    /// main program, is written M2 in its place); the other codes of its
+    /// group and other M codes do not.
+    #[test]
+    fn m99_is_found_in_the_checked_codes() {
+        let back = "  G0 X1\nG0 X3\nM2\n";
+        let cases: &[(String, &str)] = &[
+            (sub("  M99"), back),
+            (sub("  #1=99\n  M#1"), back),
+            (sub("  #1=1\n  M#1"), "  G0 X1\n  M1\n  G0 X2\nG0 X3\nM2\n"),
+            (
+                sub("  #1=0\n  M8 M#1"),
+                "  G0 X1\n  M8 M0\n  G0 X2\nG0 X3\nM2\n",
+            ),
+            (sub("  #1=2\n  M#1"), "  G0 X1\n  M2\n"),
+            (sub("  #1=9\n  M#1"), "  G0 X1\n  M9\n  G0 X2\nG0 X3\nM2\n"),
+            ("#1=99\nG0 X1\nM5 M#1\nG0 X2\n".into(), "G0 X1\nM5 M2\n"),
+            ("#1=99\nG0 X1\nM5 M#1 (c)\n".into(), "G0 X1\nM5 M2 (c)\n"),
+            ("#1=99\nG0 X1 M5 M#1\n".into(), "G0 X1 M5 M2\n"),
+        ];
+        for (text, want) in cases {
+            assert_eq!(flat(text), *want, "{text}");
+        }
+    }
+
+    /// M70 to M73 are found in the checked codes, written or computed:
+    /// each word leaves the line, and its save or restore acts.
+    #[test]
+    fn context_codes_are_found_in_the_checked_codes() {
+        let call = |line: &str| format!("o1 sub\n{line}\n  G20\no1 endsub\no1 call\nG0 X1\nM2\n");
+        let restored = "  G20\nG21\nG0 X1\nM2\n";
+        let cases: &[(String, &str)] = &[
+            (call("  M73"), restored),
+            (call("  #2=73\n  M#2"), restored),
+            (call("  #2=73\n  M8 M#2"), "  M8\n  G20\nG21\nG0 X1\nM2\n"),
+            (call("  #2=70\n  M8 M#2"), "  M8\n  G20\nG0 X1\nM2\n"),
+            (
+                call("  #2=73\n  S100 M8 M#2"),
+                "  S100 M8\n  G20\nG21\nG0 X1\nM2\n",
+            ),
+            (call("  #2=5\n  M8 M#2"), "  M8 M5\n  G20\nG0 X1\nM2\n"),
+        ];
+        for (text, want) in cases {
+            assert_eq!(flat(text), *want, "{text}");
         }
     }
 }

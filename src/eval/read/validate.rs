@@ -98,6 +98,18 @@ pub(in crate::eval) enum Checked {
     Lathe(LineCodes, usize),
 }
 
+impl Checked {
+    /// The block's M codes, in line order: one for each of its M words
+    /// (the k-th code is the k-th M word's), none for a simple block.
+    #[inline]
+    pub(in crate::eval) fn ms(&self) -> &[MCode] {
+        match self {
+            Checked::Simple => &[],
+            Checked::Line(c) | Checked::Lathe(c, _) => c.ms(),
+        }
+    }
+}
+
 /// A block's G and M codes in line order, as the checks decoded and
 /// accepted them. A G80 that gave way to another motion code on its line
 /// is left out: it changes nothing there.
