@@ -401,6 +401,8 @@ fn full_check(
     // The lathe cycle's G word.
     let mut lathe = None;
     let mut g80_gave_way = false;
+    // The code of the motion word recorded in gseen[1].
+    let mut motion = None;
     for (i, &(l, v)) in words.iter().enumerate() {
         match l {
             b'g' => {
@@ -420,7 +422,9 @@ fn full_check(
                     );
                 };
                 let grp = g.group() as usize;
-                let g80_pair = grp == 1 && gseen[1].is_some_and(|j| g == G80 || words[j].1 == 80.0);
+                // The pairing looks at the codes, not at the words' values
+                // (a G80 written G80.000001 is a G80).
+                let g80_pair = grp == 1 && gseen[1].is_some() && (g == G80 || motion == Some(G80));
                 if gseen[grp].is_some() && !g80_pair {
                     return bad(BlockError::SameGroupG, Some(i));
                 }
@@ -442,6 +446,9 @@ fn full_check(
                     lathe = Some(i);
                 }
                 gseen[grp] = Some(i);
+                if grp == 1 {
+                    motion = Some(g);
+                }
                 gbuf[gn] = (g, i);
                 gn += 1;
             }
