@@ -127,6 +127,12 @@ pub enum ErrorKind {
     EmptyProgram,
     /// `M98 L2`
     M98WithoutP,
+    /// An M98 among a line's words: after another word (`G0 X1 M98 P100`)
+    /// or not written `M98` (`M098 P100`), both refused by the reference
+    /// too, or with its code computed (`M#1 P100` with #1 = 98, a call the
+    /// reference makes but ngcflat does not). An M98 call is written at
+    /// the start of its line: `M98 P100`.
+    M98AmongWords,
     /// `o100 call` where `O100` is a bare (M98-style) block.
     FanucNeedsM98 { name: String },
     /// `M98 P100` where `o100 sub` is an O-call sub.
@@ -343,6 +349,7 @@ impl ErrorKind {
             MissingProgramEnd { .. } => "E0318",
             EmptyProgram => "E0319",
             M98WithoutP => "E0320",
+            M98AmongWords => "E0330",
             FanucNeedsM98 { .. } => "E0321",
             SubNeedsCall { .. } => "E0322",
             M99InSub => "E0323",
@@ -649,6 +656,10 @@ impl ErrorKind {
             }
             EmptyProgram => write!(f, "the program is empty"),
             M98WithoutP => write!(f, "M98 without a P word"),
+            M98AmongWords => write!(
+                f,
+                "M98 not written 'M98 P...' at the start of its line (after other words, or computed) is not run"
+            ),
             FanucNeedsM98 { name } => {
                 write!(f, "O{name} is an M98 subprogram; call it with M98 P{name}")
             }

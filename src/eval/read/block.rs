@@ -142,6 +142,14 @@ impl Interp<'_> {
                 self.s.user_m,
             )
         };
+        // An M98 here is not a call at the start of its line (a written
+        // one there is an O-line): it is not run, nor passed on.
+        if let Ok(c) = &result
+            && let Some(k) = c.ms().iter().position(|&m| m == MCode::Other(98))
+        {
+            let span = m_word(items, k).map_or(Span::new(0, raw.len() as u32), |w| w.span);
+            return Err(self.error_in_line(ErrorKind::M98AmongWords, file, start, span));
+        }
         // Borrowed where it is: the codes are not copied.
         let checked = match result {
             Ok(Checked::Simple) => &Checked::Simple,
