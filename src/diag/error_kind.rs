@@ -133,6 +133,10 @@ pub enum ErrorKind {
     /// reference makes but ngcflat does not). An M98 call is written at
     /// the start of its line: `M98 P100`.
     M98AmongWords,
+    /// An M99 ending an M98 subprogram beside another word or an
+    /// assignment (`G0 X5 M99`, `#1=1 M99`): the reference acts on them
+    /// and then refuses the line. The return is a line of its own: `M99`.
+    M99AmongWords,
     /// `o100 call` where `O100` is a bare (M98-style) block.
     FanucNeedsM98 { name: String },
     /// `M98 P100` where `o100 sub` is an O-call sub.
@@ -350,6 +354,7 @@ impl ErrorKind {
             EmptyProgram => "E0319",
             M98WithoutP => "E0320",
             M98AmongWords => "E0330",
+            M99AmongWords => "E0331",
             FanucNeedsM98 { .. } => "E0321",
             SubNeedsCall { .. } => "E0322",
             M99InSub => "E0323",
@@ -656,6 +661,10 @@ impl ErrorKind {
             }
             EmptyProgram => write!(f, "the program is empty"),
             M98WithoutP => write!(f, "M98 without a P word"),
+            M99AmongWords => write!(
+                f,
+                "M99 returning from a subprogram shares its line with other words; write it alone: 'M99'"
+            ),
             M98AmongWords => write!(
                 f,
                 "M98 not written 'M98 P...' at the start of its line (after other words, or computed) is not run"

@@ -14,6 +14,7 @@ use crate::program::FileIndex;
 use crate::eval::Interp;
 use crate::eval::expr::message::{is_stable, stabilize};
 use crate::eval::expr::params::is_read_only;
+use crate::eval::flow::FrameKind;
 use crate::eval::read::validate::{Checked, check_block};
 
 /// Evaluated words of the line: (letter, value).
@@ -142,12 +143,10 @@ impl Interp<'_> {
                 self.s.user_m,
             )
         };
-        // An M98 here is not a call at the start of its line (a written
-        // one there is an O-line): it is not run, nor passed on.
+        // An M98 here is not a call (that is an O-line): refused.
         if let Ok(c) = &result
-            && let Some(k) = c.ms().iter().position(|&m| m == MCode::Other(98))
+            && let Some(span) = m98_word(c, items, raw.len() as u32)
         {
-            let span = m_word(items, k).map_or(Span::new(0, raw.len() as u32), |w| w.span);
             return Err(self.error_in_line(ErrorKind::M98AmongWords, file, start, span));
         }
         // Borrowed where it is: the codes are not copied.
@@ -185,8 +184,8 @@ impl Interp<'_> {
         }
         // 4. Program flow words: M99, from the checked codes.
         let m99_at = ms.iter().position(|&m| m == MCode::Other(99));
-        if m99_at.is_some() && self.flow.level() > 0 {
-            return self.return_m99(file, start, raw.len() as u32);
+        if let Some(k) = m99_at.filter(|_| self.flow.level() > 0) {
+            return self.m99_line(file, start, raw.len() as u32, items, k);
         }
         if let Some(w) = m99_at.and_then(|k| m_word(items, k)) {
             // M99 in the main program ends it like M2 in the reference.
@@ -221,6 +220,32 @@ impl Interp<'_> {
             self.end_program()?;
         }
         Ok(())
+    }
+
+    /// A line whose `k`-th M code is an M99 in a subprogram: the return,
+    /// which is the whole line (the reference refuses a word or assignment
+    /// beside it, after acting on them).
+    fn m99_line(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        len: u32,
+        items: &[Item],
+        k: usize,
+    ) -> Result<(), crate::diag::Error> {
+        let own = m_word(items, k).map(|w| w.span);
+        let other = items.iter().find_map(|i| match i {
+            Item::Word(w) if Some(w.span) != own => Some(w.span),
+            Item::Assign(a) => Some(a.span),
+            _ => None,
+        });
+        // (In an O-word subroutine the M99 is refused on its own.)
+        if let Some(span) = other
+            && self.flow.frame().kind == FrameKind::M98
+        {
+            return Err(self.error_in_line(ErrorKind::M99AmongWords, file, start, span));
+        }
+        self.return_m99(file, start, len)
     }
 
     /// A `(debug,…)`, `(print,…)`, `(log,…)` or `(abort,…)` comment, after
@@ -574,6 +599,13 @@ impl Interp<'_> {
         self.reader.words_buf = words;
         Some(r)
     }
+}
+
+/// Where the line's M98 is, if its checked codes hold one (the whole
+/// line, of length `len`, if its word is not found).
+fn m98_word(c: &Checked, items: &[Item], len: u32) -> Option<Span> {
+    let k = c.ms().iter().position(|&m| m == MCode::Other(98))?;
+    Some(m_word(items, k).map_or(Span::new(0, len), |w| w.span))
 }
 
 /// The line's `k`-th M word (the one of its `k`-th M code: the checks
