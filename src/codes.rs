@@ -226,13 +226,26 @@ pub enum GCode {
     NonModal(NonModal),
 }
 
+/// The G number ×10 a G word's value stands for, as the reference reads
+/// it: ten times the value, taken down to a whole number, or up when it is
+/// more than 0.999 above one; `None` when it is more than 0.001 above one
+/// and not that far (`G1.00005` is G1, `G1.0005` is refused). The evaluator's
+/// checks and the decoder of flat lines share it, so that a target reads
+/// every G word the evaluator accepted.
+pub(crate) fn g_tenths(value: f64) -> Option<f64> {
+    let v10 = value * 10.0;
+    let down = v10.floor();
+    match v10 - down {
+        f if f > 0.999 => Some(down + 1.0),
+        f if f > 0.001 => None,
+        _ => Some(down),
+    }
+}
+
 impl GCode {
     /// Decodes a G number (`value` as written, e.g. 59.1).
     pub fn decode(value: f64) -> Option<GCode> {
-        let t = round(value * 10.0);
-        if !(0.0..=1000.0).contains(&t) || (t - value * 10.0).abs() > 1e-6 {
-            return None;
-        }
+        let t = g_tenths(value).filter(|t| (0.0..=1000.0).contains(t))?;
         GCode::from_code10(t as u16)
     }
 

@@ -5,11 +5,11 @@
 
 use crate::diag::ErrorKind;
 
-use crate::codes::Modes;
 use crate::codes::{
     CutterComp, Distance, FeedMode, GCode, MCode, MotionMode, NonModal, PathMode, Plane,
     SpindleDir, SpindleMode, ToolLength,
 };
+use crate::codes::{Modes, g_tenths};
 use crate::diag::BlockError;
 use crate::eval::state::cycle::{Cycle, depth_axis};
 use crate::eval::state::nurbs::{NO_MOTION, NURBS, Nurbs};
@@ -406,13 +406,12 @@ fn full_check(
     for (i, &(l, v)) in words.iter().enumerate() {
         match l {
             b'g' => {
-                let g10 = (v * 10.0).round();
                 if !(0.0..100.0).contains(&v) {
                     return bad(BlockError::GCodeOutOfRange, Some(i));
                 }
-                if (v * 10.0 - g10).abs() > 0.0001 {
+                let Some(g10) = g_tenths(v) else {
                     return bad(BlockError::UnknownGCodeFraction, Some(i));
-                }
+                };
                 let Some(g) = GCode::from_code10(g10 as u16) else {
                     return bad(
                         BlockError::UnknownGCode {
