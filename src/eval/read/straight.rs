@@ -529,9 +529,7 @@ impl Interp<'_> {
         let limit = if chunk == 0 { usize::MAX } else { 2 * chunk };
         // A consumer that reads blocks gets its lines decoded where they
         // are read, in place as ahead.
-        let consumer = self.out.consumer.as_ref();
-        let decode = consumer.is_some_and(|c| c.reads_blocks());
-        let rule = consumer.and_then(|c| c.moves_rule()).filter(|_| decode);
+        let (decode, rule) = self.consumer_reading();
         let mut here = InPlace {
             buf,
             comments,
@@ -550,9 +548,8 @@ impl Interp<'_> {
         };
         let paused = self.run_lines(&at, &mut here, &mut run)?;
         if paused {
-            let consumer = self.out.consumer.as_ref();
-            let decode = consumer.is_some_and(|c| c.reads_blocks());
-            let rule = consumer.and_then(|c| c.moves_rule());
+            // The consumer's state now, after the lines read in place.
+            let (decode, rule) = self.consumer_reading();
             let pool = std::mem::take(&mut self.reader.chunks);
             let shared = Shared::new(buf, run.i, comments, decode, rule, chunk, pool);
             let r = std::thread::scope(|s| {
@@ -577,6 +574,16 @@ impl Interp<'_> {
             self.flow.cur.line = first_line + lines;
         }
         Ok(lines)
+    }
+
+    /// Whether the consumer reads lines as blocks (then they are decoded
+    /// where they are read), and its rule for lines of moves alone, if it
+    /// has one then.
+    fn consumer_reading(&self) -> (bool, Option<MovesRule>) {
+        let consumer = self.out.consumer.as_ref();
+        let decode = consumer.is_some_and(|c| c.reads_blocks());
+        let rule = consumer.and_then(|c| c.moves_rule()).filter(|_| decode);
+        (decode, rule)
     }
 
     /// The loop over lines from `src`, from where `run` stands. True: `src`

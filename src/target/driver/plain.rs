@@ -354,11 +354,11 @@ impl Lowering {
             n += 1;
         }
         let taken = &lines[..n];
-        // The last of each word among them: found from the end.
+        // The last of each word among them: found from the end. (The last
+        // motion is the one the loop ended in.)
         let last_of = |of: fn(&MoveValues) -> Option<f64>, lines: &[FormLine]| {
             lines.iter().rev().find_map(|l| of(&l.values))
         };
-        let motion = taken.iter().rev().find_map(|l| l.values.motion);
         let xyz = [
             last_of(|v| v.axis(0), taken),
             last_of(|v| v.axis(1), taken),
@@ -368,7 +368,7 @@ impl Lowering {
         // The feed before the last line, as a line-by-line run leaves it.
         let f_before = last_of(MoveValues::f, &taken[..n.saturating_sub(1)]).or(self.last_f);
         let last_f = f.or(self.last_f);
-        if n == 0 || !self.m.apply_plain_motion(motion, f, xyz) {
+        if n == 0 || !self.m.apply_plain_motion(Some(motion), f, xyz) {
             return 0;
         }
         let _ = self.m.take_events();
