@@ -538,7 +538,8 @@ impl PathMode {
 /// machine model both keep it: the code in effect in each modal group, the
 /// feed and speed, the spindle, the coolant and the override switches.
 /// `default()` is LinuxCNC's power-on state. A new modal code needs its
-/// decoding above, its field here and the updates of the two owners.
+/// decoding above, its field here and its arm in [`Modes::set_mode`],
+/// which both owners update the modes through.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Modes {
     /// Group 1. The evaluator keeps `NurbsEnd` after G5.3 (no motion mode).
@@ -602,7 +603,94 @@ impl Default for Modes {
     }
 }
 
+/// A G code whose effect goes beyond the field of [`Modes`] its group is:
+/// what [`Modes::set_mode`] leaves to the machine model that keeps the
+/// modes, which knows the position, the offsets and the tools, and the
+/// order the line's codes act in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MachineCode {
+    /// Group 1: the line's move runs in it, after its non-modal code.
+    Motion(MotionMode),
+    /// Group 6: positions and offsets are read in the new units.
+    Units(Units),
+    /// Group 8: a tool length offset from the tool data or the axis words.
+    ToolLength(ToolLength),
+    /// Group 12: the position is read in another system's offsets.
+    Coord(CoordSystem),
+    /// Group 0.
+    NonModal(NonModal),
+}
+
+/// What an M code [`Modes::set_switch`] took set: the machine model may
+/// tell the machine (a motion event).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Switched {
+    /// M3, M4, M5
+    Spindle,
+    /// M7, M8, M9
+    Coolant,
+    /// M48–M53
+    Overrides,
+}
+
 impl Modes {
+    /// A G code's change of the modal state, where it is that group's
+    /// field and nothing else (plane, distance, arc distance, feed mode,
+    /// cutter compensation as written, path, retract, spindle mode, lathe
+    /// mode); the codes that ask more of the machine are handed back,
+    /// [`MachineCode`]. The one rule both machine models follow: a new
+    /// modal code needs its decoding above, its field and an arm here.
+    #[inline(always)]
+    pub fn set_mode(&mut self, g: GCode) -> Option<MachineCode> {
+        match g {
+            GCode::Plane(p) => self.plane = p,
+            GCode::Distance(d) => self.distance = d,
+            GCode::ArcDistance(d) => self.arc_distance = d,
+            GCode::FeedMode(f) => self.feed_mode = f,
+            GCode::CutterComp(c) => self.cutter_comp = c,
+            GCode::Path(p) => self.path = p,
+            GCode::Retract(r) => self.retract = r,
+            GCode::SpindleMode(s) => self.spindle_mode = s,
+            GCode::Lathe(l) => self.lathe = l,
+            GCode::Motion(m) => return Some(MachineCode::Motion(m)),
+            GCode::Units(u) => return Some(MachineCode::Units(u)),
+            GCode::ToolLength(t) => return Some(MachineCode::ToolLength(t)),
+            GCode::Coord(c) => return Some(MachineCode::Coord(c)),
+            GCode::NonModal(n) => return Some(MachineCode::NonModal(n)),
+        }
+        None
+    }
+
+    /// An M code's change of the switches (spindle direction, coolant,
+    /// overrides with the line's P word, [`Modes::set_override`]): which
+    /// it set, `None` for any other M code (left to the machine model).
+    #[inline(always)]
+    pub fn set_switch(&mut self, m: MCode, p: Option<f64>) -> Option<Switched> {
+        match m {
+            MCode::Spindle(d) => {
+                self.spindle = d;
+                Some(Switched::Spindle)
+            }
+            MCode::Mist => {
+                self.mist = true;
+                Some(Switched::Coolant)
+            }
+            MCode::Flood => {
+                self.flood = true;
+                Some(Switched::Coolant)
+            }
+            MCode::CoolantOff => {
+                (self.mist, self.flood) = (false, false);
+                Some(Switched::Coolant)
+            }
+            MCode::Override(n) => {
+                self.set_override(n, p);
+                Some(Switched::Overrides)
+            }
+            _ => None,
+        }
+    }
+
     /// M48–M53 (`n`) with the line's P word: M48 turns both overrides on,
     /// M49 off; M50–M53 turn their switch off with P0, on otherwise.
     pub fn set_override(&mut self, n: u8, p: Option<f64>) {
@@ -761,6 +849,91 @@ mod tests {
         assert_eq!(CoordSystem(9).parameters(), 5381);
         assert_eq!(CoordSystem(6).code10(), 590);
         assert_eq!(CoordSystem(7).code10(), 591);
+    }
+
+    /// Every G code either sets its group's field of the modes and
+    /// nothing else, or is handed back untouched (groups 0, 1, 6, 8, 12).
+    #[test]
+    fn set_mode_sets_the_field_or_hands_the_code_back() {
+        let mut handed = 0;
+        for t in 0..=1000u16 {
+            let Some(g) = GCode::from_code10(t) else {
+                continue;
+            };
+            let mut m = Modes::default();
+            match m.set_mode(g) {
+                Some(c) => {
+                    handed += 1;
+                    assert!([0, 1, 6, 8, 12].contains(&g.group()), "{g:?}");
+                    let back = match c {
+                        MachineCode::Motion(x) => GCode::Motion(x),
+                        MachineCode::Units(x) => GCode::Units(x),
+                        MachineCode::ToolLength(x) => GCode::ToolLength(x),
+                        MachineCode::Coord(x) => GCode::Coord(x),
+                        MachineCode::NonModal(x) => GCode::NonModal(x),
+                    };
+                    assert_eq!(back, g);
+                    assert_eq!(m, Modes::default(), "{g:?}");
+                }
+                None => {
+                    let read = match g {
+                        GCode::Plane(_) => GCode::Plane(m.plane),
+                        GCode::Distance(_) => GCode::Distance(m.distance),
+                        GCode::ArcDistance(_) => GCode::ArcDistance(m.arc_distance),
+                        GCode::FeedMode(_) => GCode::FeedMode(m.feed_mode),
+                        GCode::CutterComp(_) => GCode::CutterComp(m.cutter_comp),
+                        GCode::Path(_) => GCode::Path(m.path),
+                        GCode::Retract(_) => GCode::Retract(m.retract),
+                        GCode::SpindleMode(_) => GCode::SpindleMode(m.spindle_mode),
+                        GCode::Lathe(_) => GCode::Lathe(m.lathe),
+                        _ => panic!("{g:?} is not set alone"),
+                    };
+                    assert_eq!(read, g);
+                    // Only that field changed: setting it back restores
+                    // the power-on state.
+                    let mut again = Modes::default();
+                    assert_eq!(again.set_mode(g), None);
+                    assert_eq!(again, m);
+                    let d = Modes::default();
+                    let mut back = m.clone();
+                    let _ = back.set_mode(match g {
+                        GCode::Plane(_) => GCode::Plane(d.plane),
+                        GCode::Distance(_) => GCode::Distance(d.distance),
+                        GCode::ArcDistance(_) => GCode::ArcDistance(d.arc_distance),
+                        GCode::FeedMode(_) => GCode::FeedMode(d.feed_mode),
+                        GCode::CutterComp(_) => GCode::CutterComp(d.cutter_comp),
+                        GCode::Path(_) => GCode::Path(d.path),
+                        GCode::Retract(_) => GCode::Retract(d.retract),
+                        GCode::SpindleMode(_) => GCode::SpindleMode(d.spindle_mode),
+                        _ => GCode::Lathe(d.lathe),
+                    });
+                    assert_eq!(back, d, "{g:?}");
+                }
+            }
+        }
+        // 34 motion, 2 units, 4 tool length, 9 systems, 12 non-modal.
+        assert_eq!(handed, 61);
+    }
+
+    #[test]
+    fn switches_of_m_codes() {
+        let mut m = Modes::default();
+        let on = |v: f64, m: &mut Modes, p| m.set_switch(MCode::decode(v), p);
+        assert_eq!(on(4.0, &mut m, None), Some(Switched::Spindle));
+        assert_eq!(m.spindle, SpindleDir::Ccw);
+        assert_eq!(on(7.0, &mut m, None), Some(Switched::Coolant));
+        assert_eq!(on(8.0, &mut m, None), Some(Switched::Coolant));
+        assert!(m.mist && m.flood);
+        assert_eq!(on(51.0, &mut m, Some(0.0)), Some(Switched::Overrides));
+        assert!(!m.speed_override);
+        let before = m.clone();
+        for other in [0.0, 2.0, 6.0, 19.0, 61.0, 62.0, 70.0, 100.0, 6.5] {
+            assert_eq!(on(other, &mut m, Some(0.0)), None, "M{other}");
+        }
+        assert_eq!(m, before);
+        assert_eq!(on(9.0, &mut m, None), Some(Switched::Coolant));
+        assert_eq!(on(5.0, &mut m, None), Some(Switched::Spindle));
+        assert!(!m.mist && !m.flood && m.spindle == SpindleDir::Off);
     }
 
     #[test]

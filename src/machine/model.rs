@@ -20,7 +20,7 @@ use crate::block::{
     AXIS_LETTERS, ArcDistance, Block, CoordSystem, Distance, FeedMode, LatheMode, MCode,
     MotionMode, NonModal, PathMode, Plane, Retract, SpindleDir, ToolLength, Units,
 };
-use crate::codes::Modes;
+use crate::codes::{MachineCode, Modes, Switched};
 
 const MM_PER_INCH: f64 = 25.4;
 
@@ -352,9 +352,6 @@ impl Machine {
         if b.percent || self.ended && b.words.is_empty() {
             return;
         }
-        if let Some(m) = b.feed_mode {
-            self.modes.feed_mode = m;
-        }
         if let Some(f) = b.value(b'F') {
             self.modes.feed = f;
         }
@@ -367,7 +364,15 @@ impl Machine {
         if let Some(t) = b.value(b'T') {
             self.selected_tool = Some(t.round() as i64);
         }
-        for (m, w) in b.m_codes() {
+        for (m, _) in b.m_codes() {
+            match self.modes.set_switch(m, b.value(b'P')) {
+                Some(Switched::Spindle) => self.spindle_event(),
+                Some(Switched::Coolant) => self.push(Motion::Coolant {
+                    mist: self.modes.mist,
+                    flood: self.modes.flood,
+                }),
+                Some(Switched::Overrides) | None => {}
+            }
             match m {
                 MCode::ToolChange => {
                     // The spindle stops for the change (LinuxCNC's default,
@@ -384,39 +389,21 @@ impl Machine {
                 MCode::SetTool => {
                     self.current_tool = b.value(b'Q').map(|q| q.round() as i64);
                 }
-                MCode::Spindle(d) => {
-                    self.modes.spindle = d;
-                    self.spindle_event();
-                }
-                MCode::Mist | MCode::Flood | MCode::CoolantOff => {
-                    match m {
-                        MCode::Mist => self.modes.mist = true,
-                        MCode::Flood => self.modes.flood = true,
-                        _ => (self.modes.mist, self.modes.flood) = (false, false),
-                    }
-                    self.push(Motion::Coolant {
-                        mist: self.modes.mist,
-                        flood: self.modes.flood,
-                    });
-                }
-                MCode::Override(n) => self.modes.set_override(n, b.value(b'P')),
-                _ => {
-                    let _ = w;
-                }
+                _ => {}
             }
         }
         if b.non_modal == Some(NonModal::Dwell) {
             let seconds = b.value(b'P').unwrap_or(0.0);
             self.push(Motion::Dwell { seconds });
         }
-        if let Some(p) = b.plane {
-            self.modes.plane = p;
-        }
-        if let Some(u) = b.units {
-            self.modes.units = u;
-        }
-        if let Some(c) = b.cutter_comp {
-            self.modes.cutter_comp = c;
+        // The modes: those that are a field alone, and the units. The
+        // codes that act on the position act below, from the block's
+        // fields, in the reference's order (tool length, coordinate
+        // system, non-modal code, motion).
+        for (g, _) in b.g_codes() {
+            if let Some(MachineCode::Units(u)) = self.modes.set_mode(g) {
+                self.modes.units = u;
+            }
         }
         if let Some(t) = b.tool_length {
             self.tool_length(b, t);
@@ -425,24 +412,6 @@ impl Machine {
             let before = self.offset();
             self.modes.coord = c;
             self.shift(before);
-        }
-        if let Some(p) = b.path {
-            self.modes.path = p;
-        }
-        if let Some(d) = b.distance {
-            self.modes.distance = d;
-        }
-        if let Some(d) = b.arc_distance {
-            self.modes.arc_distance = d;
-        }
-        if let Some(r) = b.retract {
-            self.modes.retract = r;
-        }
-        if let Some(s) = b.spindle_mode {
-            self.modes.spindle_mode = s;
-        }
-        if let Some(l) = b.lathe {
-            self.modes.lathe = l;
         }
         let motion_used = match b.non_modal {
             Some(n) => self.non_modal(b, n),

@@ -7,8 +7,8 @@ use crate::diag::{Error, ErrorKind};
 use crate::program::FileIndex;
 
 use crate::codes::{
-    ArcDistance, CoordSystem, CutterComp, Distance, GCode, LatheMode, MCode, MotionMode, NonModal,
-    Plane, ToolLength, Units,
+    ArcDistance, CoordSystem, CutterComp, Distance, GCode, LatheMode, MCode, MachineCode,
+    MotionMode, NonModal, Plane, ToolLength, Units,
 };
 use crate::eval::Interp;
 use crate::eval::read::block::Words;
@@ -292,15 +292,18 @@ impl Interp<'_> {
         Ok(())
     }
 
-    /// One M code, after the line's other words: spindle, tool change
-    /// (M6, M61 with its Q), coolant, overrides (with their P); M2/M30 end
-    /// the program.
+    /// One M code, after the line's other words: the switches (spindle,
+    /// coolant, overrides with their P) as the modes set them
+    /// ([`Modes::set_switch`](crate::codes::Modes::set_switch)), tool change
+    /// (M6, M61 with its Q); M2/M30 end the program.
     // One call site, on the hot path: kept inline as before the split.
     #[inline(always)]
     fn apply_m(&mut self, m: MCode, w: &mut LineWords<'_>) {
+        if self.mach.modal.set_switch(m, w.p).is_some() {
+            return;
+        }
         match m {
             MCode::End { .. } => w.ends = true,
-            MCode::Spindle(d) => self.mach.modal.spindle = d,
             MCode::ToolChange => {
                 self.mach.current_tool = self.mach.selected_tool;
                 if let Some(p) = &mut self.mach.pockets {
@@ -309,12 +312,6 @@ impl Interp<'_> {
                 self.mach.m61 = None;
                 self.tool_change_sync();
                 w.tool_changed = true;
-            }
-            MCode::Mist => self.mach.modal.mist = true,
-            MCode::Flood => self.mach.modal.flood = true,
-            MCode::CoolantOff => {
-                self.mach.modal.mist = false;
-                self.mach.modal.flood = false;
             }
             MCode::SetTool => {
                 if self.mach.m61.is_none() {
@@ -327,12 +324,13 @@ impl Interp<'_> {
                 self.tool_change_sync();
                 w.tool_changed = true;
             }
-            MCode::Override(n) => self.mach.modal.set_override(n, w.p),
             _ => {}
         }
     }
 
-    /// The line's modal G codes, group by group. Returns the non-modal code
+    /// The line's G codes in line order: each sets its field of the modes
+    /// ([`Modes::set_mode`](crate::codes::Modes::set_mode)), and those it
+    /// hands back act on the machine here. Returns the non-modal code
     /// (G10, G28, G30, G53, G92.x, G52) if any, and whether G43.1 set a
     /// tool length offset from axis words. (A G80 beside another motion
     /// code is not among the codes: the checks left it out.)
@@ -342,19 +340,17 @@ impl Interp<'_> {
         let mut special = None;
         let mut dynamic_tlo = false;
         for &g in w.gs() {
-            match g {
+            let Some(code) = self.mach.modal.set_mode(g) else {
+                continue;
+            };
+            match code {
                 // G5.3 ends a NURBS block without choosing a motion.
-                GCode::Motion(MotionMode::NurbsEnd) => {}
-                GCode::Motion(m) => self.mach.modal.motion = m,
-                GCode::Plane(p) => self.mach.modal.plane = p,
-                GCode::Units(u) => self.set_units(u),
-                GCode::Distance(d) => self.mach.modal.distance = d,
-                GCode::ArcDistance(d) => self.mach.modal.arc_distance = d,
-                GCode::FeedMode(f) => self.mach.modal.feed_mode = f,
-                GCode::CutterComp(c) => self.mach.modal.cutter_comp = c,
-                GCode::ToolLength(ToolLength::Apply) => self.g43(false, w.h),
-                GCode::ToolLength(ToolLength::Add) => self.g43(true, w.h),
-                GCode::ToolLength(ToolLength::Dynamic) => {
+                MachineCode::Motion(MotionMode::NurbsEnd) => {}
+                MachineCode::Motion(m) => self.mach.modal.motion = m,
+                MachineCode::Units(u) => self.set_units(u),
+                MachineCode::ToolLength(ToolLength::Apply) => self.g43(false, w.h),
+                MachineCode::ToolLength(ToolLength::Add) => self.g43(true, w.h),
+                MachineCode::ToolLength(ToolLength::Dynamic) => {
                     self.mach.modal.tool_length = ToolLength::Dynamic;
                     let mut new = [0.0; 9];
                     for &(a, v) in w.axis_words() {
@@ -363,15 +359,11 @@ impl Interp<'_> {
                     self.set_tlo(Some(new), "G43.1");
                     dynamic_tlo = true;
                 }
-                GCode::ToolLength(ToolLength::Cancel) => self.tool_offset_words(false),
-                GCode::Path(p) => self.mach.modal.path = p,
-                GCode::Retract(r) => self.mach.modal.retract = r,
-                GCode::SpindleMode(m) => self.mach.modal.spindle_mode = m,
-                GCode::Lathe(l) => self.mach.modal.lathe = l,
-                GCode::Coord(cs) => self.select_cs(cs),
+                MachineCode::ToolLength(ToolLength::Cancel) => self.tool_offset_words(false),
+                MachineCode::Coord(cs) => self.select_cs(cs),
                 // G4 acts in the output alone.
-                GCode::NonModal(NonModal::Dwell) => {}
-                GCode::NonModal(n) => special = Some(n),
+                MachineCode::NonModal(NonModal::Dwell) => {}
+                MachineCode::NonModal(n) => special = Some(n),
             }
         }
         (special, dynamic_tlo)
