@@ -12,7 +12,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::eval::Settings;
-use crate::eval::tools::ToolData;
+use crate::eval::tools::{ToolData, Tools};
 use crate::fx_hasher::FxMap;
 
 use super::motion::{Feed, Motion, MoveKind, Point};
@@ -46,11 +46,10 @@ pub struct Machine {
     /// G28 and G30 home positions, machine coordinates, mm.
     pub home28: MaybeAxes,
     pub home30: MaybeAxes,
-    /// Tool data as given (machine units); whether the table is complete.
-    pub tools: FxMap<i64, ToolData>,
-    pub tools_known: bool,
-    pub current_tool: Option<i64>,
-    pub selected_tool: Option<i64>,
+    /// The tool table (machine units), the tool in the spindle and the
+    /// selected one, kept as the evaluator keeps them
+    /// ([`Machine::current_tool`] reads the tool as a whole number).
+    pub tools: Tools,
     /// Machine units are millimetres.
     pub machine_metric: bool,
     pub zero_start: bool,
@@ -122,10 +121,7 @@ impl Machine {
             tlo: ZERO,
             home28: from(5161, base),
             home30: from(5181, base),
-            tools: settings.tool_table.iter().copied().collect(),
-            tools_known: zs,
-            current_tool: (zs || !settings.tool_table.is_empty()).then_some(0),
-            selected_tool: zs.then_some(0),
+            tools: Tools::new(settings),
             machine_metric: settings.machine_metric,
             zero_start: zs,
             rotated: false,
@@ -149,10 +145,10 @@ impl Machine {
             tlo: self.tlo,
             home28: self.home28,
             home30: self.home30,
-            tools: FxMap::default(),
-            tools_known: self.tools_known,
-            current_tool: self.current_tool,
-            selected_tool: self.selected_tool,
+            tools: Tools {
+                table: FxMap::default(),
+                ..self.tools
+            },
             machine_metric: self.machine_metric,
             zero_start: self.zero_start,
             rotated: self.rotated,
@@ -201,12 +197,22 @@ impl Machine {
         std::array::from_fn(|a| Some(self.pos[a]? + off[a]?))
     }
 
+    /// The tool in the spindle, if known, as a whole number.
+    pub fn current_tool(&self) -> Option<i64> {
+        self.tools.current.map(|t| t.round() as i64)
+    }
+
+    /// The tool the last T word selected, as a whole number.
+    pub fn selected_tool(&self) -> Option<i64> {
+        self.tools.selected.map(|t| t.round() as i64)
+    }
+
     /// Tool data of tool `t` in mm, if known.
     pub fn tool(&self, t: i64) -> Option<ToolData> {
         let s = self.machine_scale();
-        let d = match self.tools.get(&t) {
-            Some(d) => *d,
-            None if self.tools_known || t == 0 => ToolData::default(),
+        let d = match self.tools.data(t) {
+            Some(d) => d,
+            None if t == 0 => ToolData::default(),
             None => return None,
         };
         Some(ToolData {
@@ -362,7 +368,7 @@ impl Machine {
             }
         }
         if let Some(t) = b.value(b'T') {
-            self.selected_tool = Some(t.round() as i64);
+            self.tools.select(t);
         }
         for (m, _) in b.m_codes() {
             match self.modes.set_switch(m, b.value(b'P')) {
@@ -381,13 +387,13 @@ impl Machine {
                         self.modes.spindle = SpindleDir::Off;
                         self.spindle_event();
                     }
-                    self.current_tool = self.selected_tool;
-                    if let Some(t) = self.selected_tool {
+                    self.tools.change();
+                    if let Some(t) = self.selected_tool() {
                         self.push(Motion::ToolChange { tool: t });
                     }
                 }
                 MCode::SetTool => {
-                    self.current_tool = b.value(b'Q').map(|q| q.round() as i64);
+                    self.tools.set_current(b.value(b'Q'));
                 }
                 _ => {}
             }
@@ -464,7 +470,7 @@ impl Machine {
                 let h = b
                     .value(b'H')
                     .map(|h| h.round() as i64)
-                    .or(self.current_tool);
+                    .or(self.current_tool());
                 let data = h.and_then(|h| self.tool(h));
                 let add = |base: Option<f64>, v: Option<f64>| match t {
                     ToolLength::Add => Some(base? + v?),
@@ -686,7 +692,7 @@ impl Machine {
             }
             Some(1) | Some(10) | Some(11) => {
                 let Some(t) = p else { return };
-                let mut d = self.tools.get(&t).copied().unwrap_or_default();
+                let mut d = self.tools.table.get(&t).copied().unwrap_or_default();
                 let ms = self.machine_scale();
                 for a in 0..9 {
                     if let Some(v) = axes[a] {
@@ -710,7 +716,7 @@ impl Machine {
                         match mm {
                             Some(mm) => d.offsets[a] = mm / ms,
                             None => {
-                                self.tools.remove(&t);
+                                self.tools.table.remove(&t);
                                 return;
                             }
                         }
@@ -719,7 +725,7 @@ impl Machine {
                 if let Some(r) = b.value(b'R') {
                     d.diameter = 2.0 * r * s / ms;
                 }
-                self.tools.insert(t, d);
+                self.tools.table.insert(t, d);
             }
             _ => {}
         }
@@ -1024,6 +1030,20 @@ mod tests {
             m.apply(&Block::decode(l.as_bytes()).unwrap());
         }
         assert_eq!(m.machine_pos()[2], Some(6.0));
-        assert_eq!(m.current_tool, Some(2));
+        assert_eq!(m.current_tool(), Some(2));
+    }
+
+    /// The model reads the tools the shared state keeps as written as
+    /// whole numbers: T2.6 M6 loads tool 3; M61 without Q leaves the tool
+    /// unknown.
+    #[test]
+    fn tools_read_as_whole_numbers() {
+        let (m, ev) = run(&["T2.6 M6", "T4"]);
+        assert!(matches!(ev[..], [Motion::ToolChange { tool: 3 }]), "{ev:?}");
+        assert_eq!((m.current_tool(), m.selected_tool()), (Some(3), Some(4)));
+        let (m, _) = run(&["M61 Q1.6"]);
+        assert_eq!(m.current_tool(), Some(2));
+        let (m, _) = run(&["M61"]);
+        assert_eq!(m.current_tool(), None);
     }
 }

@@ -1256,7 +1256,7 @@ impl Lowering {
                     let tool = b
                         .value(b'T')
                         .map(|t| t.round() as i64)
-                        .or(self.m.selected_tool);
+                        .or(self.m.selected_tool());
                     let what = match tool {
                         Some(t) => format!("M6 (change to tool {t})"),
                         None => "M6 (tool change)".into(),
@@ -1426,8 +1426,8 @@ impl Lowering {
         let h = b
             .value(b'H')
             .map(|h| h.round() as i64)
-            .or(before.current_tool);
-        if !h.is_some_and(|h| h == 0 || self.m.tools.contains_key(&h)) {
+            .or(before.current_tool());
+        if !h.is_some_and(|h| h == 0 || self.m.tools.table.contains_key(&h)) {
             return Err(need("Z"));
         }
         let z = tlo[2].ok_or_else(|| need("Z"))?;
@@ -2265,13 +2265,13 @@ impl Lowering {
                 let t = b
                     .value(b'D')
                     .map(|d| (d + 0.5) as i64)
-                    .or(self.m.current_tool);
-                let data = t.and_then(|t| match self.m.tools.get(&t) {
+                    .or(self.m.current_tool());
+                let data = t.and_then(|t| match self.m.tools.table.get(&t) {
                     Some(d) => Some((d.diameter, d.orientation.round() as i32)),
                     None if self.standalone_tools => {
                         Some((crate::eval::tools::standalone_diameter(t), 0))
                     }
-                    None if self.m.tools_known || t == 0 => Some((0.0, 0)),
+                    None if self.m.tools.known || t == 0 => Some((0.0, 0)),
                     None => None,
                 });
                 let Some((diameter, o)) = data else {

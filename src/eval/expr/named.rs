@@ -187,8 +187,8 @@ impl Interp<'_> {
                     self.note_m61(span, false);
                 }
                 let v = match p {
-                    Predef::CurrentTool => self.mach.current_tool,
-                    Predef::SelectedTool => self.mach.selected_tool,
+                    Predef::CurrentTool => self.mach.tools.current,
+                    Predef::SelectedTool => self.mach.tools.selected,
                     Predef::CurrentPocket => self.mach.pockets.map(|p| p.0),
                     _ => self.mach.pockets.map(|p| p.1),
                 };

@@ -81,13 +81,13 @@ impl Interp<'_> {
                     let t = ((d + 0.5) as i64) as f64;
                     if !self.s.tool_table.is_empty()
                         && t != 0.0
-                        && !self.mach.tools.contains_key(&(t as i64))
+                        && !self.mach.tools.table.contains_key(&(t as i64))
                     {
                         return Err(ErrorKind::ToolNotInTable { tool: t as i64 });
                     }
                     Some(t)
                 }
-                None => self.mach.current_tool,
+                None => self.mach.tools.current,
             };
             match number.and_then(|t| self.comp_tool(t)) {
                 Some(data) => {
@@ -140,7 +140,7 @@ impl Interp<'_> {
         let n = t.round() as i64;
         if self.s.zero_start
             && self.s.tool_table.is_empty()
-            && !self.mach.tools.contains_key(&n)
+            && !self.mach.tools.table.contains_key(&n)
             && !self.diags.unknown_tools.contains(&n)
         {
             return Some(crate::eval::state::tools::ToolData {

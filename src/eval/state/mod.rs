@@ -12,7 +12,6 @@ pub mod tools;
 
 use crate::codes::Modes;
 use crate::eval::Settings;
-use crate::fx_hasher::FxMap;
 
 /// Axis letters in parameter order (X Y Z A B C U V W).
 pub(crate) const AXES: [u8; 9] = *b"xyzabcuvw";
@@ -61,16 +60,14 @@ impl Position {
 pub(super) struct Machine {
     pub(super) modal: Modes,
     pub(super) pos: Position,
-    pub(super) current_tool: Option<f64>,
+    /// The tool table, the tool in the spindle and the selected one.
+    pub(super) tools: tools::Tools,
     /// RETAIN_G43 changed the tool length offset on this line: the output
     /// line to add after it (G43 or G49).
     pub(super) retain_line: Option<bool>,
-    pub(super) selected_tool: Option<f64>,
     /// Pockets of the current and the selected tool, known as the standalone
     /// reference numbers them (by tool number) under `--zero-start`.
     pub(super) pockets: Option<(f64, f64)>,
-    pub(super) tools: FxMap<i64, tools::ToolData>,
-    pub(super) tools_known: bool,
     /// Applied tool length offset, machine units.
     pub(super) tlo: Option<[f64; 9]>,
     /// An XY rotation was set (not modelled).
@@ -116,16 +113,9 @@ impl Machine {
         Machine {
             modal: Modes::default(),
             pos,
-            current_tool: if s.zero_start || !s.tool_table.is_empty() {
-                Some(0.0)
-            } else {
-                None
-            },
+            tools: tools::Tools::new(s),
             retain_line: None,
-            selected_tool: if s.zero_start { Some(0.0) } else { None },
             pockets: s.zero_start.then_some((1.0, -1.0)),
-            tools: s.tool_table.iter().copied().collect(),
-            tools_known: s.zero_start,
             tlo: Some([0.0; 9]),
             rotated: false,
             nurbs: nurbs::Nurbs::default(),

@@ -121,7 +121,7 @@ impl Interp<'_> {
         } else {
             ToolLength::Apply
         };
-        let tool = h.or(self.mach.current_tool);
+        let tool = h.or(self.mach.tools.current);
         let data = tool.and_then(|t| self.tool(t));
         let new = match (add, data) {
             (false, Some(d)) => Some(d.offsets),
@@ -203,7 +203,7 @@ impl Interp<'_> {
         // tool's offset, and unloading the tool (T0) cancels G43, before the
         // line's own G43/G49. The output says so in a line of its own.
         if w.tool_changed && self.s.retain_g43 && self.mach.modal.tool_length.in_effect() {
-            let on = self.mach.current_tool != Some(0.0);
+            let on = self.mach.tools.current != Some(0.0);
             self.tool_offset_words(on);
             if !w.gs().iter().any(|g| matches!(g, GCode::ToolLength(_))) {
                 self.mach.retain_line = Some(on);
@@ -264,12 +264,14 @@ impl Interp<'_> {
                 b't' => {
                     // With a tool table, a tool must be in it (T0: none).
                     let t = v.round() as i64;
-                    if !self.s.tool_table.is_empty() && t != 0 && !self.mach.tools.contains_key(&t)
+                    if !self.s.tool_table.is_empty()
+                        && t != 0
+                        && !self.mach.tools.table.contains_key(&t)
                     {
                         let k = ErrorKind::ToolNotInTable { tool: t };
                         return Err(self.error(k, file, start, start));
                     }
-                    self.mach.selected_tool = Some(v);
+                    self.mach.tools.select(v);
                     if let Some(p) = &mut self.mach.pockets {
                         p.1 = v;
                     }
@@ -305,7 +307,7 @@ impl Interp<'_> {
         match m {
             MCode::End { .. } => w.ends = true,
             MCode::ToolChange => {
-                self.mach.current_tool = self.mach.selected_tool;
+                self.mach.tools.change();
                 if let Some(p) = &mut self.mach.pockets {
                     p.0 = p.1;
                 }
@@ -315,9 +317,9 @@ impl Interp<'_> {
             }
             MCode::SetTool => {
                 if self.mach.m61.is_none() {
-                    self.mach.m61 = Some((self.line_no(), self.mach.current_tool));
+                    self.mach.m61 = Some((self.line_no(), self.mach.tools.current));
                 }
-                self.mach.current_tool = w.q;
+                self.mach.tools.set_current(w.q);
                 if let (Some(p), Some(q)) = (&mut self.mach.pockets, w.q) {
                     p.0 = q;
                 }
@@ -553,10 +555,10 @@ impl Interp<'_> {
     /// the value differs there.
     pub(in crate::eval) fn note_m61(&mut self, span: crate::parse::ast::Span, data: bool) {
         if let Some((line, old)) = self.mach.m61
-            && (old != self.mach.current_tool
+            && (old != self.mach.tools.current
                 && (!data
                     || old.and_then(|t| self.tool(t))
-                        != self.mach.current_tool.and_then(|t| self.tool(t))))
+                        != self.mach.tools.current.and_then(|t| self.tool(t))))
         {
             let why = "M61 (the standalone interpreter keeps its current tool)";
             self.warn_standalone(why, line, span);
@@ -1050,7 +1052,7 @@ mod tests {
         let s = Settings::default();
         let tool = |lines: &[&str]| {
             let mut t = None;
-            run(&s, lines, |it| t = it.mach.current_tool);
+            run(&s, lines, |it| t = it.mach.tools.current);
             t
         };
         assert_eq!(tool(&["T2 M6"]), Some(2.0));

@@ -4,9 +4,10 @@
 //! units, as LinuxCNC stores it.
 
 use crate::codes::CoordSystem;
-use crate::eval::Interp;
 use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
+use crate::eval::{Interp, Settings};
+use crate::fx_hasher::FxMap;
 
 /// One tool: offsets X..W, diameter, front and back angle, orientation.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -16,6 +17,70 @@ pub struct ToolData {
     pub front: f64,
     pub back: f64,
     pub orientation: f64,
+}
+
+/// The tools as a run of the program knows them: the table, whether it is
+/// complete, the tool in the spindle and the one selected. The evaluator
+/// and the machine model after it both keep one and change it through the
+/// same steps: a T word selects ([`Tools::select`]), M6 loads the selected
+/// tool ([`Tools::change`]), M61 sets the tool in the spindle
+/// ([`Tools::set_current`]). Numbers are kept as the words give them (the
+/// evaluator reads `#<_current_tool>` as written); the machine model reads
+/// them as whole numbers.
+#[derive(Debug, Clone, Default)]
+pub struct Tools {
+    /// Tool data as given (machine units), by tool number.
+    pub table: FxMap<i64, ToolData>,
+    /// The table is complete (`--zero-start`): a tool not in it has no
+    /// offsets and no diameter.
+    pub known: bool,
+    /// The tool in the spindle, if known: tool 0 (none) with a tool table
+    /// or `--zero-start`, else unknown until an M6 or M61.
+    pub current: Option<f64>,
+    /// The tool the last T word selected (0 under `--zero-start`).
+    pub selected: Option<f64>,
+}
+
+impl Tools {
+    /// The tools at the start of a run with `s`.
+    pub fn new(s: &Settings) -> Tools {
+        Tools {
+            table: s.tool_table.iter().copied().collect(),
+            known: s.zero_start,
+            current: (s.zero_start || !s.tool_table.is_empty()).then_some(0.0),
+            selected: s.zero_start.then_some(0.0),
+        }
+    }
+
+    /// A T word: selects tool `t` for the next M6.
+    #[inline]
+    pub fn select(&mut self, t: f64) {
+        self.selected = Some(t);
+    }
+
+    /// M6: the selected tool goes in the spindle (an unknown one if none
+    /// was selected).
+    #[inline]
+    pub fn change(&mut self) {
+        self.current = self.selected;
+    }
+
+    /// M61 with its Q word: the tool in the spindle is `q` (unknown
+    /// without one).
+    #[inline]
+    pub fn set_current(&mut self, q: Option<f64>) {
+        self.current = q;
+    }
+
+    /// The table's data of tool `t` (machine units): its row, or none
+    /// (all zero) when the table is complete; `None` when unknown.
+    pub fn data(&self, t: i64) -> Option<ToolData> {
+        match self.table.get(&t) {
+            Some(d) => Some(*d),
+            None if self.known => Some(ToolData::default()),
+            None => None,
+        }
+    }
 }
 
 /// The diameter (machine units) of tool `t` in the standalone
@@ -80,16 +145,12 @@ impl Interp<'_> {
         if self.diags.unknown_tools.contains(&t) {
             return None;
         }
-        match self.mach.tools.get(&t) {
-            Some(d) => Some(*d),
-            None if self.mach.tools_known => Some(ToolData::default()),
-            None => None,
-        }
+        self.mach.tools.data(t)
     }
 
     /// A tool-data parameter #5400..#5413.
     pub(in crate::eval) fn tool_param(&self, i: usize) -> Option<f64> {
-        let current = self.mach.current_tool?;
+        let current = self.mach.tools.current?;
         if i == 5400 {
             return Some(current);
         }
@@ -189,10 +250,10 @@ impl Interp<'_> {
         }
         match d {
             Some(data) => {
-                self.mach.tools.insert(t, data);
+                self.mach.tools.table.insert(t, data);
             }
             None => {
-                self.mach.tools.remove(&t);
+                self.mach.tools.table.remove(&t);
                 self.diags.unknown_tools.insert(t);
             }
         }
@@ -202,10 +263,56 @@ impl Interp<'_> {
 impl Machine {
     /// How to make the tool data of the tool in the spindle known.
     pub(in crate::eval) fn tool_data_hint(&self) -> String {
-        if self.current_tool.is_none() {
+        if self.tools.current.is_none() {
             "--tool-table FILE (LinuxCNC's tool table; the spindle then starts with tool 0 until an M6 or M61), or --zero-start".into()
         } else {
             "--tool-table FILE (LinuxCNC's tool table), or --zero-start".into()
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The start as the settings give it, and T, M6 and M61 in turn.
+    #[test]
+    fn tools_start_and_change() {
+        let plain = Tools::new(&Settings::default());
+        assert_eq!(
+            (plain.current, plain.selected, plain.known),
+            (None, None, false)
+        );
+        assert_eq!(plain.data(1), None);
+        let row = ToolData {
+            diameter: 0.5,
+            ..ToolData::default()
+        };
+        let table = Settings {
+            tool_table: vec![(2, row)],
+            ..Settings::default()
+        };
+        let mut t = Tools::new(&table);
+        assert_eq!((t.current, t.selected), (Some(0.0), None));
+        assert_eq!((t.data(2), t.data(3)), (Some(row), None));
+        t.change();
+        assert_eq!(t.current, None, "M6 with no tool selected");
+        t.select(2.4);
+        assert_eq!((t.current, t.selected), (None, Some(2.4)));
+        t.change();
+        assert_eq!(t.current, Some(2.4));
+        t.set_current(Some(5.0));
+        assert_eq!((t.current, t.selected), (Some(5.0), Some(2.4)));
+        t.set_current(None);
+        assert_eq!(t.current, None);
+        let zero = Tools::new(&Settings {
+            zero_start: true,
+            ..Settings::default()
+        });
+        assert_eq!(
+            (zero.current, zero.selected, zero.known),
+            (Some(0.0), Some(0.0), true)
+        );
+        assert_eq!(zero.data(7), Some(ToolData::default()));
     }
 }
