@@ -101,6 +101,28 @@ impl ToolLength {
     pub fn in_effect(self) -> bool {
         self != ToolLength::Cancel
     }
+
+    /// The tool length offset per axis (X … W) this code puts in effect,
+    /// the rule both machine models follow, each in its own unit: G43 the
+    /// offsets of its tool (`tool`: H's, or the one in the spindle), on
+    /// every axis the tool data gives (Z, and X on lathes; the others are
+    /// 0 unless the table gives them); G43.2 the offset in effect (`old`)
+    /// plus them; G43.1 the line's axis words (`words`), 0 on an axis
+    /// without one; G49 none. Unknown where what it needs is.
+    #[inline]
+    pub fn offset(
+        self,
+        old: [Option<f64>; 9],
+        tool: Option<[f64; 9]>,
+        words: [Option<f64>; 9],
+    ) -> [Option<f64>; 9] {
+        std::array::from_fn(|a| match self {
+            ToolLength::Apply => Some(tool?[a]),
+            ToolLength::Add => Some(old[a]? + tool?[a]),
+            ToolLength::Dynamic => Some(words[a].unwrap_or(0.0)),
+            ToolLength::Cancel => Some(0.0),
+        })
+    }
 }
 
 /// G54–G59.3 as 1–9.
@@ -913,6 +935,40 @@ mod tests {
         }
         // 34 motion, 2 units, 4 tool length, 9 systems, 12 non-modal.
         assert_eq!(handed, 61);
+    }
+
+    #[test]
+    fn tool_length_offsets() {
+        let mut old = [Some(1.0); 9];
+        old[4] = None;
+        let mut tool = [0.0; 9];
+        (tool[0], tool[2]) = (0.5, 2.0);
+        let mut words = [None; 9];
+        words[2] = Some(3.0);
+        let apply = ToolLength::Apply.offset(old, Some(tool), words);
+        assert_eq!(
+            apply,
+            tool.map(Some),
+            "G43: the tool's, whatever was in effect"
+        );
+        let add = ToolLength::Add.offset(old, Some(tool), words);
+        assert_eq!(
+            (add[0], add[2], add[3], add[4]),
+            (Some(1.5), Some(3.0), Some(1.0), None)
+        );
+        for code in [ToolLength::Apply, ToolLength::Add] {
+            assert_eq!(
+                code.offset(old, None, words),
+                [None; 9],
+                "{code:?}, no data"
+            );
+        }
+        let dynamic = ToolLength::Dynamic.offset([None; 9], None, words);
+        assert_eq!((dynamic[2], dynamic[0]), (Some(3.0), Some(0.0)));
+        assert_eq!(
+            ToolLength::Cancel.offset([None; 9], Some(tool), words),
+            [Some(0.0); 9]
+        );
     }
 
     #[test]

@@ -463,34 +463,27 @@ impl Machine {
         }
     }
 
+    /// G43, G43.2 (with H's tool or the current one), G43.1, G49: the
+    /// offset by [`ToolLength::offset`], in mm; the machine stays where
+    /// it is.
     fn tool_length(&mut self, b: &Block, t: ToolLength) {
         let before = self.offset();
-        match t {
-            ToolLength::Apply | ToolLength::Add => {
-                let h = b
-                    .value(b'H')
-                    .map(|h| h.round() as i64)
-                    .or(self.current_tool());
-                let data = h.and_then(|h| self.tool(h));
-                let add = |base: Option<f64>, v: Option<f64>| match t {
-                    ToolLength::Add => Some(base? + v?),
-                    _ => v,
-                };
-                let z = data.map(|d| d.offsets);
-                self.tlo = std::array::from_fn(|a| {
-                    // LinuxCNC applies the Z offset, and X on lathes (X and
-                    // Z carry the tool's offsets; the others are 0 unless
-                    // the table gives them).
-                    add(self.tlo[a], z.map(|o| o[a]))
-                });
-            }
-            ToolLength::Dynamic => {
-                let s = self.scale();
-                let axes = b.axes();
-                self.tlo = std::array::from_fn(|a| Some(axes[a].map_or(0.0, |v| v * s)));
-            }
-            ToolLength::Cancel => self.tlo = ZERO,
-        }
+        let tool = match t {
+            ToolLength::Apply | ToolLength::Add => b
+                .value(b'H')
+                .map(|h| h.round() as i64)
+                .or(self.current_tool())
+                .and_then(|h| self.tool(h))
+                .map(|d| d.offsets),
+            ToolLength::Dynamic | ToolLength::Cancel => None,
+        };
+        let words = if t == ToolLength::Dynamic {
+            let s = self.scale();
+            b.axes().map(|v| v.map(|v| v * s))
+        } else {
+            UNKNOWN
+        };
+        self.tlo = t.offset(self.tlo, tool, words);
         self.modes.tool_length = t;
         self.shift(before);
     }

@@ -113,39 +113,50 @@ impl Interp<'_> {
         self.mach.pos.axes[axis] = v.ok_or(Unknown::After(what, line));
     }
 
-    /// G43 (`add` false) or G43.2 (true) with the tool of `h` or the
-    /// current one.
-    fn g43(&mut self, add: bool, h: Option<f64>) {
-        self.mach.modal.tool_length = if add {
-            ToolLength::Add
-        } else {
-            ToolLength::Apply
+    /// A tool length code: G43 or G43.2 with the tool of `h` or the
+    /// current one, G43.1 with the line's axis words, G49; the offset by
+    /// [`ToolLength::offset`], in machine units, moving the program
+    /// position the other way.
+    fn tool_length(&mut self, code: ToolLength, h: Option<f64>, axis_words: &[(usize, f64)]) {
+        self.mach.modal.tool_length = code;
+        let tool = match code {
+            ToolLength::Apply | ToolLength::Add => h
+                .or(self.mach.tools.current)
+                .and_then(|t| self.tool(t))
+                .map(|d| d.offsets),
+            ToolLength::Dynamic | ToolLength::Cancel => None,
         };
-        let tool = h.or(self.mach.tools.current);
-        let data = tool.and_then(|t| self.tool(t));
-        let new = match (add, data) {
-            (false, Some(d)) => Some(d.offsets),
-            (_, Some(d)) => self
-                .mach
-                .tlo
-                .map(|old| std::array::from_fn(|a| old[a] + d.offsets[a])),
-            _ => None,
+        let mut words = [None; 9];
+        if code == ToolLength::Dynamic {
+            for &(a, v) in axis_words {
+                words[a] = Some(v / self.to_prog(a));
+            }
+        }
+        let old = self.mach.tlo.map_or([None; 9], |t| t.map(Some));
+        let new = code.offset(old, tool, words);
+        let new = new
+            .iter()
+            .all(Option::is_some)
+            .then(|| new.map(|v| v.unwrap_or(0.0)));
+        let what = match code {
+            ToolLength::Dynamic => "G43.1",
+            ToolLength::Cancel => "G49",
+            ToolLength::Apply | ToolLength::Add => {
+                "a tool length offset (G43) of a tool whose data is unknown"
+            }
         };
-        self.set_tlo(
-            new,
-            "a tool length offset (G43) of a tool whose data is unknown",
-        );
+        self.set_tlo(new, what);
     }
 
     /// G43 without H (`on`: the current tool's offset) or G49, as M72
     /// restores them.
     pub(in crate::eval) fn tool_offset_words(&mut self, on: bool) {
-        if on {
-            self.g43(false, None);
+        let code = if on {
+            ToolLength::Apply
         } else {
-            self.mach.modal.tool_length = ToolLength::Cancel;
-            self.set_tlo(Some([0.0; 9]), "G49");
-        }
+            ToolLength::Cancel
+        };
+        self.tool_length(code, None, &[]);
     }
 
     /// G92.3 (`on`) applies the offsets kept in the parameters, G92.2 stops
@@ -350,18 +361,10 @@ impl Interp<'_> {
                 MachineCode::Motion(MotionMode::NurbsEnd) => {}
                 MachineCode::Motion(m) => self.mach.modal.motion = m,
                 MachineCode::Units(u) => self.set_units(u),
-                MachineCode::ToolLength(ToolLength::Apply) => self.g43(false, w.h),
-                MachineCode::ToolLength(ToolLength::Add) => self.g43(true, w.h),
-                MachineCode::ToolLength(ToolLength::Dynamic) => {
-                    self.mach.modal.tool_length = ToolLength::Dynamic;
-                    let mut new = [0.0; 9];
-                    for &(a, v) in w.axis_words() {
-                        new[a] = v / self.to_prog(a);
-                    }
-                    self.set_tlo(Some(new), "G43.1");
-                    dynamic_tlo = true;
+                MachineCode::ToolLength(t) => {
+                    self.tool_length(t, w.h, w.axis_words());
+                    dynamic_tlo |= t == ToolLength::Dynamic;
                 }
-                MachineCode::ToolLength(ToolLength::Cancel) => self.tool_offset_words(false),
                 MachineCode::Coord(cs) => self.select_cs(cs),
                 // G4 acts in the output alone.
                 MachineCode::NonModal(NonModal::Dwell) => {}
