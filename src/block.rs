@@ -203,17 +203,34 @@ fn trailing_zeros(line: &[u8], end: usize, frac: u32) -> u32 {
 
 /// Where a line of moves alone is written otherwise than as its text: the
 /// `n` bytes ending at `end` (offsets in the line) are dropped for each of
-/// the first `count` cuts (a number's trailing zeros).
+/// the first `count` cuts (a number's trailing zeros), or the whole line
+/// goes.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Cuts {
     at: [(u16, u8); 5],
     count: u8,
+    /// The whole line goes, its newline too.
+    whole: bool,
 }
 
 impl Cuts {
+    /// The whole line is cut: nothing is written for it, not even an
+    /// empty line.
+    pub fn whole() -> Cuts {
+        Cuts {
+            whole: true,
+            ..Cuts::default()
+        }
+    }
+
     /// Written as its text.
     pub fn is_empty(&self) -> bool {
-        self.count == 0
+        self.count == 0 && !self.whole
+    }
+
+    /// Written as nothing (see [`Cuts::whole`]).
+    pub fn is_whole(&self) -> bool {
+        self.whole
     }
 
     /// Adds a cut; false if there is no room (a line of moves alone has
@@ -240,6 +257,9 @@ impl Cuts {
 
     /// Appends `text` so written to `out`.
     pub fn write(&self, text: &[u8], out: &mut Vec<u8>) {
+        if self.whole {
+            return;
+        }
         let mut from = 0;
         for &(end, n) in &self.at[..usize::from(self.count)] {
             let end = usize::from(end);
@@ -257,6 +277,9 @@ impl Cuts {
 /// `max_digits` digits are kept as written (`written_as_is`) or without
 /// their trailing zeros (`without_trailing_zeros`), and a line so written
 /// shorter than `max_len` bytes fits its line limit however it is counted.
+/// With `drops_comments`, a line holding an inert comment alone (one the
+/// straight-line reader takes: not a message, log or other active comment)
+/// is written as nothing, not even an empty line.
 /// A consumer gives it when a straight run starts; the reader then works
 /// out each such line's output, and the consumer checks that the rule is
 /// still its own when it takes the line.
@@ -266,6 +289,7 @@ pub struct MovesRule {
     pub max_digits: u8,
     pub max_len: usize,
     pub arcs: bool,
+    pub drops_comments: bool,
 }
 
 /// The values of a line of moves alone: its motion code (G0–G3), X, Y, Z,
@@ -316,6 +340,12 @@ impl MoveValues {
             has: has & 0b1111,
             ijk,
         }
+    }
+
+    /// No word at all (a line of a comment alone).
+    #[inline(always)]
+    pub fn is_blank(&self) -> bool {
+        self.motion.is_none() && self.has == 0 && !self.ijk
     }
 
     #[inline(always)]
@@ -459,6 +489,12 @@ impl Spacing {
     #[inline(always)]
     pub(crate) fn break_off(&mut self) {
         self.next = Spacing::OFF;
+    }
+
+    /// No word has been read, and none was out of place.
+    #[inline(always)]
+    pub(crate) fn is_fresh(&self) -> bool {
+        self.next == self.start
     }
 
     /// The words read are in place and the last ends the line at `end`.

@@ -692,6 +692,8 @@ fn plain_line() -> impl Strategy<Value = String> {
             Just("G93"), Just("G94"), Just("G41 D0"), Just("G40"), Just("G10 L2 P1 R30"),
             Just("G10 L2 P1 X1"), Just("G92 X3"), Just("G55"), Just("G54"), Just("G80"),
             Just("M3 S100"), Just(""), Just("G2.5"), Just("G4 P0"),
+            // Comments alone, which a target drops.
+            Just("(note)"), Just("(z at -1.5, pass 2)  "),
             // Words the loop reads but leaves to the block checks, with a
             // comment the plain-line scanner does not take.
             Just("G4 P0 (wait)"), Just("G17 (xy plane)"), Just("G92.1 (cancel)"),
@@ -812,6 +814,10 @@ fn lines_handed_over_together_leave_the_model_where_they_would_one_by_one() {
             };
             prog.push_str(&line);
             prog.push('\n');
+            // Comments alone among them, after an arc (in its motion) too.
+            if j % 6 == 4 || j % 9 == 0 {
+                prog.push_str("(one comment alone)\n");
+            }
         }
         // From the current position: a full circle, a drilling cycle with
         // its initial level, and the cycle again after moves.

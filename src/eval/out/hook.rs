@@ -171,7 +171,8 @@ impl FormBatch {
     }
 
     /// Adds a line (text at `text` in the run's input) written as
-    /// `written` by `rule`; true when the batch is full.
+    /// `written` by `rule` (no bytes: nothing, not even an empty line, as
+    /// for a comment alone the rule drops); true when the batch is full.
     #[inline]
     pub(in crate::eval) fn push(
         &mut self,
@@ -186,8 +187,10 @@ impl FormBatch {
         if self.lines.is_empty() {
             self.rule = Some(rule);
         }
-        self.written.extend_from_slice(written);
-        self.written.push(b'\n');
+        if !written.is_empty() {
+            self.written.extend_from_slice(written);
+            self.written.push(b'\n');
+        }
         self.lines.push(FormLine {
             line_start,
             text: (text.0 as u32, text.1 as u32),

@@ -144,7 +144,7 @@ fn decode_line(
     raw: &mut RawLine,
     out: &mut Vec<u8>,
 ) -> Option<LineRead> {
-    if let Some(rule) = rule.filter(|_| ToForm::may_take(buf, i)) {
+    if let Some(rule) = rule.filter(|r| ToForm::may_take(buf, i, r)) {
         let mut sink = ToForm::new(i, rule);
         if !read_line_into(buf, i, p, comments, &mut sink) {
             return None;
@@ -184,7 +184,8 @@ pub(super) enum Decoded<'p> {
     /// for a consumer that takes such a line without a block.
     Moves(&'p [RawWord]),
     /// A move and nothing else that the consumer's `rule` writes as
-    /// `written` (`None`: as the line's text).
+    /// `written` (`None`: as the line's text; no bytes: as nothing, for a
+    /// comment alone the rule drops).
     Form {
         written: Option<&'p [u8]>,
         rule: MovesRule,
@@ -270,6 +271,9 @@ pub(super) fn cut(buf: &[u8], from: usize, size: usize) -> Vec<usize> {
 /// A line of moves alone, `text`, as its consumer writes it (see
 /// [`Cuts`]): as its text, or as bytes put at the end of `out`.
 fn written(out: &mut Vec<u8>, text: &[u8], cuts: &Cuts) -> Kind {
+    if cuts.is_whole() {
+        return Kind::FormOut(out.len() as u32, 0);
+    }
     if cuts.is_empty() {
         return Kind::Form;
     }
@@ -697,11 +701,17 @@ mod tests {
         // without blocks.
         // With a rule, the moves come as written by it: as their text, or
         // (with one decimal) without the trailing zero of `.50`.
+        // A rule that drops comments writes a comment alone as nothing.
         let rule = Some(MovesRule {
             decimals: 1,
             max_digits: 8,
             max_len: 80,
             arcs: false,
+            drops_comments: false,
+        });
+        let dropping = rule.map(|r| MovesRule {
+            drops_comments: true,
+            ..r
         });
         for (chunk, helper, decode, rule) in [1, 64, 1000, 1 << 20].into_iter().flat_map(|c| {
             [
@@ -711,6 +721,8 @@ mod tests {
                 (c, false, true, None),
                 (c, true, true, rule),
                 (c, false, true, rule),
+                (c, true, true, dropping),
+                (c, false, true, dropping),
             ]
         }) {
             let shared = Shared::new(buf, 0, true, decode, rule, chunk, ChunkPool::default());
@@ -747,6 +759,15 @@ mod tests {
                             let mut want = Block::default();
                             want.decode_into(&buf[i..p.text_end]).expect("decodes");
                             let text = &buf[i..p.text_end];
+                            if rule.is_some_and(|r| r.drops_comments) && text[0] == b'(' {
+                                let Some(Decoded::Form { written, .. }) = block else {
+                                    panic!("comment not dropped by the rule");
+                                };
+                                assert_eq!(written, Some(&b""[..]));
+                                i = p.next;
+                                lines += 1;
+                                continue;
+                            }
                             if rule.is_some() && text[0] != b'(' {
                                 let want = String::from_utf8_lossy(text).replace(".50", ".5");
                                 let Some(Decoded::Form { written, .. }) = block else {

@@ -282,22 +282,27 @@ impl ToForm {
     }
 
     /// Whether the line at `buf[i..]` may be one (its first word is G0–G3,
-    /// X, Y, Z, F, I, J or K): lines that are not are left to [`ToRaw`] at
-    /// once.
+    /// X, Y, Z, F, I, J or K, or it starts with a comment `rule` drops):
+    /// lines that are not are left to [`ToRaw`] at once.
     #[inline(always)]
-    pub(in crate::eval) fn may_take(buf: &[u8], i: usize) -> bool {
+    pub(in crate::eval) fn may_take(buf: &[u8], i: usize, rule: &MovesRule) -> bool {
         match buf.get(i) {
             Some(b'G') => matches!(buf.get(i + 1), Some(b'0'..=b'3')),
             Some(b'X' | b'Y' | b'Z' | b'F' | b'I' | b'J' | b'K') => true,
+            Some(b'(') => rule.drops_comments,
             _ => false,
         }
     }
 
     /// After a successful read of the line ending its text at `text_end`:
     /// where it is written otherwise than as its text, if it is such a line
-    /// (its last word ends the text).
+    /// (its last word ends the text), or an inert comment alone that the
+    /// rule drops ([`Cuts::whole`]).
     #[inline(always)]
     pub(in crate::eval) fn finish(&self, text_end: usize) -> Option<Cuts> {
+        if self.cuts.is_whole() {
+            return Some(self.cuts);
+        }
         let fits = text_end - self.start - self.cuts.dropped() < self.rule.max_len;
         (self.spacing.ends_at(text_end) && fits).then_some(self.cuts)
     }
@@ -353,8 +358,13 @@ impl WordSink for ToForm {
     }
 
     #[inline(always)]
-    fn comment(&mut self, _: &[u8], _: usize, _: usize) {
-        self.spacing.break_off();
+    fn comment(&mut self, _: &[u8], open: usize, _: usize) {
+        // The comment is the line (nothing can follow it).
+        if self.rule.drops_comments && open == self.start && self.spacing.is_fresh() {
+            self.cuts = Cuts::whole();
+        } else {
+            self.spacing.break_off();
+        }
     }
 }
 
@@ -881,18 +891,25 @@ mod tests {
     /// in millimetres), as the reader works it out: `None` for lines left
     /// to their words.
     fn formed(line: &str, arcs: bool, max_len: usize) -> Option<String> {
-        let rule = MovesRule {
-            decimals: 4,
-            max_digits: 8,
-            max_len,
-            arcs,
-        };
+        formed_by(
+            line,
+            MovesRule {
+                decimals: 4,
+                max_digits: 8,
+                max_len,
+                arcs,
+                drops_comments: false,
+            },
+        )
+    }
+
+    fn formed_by(line: &str, rule: MovesRule) -> Option<String> {
         // Room after the line for the eight-byte number reads.
         let buf = format!("{line}\n{}", " ".repeat(32));
         let buf = buf.as_bytes();
         let mut p = Plain::default();
         let mut sink = ToForm::new(0, rule);
-        if !ToForm::may_take(buf, 0) || !read_line_into(buf, 0, &mut p, true, &mut sink) {
+        if !ToForm::may_take(buf, 0, &rule) || !read_line_into(buf, 0, &mut p, true, &mut sink) {
             return None;
         }
         let cuts = sink.finish(p.text_end)?;
@@ -948,6 +965,46 @@ mod tests {
             Some("G1 X1.25 Y2")
         );
         assert_eq!(formed("G1 X1.2500 Y2.0000", true, 11), None);
+    }
+
+    /// A rule that drops comments writes a line of an inert comment alone
+    /// as nothing; any other line with a comment is left to its words.
+    #[test]
+    fn comments_alone_go_where_the_rule_drops_comments() {
+        let rule = MovesRule {
+            decimals: 4,
+            max_digits: 8,
+            max_len: 80,
+            arcs: true,
+            drops_comments: true,
+        };
+        let cases: &[(&str, Option<&str>)] = &[
+            ("(only a comment)", Some("")),
+            ("(segment 25, depth -1.435)   ", Some("")),
+            ("( spaced )", Some("")),
+            ("()", Some("")),
+            // Active comments, and comments after something else.
+            ("(msg, shown)", None),
+            ("(debug, x)", None),
+            ("(print, x)", None),
+            ("(logopen,f)", None),
+            (" (after a blank)", None),
+            ("N10 (numbered)", None),
+            ("G1 X1 (c)", None),
+            ("(a) (b)", None),
+            ("(nested (no))", None),
+            // Moves are written as without the flag.
+            ("G1 X1.50", Some("G1 X1.5")),
+        ];
+        for &(line, want) in cases {
+            assert_eq!(formed_by(line, rule).as_deref(), want, "{line}");
+        }
+        // Without the flag, a comment alone is left to its words.
+        let keeping = MovesRule {
+            drops_comments: false,
+            ..rule
+        };
+        assert_eq!(formed_by("(only a comment)", keeping), None);
     }
 
     #[test]

@@ -19,6 +19,7 @@ use crate::emit::Output;
 use crate::eval::{FormLine, FormLines, Origin};
 
 use super::{Lowering, Problem, Profile, io_error};
+use crate::target::profile::Comments;
 
 /// The whole G and M codes below 128 the profile has, and its word and
 /// axis letters, as bits (G17 is bit 17, X bit 88): looked up once per word
@@ -253,6 +254,8 @@ impl Lowering {
             max_digits: self.p.max_digits,
             max_len: self.p.line_limit.map_or(usize::MAX, |(limit, _)| limit),
             arcs: self.codes.g & 0b1100 == 0b1100 && word(b'I') && word(b'J') && word(b'K'),
+            // Inert comments are kept only where the target keeps them all.
+            drops_comments: self.p.comments == Comments::Strip,
         })
     }
 
@@ -420,13 +423,14 @@ impl Lowering {
 
 /// Whether a line of moves alone with values `v`, run in `motion` (its
 /// own or the modal one), is one [`Lowering::is_plain`] accepts with its
-/// block: G0 or G1 without I, J, K, or G2/G3 with them and an axis word.
-/// If so, whether it is an arc and whether it names an axis.
+/// block: G0 or G1 without I, J, K, G2/G3 with them and an axis word, or
+/// no word at all (a comment alone) in any of them. If so, whether it is
+/// run as an arc and whether it names an axis.
 fn plain_form(v: &MoveValues, motion: MotionMode) -> Option<(bool, bool)> {
     let arc = matches!(motion, MotionMode::ArcCw | MotionMode::ArcCcw);
     let axis = v.has_axis();
     let plain = arc || matches!(motion, MotionMode::Rapid | MotionMode::Linear);
-    (plain && v.ijk == arc && (!arc || axis)).then_some((arc, axis))
+    (plain && (v.ijk == arc && (!arc || axis) || v.is_blank())).then_some((arc, axis))
 }
 
 #[cfg(test)]
