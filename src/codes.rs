@@ -683,6 +683,18 @@ impl Modes {
         None
     }
 
+    /// An axis word's value as the position it stands for, in both
+    /// machine models: an X word is a diameter in lathe diameter mode
+    /// (G7), and positions are radii.
+    #[inline(always)]
+    pub fn radius_word(&self, axis: usize, v: f64) -> f64 {
+        if axis == 0 && self.lathe == LatheMode::Diameter {
+            v / 2.0
+        } else {
+            v
+        }
+    }
+
     /// An M code's change of the switches (spindle direction, coolant,
     /// overrides with the line's P word, [`Modes::set_override`]): which
     /// it set, `None` for any other M code (left to the machine model).
@@ -971,8 +983,14 @@ mod tests {
         );
     }
 
+    /// The switches M codes set; and X words in G7 (not a switch, the
+    /// other per-word rule of the modes).
     #[test]
     fn switches_of_m_codes() {
+        let mut m = Modes::default();
+        assert_eq!((m.radius_word(0, 3.0), m.radius_word(1, 3.0)), (3.0, 3.0));
+        m.lathe = LatheMode::Diameter;
+        assert_eq!((m.radius_word(0, 3.0), m.radius_word(2, 3.0)), (1.5, 3.0));
         let mut m = Modes::default();
         let on = |v: f64, m: &mut Modes, p| m.set_switch(MCode::decode(v), p);
         assert_eq!(on(4.0, &mut m, None), Some(Switched::Spindle));

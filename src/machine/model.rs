@@ -17,8 +17,8 @@ use crate::fx_hasher::FxMap;
 
 use super::motion::{Feed, Motion, MoveKind, Point};
 use crate::block::{
-    AXIS_LETTERS, ArcDistance, Block, CoordSystem, Distance, FeedMode, LatheMode, MCode,
-    MotionMode, NonModal, PathMode, Plane, Retract, SpindleDir, ToolLength, Units,
+    AXIS_LETTERS, ArcDistance, Block, CoordSystem, Distance, FeedMode, MCode, MotionMode, NonModal,
+    PathMode, Plane, Retract, SpindleDir, ToolLength, Units,
 };
 use crate::codes::{MachineCode, Modes, Switched};
 
@@ -523,11 +523,7 @@ impl Machine {
     /// program unit), by the distance and diameter modes.
     #[inline]
     fn axis_target(&self, a: usize, v: f64, s: f64) -> Option<f64> {
-        let v = if a == 0 && self.modes.lathe == LatheMode::Diameter {
-            v / 2.0
-        } else {
-            v
-        };
+        let v = self.modes.radius_word(a, v);
         let rot = if (3..=5).contains(&a) { 1.0 } else { s };
         match self.modes.distance {
             Distance::Absolute => Some(v * rot),

@@ -7,8 +7,8 @@ use crate::diag::{Error, ErrorKind};
 use crate::program::FileIndex;
 
 use crate::codes::{
-    ArcDistance, CoordSystem, CutterComp, Distance, GCode, LatheMode, MCode, MachineCode,
-    MotionMode, NonModal, Plane, ToolLength, Units,
+    ArcDistance, CoordSystem, CutterComp, Distance, GCode, MCode, MachineCode, MotionMode,
+    NonModal, Plane, ToolLength, Units,
 };
 use crate::eval::Interp;
 use crate::eval::read::block::Words;
@@ -815,21 +815,10 @@ impl Machine {
         true
     }
 
-    /// A motion word's value on an axis: X words are diameters in lathe
-    /// diameter mode (G7), and the position is a radius.
-    #[inline(always)]
-    fn radius_word(&self, axis: usize, v: f64) -> f64 {
-        if axis == 0 && self.modal.lathe == LatheMode::Diameter {
-            v / 2.0
-        } else {
-            v
-        }
-    }
-
     /// Where a word sends an axis: its value (G90) or the position plus it
     /// (G91).
     pub(in crate::eval) fn axis_end(&self, axis: usize, v: f64) -> Result<f64, Unknown> {
-        let v = self.radius_word(axis, v);
+        let v = self.modal.radius_word(axis, v);
         if self.modal.distance == Distance::Absolute {
             Ok(v)
         } else {
@@ -842,7 +831,7 @@ impl Machine {
     #[inline]
     pub(in crate::eval) fn move_axis(&mut self, axis: usize, v: f64) {
         self.tlo_moved = false;
-        let v = self.radius_word(axis, v);
+        let v = self.modal.radius_word(axis, v);
         if self.modal.distance == Distance::Absolute {
             self.pos.axes[axis] = Ok(v);
         } else if let Ok(p) = &mut self.pos.axes[axis] {
