@@ -579,23 +579,18 @@ pub struct Block {
     m_words: u8,
     /// The slots of `value_at` that hold a word, as bits.
     present: u32,
-    pub motion: Option<MotionMode>,
-    pub plane: Option<Plane>,
-    pub distance: Option<Distance>,
-    pub arc_distance: Option<ArcDistance>,
-    pub feed_mode: Option<FeedMode>,
-    pub units: Option<Units>,
-    pub cutter_comp: Option<CutterComp>,
-    pub tool_length: Option<ToolLength>,
-    pub coord: Option<CoordSystem>,
-    pub path: Option<PathMode>,
-    pub retract: Option<Retract>,
-    pub spindle_mode: Option<SpindleMode>,
-    pub lathe: Option<LatheMode>,
-    pub non_modal: Option<NonModal>,
+    /// The line's G code of each modal group, by [`GCode::group`] (a G80
+    /// beside another motion code gives way to it): one code a group, and
+    /// nothing here to add for a new group.
+    gs: [Option<GCode>; 16],
+    /// The groups of `gs` that hold a code, as bits.
+    groups: u16,
 }
 
 const NO_WORD: u8 = u8::MAX;
+
+/// The motion group ([`GCode::group`]).
+const MOTION: u8 = 1;
 
 fn slot(letter: u8) -> usize {
     match letter {
@@ -658,25 +653,90 @@ impl Block {
         !self.percent
             && self.present & !ALLOWED == 0
             && self.m_words == 0
+            && self.groups & !(1 << MOTION) == 0
             && matches!(
-                self.motion,
+                self.motion(),
                 None | Some(
                     MotionMode::Rapid | MotionMode::Linear | MotionMode::ArcCw | MotionMode::ArcCcw
                 )
             )
-            && self.plane.is_none()
-            && self.distance.is_none()
-            && self.arc_distance.is_none()
-            && self.feed_mode.is_none()
-            && self.units.is_none()
-            && self.cutter_comp.is_none()
-            && self.tool_length.is_none()
-            && self.coord.is_none()
-            && self.path.is_none()
-            && self.retract.is_none()
-            && self.spindle_mode.is_none()
-            && self.lathe.is_none()
-            && self.non_modal.is_none()
+    }
+
+    /// The line's code of modal group `group` ([`GCode::group`]).
+    #[inline]
+    pub fn code(&self, group: u8) -> Option<GCode> {
+        *self.gs.get(group as usize)?
+    }
+
+    /// The motion code (group 1).
+    #[inline]
+    pub fn motion(&self) -> Option<MotionMode> {
+        match self.gs[MOTION as usize] {
+            Some(GCode::Motion(m)) => Some(m),
+            _ => None,
+        }
+    }
+
+    /// The units code (group 6).
+    pub fn units(&self) -> Option<Units> {
+        match self.gs[6] {
+            Some(GCode::Units(u)) => Some(u),
+            _ => None,
+        }
+    }
+
+    /// The feed mode code (group 5).
+    pub fn feed_mode(&self) -> Option<FeedMode> {
+        match self.gs[5] {
+            Some(GCode::FeedMode(f)) => Some(f),
+            _ => None,
+        }
+    }
+
+    /// The cutter compensation code (group 7).
+    pub fn cutter_comp(&self) -> Option<CutterComp> {
+        match self.gs[7] {
+            Some(GCode::CutterComp(c)) => Some(c),
+            _ => None,
+        }
+    }
+
+    /// The tool length code (group 8).
+    pub fn tool_length(&self) -> Option<ToolLength> {
+        match self.gs[8] {
+            Some(GCode::ToolLength(t)) => Some(t),
+            _ => None,
+        }
+    }
+
+    /// The retract code (group 10).
+    pub fn retract(&self) -> Option<Retract> {
+        match self.gs[10] {
+            Some(GCode::Retract(r)) => Some(r),
+            _ => None,
+        }
+    }
+
+    /// The coordinate system code (group 12).
+    pub fn coord(&self) -> Option<CoordSystem> {
+        match self.gs[12] {
+            Some(GCode::Coord(c)) => Some(c),
+            _ => None,
+        }
+    }
+
+    /// The non-modal code (group 0).
+    pub fn non_modal(&self) -> Option<NonModal> {
+        match self.gs[0] {
+            Some(GCode::NonModal(n)) => Some(n),
+            _ => None,
+        }
+    }
+
+    /// The line's G codes of the modal groups, one a group, in the order
+    /// of the groups (a G80 beside another motion code left out).
+    pub fn modal_codes(&self) -> impl Iterator<Item = GCode> + '_ {
+        self.gs.iter().flatten().copied()
     }
 
     /// Whether any axis word is present.
@@ -815,20 +875,10 @@ impl Block {
         }
         self.present = 0;
         self.m_words = 0;
-        self.motion = None;
-        self.plane = None;
-        self.distance = None;
-        self.arc_distance = None;
-        self.feed_mode = None;
-        self.units = None;
-        self.cutter_comp = None;
-        self.tool_length = None;
-        self.coord = None;
-        self.path = None;
-        self.retract = None;
-        self.spindle_mode = None;
-        self.lathe = None;
-        self.non_modal = None;
+        if self.groups != 0 {
+            self.gs = [None; 16];
+            self.groups = 0;
+        }
     }
 
     fn comments_only(&mut self, line: &[u8], mut i: usize) -> Result<(), DecodeError> {
@@ -919,76 +969,24 @@ impl Block {
                     span,
                     what: DecodeProblem::UnknownG(value),
                 })?;
-                let conflict = |set: bool| {
-                    if set {
-                        Err(DecodeError {
-                            span,
-                            what: DecodeProblem::GroupConflict,
-                        })
-                    } else {
-                        Ok(())
-                    }
-                };
-                match g {
-                    // G80 beside another motion code is allowed (the
-                    // other one acts), as in LinuxCNC.
-                    GCode::Motion(m) => match self.motion {
-                        None | Some(MotionMode::CancelCycle) => self.motion = Some(m),
-                        Some(_) if m == MotionMode::CancelCycle => {}
-                        Some(_) => conflict(true)?,
-                    },
-                    GCode::Plane(p) => {
-                        conflict(self.plane.is_some())?;
-                        self.plane = Some(p);
-                    }
-                    GCode::Distance(d) => {
-                        conflict(self.distance.is_some())?;
-                        self.distance = Some(d);
-                    }
-                    GCode::ArcDistance(d) => {
-                        conflict(self.arc_distance.is_some())?;
-                        self.arc_distance = Some(d);
-                    }
-                    GCode::FeedMode(m) => {
-                        conflict(self.feed_mode.is_some())?;
-                        self.feed_mode = Some(m);
-                    }
-                    GCode::Units(u) => {
-                        conflict(self.units.is_some())?;
-                        self.units = Some(u);
-                    }
-                    GCode::CutterComp(c) => {
-                        conflict(self.cutter_comp.is_some())?;
-                        self.cutter_comp = Some(c);
-                    }
-                    GCode::ToolLength(t) => {
-                        conflict(self.tool_length.is_some())?;
-                        self.tool_length = Some(t);
-                    }
-                    GCode::Coord(c) => {
-                        conflict(self.coord.is_some())?;
-                        self.coord = Some(c);
-                    }
-                    GCode::Path(p) => {
-                        conflict(self.path.is_some())?;
-                        self.path = Some(p);
-                    }
-                    GCode::Retract(r) => {
-                        conflict(self.retract.is_some())?;
-                        self.retract = Some(r);
-                    }
-                    GCode::SpindleMode(s) => {
-                        conflict(self.spindle_mode.is_some())?;
-                        self.spindle_mode = Some(s);
-                    }
-                    GCode::Lathe(l) => {
-                        conflict(self.lathe.is_some())?;
-                        self.lathe = Some(l);
-                    }
-                    GCode::NonModal(m) => {
-                        conflict(self.non_modal.is_some())?;
-                        self.non_modal = Some(m);
-                    }
+                let group = g.group() as usize;
+                let bit = 1 << group;
+                // One code a group; a G80 beside another motion code is
+                // allowed (the other one acts), as in LinuxCNC.
+                let keep = self.groups & bit != 0
+                    && match (self.gs[group], g) {
+                        (Some(GCode::Motion(MotionMode::CancelCycle)), _) => false,
+                        (_, GCode::Motion(MotionMode::CancelCycle)) => true,
+                        _ => {
+                            return Err(DecodeError {
+                                span,
+                                what: DecodeProblem::GroupConflict,
+                            });
+                        }
+                    };
+                if !keep {
+                    self.gs[group] = Some(g);
+                    self.groups |= bit;
                 }
                 WordKind::G(g)
             }
@@ -1247,7 +1245,7 @@ mod tests {
             ("G80 G81 X3 R1 Z-1", MotionMode::Cycle(81)),
         ] {
             let b = Block::decode(line.as_bytes()).unwrap();
-            assert_eq!(b.motion, Some(want), "{line}");
+            assert_eq!(b.motion(), Some(want), "{line}");
         }
         assert!(Block::decode(b"G0 G1 X1").is_err());
     }
@@ -1255,9 +1253,10 @@ mod tests {
     #[test]
     fn decodes_groups_words_and_comments() {
         let b = Block::decode(b"N10 g20 G64 P0.01 g1 x1.5 Y - 2 f300 (MSG, hi) ; rest").unwrap();
-        assert_eq!(b.units, Some(Units::Inch));
-        assert_eq!(b.path, Some(PathMode::Blend));
-        assert_eq!(b.motion, Some(MotionMode::Linear));
+        assert_eq!(b.units(), Some(Units::Inch));
+        assert_eq!(b.code(13), Some(GCode::Path(PathMode::Blend)));
+        assert_eq!(b.code(99), None);
+        assert_eq!(b.motion(), Some(MotionMode::Linear));
         assert_eq!(b.value(b'X'), Some(1.5));
         assert_eq!(b.value(b'Y'), Some(-2.0));
         assert_eq!(b.value(b'P'), Some(0.01));
@@ -1273,14 +1272,69 @@ mod tests {
         assert!(Block::decode(b"G1 W-1").unwrap().has_axis());
     }
 
+    /// Any two G codes on a line: refused when of one group (but a G80
+    /// beside another motion code, which gives way), kept by group
+    /// otherwise; a line of one code and an axis word is a plain move for
+    /// G0-G3 alone.
+    #[test]
+    fn one_code_a_group() {
+        let all: Vec<GCode> = (0..=1000u16).filter_map(GCode::from_code10).collect();
+        let name = |g: GCode| g.name();
+        let g80 = GCode::Motion(MotionMode::CancelCycle);
+        for &a in &all {
+            let one = Block::decode(format!("{} X1", name(a)).as_bytes()).unwrap();
+            assert_eq!(one.code(a.group()), Some(a));
+            let plain = matches!(
+                a,
+                GCode::Motion(
+                    MotionMode::Rapid | MotionMode::Linear | MotionMode::ArcCw | MotionMode::ArcCcw
+                )
+            );
+            assert_eq!(one.is_plain_move(), plain, "{a:?}");
+            for &b in &all {
+                let line = format!("{} {}", name(a), name(b));
+                let got = Block::decode(line.as_bytes());
+                if a.group() != b.group() {
+                    let got = got.unwrap();
+                    assert_eq!(
+                        (got.code(a.group()), got.code(b.group())),
+                        (Some(a), Some(b))
+                    );
+                    let mut want = vec![a, b];
+                    want.sort_by_key(|g| g.group());
+                    assert_eq!(got.modal_codes().collect::<Vec<_>>(), want, "{line}");
+                } else if a == g80 || b == g80 {
+                    let other = if a == g80 { b } else { a };
+                    let got = got.unwrap();
+                    assert_eq!(got.code(1), Some(other), "{line}");
+                    assert_eq!(got.modal_codes().count(), 1);
+                } else {
+                    assert_eq!(
+                        got.unwrap_err().what,
+                        DecodeProblem::GroupConflict,
+                        "{line}"
+                    );
+                }
+            }
+        }
+        // The room is cleared between lines.
+        let mut b = Block::decode(b"G20 G91 G1 X1").unwrap();
+        b.decode_into(b"X2").unwrap();
+        assert_eq!(
+            (b.units(), b.motion(), b.modal_codes().count()),
+            (None, None, 0)
+        );
+        assert!(b.is_plain_move());
+    }
+
     #[test]
     fn decodes_codes() {
         let b = Block::decode(b"G59.1 G43.2 H2 G98 G83 M6 T3 M61 Q1").unwrap();
-        assert_eq!(b.coord, Some(CoordSystem(7)));
-        assert_eq!(b.coord.map(|c| c.code10()), Some(591));
-        assert_eq!(b.tool_length, Some(ToolLength::Add));
-        assert_eq!(b.retract, Some(Retract::Initial));
-        assert_eq!(b.motion, Some(MotionMode::Cycle(83)));
+        assert_eq!(b.coord(), Some(CoordSystem(7)));
+        assert_eq!(b.coord().map(|c| c.code10()), Some(591));
+        assert_eq!(b.tool_length(), Some(ToolLength::Add));
+        assert_eq!(b.retract(), Some(Retract::Initial));
+        assert_eq!(b.motion(), Some(MotionMode::Cycle(83)));
         let ms: Vec<MCode> = b.m_codes().map(|m| m.0).collect();
         assert_eq!(ms, vec![MCode::ToolChange, MCode::SetTool]);
         assert!(Block::decode(b"%").unwrap().percent);
@@ -1292,7 +1346,7 @@ mod tests {
         assert!(Block::decode(b"G0 X").is_err());
         assert!(Block::decode(b"G0 (x").is_err());
         assert!(Block::decode(b"G12.5").is_err());
-        assert_eq!(Block::decode(b"G54").unwrap().coord, Some(CoordSystem(1)));
-        assert_eq!(Block::decode(b"G59").unwrap().coord, Some(CoordSystem(6)));
+        assert_eq!(Block::decode(b"G54").unwrap().coord(), Some(CoordSystem(1)));
+        assert_eq!(Block::decode(b"G59").unwrap().coord(), Some(CoordSystem(6)));
     }
 }

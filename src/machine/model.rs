@@ -277,7 +277,7 @@ impl Machine {
 
     /// Applies one decoded block in LinuxCNC's order of execution.
     pub fn apply(&mut self, b: &Block) {
-        if !self.record && b.is_plain_move() && self.plain_motion(b.motion) {
+        if !self.record && b.is_plain_move() && self.plain_motion(b.motion()) {
             self.apply_plain_move(b);
             return;
         }
@@ -298,7 +298,7 @@ impl Machine {
     /// both on random blocks).
     fn apply_plain_move(&mut self, b: &Block) {
         let axes = AXIS_LETTERS.map(|l| b.value(l));
-        self.apply_plain_values(b.motion, b.value(b'F'), b.value(b'S'), &axes);
+        self.apply_plain_values(b.motion(), b.value(b'F'), b.value(b'S'), &axes);
     }
 
     /// [`Machine::apply`] for a block of G0–G3 (or none, in G0–G3) with X,
@@ -398,7 +398,7 @@ impl Machine {
                 _ => {}
             }
         }
-        if b.non_modal == Some(NonModal::Dwell) {
+        if b.non_modal() == Some(NonModal::Dwell) {
             let seconds = b.value(b'P').unwrap_or(0.0);
             self.push(Motion::Dwell { seconds });
         }
@@ -406,24 +406,24 @@ impl Machine {
         // codes that act on the position act below, from the block's
         // fields, in the reference's order (tool length, coordinate
         // system, non-modal code, motion).
-        for (g, _) in b.g_codes() {
+        for g in b.modal_codes() {
             if let Some(MachineCode::Units(u)) = self.modes.set_mode(g) {
                 self.modes.units = u;
             }
         }
-        if let Some(t) = b.tool_length {
+        if let Some(t) = b.tool_length() {
             self.tool_length(b, t);
         }
-        if let Some(c) = b.coord {
+        if let Some(c) = b.coord() {
             let before = self.offset();
             self.modes.coord = c;
             self.shift(before);
         }
-        let motion_used = match b.non_modal {
+        let motion_used = match b.non_modal() {
             Some(n) => self.non_modal(b, n),
             None => false,
-        } || b.tool_length == Some(ToolLength::Dynamic) && b.motion.is_none();
-        if let Some(m) = b.motion {
+        } || b.tool_length() == Some(ToolLength::Dynamic) && b.motion().is_none();
+        if let Some(m) = b.motion() {
             if matches!(m, MotionMode::Cycle(_))
                 && !matches!(self.modes.motion, MotionMode::Cycle(_))
             {
@@ -431,7 +431,7 @@ impl Machine {
             }
             self.modes.motion = m;
         }
-        if !motion_used && (b.has_axis() || b.motion.is_some_and(moves_without_axes)) {
+        if !motion_used && (b.has_axis() || b.motion().is_some_and(moves_without_axes)) {
             self.motion(b);
         }
         for (m, _) in b.m_codes() {

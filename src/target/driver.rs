@@ -630,7 +630,7 @@ impl Lowering {
                 });
             }
         }
-        if let Some(c) = b.coord
+        if let Some(c) = b.coord()
             && c.0 <= self.p.coord_systems
         {
             self.target_coord = c;
@@ -655,9 +655,9 @@ impl Lowering {
             });
         }
         self.native_g5_words(b, before, &mut d.extra);
-        if b.tool_length
+        if b.tool_length()
             .is_some_and(|t| matches!(t, ToolLength::Apply | ToolLength::Add))
-            && !self.p.has_g(if b.tool_length == Some(ToolLength::Apply) {
+            && !self.p.has_g(if b.tool_length() == Some(ToolLength::Apply) {
                 430
             } else {
                 432
@@ -692,7 +692,7 @@ impl Lowering {
         let lowered = compensated
             .map_or_else(|| self.lower_motion(b, before), |c| Ok(Some(c)))
             .map_err(|k| Problem {
-                span: b.motion.and_then(|_| {
+                span: b.motion().and_then(|_| {
                     b.g_codes()
                         .find(|(g, _)| matches!(g, GCode::Motion(_)))
                         .map(|(_, w)| w.span)
@@ -735,7 +735,7 @@ impl Lowering {
         self.coord_shift(&self.m, self.target_coord)
             .map(Some)
             .map_err(|k| Problem {
-                span: b.coord.and(g_span(b, 591, 593)),
+                span: b.coord().and(g_span(b, 591, 593)),
                 kind: k,
             })
     }
@@ -803,7 +803,7 @@ impl Lowering {
         if self.defer_block.is_none() {
             return Vec::new();
         }
-        let dwell = b.non_modal == Some(NonModal::Dwell);
+        let dwell = b.non_modal() == Some(NonModal::Dwell);
         let mut words = Vec::new();
         for (i, w) in b.words.iter().enumerate() {
             let dwell_p = dwell && w.letter == b'P' && matches!(w.kind, WordKind::Value);
@@ -831,11 +831,11 @@ impl Lowering {
     /// G28/G30 intermediate points. Those are rewritten when the
     /// program's coordinate system is not the target's.
     fn positions_in_work(b: &Block, m: &Machine) -> bool {
-        b.non_modal == Some(NonModal::SetG92)
+        b.non_modal() == Some(NonModal::SetG92)
             || m.modes.distance == Distance::Absolute
-                && b.tool_length != Some(ToolLength::Dynamic)
+                && b.tool_length() != Some(ToolLength::Dynamic)
                 && matches!(
-                    b.non_modal,
+                    b.non_modal(),
                     None | Some(NonModal::Dwell | NonModal::Home | NonModal::Home2)
                 )
     }
@@ -883,7 +883,7 @@ impl Lowering {
         b: &Block,
         before: &Machine,
     ) -> Result<Option<Vec<(u8, f64)>>, ErrorKind> {
-        let (code, what) = match b.non_modal {
+        let (code, what) = match b.non_modal() {
             Some(NonModal::LocalOffset) => (520, "G52 (local offset)"),
             Some(NonModal::ResetG92) => (921, "G92.1"),
             Some(NonModal::SuspendG92) => (922, "G92.2 (G92 offsets off)"),
@@ -957,11 +957,11 @@ impl Lowering {
     /// probe is taken as not tripping, so a second probe to the same
     /// target is refused too.
     fn probe_in_place(&self, b: &Block, before: &Machine) -> Option<ErrorKind> {
-        let motion = b.motion.unwrap_or(before.modes.motion);
+        let motion = b.motion().unwrap_or(before.modes.motion);
         if !matches!(motion, MotionMode::Probe(_))
             || !b.has_axis()
-            || b.non_modal.is_some_and(|n| !matches!(n, NonModal::Dwell))
-            || b.tool_length == Some(ToolLength::Dynamic)
+            || b.non_modal().is_some_and(|n| !matches!(n, NonModal::Dwell))
+            || b.tool_length() == Some(ToolLength::Dynamic)
         {
             return None;
         }
@@ -987,7 +987,7 @@ impl Lowering {
     /// half its chord (a half turn about the chord's middle); GRBL-class
     /// firmwares refuse any radius short of it (error 34).
     fn arc_radius_short(&self, b: &Block, before: &Machine) -> Option<ErrorKind> {
-        let motion = b.motion.unwrap_or(before.modes.motion);
+        let motion = b.motion().unwrap_or(before.modes.motion);
         if !matches!(motion, MotionMode::ArcCw | MotionMode::ArcCcw) || !b.has_axis() {
             return None;
         }
@@ -1011,7 +1011,7 @@ impl Lowering {
     /// since the target would take a missing pair as minus the block's own
     /// P Q, where LinuxCNC reflects the previous block's P Q.
     fn native_g5_words(&mut self, b: &Block, before: &Machine, extra: &mut Vec<(u8, f64)>) {
-        let motion = b.motion.unwrap_or(before.modes.motion);
+        let motion = b.motion().unwrap_or(before.modes.motion);
         if motion != MotionMode::CubicSpline || !self.p.has_g(50) || !b.has_axis() {
             return;
         }
@@ -1395,14 +1395,14 @@ impl Lowering {
                 drop(l);
             }
         }
-        let arc = matches!(b.motion, Some(MotionMode::ArcCw | MotionMode::ArcCcw))
-            || b.motion.is_none()
+        let arc = matches!(b.motion(), Some(MotionMode::ArcCw | MotionMode::ArcCcw))
+            || b.motion().is_none()
                 && matches!(self.m.modes.motion, MotionMode::ArcCw | MotionMode::ArcCcw)
                 && b.has_axis();
         if arc && b.value(b'P') == Some(1.0) {
             drop(b'P');
         }
-        if b.retract.is_some() && !self.p.has_g(980) {
+        if b.retract().is_some() && !self.p.has_g(980) {
             // Nothing else belongs to G98/G99.
         }
     }
@@ -1466,7 +1466,7 @@ impl Lowering {
         fates: &mut [Fate],
         extra: &mut Vec<(u8, f64)>,
     ) {
-        if let Some(m) = b.feed_mode {
+        if let Some(m) = b.feed_mode() {
             self.target_inverse = m == FeedMode::InverseTime;
         }
         if !self.feed_rewrite {
@@ -1499,10 +1499,10 @@ impl Lowering {
         b: &Block,
         before: &Machine,
     ) -> Result<Option<Vec<PlainLine>>, ErrorKind> {
-        let motion = b.motion.unwrap_or(before.modes.motion);
+        let motion = b.motion().unwrap_or(before.modes.motion);
         let moves = b.has_axis() || b.value(b'@').is_some() || b.value(b'^').is_some();
-        let other_axis_use = b.non_modal.is_some_and(|n| !matches!(n, NonModal::Dwell))
-            || b.tool_length == Some(ToolLength::Dynamic);
+        let other_axis_use = b.non_modal().is_some_and(|n| !matches!(n, NonModal::Dwell))
+            || b.tool_length() == Some(ToolLength::Dynamic);
         match motion {
             MotionMode::Cycle(n) if !self.p.has_g(n as u16 * 10) => {
                 if !moves || other_axis_use {
@@ -1718,7 +1718,7 @@ impl Lowering {
             message: message.into(),
         };
         if motion == MotionMode::NurbsEnd {
-            if b.motion != Some(MotionMode::NurbsEnd) {
+            if b.motion() != Some(MotionMode::NurbsEnd) {
                 return Ok(None);
             }
             let Some(curve) = self.nurbs.take() else {
@@ -1742,13 +1742,13 @@ impl Lowering {
             return Ok(Some(lines));
         }
         let pending = before.modes.motion == MotionMode::Nurbs && self.nurbs.is_some();
-        if pending && b.units.is_some_and(|u| u != before.modes.units) {
+        if pending && b.units().is_some_and(|u| u != before.modes.units) {
             return Err(not_lowered(
                 self,
                 "G20/G21 between G5.2 and G5.3 is not lowered (LinuxCNC keeps the points already given in the old units)",
             ));
         }
-        if b.motion != Some(MotionMode::Nurbs) && !b.has_axis() {
+        if b.motion() != Some(MotionMode::Nurbs) && !b.has_axis() {
             return Ok(None);
         }
         // Nothing moves until G5.3.
@@ -1961,7 +1961,7 @@ impl Lowering {
         fates: &mut [Fate],
     ) -> Result<Option<Vec<PlainLine>>, Problem> {
         if self.p.has_g(410)
-            || self.comp.is_none() && b.cutter_comp.is_none() && self.after_off.is_none()
+            || self.comp.is_none() && b.cutter_comp().is_none() && self.after_off.is_none()
         {
             return Ok(None);
         }
@@ -1974,8 +1974,8 @@ impl Lowering {
             .find(|(g, _)| matches!(g, GCode::Motion(_)))
             .map(|(_, w)| w.span);
         let moves = b.has_axis();
-        let other_axis_use = b.non_modal.is_some_and(|n| !matches!(n, NonModal::Dwell))
-            || b.tool_length == Some(ToolLength::Dynamic);
+        let other_axis_use = b.non_modal().is_some_and(|n| !matches!(n, NonModal::Dwell))
+            || b.tool_length() == Some(ToolLength::Dynamic);
         let motion = self.m.modes.motion;
         if !moves && self.tool_change_after_off(b) {
             return Ok(None);
@@ -2009,7 +2009,7 @@ impl Lowering {
         let mut lines: Vec<PlainLine> = Vec::new();
         let mut handled = false;
         // G40 comes before the block's motion.
-        if b.cutter_comp == Some(CutterComp::Off)
+        if b.cutter_comp() == Some(CutterComp::Off)
             && let Some(mut c) = self.comp.take()
         {
             c.comp
@@ -2020,7 +2020,7 @@ impl Lowering {
             self.after_off = Some(at);
             handled = true;
         }
-        if let Some(cc) = b.cutter_comp.filter(|c| *c != CutterComp::Off) {
+        if let Some(cc) = b.cutter_comp().filter(|c| *c != CutterComp::Off) {
             for (i, w) in b.words.iter().enumerate() {
                 if matches!(w.kind, WordKind::Value) && matches!(w.letter, b'D' | b'L') {
                     fates[i] = Fate::Drop;
@@ -2103,7 +2103,7 @@ impl Lowering {
     /// is written in work coordinates with every axis, when they are all
     /// known (its G53 dropped). Whether it is.
     fn g53_after_off(&self, b: &Block, fates: &mut [Fate]) -> bool {
-        let g53 = b.non_modal == Some(NonModal::MachineCoords)
+        let g53 = b.non_modal() == Some(NonModal::MachineCoords)
             && self.prog_pos(&self.m).iter().all(Option::is_some);
         if g53 {
             for (i, w) in b.words.iter().enumerate() {
@@ -2347,7 +2347,7 @@ impl Lowering {
         if !(moves || arc && ijk_only) {
             return Ok(false);
         }
-        if b.units.is_some() && c.comp.holding() {
+        if b.units().is_some() && c.comp.holding() {
             return Err(self.comp_refusal(
                 span,
                 "E1180",

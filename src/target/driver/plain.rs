@@ -78,7 +78,7 @@ impl Lowering {
         if b.percent || b.block_delete || !self.plain_state() {
             return false;
         }
-        let motion = b.motion.unwrap_or(self.m.modes.motion);
+        let motion = b.motion().unwrap_or(self.m.modes.motion);
         let arc = match motion {
             MotionMode::Rapid | MotionMode::Linear => false,
             MotionMode::ArcCw | MotionMode::ArcCcw => true,
@@ -391,7 +391,7 @@ impl Lowering {
         text: &[u8],
         out: &mut Output,
     ) -> Result<Vec<Problem>, Error> {
-        let motion = b.motion.unwrap_or(self.m.modes.motion);
+        let motion = b.motion().unwrap_or(self.m.modes.motion);
         // G7 is not in effect (or the target has it): values as written.
         self.m.apply(b);
         let _ = self.m.take_events();
