@@ -271,19 +271,6 @@ impl GCode {
         GCode::from_code10(t as u16)
     }
 
-    /// Decodes a G number rounded to the nearest tenth, however far from
-    /// it: for a value already checked (the evaluator refuses a G word more
-    /// than 0.0001 from a tenth before it runs the line).
-    #[inline]
-    pub fn nearest(value: f64) -> Option<GCode> {
-        let t = round(value * 10.0);
-        if (0.0..=1000.0).contains(&t) {
-            GCode::from_code10(t as u16)
-        } else {
-            None
-        }
-    }
-
     /// The G code of a number ×10 (G59.1 → 591), None for one LinuxCNC
     /// does not know. The evaluator, which rounds G words with its own
     /// tolerance, decodes through this too.
@@ -832,36 +819,9 @@ pub enum SpindleDir {
     Ccw,
 }
 
-/// `x.round()` (halves away from zero) without a call into libm for the
-/// values codes have: from 0 to 2^53 the part after the point is exact, so
-/// comparing it with one half decides.
-#[inline]
-pub(crate) fn round(x: f64) -> f64 {
-    if (0.0..9.0e15).contains(&x) && x.is_sign_positive() {
-        // Through i64: one instruction each way on x86-64, unlike u64.
-        let i = x as i64;
-        (i + i64::from(x - i as f64 >= 0.5)) as f64
-    } else {
-        x.round()
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    proptest::proptest! {
-        #[test]
-        fn round_is_f64_round(
-            x in proptest::num::f64::ANY,
-            y in -100.0f64..2000.0,
-            k in 0u64..100_000,
-        ) {
-            for v in [x, y, k as f64 / 2.0, k as f64 / 20.0 + 0.05] {
-                proptest::prop_assert_eq!(round(v).to_bits(), v.round().to_bits(), "{}", v);
-            }
-        }
-    }
 
     #[test]
     fn g_codes_by_number_and_back() {

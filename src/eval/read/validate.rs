@@ -260,6 +260,20 @@ fn simple_block_ok(words: &[(u8, f64)], modal: &Modes) -> bool {
 /// A check's result: the error and the index of the word it concerns.
 type Check = Result<(), (ErrorKind, Option<usize>)>;
 
+/// The code a G word of value `v` stands for, as the reference reads it
+/// (see [`g_tenths`]), or why it stands for none. The block checks and the
+/// reader of a lathe cycle's contour (whose lines are not checked as
+/// blocks) decode G words with it.
+pub(in crate::eval) fn g_word(v: f64) -> Result<GCode, BlockError> {
+    if !(0.0..100.0).contains(&v) {
+        return Err(BlockError::GCodeOutOfRange);
+    }
+    let g10 = g_tenths(v).ok_or(BlockError::UnknownGCodeFraction)?;
+    GCode::from_code10(g10 as u16).ok_or_else(|| BlockError::UnknownGCode {
+        code: crate::emit::number_string(v, None),
+    })
+}
+
 fn bad<T>(e: BlockError, at: Option<usize>) -> Result<T, (ErrorKind, Option<usize>)> {
     Err((ErrorKind::Block(e), at))
 }
@@ -406,19 +420,9 @@ fn full_check(
     for (i, &(l, v)) in words.iter().enumerate() {
         match l {
             b'g' => {
-                if !(0.0..100.0).contains(&v) {
-                    return bad(BlockError::GCodeOutOfRange, Some(i));
-                }
-                let Some(g10) = g_tenths(v) else {
-                    return bad(BlockError::UnknownGCodeFraction, Some(i));
-                };
-                let Some(g) = GCode::from_code10(g10 as u16) else {
-                    return bad(
-                        BlockError::UnknownGCode {
-                            code: crate::emit::number_string(v, None),
-                        },
-                        Some(i),
-                    );
+                let g = match g_word(v) {
+                    Ok(g) => g,
+                    Err(e) => return bad(e, Some(i)),
                 };
                 let grp = g.group() as usize;
                 // The pairing looks at the codes, not at the words' values

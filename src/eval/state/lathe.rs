@@ -18,7 +18,7 @@ use crate::codes::{
     ArcDistance, CutterComp, Distance, FeedMode, GCode, LatheMode, MotionMode, Plane, Units,
 };
 use crate::eval::flow::{FrameKind, SubRec};
-use crate::eval::read::validate::{Checked, LineCodes, check_block};
+use crate::eval::read::validate::{Checked, LineCodes, check_block, g_word};
 use crate::eval::{Interp, file_key, read_error};
 
 /// A cycle whose contour subroutine is running.
@@ -60,6 +60,9 @@ enum Element {
 fn lathe(k: LatheError) -> ErrorKind {
     ErrorKind::Lathe(k)
 }
+
+/// A contour line's evaluated words, and its motion code if it has one.
+type ContourWords = (Vec<(u8, f64)>, Option<MotionMode>);
 
 impl Interp<'_> {
     fn lathe_err(&self, k: LatheError, file: &Rc<FileIndex>, start: u32, len: u32) -> Error {
@@ -365,15 +368,19 @@ impl Interp<'_> {
         self.contour_line(file, start, &line)
     }
 
-    /// A line of the contour: its assignments act; its axis, I/K/R and
-    /// A/C words and its motion code add to the contour.
-    fn contour_line(&mut self, file: &Rc<FileIndex>, start: u32, line: &Line) -> Result<(), Error> {
-        let LineKind::Items(items) = &line.kind else {
-            return Ok(());
-        };
+    /// The words of a contour line, evaluated (its assignments done), and
+    /// its motion code if it has one. A G word the reference does not read
+    /// as a code is refused at the word, as on any other line.
+    fn contour_words(
+        &mut self,
+        file: &Rc<FileIndex>,
+        start: u32,
+        items: &[Item],
+    ) -> Result<ContourWords, Error> {
         let mut words: Vec<(u8, f64)> = Vec::new();
         let mut num_set = Vec::new();
         let mut named_set = Vec::new();
+        let mut code = None;
         for item in items {
             match item {
                 Item::Word(w) => {
@@ -381,6 +388,16 @@ impl Interp<'_> {
                         .eval_value(&w.value)
                         .map_err(|f| self.fault_in_line(*f, file, start))?;
                     words.push((w.letter, v));
+                    if w.letter == b'g' {
+                        match g_word(v) {
+                            Ok(GCode::Motion(m)) => code = Some(m),
+                            Ok(_) => {}
+                            Err(k) => {
+                                let kind = ErrorKind::Block(k);
+                                return Err(self.error_in_line(kind, file, start, w.span));
+                            }
+                        }
+                    }
                 }
                 Item::Assign(a) => {
                     self.read_assign(file, start, a, &mut num_set, &mut named_set)?
@@ -389,6 +406,16 @@ impl Interp<'_> {
             }
         }
         self.apply_assigns(&num_set, &named_set);
+        Ok((words, code))
+    }
+
+    /// A line of the contour: its assignments act; its axis, I/K/R and
+    /// A/C words and its motion code add to the contour.
+    fn contour_line(&mut self, file: &Rc<FileIndex>, start: u32, line: &Line) -> Result<(), Error> {
+        let LineKind::Items(items) = &line.kind else {
+            return Ok(());
+        };
+        let (words, code) = self.contour_words(file, start, items)?;
         if words.is_empty() {
             return Ok(());
         }
@@ -407,14 +434,7 @@ impl Interp<'_> {
         if distance == Distance::Incremental {
             end = end + point;
         }
-        let mut motion = run.motion;
-        for &(l, v) in &words {
-            if l == b'g'
-                && let Some(GCode::Motion(m)) = GCode::nearest(v)
-            {
-                motion = m;
-            }
-        }
+        let motion = code.unwrap_or(run.motion);
         let mut add: Option<Element> = None;
         let mut short_radius = false;
         if end != point {
