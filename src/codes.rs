@@ -220,6 +220,20 @@ pub enum NonModal {
     RestoreG92,
 }
 
+impl NonModal {
+    /// The line's axis words are the code's (G10, G28, G30, G52, G53,
+    /// G92), not a move in the motion mode. G4, G28.1, G30.1 and G92.1 to
+    /// G92.3 leave them to the motion mode, as in the reference: the line
+    /// moves, after the code acts.
+    pub fn takes_axis_words(self) -> bool {
+        use NonModal::*;
+        match self {
+            SetData | Home | Home2 | LocalOffset | MachineCoords | SetG92 => true,
+            Dwell | SetHome | SetHome2 | ResetG92 | SuspendG92 | RestoreG92 => false,
+        }
+    }
+}
+
 /// Arc distance mode (group 4); Absolute second, as in [`Distance`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ArcDistance {

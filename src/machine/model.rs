@@ -420,7 +420,10 @@ impl Machine {
             self.shift(before);
         }
         let motion_used = match b.non_modal() {
-            Some(n) => self.non_modal(b, n),
+            Some(n) => {
+                self.non_modal(b, n);
+                n.takes_axis_words()
+            }
             None => false,
         } || b.tool_length() == Some(ToolLength::Dynamic) && b.motion().is_none();
         if let Some(m) = b.motion() {
@@ -531,15 +534,14 @@ impl Machine {
         }
     }
 
-    fn non_modal(&mut self, b: &Block, n: NonModal) -> bool {
+    fn non_modal(&mut self, b: &Block, n: NonModal) {
         let s = self.scale();
         let ms = self.machine_scale();
         let axes = b.axes();
         match n {
-            NonModal::Dwell => false,
+            NonModal::Dwell => {}
             NonModal::SetData => {
                 self.set_data(b);
-                true
             }
             NonModal::Home | NonModal::Home2 => {
                 if b.has_axis() {
@@ -563,7 +565,6 @@ impl Machine {
                     }
                 }
                 self.line_to(MoveKind::Rapid, to);
-                true
             }
             NonModal::SetHome | NonModal::SetHome2 => {
                 let m = self.machine_pos();
@@ -574,7 +575,6 @@ impl Machine {
                 } else {
                     self.home30 = h;
                 }
-                false
             }
             NonModal::MachineCoords => {
                 let off = self.offset();
@@ -593,7 +593,6 @@ impl Machine {
                 if b.has_axis() {
                     self.line_to(kind, to);
                 }
-                true
             }
             NonModal::SetG92 | NonModal::LocalOffset => {
                 let before = self.offset();
@@ -619,7 +618,6 @@ impl Machine {
                 self.g92_applied = Some(true);
                 self.shift(before);
                 let _ = ms;
-                true
             }
             NonModal::ResetG92 | NonModal::SuspendG92 => {
                 let before = self.offset();
@@ -628,13 +626,11 @@ impl Machine {
                 }
                 self.g92_applied = Some(false);
                 self.shift(before);
-                false
             }
             NonModal::RestoreG92 => {
                 let before = self.offset();
                 self.g92_applied = Some(true);
                 self.shift(before);
-                false
             }
         }
     }

@@ -31,18 +31,10 @@ fn m_group(m: MCode) -> Option<u8> {
     })
 }
 
-/// Codes that take the axis words (besides motion codes).
+/// Codes that take the axis words (besides motion codes, and G53, which
+/// moves in G0 or G1): [`NonModal::takes_axis_words`].
 fn g_uses_axes(g: GCode) -> bool {
-    matches!(
-        g,
-        GCode::NonModal(
-            NonModal::SetData
-                | NonModal::Home
-                | NonModal::Home2
-                | NonModal::LocalOffset
-                | NonModal::SetG92
-        )
-    )
+    matches!(g, GCode::NonModal(n) if n.takes_axis_words() && n != NonModal::MachineCoords)
 }
 
 /// G41/G42 or G41.1/G42.1.

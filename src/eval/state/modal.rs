@@ -234,9 +234,11 @@ impl Interp<'_> {
                 }
             }
         }
-        match special {
-            Some(g) => self.apply_non_modal(file, start, g, words, &w)?,
-            None => self.apply_motion(file, start, words, &w, motion_before, dynamic_tlo)?,
+        if let Some(g) = special {
+            self.apply_non_modal(file, start, g, words, &w)?;
+        }
+        if !special.is_some_and(NonModal::takes_axis_words) {
+            self.apply_motion(file, start, words, &w, motion_before, dynamic_tlo)?;
         }
         if let Some(on) = self.mach.retain_line.take() {
             self.emit_raw(if on { b"G43" } else { b"G49" })?;
