@@ -381,13 +381,9 @@ impl Machine {
             }
             match m {
                 MCode::ToolChange => {
-                    // The spindle stops for the change (LinuxCNC's default,
-                    // [EMCIO]TOOL_CHANGE_WITH_SPINDLE_ON = 0) and stays off.
-                    if self.modes.spindle != SpindleDir::Off {
-                        self.modes.spindle = SpindleDir::Off;
+                    if self.tools.change(&mut self.modes) {
                         self.spindle_event();
                     }
-                    self.tools.change();
                     if let Some(t) = self.selected_tool() {
                         self.push(Motion::ToolChange { tool: t });
                     }

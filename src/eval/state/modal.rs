@@ -320,7 +320,9 @@ impl Interp<'_> {
         match m {
             MCode::End { .. } => w.ends = true,
             MCode::ToolChange => {
-                self.mach.tools.change();
+                // The spindle stops for the change, as in the model after
+                // evaluation (no event here: the line is written as is).
+                self.mach.tools.change(&mut self.mach.modal);
                 if let Some(p) = &mut self.mach.pockets {
                     p.0 = p.1;
                 }

@@ -3,7 +3,7 @@
 //! by the program itself (G10 L1/L10/L11). Tool data is kept in machine
 //! units, as LinuxCNC stores it.
 
-use crate::codes::CoordSystem;
+use crate::codes::{CoordSystem, Modes, SpindleDir};
 use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
 use crate::eval::{Interp, Settings};
@@ -58,11 +58,16 @@ impl Tools {
         self.selected = Some(t);
     }
 
-    /// M6: the selected tool goes in the spindle (an unknown one if none
-    /// was selected).
+    /// M6: the spindle stops for the change and stays off (LinuxCNC's
+    /// default, `[EMCIO]TOOL_CHANGE_WITH_SPINDLE_ON = 0`), and the selected
+    /// tool goes in (an unknown one if none was selected). True when the
+    /// spindle was turning.
     #[inline]
-    pub fn change(&mut self) {
+    pub fn change(&mut self, modes: &mut Modes) -> bool {
         self.current = self.selected;
+        let stops = modes.spindle != SpindleDir::Off;
+        modes.spindle = SpindleDir::Off;
+        stops
     }
 
     /// M61 with its Q word: the tool in the spindle is `q` (unknown
@@ -295,12 +300,14 @@ mod tests {
         let mut t = Tools::new(&table);
         assert_eq!((t.current, t.selected), (Some(0.0), None));
         assert_eq!((t.data(2), t.data(3)), (Some(row), None));
-        t.change();
+        let mut modes = Modes::default();
+        assert!(!t.change(&mut modes));
         assert_eq!(t.current, None, "M6 with no tool selected");
         t.select(2.4);
         assert_eq!((t.current, t.selected), (None, Some(2.4)));
-        t.change();
-        assert_eq!(t.current, Some(2.4));
+        modes.spindle = SpindleDir::Ccw;
+        assert!(t.change(&mut modes), "the spindle stops");
+        assert_eq!((t.current, modes.spindle), (Some(2.4), SpindleDir::Off));
         t.set_current(Some(5.0));
         assert_eq!((t.current, t.selected), (Some(5.0), Some(2.4)));
         t.set_current(None);
