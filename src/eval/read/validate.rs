@@ -253,10 +253,8 @@ fn simple_block_ok(words: &[(u8, f64)], modal: &Modes) -> bool {
 type Check = Result<(), (ErrorKind, Option<usize>)>;
 
 /// The code a G word of value `v` stands for, as the reference reads it
-/// (see [`g_tenths`]), or why it stands for none. The block checks and the
-/// reader of a lathe cycle's contour (whose lines are not checked as
-/// blocks) decode G words with it.
-pub(in crate::eval) fn g_word(v: f64) -> Result<GCode, BlockError> {
+/// (see [`g_tenths`]), or why it stands for none.
+fn g_word(v: f64) -> Result<GCode, BlockError> {
     if !(0.0..100.0).contains(&v) {
         return Err(BlockError::GCodeOutOfRange);
     }
@@ -389,24 +387,63 @@ impl<'a> Decoded<'a> {
     }
 }
 
-fn full_check(
-    words: &[(u8, f64)],
-    modal: &Modes,
-    points: &Nurbs,
-    cycle: &Cycle,
-    user_m: u128,
-) -> Result<Checked, (ErrorKind, Option<usize>)> {
+/// Which lines a check is for: lines that run, or a lathe cycle's contour
+/// lines (see [`check_contour_line`]), which skip what only running needs.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Lines {
+    Run,
+    Contour,
+}
+
+/// A block's codes and where its other words are, as the reading of a
+/// line finds them (see [`read_codes`]).
+struct ReadCodes {
+    gbuf: [(GCode, usize); 16],
+    gn: usize,
+    mbuf: [(MCode, usize); 16],
+    mn: usize,
+    has: [Option<u8>; 128],
+    /// The lathe cycle's G word.
+    lathe: Option<usize>,
+    g80_gave_way: bool,
+}
+
+impl ReadCodes {
+    fn decoded<'a>(&'a self, words: &'a [(u8, f64)], modal: &'a Modes) -> Decoded<'a> {
+        Decoded::new(
+            words,
+            modal,
+            &self.gbuf[..self.gn],
+            &self.mbuf[..self.mn],
+            &self.has,
+        )
+    }
+
+    fn checked(&self, d: &Decoded<'_>) -> Checked {
+        let codes = LineCodes::of(d.gs, d.ms, self.g80_gave_way);
+        match self.lathe {
+            Some(at) => Checked::Lathe(codes, at),
+            None => Checked::Line(codes),
+        }
+    }
+}
+
+/// The G and M words of a block decoded, each group at most once (a G80
+/// gives way to another motion code), and where each other letter is.
+#[inline]
+fn read_codes(words: &[(u8, f64)], user_m: u128) -> Result<ReadCodes, (ErrorKind, Option<usize>)> {
     let mut gseen: [Option<usize>; 16] = [None; 16];
     let mut mseen: [Option<usize>; 16] = [None; 16];
     // Fixed-size scratch: this runs for every line.
-    let mut gbuf = [(G80, 0usize); 16];
-    let mut gn = 0;
-    let mut mbuf = [(MCode::Other(0), 0usize); 16];
-    let mut mn = 0;
-    let mut has = [None::<u8>; 128];
-    // The lathe cycle's G word.
-    let mut lathe = None;
-    let mut g80_gave_way = false;
+    let mut r = ReadCodes {
+        gbuf: [(G80, 0usize); 16],
+        gn: 0,
+        mbuf: [(MCode::Other(0), 0usize); 16],
+        mn: 0,
+        has: [None::<u8>; 128],
+        lathe: None,
+        g80_gave_way: false,
+    };
     // The code of the motion word recorded in gseen[1].
     let mut motion = None;
     for (i, &(l, v)) in words.iter().enumerate() {
@@ -424,28 +461,28 @@ fn full_check(
                     return bad(BlockError::SameGroupG, Some(i));
                 }
                 if g80_pair {
-                    g80_gave_way = true;
+                    r.g80_gave_way = true;
                     if g == G80 {
                         continue;
                     }
                     // The other code takes the place of the G80 recorded
                     // before: the list stays in line order, without it.
-                    if let Some(k) = gbuf[..gn].iter().position(|x| x.0 == G80) {
-                        gbuf.copy_within(k + 1..gn, k);
-                        gn -= 1;
+                    if let Some(k) = r.gbuf[..r.gn].iter().position(|x| x.0 == G80) {
+                        r.gbuf.copy_within(k + 1..r.gn, k);
+                        r.gn -= 1;
                     }
                 }
                 if matches!(g, GCode::Motion(M::LatheCycle { .. })) {
                     // The lathe cycles run a contour subroutine named by Q
                     // (after a G80 on their line too).
-                    lathe = Some(i);
+                    r.lathe = Some(i);
                 }
                 gseen[grp] = Some(i);
                 if grp == 1 {
                     motion = Some(g);
                 }
-                gbuf[gn] = (g, i);
-                gn += 1;
+                r.gbuf[r.gn] = (g, i);
+                r.gn += 1;
             }
             b'm' => {
                 if v.fract() != 0.0 || v < 0.0 {
@@ -468,21 +505,32 @@ fn full_check(
                     return bad(BlockError::SameGroupM, Some(i));
                 }
                 mseen[grp as usize] = Some(i);
-                if mn == mbuf.len() {
+                if r.mn == r.mbuf.len() {
                     // (More than four M words are refused before this.)
                     return Err((ErrorKind::TooManyMWords, Some(i)));
                 }
-                mbuf[mn] = (code, i);
-                mn += 1;
+                r.mbuf[r.mn] = (code, i);
+                r.mn += 1;
             }
             _ => {
                 if (l as usize) < 128 {
-                    has[l as usize] = Some(i.min(255) as u8);
+                    r.has[l as usize] = Some(i.min(255) as u8);
                 }
             }
         }
     }
-    let d = Decoded::new(words, modal, &gbuf[..gn], &mbuf[..mn], &has);
+    Ok(r)
+}
+
+fn full_check(
+    words: &[(u8, f64)],
+    modal: &Modes,
+    points: &Nurbs,
+    cycle: &Cycle,
+    user_m: u128,
+) -> Result<Checked, (ErrorKind, Option<usize>)> {
+    let r = read_codes(words, user_m)?;
+    let d = r.decoded(words, modal);
     check_nurbs(&d, points)?;
     check_motion_words(&d)?;
     check_axis_codes(&d)?;
@@ -490,18 +538,36 @@ fn full_check(
     check_axis_values(&d)?;
     check_word_values(&d)?;
     check_unused_words(&d)?;
-    check_whole_numbers(&d)?;
+    check_whole_numbers(&d, Lines::Run)?;
     check_g10(&d)?;
-    check_required_words(&d)?;
+    check_required_words(&d, Lines::Run)?;
     check_feed(&d)?;
     if modal.cutter_comp != CutterComp::Off || d.g_on(comp_on) {
         check_comp(&d)?;
     }
-    let codes = LineCodes::of(d.gs, d.ms, g80_gave_way);
-    Ok(match lathe {
-        Some(at) => Checked::Lathe(codes, at),
-        None => Checked::Line(codes),
-    })
+    Ok(r.checked(&d))
+}
+
+/// The checks of [`check_block`] the reference makes on a line of a lathe
+/// cycle's contour (G70-G72 run their contour subroutine collecting its
+/// moves): its codes and the words they take, not what its motion would
+/// need to run (a feed rate, arc words, a canned cycle's state, cutter
+/// compensation), which the cycle checks itself, nor what its M codes
+/// need: they do not run there (a user M-code need not be declared).
+/// `modal` has the motion the contour has reached.
+pub(in crate::eval) fn check_contour_line(
+    words: &[(u8, f64)],
+    modal: &Modes,
+) -> Result<Checked, (ErrorKind, Option<usize>)> {
+    let r = read_codes(words, u128::MAX)?;
+    let d = r.decoded(words, modal);
+    check_axis_codes(&d)?;
+    check_word_values(&d)?;
+    check_unused_words(&d)?;
+    check_whole_numbers(&d, Lines::Contour)?;
+    check_g10(&d)?;
+    check_required_words(&d, Lines::Contour)?;
+    Ok(r.checked(&d))
 }
 
 /// What the reference refuses while cutter compensation is on, and the
@@ -975,7 +1041,8 @@ fn takes_q(d: &Decoded<'_>) -> bool {
 }
 
 /// Whole numbers, peck depths, H, and G53's conditions.
-fn check_whole_numbers(d: &Decoded<'_>) -> Check {
+fn check_whole_numbers(d: &Decoded<'_>, lines: Lines) -> Check {
+    let runs = lines == Lines::Run;
     // Whole numbers.
     let g41_g42 = d.g_on(|g| matches!(g, GCode::CutterComp(CutterComp::Left | CutterComp::Right)));
     for (i, &(l, v)) in d.words.iter().enumerate() {
@@ -984,12 +1051,13 @@ fn check_whole_numbers(d: &Decoded<'_>) -> Check {
         }
         // The reference's test: the D value within 0.0001 of the integer
         // (int)(D + 0.5), which also refuses every negative D.
-        if l == b'd' && g41_g42 && (((v + 0.5) as i64) as f64 - v).abs() >= 0.0001 {
+        if runs && l == b'd' && g41_g42 && (((v + 0.5) as i64) as f64 - v).abs() >= 0.0001 {
             return bad(BlockError::CompDNotWhole, Some(i));
         }
     }
     // Peck depths of a running G73/G83.
-    if matches!(d.motion, M::Cycle(73 | 83))
+    if runs
+        && matches!(d.motion, M::Cycle(73 | 83))
         && (d.motion_here.is_some() || d.axis_word.is_some())
         && d.value(b'q').is_some_and(|q| q != -1.0 && q <= 0.0)
     {
@@ -1044,13 +1112,16 @@ fn check_g10(d: &Decoded<'_>) -> Check {
 }
 
 /// Codes that need words.
-fn check_required_words(d: &Decoded<'_>) -> Check {
+fn check_required_words(d: &Decoded<'_>, lines: Lines) -> Check {
     let g4 = d.g_at(|g| g == GCode::NonModal(NonModal::Dwell));
     if g4.is_some() && !d.given(b'p') {
         return bad(BlockError::G4PMissing, g4);
     }
     if d.has_g(GCode::SpindleMode(SpindleMode::ConstantSurface)) && d.has_at(b's').is_none() {
         return bad(BlockError::G96SMissing, None);
+    }
+    if lines == Lines::Contour {
+        return Ok(());
     }
     if d.m_on(|m| matches!(m, MCode::Io(62..=65))) && d.has_at(b'p').is_none() {
         return bad(BlockError::M62PMissing, None);

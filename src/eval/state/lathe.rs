@@ -18,7 +18,7 @@ use crate::codes::{
     ArcDistance, CutterComp, Distance, FeedMode, GCode, LatheMode, MotionMode, Plane, Units,
 };
 use crate::eval::flow::{FrameKind, SubRec};
-use crate::eval::read::validate::{Checked, LineCodes, check_block, g_word};
+use crate::eval::read::validate::{Checked, LineCodes, check_block, check_contour_line};
 use crate::eval::{Interp, file_key, read_error};
 
 /// A cycle whose contour subroutine is running.
@@ -368,9 +368,12 @@ impl Interp<'_> {
         self.contour_line(file, start, &line)
     }
 
-    /// The words of a contour line, evaluated (its assignments done), and
-    /// its motion code if it has one. A G word the reference does not read
-    /// as a code is refused at the word, as on any other line.
+    /// The words of a contour line, evaluated, and its motion code if it
+    /// has one; its assignments done. The line's codes and words are
+    /// checked as the reference checks every line the contour runs
+    /// ([`check_contour_line`], in the motion the contour has reached): a G
+    /// word it does not read as a code, two codes of one group, a word no
+    /// code on the line uses are refused there.
     fn contour_words(
         &mut self,
         file: &Rc<FileIndex>,
@@ -378,9 +381,9 @@ impl Interp<'_> {
         items: &[Item],
     ) -> Result<ContourWords, Error> {
         let mut words: Vec<(u8, f64)> = Vec::new();
+        let mut spans = Vec::new();
         let mut num_set = Vec::new();
         let mut named_set = Vec::new();
-        let mut code = None;
         for item in items {
             match item {
                 Item::Word(w) => {
@@ -388,21 +391,34 @@ impl Interp<'_> {
                         .eval_value(&w.value)
                         .map_err(|f| self.fault_in_line(*f, file, start))?;
                     words.push((w.letter, v));
-                    if w.letter == b'g' {
-                        match g_word(v) {
-                            Ok(GCode::Motion(m)) => code = Some(m),
-                            Ok(_) => {}
-                            Err(k) => {
-                                let kind = ErrorKind::Block(k);
-                                return Err(self.error_in_line(kind, file, start, w.span));
-                            }
-                        }
-                    }
+                    spans.push(w.span);
                 }
                 Item::Assign(a) => {
                     self.read_assign(file, start, a, &mut num_set, &mut named_set)?
                 }
                 Item::Comment(_) => {}
+            }
+        }
+        let mut code = None;
+        if !words.is_empty() {
+            let mut modal = self.mach.modal.clone();
+            if let Some(run) = self.mach.lathe.as_deref() {
+                modal.motion = run.motion;
+            }
+            match check_contour_line(&words, &modal) {
+                // (A contour line's codes are always decoded.)
+                Ok(Checked::Simple) => {}
+                Ok(Checked::Line(c) | Checked::Lathe(c, _)) => {
+                    code = c.gs().iter().find_map(|g| match g {
+                        GCode::Motion(m) => Some(*m),
+                        _ => None,
+                    })
+                }
+                Err((kind, at)) => {
+                    let whole = crate::parse::ast::Span::new(0, line_len(file, start));
+                    let span = at.and_then(|i| spans.get(i).copied()).unwrap_or(whole);
+                    return Err(self.error_in_line(kind, file, start, span));
+                }
             }
         }
         self.apply_assigns(&num_set, &named_set);
