@@ -133,6 +133,19 @@ impl CoordSystem {
     /// G54, LinuxCNC's first coordinate system.
     pub const G54: CoordSystem = CoordSystem(1);
 
+    /// The system a value of `#5220` (the active system, as a parameter
+    /// file keeps it) starts a run in: its whole part (taken toward zero)
+    /// when 1 to 9, else G54, as the reference reads it. Both machine
+    /// models start from it.
+    pub fn from_parameter(v: f64) -> CoordSystem {
+        let n = v.trunc();
+        if (1.0..=9.0).contains(&n) {
+            CoordSystem(n as u8)
+        } else {
+            CoordSystem::G54
+        }
+    }
+
     /// Its row in a table of the nine systems (G54 is 0, G59.3 is 8).
     pub fn index(self) -> usize {
         (self.0.clamp(1, 9) - 1) as usize
@@ -857,6 +870,11 @@ mod tests {
         assert_eq!(CoordSystem(9).parameters(), 5381);
         assert_eq!(CoordSystem(6).code10(), 590);
         assert_eq!(CoordSystem(7).code10(), 591);
+        for (v, want) in [(2.0, 2), (2.6, 2), (9.9, 9), (0.0, 1), (0.5, 1), (10.0, 1)] {
+            assert_eq!(CoordSystem::from_parameter(v), CoordSystem(want), "{v}");
+        }
+        assert_eq!(CoordSystem::from_parameter(f64::NAN), CoordSystem::G54);
+        assert_eq!(CoordSystem::from_parameter(-1.0), CoordSystem::G54);
     }
 
     /// Every G code either sets its group's field of the modes and

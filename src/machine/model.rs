@@ -102,9 +102,7 @@ impl Machine {
         }
         let coord = p
             .get(&5220)
-            .map(|v| v.round())
-            .filter(|v| (1.0..=9.0).contains(v))
-            .map_or(CoordSystem::G54, |v| CoordSystem(v as u8));
+            .map_or(CoordSystem::G54, |&v| CoordSystem::from_parameter(v));
         let g92_applied = match p.get(&5210) {
             Some(v) => Some(*v != 0.0),
             None => zs.then_some(false),

@@ -10,7 +10,7 @@ pub(super) mod nurbs;
 pub(super) mod restore;
 pub mod tools;
 
-use crate::codes::Modes;
+use crate::codes::{CoordSystem, Modes};
 use crate::eval::Settings;
 
 /// Axis letters in parameter order (X Y Z A B C U V W).
@@ -110,8 +110,18 @@ impl Machine {
         for &(axis, v) in &s.start_position {
             pos.axes[axis] = Ok(v);
         }
+        // The active coordinate system a parameter file or -D gives (the
+        // last value of #5220), as the machine model after evaluation
+        // starts.
+        let coord = s.defines.iter().rev().find_map(|d| match d {
+            crate::eval::Define::Numbered(5220, v) => Some(CoordSystem::from_parameter(*v)),
+            _ => None,
+        });
         Machine {
-            modal: Modes::default(),
+            modal: Modes {
+                coord: coord.unwrap_or(CoordSystem::G54),
+                ..Modes::default()
+            },
             pos,
             tools: tools::Tools::new(s),
             retain_line: None,
