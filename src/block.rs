@@ -293,8 +293,8 @@ pub struct MovesRule {
 }
 
 /// The values of a line of moves alone: its motion code (G0–G3), X, Y, Z,
-/// F, and whether it has arc centre words (I, J, K). Kept small: a batch
-/// of such lines holds one per line.
+/// F, whether it has arc centre words (I, J, K) and their values. Kept
+/// small: a batch of such lines holds one per line.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct MoveValues {
     pub motion: Option<MotionMode>,
@@ -302,6 +302,8 @@ pub struct MoveValues {
     vals: [f64; 4],
     has: u8,
     pub ijk: bool,
+    /// I, J and K, 0 where the line has none (all 0 without `ijk`).
+    pub centre: [f64; 3],
 }
 
 impl MoveValues {
@@ -326,19 +328,22 @@ impl MoveValues {
     }
 
     /// From X, Y, Z and F as `vals` and which of them there are as the
-    /// bits of `has` (1, 2, 4, 8; the others are ignored).
+    /// bits of `has` (1, 2, 4, 8; the others are ignored), and I, J, K as
+    /// `centre`.
     #[inline(always)]
     pub(crate) fn from_parts(
         motion: Option<MotionMode>,
         vals: [f64; 4],
         has: u8,
         ijk: bool,
+        centre: [f64; 3],
     ) -> MoveValues {
         MoveValues {
             motion,
             vals,
             has: has & 0b1111,
             ijk,
+            centre,
         }
     }
 

@@ -180,8 +180,14 @@ pub(crate) fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
     match result {
         (w, None) => w,
         (mut w, Some(e)) => {
-            // Target problems found before the error come first.
-            w.retain(|d| d.level() == Level::Error);
+            // Target problems found before the error come first; the
+            // lowering may have found the same error at the same place (it
+            // checks arcs again with the positions it knows): it is
+            // reported once.
+            let site = |d: &Diagnostic| d.site.as_ref().map(|s| (s.file.path.clone(), s.start));
+            w.retain(|d| {
+                d.level() == Level::Error && !(d.code() == e.code() && site(d) == site(&e))
+            });
             w.push(*e);
             w
         }

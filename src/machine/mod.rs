@@ -10,3 +10,4 @@ pub(crate) mod motion;
 
 pub use block::Block;
 pub use model::Machine;
+pub(crate) use model::radius_center;

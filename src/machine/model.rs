@@ -519,7 +519,7 @@ impl Machine {
     /// Where axis `a` goes for its word `v` (program units; `s` mm per
     /// program unit), by the distance and diameter modes.
     #[inline]
-    fn axis_target(&self, a: usize, v: f64, s: f64) -> Option<f64> {
+    pub(crate) fn axis_target(&self, a: usize, v: f64, s: f64) -> Option<f64> {
         let v = self.modes.radius_word(a, v);
         let rot = if (3..=5).contains(&a) { 1.0 } else { s };
         match self.modes.distance {
@@ -852,7 +852,7 @@ fn moves_without_axes(m: MotionMode) -> bool {
 }
 
 /// Centre of an R-format arc from `a` to `b` (positive R: the shorter arc).
-fn radius_center(a: [f64; 2], b: [f64; 2], r: f64, ccw: bool) -> [f64; 2] {
+pub(crate) fn radius_center(a: [f64; 2], b: [f64; 2], r: f64, ccw: bool) -> [f64; 2] {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let d = (dx * dx + dy * dy).sqrt();
     let mid = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];

@@ -24,6 +24,7 @@ use super::format::LineWriter;
 use super::lower::{self, PlainLine};
 use super::profile::{Profile, ToolChange};
 
+mod arcs;
 mod plain;
 
 /// A problem found on a line: the word it is about and what it is.
@@ -214,15 +215,25 @@ impl Lowering {
     }
 }
 
+/// A problem's span that stands for the start of its line, where the
+/// evaluator reports an error of the block (an arc rs274 refuses).
+const LINE_START: crate::block::Span = crate::block::Span {
+    start: u16::MAX,
+    end: u16::MAX,
+};
+
 /// The site of `span` of a flat line from `origin`: exact on a line written
 /// as read; otherwise the same-lettered word of the source line (by its
-/// rank), or the whole line.
+/// rank), or the whole line; [`LINE_START`] where the line starts.
 fn site_of(origin: &Origin<'_>, text: &[u8], span: Option<crate::block::Span>) -> Site {
     let file: &Arc<SourceFile> = origin.file;
     let start = origin.line_start;
     let Some(span) = span else {
         return Site::new(file, start, start + line_len(file, start));
     };
+    if span == LINE_START {
+        return Site::new(file, start, start);
+    }
     if origin.verbatim {
         return Site::new(file, start + span.start as u32, start + span.end as u32);
     }
@@ -404,7 +415,7 @@ impl Lowering {
         origin: &Origin<'_>,
         out: &mut Output,
     ) -> Result<Vec<Problem>, Error> {
-        if self.plain && self.is_plain(b) {
+        if self.plain && self.is_plain(b) && !self.plain_arc_off(b) {
             self.write_plain(b, text, out)
         } else {
             self.lower_block(b, text, origin, out)
@@ -651,6 +662,13 @@ impl Lowering {
         if let Some(k) = self.arc_radius_short(b, before) {
             return Err(Problem {
                 span: b.words.iter().find(|w| w.letter == b'R').map(|w| w.span),
+                kind: k,
+            });
+        }
+        if let Some(k) = self.linuxcnc_arc_refusal(b, before) {
+            // At the line, as the evaluator reports it.
+            return Err(Problem {
+                span: Some(LINE_START),
                 kind: k,
             });
         }
@@ -1524,6 +1542,12 @@ impl Lowering {
                     }
                     return self.lower_arc(b, before, motion, turns).map(Some);
                 }
+                if !other_axis_use
+                    && b.has_axis()
+                    && self.arc_off_target(b, before, &self.m, motion)
+                {
+                    return self.lower_arc(b, before, motion, turns).map(Some);
+                }
                 Ok(None)
             }
             MotionMode::Cycle(_) => Ok(None),
@@ -1622,15 +1646,29 @@ impl Lowering {
         };
         let start = known(start, "start")?;
         let end = known(end, "end")?;
-        if b.value(b'R').is_some() {
-            return Err(self.refuse(
-                "an R-form arc with P turns",
-                "only centre-form arcs are lowered",
-            ));
-        }
         let plane = Self::plane(&self.m)?;
-        let ijk = [b.value(b'I'), b.value(b'J'), b.value(b'K')];
         let mut centre = start;
+        if let Some(r) = b.value(b'R') {
+            if turns != 1.0 {
+                return Err(self.refuse(
+                    "an R-form arc with P turns",
+                    "only centre-form arcs are lowered",
+                ));
+            }
+            // LinuxCNC's centre for the radius (a checked arc).
+            let [p, q, _] = plane.axes();
+            let arc = CompArc {
+                ccw: motion == MotionMode::ArcCcw,
+                center: ArcCenter::Radius(r),
+                turns: 1,
+            };
+            let tol = Tolerances::default_for(self.m.modes.units);
+            let (c, _) =
+                crate::geom::comp::arc_center(&tol, arc, [start[p], start[q]], [end[p], end[q]])
+                    .map_err(|_| self.lower_error(lower::LowerError::BadArc))?;
+            (centre[p], centre[q]) = (c[0], c[1]);
+        }
+        let ijk = [b.value(b'I'), b.value(b'J'), b.value(b'K')];
         for i in 0..3 {
             if let Some(v) = ijk[i] {
                 centre[i] = match self.m.modes.arc_distance {
@@ -1646,6 +1684,7 @@ impl Lowering {
             end,
             centre,
             turns: turns.max(1.0) as u32,
+            radius_step: self.radius_step(),
         };
         lower::arc::lower_arc(&input).map_err(|e| self.lower_error(e))
     }

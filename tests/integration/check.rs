@@ -1327,3 +1327,28 @@ fn json_lines_parse_and_end_with_a_summary() {
     assert_eq!(v["span"]["start"], 4);
     assert_eq!(v["end"]["line"], 1);
 }
+
+/// An arc error the evaluator reports and the lowering finds again at the
+/// same place (it checks arcs with the positions it knows) is one error.
+#[test]
+fn target_check_reports_an_arc_error_once() {
+    for target in ["grbl", "grblhal", "fluidnc"] {
+        let (_, _, stderr) = run(
+            &root(),
+            &[
+                "check",
+                "--target",
+                target,
+                "--message-format",
+                "short",
+                "fixtures/err/blocks/arc-r-same-point.ngc",
+            ],
+        );
+        assert_eq!(
+            summary(&stderr),
+            "1 files, 1 errors, 0 warnings",
+            "{stderr}"
+        );
+        assert!(stderr.contains("[E0651]"), "{stderr}");
+    }
+}

@@ -534,7 +534,10 @@ fn compare_with_arcs(a: &[String], b: &[String], plane: Plane) -> Result<(), Str
         }
         let arc = canon_arc(&nums, plane).ok_or("bad ARC_FEED")?;
         let total = canon_sweep(pa, &arc, plane);
+        // LinuxCNC moves a spiral when the end is off the start's
+        // distance from the centre: the distance is linear in the angle.
         let radius = (pa[q] - arc.centre[1]).hypot(pa[p] - arc.centre[0]);
+        let spiral = (arc.end[q] - arc.centre[1]).hypot(arc.end[p] - arc.centre[0]) - radius;
         let a0 = (pa[q] - arc.centre[1]).atan2(pa[p] - arc.centre[0]);
         let dir = arc.rotation.signum();
         let mut acc = 0.0;
@@ -559,8 +562,9 @@ fn compare_with_arcs(a: &[String], b: &[String], plane: Plane) -> Result<(), Str
             }
             acc += canon_sweep(pb, &piece, plane);
             let angle = a0 + dir * acc;
-            let want_p = arc.centre[0] + radius * angle.cos();
-            let want_q = arc.centre[1] + radius * angle.sin();
+            let r = radius + spiral * (acc / total).min(1.0);
+            let want_p = arc.centre[0] + r * angle.cos();
+            let want_q = arc.centre[1] + r * angle.sin();
             let want_n = pa[n] + (arc.end[n] - pa[n]) * (acc / total).min(1.0);
             let e = piece.end;
             if (e[p] - want_p).abs() > 3e-4
@@ -603,7 +607,8 @@ fn plane_code(plane: Plane) -> &'static str {
     }
 }
 
-/// Full circles without end point and P-turn arcs, written both ways.
+/// Full circles without end point, P-turn arcs and spiral arcs, written
+/// both ways.
 fn arc_program(seed: u64) -> (String, String, Plane) {
     use ngcflat::target::lower::arc::{ArcInput, lower_arc};
     let mut rng = Rng::new(seed);
@@ -648,7 +653,14 @@ fn arc_program(seed: u64) -> (String, String, Plane) {
         let mut words = vec![g.to_string()];
         let with_end = rng.chance(0.5);
         if with_end {
-            let r = op.hypot(oq);
+            // Some arcs end a little off the start's distance from the
+            // centre (within LinuxCNC's tolerance): a spiral.
+            let spiral = if rng.chance(0.3) {
+                rng.milli(-0.015, 0.015) / if units == "G20" { 25.4 } else { 1.0 }
+            } else {
+                0.0
+            };
+            let r = op.hypot(oq) + spiral;
             let phi = rng.milli(-3.2, 3.2);
             end[p] = centre[p] + r * phi.cos();
             end[q] = centre[q] + r * phi.sin();
@@ -687,6 +699,7 @@ fn arc_program(seed: u64) -> (String, String, Plane) {
             end,
             centre,
             turns,
+            radius_step: 0.004 / if units == "G20" { 25.4 } else { 1.0 },
         })
         .expect("arc lowers");
         low.push_str(&format!("({line})\n"));

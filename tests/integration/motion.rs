@@ -171,6 +171,9 @@ impl Replay {
         let (e1, e2, c1, c2, rot, en) = (n[0] * s, n[1] * s, n[2] * s, n[3] * s, n[4], n[5] * s);
         let p = self.pos;
         let r = (p[f] - c1).hypot(p[sec] - c2);
+        // An end off the start's distance from the centre: LinuxCNC moves
+        // a spiral, the distance linear in the angle.
+        let spiral = (e1 - c1).hypot(e2 - c2) - r;
         let a0 = (p[sec] - c2).atan2(p[f] - c1);
         let a1 = (e2 - c2).atan2(e1 - c1);
         let ccw = rot > 0.0;
@@ -186,8 +189,9 @@ impl Replay {
             let t = k as f64 / steps as f64;
             let a = if ccw { a0 + sweep * t } else { a0 - sweep * t };
             let mut q = p;
-            q[f] = c1 + r * a.cos();
-            q[sec] = c2 + r * a.sin();
+            let rt = r + spiral * t;
+            q[f] = c1 + rt * a.cos();
+            q[sec] = c2 + rt * a.sin();
             q[nrm] = p[nrm] + (en - p[nrm]) * t;
             pts.push(q);
         }

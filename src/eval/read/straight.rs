@@ -507,7 +507,13 @@ fn move_values(p: &Plain) -> MoveValues {
     let has = (p.mask >> 1 & 0b111 | (p.mask >> F & 1) << 3) as u8;
     let vals = [p.vals[1], p.vals[2], p.vals[3], p.vals[F]];
     let ijk = p.mask & (1 << I | 1 << J | 1 << K) != 0;
-    MoveValues::from_parts(motion, vals, has, ijk)
+    let word = |k: usize| if p.mask & 1 << k != 0 { p.vals[k] } else { 0.0 };
+    let centre = if ijk {
+        [word(I), word(J), word(K)]
+    } else {
+        [0.0; 3]
+    };
+    MoveValues::from_parts(motion, vals, has, ijk, centre)
 }
 
 impl Interp<'_> {

@@ -137,6 +137,19 @@ impl Lowering {
         !(arc && ijk && !axis)
     }
 
+    /// Whether a block [`Lowering::is_plain`] accepted is an arc to be
+    /// lowered (see `arcs.rs`): it then goes the general way.
+    pub(super) fn plain_arc_off(&self, b: &Block) -> bool {
+        let motion = b.motion().unwrap_or(self.m.modes.motion);
+        if !matches!(motion, MotionMode::ArcCw | MotionMode::ArcCcw) {
+            return false;
+        }
+        let mut after = self.m.snapshot();
+        after.apply(b);
+        self.arc_off_target(b, &self.m, &after, motion)
+            || self.arc_refused(b, &self.m, &after, motion).is_some()
+    }
+
     /// Whether the state lets a line through the short way: nothing is
     /// being lowered (compensation, G95, G7 on a target without it) and the
     /// target is in the program's coordinate system.
@@ -267,6 +280,9 @@ impl Lowering {
         let Some((arc, axis)) = plain_form(v, motion) else {
             return false;
         };
+        if arc && self.form_arc_off(self.m_xyz(), v.xyz(), v.centre) {
+            return false;
+        }
         if !self.m.apply_plain_motion(v.motion, v.f(), v.xyz()) {
             return false;
         }
@@ -352,6 +368,9 @@ impl Lowering {
             let Some((arc, axis)) = plain_form(v, m) else {
                 break;
             };
+            if arc && self.form_arc_off(self.start_of(&lines[..n]), v.xyz(), v.centre) {
+                break;
+            }
             motion = m;
             ends_cycle |= arc || axis;
             n += 1;
@@ -418,6 +437,31 @@ impl Lowering {
             Err(kind) => return Ok(vec![Problem { span: None, kind }]),
         }
         Ok(Vec::new())
+    }
+}
+
+impl Lowering {
+    /// The model's X Y Z (mm).
+    #[inline(always)]
+    fn m_xyz(&self) -> [Option<f64>; 3] {
+        [self.m.pos[0], self.m.pos[1], self.m.pos[2]]
+    }
+
+    /// Where the line after `before` starts (X Y Z, mm) when they are run
+    /// from the model's state with absolute positions: each axis of the
+    /// plane at the last value of its word among them (the others are not
+    /// needed by the arc check).
+    fn start_of(&self, before: &[FormLine]) -> [Option<f64>; 3] {
+        let s = self.m.scale();
+        let mut at = self.m_xyz();
+        if let Some(axes) = self.m.modes.plane.xyz_axes() {
+            for a in [axes[0], axes[1]] {
+                if let Some(x) = before.iter().rev().find_map(|l| l.values.axis(a)) {
+                    at[a] = self.m.axis_target(a, x, s);
+                }
+            }
+        }
+        at
     }
 }
 

@@ -16,6 +16,16 @@
 //! offsets from the part's start (I J in G17, I K in G18, J K in G19;
 //! incremental arc centres, G91.1, the default of LinuxCNC and the only
 //! form of GRBL). Axes other than X Y Z must not move during the arc.
+//!
+//! An arc whose end is not quite at its start's distance from the centre
+//! (LinuxCNC accepts up to 0.002 in, or 0.02 mm, and more on a large
+//! radius) is a spiral there: the distance from the centre, like the
+//! height, moves linearly with the angle turned. The parts' ends are on
+//! that spiral, and there are enough parts that the distance changes by
+//! at most [`ArcInput::radius_step`] over each: a controller turns each
+//! part about the centre at its start's distance and checks that its end
+//! is about as far (GRBL refuses a difference over 0.005 mm and 0.1 % of
+//! the radius, error 33).
 
 use super::{LowerError, PlainLine, push};
 use crate::codes::Plane;
@@ -36,6 +46,9 @@ pub struct ArcInput {
     pub centre: [f64; 3],
     /// P turns (1 without P).
     pub turns: u32,
+    /// The most the distance from the centre may change over one part
+    /// (program units, above 0).
+    pub radius_step: f64,
 }
 
 /// The in-plane axes (first, second) and the normal axis, as indices into
@@ -67,8 +80,8 @@ pub fn sweep(a: &ArcInput) -> Result<f64, LowerError> {
     Ok(base + 2.0 * PI * f64::from(a.turns.max(1) - 1))
 }
 
-/// Lowers a full circle or a P-turn arc into arcs of less than half a turn
-/// without P (see the module doc for the rule).
+/// Lowers a full circle, a P-turn arc or a spiral arc into arcs of less
+/// than half a turn without P (see the module doc for the rule).
 pub fn lower_arc(a: &ArcInput) -> Result<Vec<PlainLine>, LowerError> {
     let [p, q, n] = axes(a.plane)?;
     let radius = (a.start[q] - a.centre[q]).hypot(a.start[p] - a.centre[p]);
@@ -76,7 +89,12 @@ pub fn lower_arc(a: &ArcInput) -> Result<Vec<PlainLine>, LowerError> {
         return Err(LowerError::BadArc);
     }
     let total = sweep(a)?;
-    let parts_f = (total / PI).floor() + 1.0;
+    // The change of the distance from the centre over the whole sweep.
+    let spiral = (a.end[q] - a.centre[q]).hypot(a.end[p] - a.centre[p]) - radius;
+    let mut parts_f = (total / PI).floor() + 1.0;
+    if spiral.abs() > a.radius_step {
+        parts_f = parts_f.max((spiral.abs() / a.radius_step).ceil());
+    }
     if parts_f > super::MAX_LINES as f64 {
         return Err(LowerError::TooManyLines);
     }
@@ -94,9 +112,10 @@ pub fn lower_arc(a: &ArcInput) -> Result<Vec<PlainLine>, LowerError> {
         } else {
             let t = k as f64 / parts as f64;
             let angle = a0 + sign * total * t;
+            let r = radius + spiral * t;
             let mut pt = [0.0; 3];
-            pt[p] = a.centre[p] + radius * angle.cos();
-            pt[q] = a.centre[q] + radius * angle.sin();
+            pt[p] = a.centre[p] + r * angle.cos();
+            pt[q] = a.centre[q] + r * angle.sin();
             pt[n] = a.start[n] + (a.end[n] - a.start[n]) * t;
             pt
         };
@@ -137,6 +156,7 @@ mod tests {
             end: [0.0, 0.0, -2.0],
             centre: [5.0, 0.0, 0.0],
             turns: 1,
+            radius_step: 0.001,
         };
         let out = lower_arc(&a).unwrap();
         assert_eq!(out.len(), 3);
@@ -161,6 +181,7 @@ mod tests {
             end: [0.0, 0.0, 1.0],
             centre: [0.0, 0.0, 0.0],
             turns: 1,
+            radius_step: 0.001,
         };
         // G18: G3 turns from Z toward X; from X to Z is three quarters.
         assert!((sweep(&a).unwrap() - 1.5 * PI).abs() < 1e-12);
@@ -174,6 +195,38 @@ mod tests {
     }
 
     #[test]
+    fn spiral_parts_end_on_the_spiral() {
+        // A half turn about (1, 0) from (0, 0) to (2.02, 0): the distance
+        // from the centre goes from 1 to 1.02, 0.006 per part at most: four
+        // parts of 0.005.
+        let a = ArcInput {
+            plane: Plane::XY,
+            clockwise: true,
+            start: [0.0, 0.0, 0.0],
+            end: [2.02, 0.0, 0.0],
+            centre: [1.0, 0.0, 0.0],
+            turns: 1,
+            radius_step: 0.006,
+        };
+        let out = lower_arc(&a).unwrap();
+        assert_eq!(out.len(), 4);
+        let mut from = a.start;
+        for (k, l) in out.iter().enumerate() {
+            let w = words(l);
+            let to = [w[1].1, w[2].1, w[3].1];
+            let r = (to[0] - 1.0).hypot(to[1]);
+            assert!((r - (1.0 + 0.02 * (k + 1) as f64 / 4.0)).abs() < 1e-12);
+            // Each part's centre is the arc's, as offsets from its start.
+            assert!((w[4].1 - (1.0 - from[0])).abs() < 1e-12);
+            assert!((w[5].1 + from[1]).abs() < 1e-12);
+            from = to;
+        }
+        // Clockwise from the left of the centre: over the top (Y > 0).
+        assert!(words(&out[1])[2].1 > 0.0);
+        assert_eq!(words(&out[3])[1].1, 2.02);
+    }
+
+    #[test]
     fn runaway_turns_refused() {
         let a = ArcInput {
             plane: Plane::YZ,
@@ -182,6 +235,7 @@ mod tests {
             end: [0.0, 1.0, 0.0],
             centre: [0.0, 0.0, 0.0],
             turns: u32::MAX,
+            radius_step: 0.001,
         };
         assert_eq!(lower_arc(&a), Err(LowerError::TooManyLines));
     }
@@ -195,6 +249,7 @@ mod tests {
             end: [1.0, 1.0, 0.0],
             centre: [1.0, 1.0, 0.0],
             turns: 1,
+            radius_step: 0.001,
         };
         assert_eq!(lower_arc(&a), Err(LowerError::BadArc));
     }
@@ -209,6 +264,7 @@ mod tests {
                 end: [0.0, 1.0, 0.0],
                 centre: [0.0, 0.0, 0.0],
                 turns: 2,
+                radius_step: 0.001,
             };
             assert_eq!(lower_arc(&a).map_err(|e| e.code()), Err("E1105"));
             assert_eq!(sweep(&a).map_err(|e| e.code()), Err("E1105"));

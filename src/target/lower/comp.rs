@@ -118,6 +118,7 @@ pub fn lower_comp_moves<T>(
                     end: p,
                     centre,
                     turns: turn.unsigned_abs().max(1),
+                    radius_step: radius_tolerance,
                 };
                 for l in lower_arc(&input)? {
                     if out.len() >= super::MAX_LINES {
