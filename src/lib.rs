@@ -21,6 +21,7 @@ mod fx_hasher;
 pub mod geom;
 mod library;
 pub mod machine;
+mod modes;
 mod number;
 pub mod parse;
 pub mod program;

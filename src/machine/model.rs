@@ -20,7 +20,7 @@ use crate::block::{
     AXIS_LETTERS, ArcDistance, Block, CoordSystem, Distance, FeedMode, MCode, MotionMode, NonModal,
     PathMode, Plane, Retract, SpindleDir, ToolLength, Units,
 };
-use crate::codes::{MachineCode, Modes, Switched};
+use crate::modes::{MachineCode, Modes, Switched};
 
 const MM_PER_INCH: f64 = 25.4;
 

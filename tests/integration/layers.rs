@@ -8,6 +8,7 @@ const ORDER: &[&str] = &[
     "source",
     "number",
     "codes",
+    "modes",
     "block",
     "geom",
     "fx_hasher",

@@ -5,14 +5,15 @@
 
 use crate::diag::ErrorKind;
 
+use crate::codes::g_tenths;
 use crate::codes::{
     CutterComp, Distance, FeedMode, GCode, MCode, MotionMode, NonModal, PathMode, Plane,
     SpindleDir, SpindleMode, ToolLength,
 };
-use crate::codes::{Modes, g_tenths};
 use crate::diag::BlockError;
 use crate::eval::state::cycle::{Cycle, depth_axis};
 use crate::eval::state::nurbs::{NO_MOTION, NURBS, Nurbs};
+use crate::modes::Modes;
 
 use MotionMode as M;
 

@@ -10,8 +10,9 @@ pub(super) mod nurbs;
 pub(super) mod restore;
 pub mod tools;
 
-use crate::codes::{CoordSystem, Modes};
+use crate::codes::CoordSystem;
 use crate::eval::Settings;
+use crate::modes::Modes;
 
 /// Axis letters in parameter order (X Y Z A B C U V W).
 pub(crate) const AXES: [u8; 9] = *b"xyzabcuvw";

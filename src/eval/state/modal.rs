@@ -7,8 +7,8 @@ use crate::diag::{Error, ErrorKind};
 use crate::program::FileIndex;
 
 use crate::codes::{
-    ArcDistance, CoordSystem, CutterComp, Distance, GCode, MCode, MachineCode, MotionMode,
-    NonModal, Plane, ToolLength, Units,
+    ArcDistance, CoordSystem, CutterComp, Distance, GCode, MCode, MotionMode, NonModal, Plane,
+    ToolLength, Units,
 };
 use crate::eval::Interp;
 use crate::eval::read::block::Words;
@@ -16,6 +16,7 @@ use crate::eval::read::validate::{Checked, LineCodes};
 use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
 use crate::eval::state::nurbs::{NO_MOTION, NURBS};
+use crate::modes::MachineCode;
 
 /// A motion code other than G80 (which gives way to one on its line).
 #[inline]
@@ -309,7 +310,7 @@ impl Interp<'_> {
 
     /// One M code, after the line's other words: the switches (spindle,
     /// coolant, overrides with their P) as the modes set them
-    /// ([`Modes::set_switch`](crate::codes::Modes::set_switch)), tool change
+    /// ([`Modes::set_switch`](crate::modes::Modes::set_switch)), tool change
     /// (M6, M61 with its Q); M2/M30 end the program.
     // One call site, on the hot path: kept inline as before the split.
     #[inline(always)]
@@ -346,7 +347,7 @@ impl Interp<'_> {
     }
 
     /// The line's G codes in line order: each sets its field of the modes
-    /// ([`Modes::set_mode`](crate::codes::Modes::set_mode)), and those it
+    /// ([`Modes::set_mode`](crate::modes::Modes::set_mode)), and those it
     /// hands back act on the machine here. Returns the non-modal code
     /// (G10, G28, G30, G53, G92.x, G52) if any, and whether G43.1 set a
     /// tool length offset from axis words. (A G80 beside another motion
@@ -936,11 +937,12 @@ mod tests {
     use std::sync::Arc;
 
     use crate::codes::{
-        ArcDistance, CutterComp, Distance, FeedMode, Modes, MotionMode, Plane, SpindleDir, Units,
+        ArcDistance, CutterComp, Distance, FeedMode, MotionMode, Plane, SpindleDir, Units,
     };
     use crate::emit::{Destination, MemoryOut, Sink};
     use crate::eval::read::validate::check_block;
     use crate::eval::{Interp, Settings};
+    use crate::modes::Modes;
     use crate::program::{FileIndex, Loader, SearchPath, SourceFile};
 
     /// A line's words: `G80 G1 X1` → g 80, g 1, x 1.

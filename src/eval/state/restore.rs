@@ -7,9 +7,9 @@ use crate::diag::{Error, ErrorKind};
 use crate::parse::ast::Span;
 use crate::program::FileIndex;
 
-use crate::codes::Modes;
 use crate::codes::{CutterComp, GCode, SpindleDir, SpindleMode};
 use crate::eval::Interp;
+use crate::modes::Modes;
 
 /// The state M70 or M73 saves: the modal state, and whether G92 offsets
 /// were applied (M72 turns them on or off again).

@@ -3,11 +3,12 @@
 //! by the program itself (G10 L1/L10/L11). Tool data is kept in machine
 //! units, as LinuxCNC stores it.
 
-use crate::codes::{CoordSystem, Modes, SpindleDir};
+use crate::codes::{CoordSystem, SpindleDir};
 use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
 use crate::eval::{Interp, Settings};
 use crate::fx_hasher::FxMap;
+use crate::modes::Modes;
 
 /// One tool: offsets X..W, diameter, front and back angle, orientation.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
