@@ -741,29 +741,33 @@ impl Machine {
         }
     }
 
-    /// Where a canned cycle leaves the tool: each repeat at the XY target,
-    /// Z at the clear plane (the initial Z under G98 when above R, else R).
+    /// Where a canned cycle leaves the tool: each repeat at the target on
+    /// the plane's two axes (X and Y in G17, Z and X in G18, Y and Z in
+    /// G19), the third at the clear plane (the initial position under G98
+    /// when above R, else R), as rs274 leaves it. (The UVW planes, where
+    /// the checks refuse cycles, are read as G17.)
     fn cycle(&mut self, b: &Block, to: MaybeAxes) {
         let s = self.scale();
         if let Some(r) = b.value(b'R') {
             self.cycle_r = Some(r);
         }
-        let initial = self.pos[2];
+        let [p, q, n] = self.modes.plane.xyz_axes().unwrap_or([0, 1, 2]);
+        let initial = self.pos[n];
         let r_mm = match (self.modes.distance, self.cycle_r) {
             (Distance::Absolute, Some(r)) => Some(r * s),
             (Distance::Incremental, Some(r)) => initial.map(|z| z + r * s),
             _ => None,
         };
         let reps = b.value(b'L').map_or(1, |l| l.round().max(1.0) as usize);
-        let mut xy = (self.pos[0], self.pos[1]);
+        let mut at = (self.pos[p], self.pos[q]);
         for _ in 0..reps {
             match self.modes.distance {
-                Distance::Absolute => xy = (to[0], to[1]),
+                Distance::Absolute => at = (to[p], to[q]),
                 Distance::Incremental => {
                     let d = b.axes();
-                    xy = (
-                        xy.0.map(|x| x + d[0].unwrap_or(0.0) * s),
-                        xy.1.map(|y| y + d[1].unwrap_or(0.0) * s),
+                    at = (
+                        at.0.map(|x| x + d[p].unwrap_or(0.0) * s),
+                        at.1.map(|y| y + d[q].unwrap_or(0.0) * s),
                     );
                 }
             }
@@ -775,9 +779,9 @@ impl Machine {
                 _ => None,
             },
         };
-        self.pos[0] = xy.0;
-        self.pos[1] = xy.1;
-        self.pos[2] = clear;
+        self.pos[p] = at.0;
+        self.pos[q] = at.1;
+        self.pos[n] = clear;
     }
 
     fn arc(&mut self, b: &Block, to: MaybeAxes) {
@@ -966,6 +970,24 @@ mod tests {
             (m.pos[0], m.pos[1], m.pos[2]),
             (Some(5.0), Some(5.0), Some(2.0))
         );
+    }
+
+    /// A canned cycle ends on its plane's axes at the target and on the
+    /// third at the clear plane, in each plane (the positions rs274 reads
+    /// after these lines from X0 Y5 Z0).
+    #[test]
+    fn cycles_end_on_their_plane() {
+        for (line, want) in [
+            ("G17 G99 G81 X1 Y2 Z-1 R2 F100", [1.0, 2.0, 2.0]),
+            ("G18 G99 G81 X1 Z3 Y-1 R2 F100", [1.0, 2.0, 3.0]),
+            ("G18 G98 G81 X1 Z3 Y-1 R2 F100", [1.0, 5.0, 3.0]),
+            ("G19 G99 G81 Y1 Z3 X-1 R2 F100", [2.0, 1.0, 3.0]),
+            ("G19 G98 G83 Y1 Z3 X-1 R7 Q1 F100", [7.0, 1.0, 3.0]),
+            ("G18 G91 G99 G81 X1 Z1 Y-1 R-2 L2 F100", [2.0, 3.0, 2.0]),
+        ] {
+            let (m, _) = run(&["G0 X0 Y5 Z0", line]);
+            assert_eq!(m.pos[..3], want.map(Some), "{line}");
+        }
     }
 
     #[test]
