@@ -286,13 +286,22 @@ fn digits_value(w: u64, len: u32) -> u64 {
 #[inline(always)]
 fn load8_padded(buf: &[u8], i: usize) -> u64 {
     let rest = buf.get(i..).unwrap_or(&[]);
-    match rest.first_chunk::<8>() {
-        Some(b) => u64::from_le_bytes(*b),
-        // Byte by byte (a copy of a variable length would call memcpy).
-        None => rest
-            .iter()
+    if let Some(b) = rest.first_chunk::<8>() {
+        return u64::from_le_bytes(*b);
+    }
+    let len = buf.len();
+    if rest.is_empty() {
+        0
+    } else if let Some(last) = buf.last_chunk::<8>() {
+        // The last eight bytes, shifted down to start at `i` (1 to 7 of
+        // them are there): one load, not one per byte.
+        u64::from_le_bytes(*last) >> (8 * (8 - (len - i)))
+    } else {
+        // A buffer shorter than eight bytes, byte by byte (a copy of a
+        // variable length would call memcpy).
+        rest.iter()
             .enumerate()
-            .fold(0, |w, (k, &c)| w | u64::from(c) << (8 * k)),
+            .fold(0, |w, (k, &c)| w | u64::from(c) << (8 * k))
     }
 }
 
@@ -387,6 +396,22 @@ fn digits_with(buf: &[u8], i: usize, load: impl Fn(&[u8], usize) -> u64) -> Opti
 #[cfg(test)]
 mod tests {
     use super::number_string as s;
+
+    /// A padded load is the bytes there, byte by byte, and zeros past the
+    /// end, wherever it starts in a buffer of any length.
+    #[test]
+    fn padded_load_is_the_bytes_then_zeros() {
+        let text: Vec<u8> = (1..=24).collect();
+        for len in 0..=text.len() {
+            let buf = &text[..len];
+            for i in 0..=len + 2 {
+                let want = (0..8).fold(0u64, |w, k| {
+                    w | u64::from(buf.get(i + k).copied().unwrap_or(0)) << (8 * k)
+                });
+                assert_eq!(super::load8_padded(buf, i), want, "len {len} at {i}");
+            }
+        }
+    }
 
     #[test]
     fn shortest_without_exponent() {
