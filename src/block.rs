@@ -433,6 +433,11 @@ impl RawLine {
         &self.words[..self.len as usize]
     }
 
+    /// Whether the line ends in a comment.
+    pub fn has_comment(&self) -> bool {
+        self.comment.is_some()
+    }
+
     /// The words of a line of `text_len` bytes if it is a move and nothing
     /// else, written the plainest way: at most G X Y Z F, each letter upper
     /// case, G0 or G1, one blank between words and none around them, no
@@ -795,47 +800,7 @@ impl Block {
     /// Decodes into `self`, reusing its room.
     pub fn decode_into(&mut self, line: &[u8]) -> Result<(), DecodeError> {
         self.clear();
-        let n = line.len().min(u16::MAX as usize);
-        let line = &line[..n];
-        let span = |a: usize, b: usize| Span {
-            start: a as u16,
-            end: b as u16,
-        };
-        let mut i = skip_blanks(line, 0);
-        if line.get(i) == Some(&b'%') {
-            let j = skip_blanks(line, i + 1);
-            if j >= n || line[j] == b';' || line[j] == b'(' {
-                self.percent = true;
-                return self.comments_only(line, j);
-            }
-        }
-        if line.get(i) == Some(&b'/') {
-            self.block_delete = true;
-            i = skip_blanks(line, i + 1);
-        }
-        while i < n {
-            let c = line[i];
-            match c {
-                b' ' | b'\t' | b'\r' | b'\n' => i += 1,
-                b'(' | b';' => i = self.comment_at(line, i)?,
-                _ => {
-                    let letter = c.to_ascii_uppercase();
-                    if !(letter.is_ascii_uppercase() || letter == b'@' || letter == b'^') {
-                        return Err(DecodeError {
-                            span: span(i, i + 1),
-                            what: DecodeProblem::BadCharacter(c),
-                        });
-                    }
-                    let (value, end, shape) = read_number(line, i + 1).ok_or(DecodeError {
-                        span: span(i, i + 1),
-                        what: DecodeProblem::BadNumber,
-                    })?;
-                    self.push_word(letter, value, span(i, end), shape)?;
-                    i = end;
-                }
-            }
-        }
-        Ok(())
+        read_flat_line(line, self)
     }
 
     /// The block of a line the straight-line reader read into `raw` (the
@@ -884,38 +849,6 @@ impl Block {
             self.gs = [None; 16];
             self.groups = 0;
         }
-    }
-
-    fn comments_only(&mut self, line: &[u8], mut i: usize) -> Result<(), DecodeError> {
-        while i < line.len() {
-            i = match line[i] {
-                b'(' | b';' => self.comment_at(line, i)?,
-                _ => i + 1,
-            };
-        }
-        Ok(())
-    }
-
-    /// Keeps the comment starting at `line[i]` (`(` or `;`); the offset
-    /// after it.
-    fn comment_at(&mut self, line: &[u8], i: usize) -> Result<usize, DecodeError> {
-        let n = line.len();
-        if line[i] == b';' {
-            self.comment(line, i, n);
-            return Ok(n);
-        }
-        let close = line[i..]
-            .iter()
-            .position(|&b| b == b')')
-            .ok_or(DecodeError {
-                span: Span {
-                    start: i as u16,
-                    end: n as u16,
-                },
-                what: DecodeProblem::UnclosedComment,
-            })?;
-        self.comment(line, i, i + close + 1);
-        Ok(i + close + 1)
     }
 
     fn comment(&mut self, line: &[u8], start: usize, end: usize) {
@@ -1024,6 +957,148 @@ impl Block {
     }
 }
 
+/// What [`read_flat_line`] hands over as it reads a line, in line order.
+pub(crate) trait LineSink {
+    /// What stops the reading: a [`DecodeError`] of the text, or the
+    /// sink's own.
+    type Error: From<DecodeError>;
+    /// Whether it takes the shapes of numbers ([`Shape::default`] for each
+    /// if not).
+    const SHAPES: bool;
+    /// A `%` line (nothing but comments follow).
+    fn on_percent(&mut self) -> Result<(), Self::Error>;
+    /// `/` at the start.
+    fn on_block_delete(&mut self);
+    /// A word: its upper-case letter (or `@`, `^`), value, span and shape,
+    /// and whether its number has blanks before or inside it (false: it
+    /// follows the letter and holds none).
+    fn on_word(
+        &mut self,
+        letter: u8,
+        value: f64,
+        span: Span,
+        shape: Shape,
+        spaced: bool,
+    ) -> Result<(), Self::Error>;
+    /// The comment `line[start..end]` (`(…)`, or `;` to the end).
+    fn on_comment(&mut self, line: &[u8], start: usize, end: usize) -> Result<(), Self::Error>;
+}
+
+/// The one reader of a flat line's text (no terminator; trailing `\r` and
+/// blanks are fine; blanks may appear anywhere outside comments, as in
+/// RS274NGC): its words, comments, `%` and `/`, handed to `sink` as read.
+/// [`Block::decode_into`] types what it reads; the evaluator's plain-line
+/// path keeps the words alone.
+#[inline(always)]
+pub(crate) fn read_flat_line<S: LineSink>(line: &[u8], sink: &mut S) -> Result<(), S::Error> {
+    let n = line.len().min(u16::MAX as usize);
+    let line = &line[..n];
+    let span = |a: usize, b: usize| Span {
+        start: a as u16,
+        end: b as u16,
+    };
+    let mut i = skip_blanks(line, 0);
+    if line.get(i) == Some(&b'%') {
+        let j = skip_blanks(line, i + 1);
+        if j >= n || line[j] == b';' || line[j] == b'(' {
+            sink.on_percent()?;
+            return comments_only(line, j, sink);
+        }
+    }
+    if line.get(i) == Some(&b'/') {
+        sink.on_block_delete();
+        i = skip_blanks(line, i + 1);
+    }
+    while i < n {
+        let c = line[i];
+        match c {
+            b' ' | b'\t' | b'\r' | b'\n' => i += 1,
+            b'(' | b';' => i = comment_at(line, i, sink)?,
+            _ => {
+                let letter = c.to_ascii_uppercase();
+                if !(letter.is_ascii_uppercase() || letter == b'@' || letter == b'^') {
+                    return Err(DecodeError {
+                        span: span(i, i + 1),
+                        what: DecodeProblem::BadCharacter(c),
+                    }
+                    .into());
+                }
+                let (value, end, shape, spaced) =
+                    read_number(line, i + 1, S::SHAPES).ok_or(DecodeError {
+                        span: span(i, i + 1),
+                        what: DecodeProblem::BadNumber,
+                    })?;
+                sink.on_word(letter, value, span(i, end), shape, spaced)?;
+                i = end;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn comments_only<S: LineSink>(line: &[u8], mut i: usize, sink: &mut S) -> Result<(), S::Error> {
+    while i < line.len() {
+        i = match line[i] {
+            b'(' | b';' => comment_at(line, i, sink)?,
+            _ => i + 1,
+        };
+    }
+    Ok(())
+}
+
+/// Hands over the comment starting at `line[i]` (`(` or `;`); the offset
+/// after it.
+fn comment_at<S: LineSink>(line: &[u8], i: usize, sink: &mut S) -> Result<usize, S::Error> {
+    let n = line.len();
+    if line[i] == b';' {
+        sink.on_comment(line, i, n)?;
+        return Ok(n);
+    }
+    let close = line[i..]
+        .iter()
+        .position(|&b| b == b')')
+        .ok_or(DecodeError {
+            span: Span {
+                start: i as u16,
+                end: n as u16,
+            },
+            what: DecodeProblem::UnclosedComment,
+        })?;
+    sink.on_comment(line, i, i + close + 1)?;
+    Ok(i + close + 1)
+}
+
+impl LineSink for Block {
+    type Error = DecodeError;
+    const SHAPES: bool = true;
+
+    fn on_percent(&mut self) -> Result<(), DecodeError> {
+        self.percent = true;
+        Ok(())
+    }
+
+    fn on_block_delete(&mut self) {
+        self.block_delete = true;
+    }
+
+    #[inline(always)]
+    fn on_word(
+        &mut self,
+        letter: u8,
+        value: f64,
+        span: Span,
+        shape: Shape,
+        _: bool,
+    ) -> Result<(), DecodeError> {
+        self.push_word(letter, value, span, shape)
+    }
+
+    fn on_comment(&mut self, line: &[u8], start: usize, end: usize) -> Result<(), DecodeError> {
+        self.comment(line, start, end);
+        Ok(())
+    }
+}
+
 fn skip_blanks(line: &[u8], mut i: usize) -> usize {
     while i < line.len() && matches!(line[i], b' ' | b'\t' | b'\r') {
         i += 1;
@@ -1032,7 +1107,9 @@ fn skip_blanks(line: &[u8], mut i: usize) -> usize {
 }
 
 /// Reads `[+-]digits[.digits]` with blanks allowed between its characters;
-/// returns the value and the end of the number.
+/// returns the value, the end of the number, its shape and whether it was
+/// read with blanks before or inside it (false: it starts at `start` and
+/// holds none). The shape is worked out only if `shapes` asks for it.
 ///
 /// A number of at most 15 significant digits without blanks (every number
 /// the evaluator writes, and the usual CAM number) is read in one pass:
@@ -1041,8 +1118,8 @@ fn skip_blanks(line: &[u8], mut i: usize) -> usize {
 /// rounded value of the decimal, which is what `str::parse` returns too.
 /// Longer numbers without blanks are parsed where they are written; the
 /// rest (blanks inside) is gathered first.
-#[inline]
-fn read_number(line: &[u8], start: usize) -> Option<(f64, usize, Shape)> {
+#[inline(always)]
+fn read_number(line: &[u8], start: usize, shapes: bool) -> Option<(f64, usize, Shape, bool)> {
     let mut i = start;
     let (neg, plus) = match line.get(i) {
         Some(b'-') => {
@@ -1060,9 +1137,13 @@ fn read_number(line: &[u8], start: usize) -> Option<(f64, usize, Shape)> {
     if let Some(d) = digits_at(line, i) {
         let after = skip_blanks(line, d.end);
         if !matches!(line.get(after), Some(c) if c.is_ascii_digit() || *c == b'.') {
-            let shape = Shape::of(&d, line, i, neg, plus);
+            let shape = if shapes {
+                Shape::of(&d, line, i, neg, plus)
+            } else {
+                Shape::default()
+            };
             let v = d.value();
-            return Some((if neg { -v } else { v }, d.end, shape));
+            return Some((if neg { -v } else { v }, d.end, shape, false));
         }
     }
     let mut mant: u64 = 0;
@@ -1102,6 +1183,9 @@ fn read_number(line: &[u8], start: usize) -> Option<(f64, usize, Shape)> {
         if digits <= 15 && frac <= 22 {
             // Below 10^15: exact through i64 (one instruction, unlike u64).
             let v = mant as i64 as f64 / POW10[frac as usize];
+            if !shapes {
+                return Some((if neg { -v } else { v }, i, Shape::default(), false));
+            }
             let lone_zero = int == 1 && first == b'0';
             let int_digits = if lone_zero { 0 } else { int };
             let lead = !plus && int > 0 && (int == 1 || first != b'0') && int_digits + frac <= 15;
@@ -1114,17 +1198,17 @@ fn read_number(line: &[u8], start: usize) -> Option<(f64, usize, Shape)> {
                 int: int_digits.min(255) as u8,
                 frac: frac.min(255) as u8,
             };
-            return Some((if neg { -v } else { v }, i, shape));
+            return Some((if neg { -v } else { v }, i, shape, false));
         }
         // Long, but in one piece: read where it is written.
         if let Some(v) = std::str::from_utf8(&line[start..i])
             .ok()
             .and_then(|t| t.parse::<f64>().ok())
         {
-            return Some((v, i, Shape::default()));
+            return Some((v, i, Shape::default(), false));
         }
     }
-    read_number_slow(line, start).map(|(v, e)| (v, e, Shape::default()))
+    read_number_slow(line, start).map(|(v, e)| (v, e, Shape::default(), true))
 }
 
 /// [`read_number`] for numbers with blanks inside or many digits.
@@ -1215,7 +1299,7 @@ mod tests {
         ) {
             let line = format!("X{text}");
             let start = at.min(line.len());
-            let fast = read_number(line.as_bytes(), start).map(|(v, e, _)| (v, e));
+            let fast = read_number(line.as_bytes(), start, true).map(|(v, e, _, _)| (v, e));
             let slow = read_number_slow(line.as_bytes(), start);
             proptest::prop_assert_eq!(
                 fast.map(|(v, e)| (v.to_bits(), e)),
@@ -1235,7 +1319,7 @@ mod tests {
                 "X{}{int}.{frac:0width$} Y1",
                 if neg { "-" } else { "" },
             );
-            let got = read_number(line.as_bytes(), 1).map(|(v, e, _)| (v, e));
+            let got = read_number(line.as_bytes(), 1, true).map(|(v, e, _, _)| (v, e));
             let want: f64 = line[1..line.len() - 3].parse().unwrap();
             proptest::prop_assert_eq!(got.map(|g| g.0.to_bits()), Some(want.to_bits()));
             proptest::prop_assert_eq!(got.map(|g| g.1), Some(line.len() - 3));

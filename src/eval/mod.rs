@@ -15,7 +15,7 @@ pub use state::tools;
 use flow::{Flow, Frame, FrameKind, label_of_key};
 use out::Writer;
 use read::Reader;
-use read::fast;
+use read::plain;
 use state::Machine;
 
 use std::collections::HashSet;
@@ -683,15 +683,15 @@ impl<'s> Interp<'s> {
         };
         self.flow.cur.pos = next;
         self.flow.cur.line += 1;
-        let mut fw = std::mem::take(&mut self.reader.fast_words);
-        if fast::scan(raw, &mut fw) && !fw.is_empty() {
-            let r = self.exec_plain(file, start, raw, &fw);
-            self.reader.fast_words = fw;
-            if let Some(r) = r {
-                return r;
-            }
+        let mut room = self.reader.plain.take().unwrap_or_default();
+        let plain = if plain::read_plain(raw, &mut room.words) {
+            self.exec_plain(file, start, raw, &room.words)
         } else {
-            self.reader.fast_words = fw;
+            None
+        };
+        self.reader.plain = Some(room);
+        if let Some(r) = plain {
+            return r;
         }
         let line = if file.keeps(line_idx) {
             let key = (file_key(file), line_idx);

@@ -529,21 +529,23 @@ impl Interp<'_> {
 }
 
 impl Interp<'_> {
-    /// Runs a plain line (literal words only) scanned by the fast path.
-    /// `None` sends the line to the grammar instead.
+    /// Runs a plain line (literal words only, see
+    /// [`crate::eval::read::plain`]) of the words `read` (their spans in the
+    /// line). `None` sends the line to the grammar instead.
     pub(in crate::eval) fn exec_plain(
         &mut self,
         file: &Rc<FileIndex>,
         start: u32,
         raw: &[u8],
-        fw: &[crate::eval::read::fast::FastWord],
+        read: &[crate::block::RawWord],
     ) -> Option<Result<(), crate::diag::Error>> {
         let mut words = std::mem::take(&mut self.reader.words_buf);
         words.clear();
         let mut seen = 0u32;
         let mut m_count = 0;
-        for w in fw {
-            match w.letter {
+        for w in read {
+            let letter = w.letter.to_ascii_lowercase();
+            match letter {
                 b'u' | b'v' | b'w' if !self.s.uvw_axes => return None,
                 b'm' => {
                     if matches!(w.value, 70.0 | 71.0 | 72.0 | 73.0 | 98.0 | 99.0) {
@@ -563,7 +565,7 @@ impl Interp<'_> {
                     seen |= bit;
                 }
             }
-            words.push((w.letter, w.value));
+            words.push((letter, w.value));
         }
         let r = (|| {
             let checked = match check_block(
@@ -575,8 +577,8 @@ impl Interp<'_> {
             ) {
                 Err((k, at)) => {
                     let span = at
-                        .and_then(|i| fw.get(i))
-                        .map(|w| Span::new(w.start as u32, w.end as u32))
+                        .and_then(|i| read.get(i))
+                        .map(|w| Span::new(w.span.start.into(), w.span.end.into()))
                         .unwrap_or(Span::new(0, raw.len() as u32));
                     return Err(self.error_in_line(k, file, start, span));
                 }

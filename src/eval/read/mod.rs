@@ -1,7 +1,8 @@
-//! Reading the source: lines, words and blocks, the plain-line fast paths.
+//! Reading the source: lines, words and blocks, the plain-line fast paths
+//! (the straight-line reader, and plain lines decoded as blocks).
 
 pub(super) mod block;
-pub(super) mod fast;
+pub(super) mod plain;
 mod scan_ahead;
 pub(super) mod straight;
 pub(super) mod validate;
@@ -16,7 +17,8 @@ pub(super) struct Reader {
     pub(super) parser: LineParser,
     /// Lines of a streamed file.
     pub(super) window: Window,
-    pub(super) fast_words: Vec<fast::FastWord>,
+    /// Room for a plain line's words and block.
+    pub(super) plain: Option<Box<plain::PlainRoom>>,
     pub(super) words_buf: Vec<(u8, f64)>,
     pub(super) scratch: Option<Box<block::Scratch>>,
     /// Chunks of lines read ahead, kept from one straight run to the next.
@@ -29,7 +31,7 @@ pub(super) struct Reader {
 impl Reader {
     pub(super) fn new() -> Reader {
         Reader {
-            fast_words: Vec::with_capacity(16),
+            plain: Some(Box::default()),
             words_buf: Vec::with_capacity(16),
             scratch: Some(Box::default()),
             ..Reader::default()

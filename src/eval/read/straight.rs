@@ -19,6 +19,7 @@ use crate::program::FileIndex;
 use crate::codes::{CutterComp, FeedMode, MotionMode, Plane};
 use crate::eval::Interp;
 use crate::eval::out::hook::FormBatch;
+use crate::eval::read::plain::{PlainRoom, read_plain};
 use crate::eval::read::scan_ahead::{Ahead, Decoded, InPlace, LineRoom, Lines, Read, Shared};
 
 /// Word slots: G, X, Y, Z, A, B, C, F, S (the fast set), then I, J, K, R, P
@@ -516,6 +517,30 @@ fn move_values(p: &Plain) -> MoveValues {
     MoveValues::from_parts(motion, vals, has, ijk, centre)
 }
 
+/// The words, with their spans, of the line at `buf[i..]` (its text ending
+/// at `text_end`) the loop read and takes on the general checks: as this
+/// reader reads them into `room`'s raw line, or where a number took the
+/// byte-at-a-time reader (see [`ToRaw::finish`]), as the general path
+/// reads them. `None` leaves the line to the general path: a line with a
+/// comment, as there.
+fn plain_words<'r>(
+    buf: &[u8],
+    i: usize,
+    text_end: usize,
+    room: &'r mut PlainRoom,
+) -> Option<&'r [RawWord]> {
+    let mut sink = ToRaw::new(&mut room.raw, i);
+    // The line was read already (with or without its comment).
+    if !read_line_into(buf, i, &mut Plain::default(), true, &mut sink) {
+        return None;
+    }
+    if !sink.finish() {
+        return read_plain(&buf[i..text_end], &mut room.words).then_some(&room.words[..]);
+    }
+    let words = room.raw.words();
+    (!room.raw.has_comment() && !words.is_empty()).then_some(words)
+}
+
 impl Interp<'_> {
     /// Runs plain lines from `buf` (the file's bytes from offset `base`),
     /// stopping before line `stop_line`. Returns the number of lines run; 0
@@ -673,16 +698,7 @@ impl Interp<'_> {
                 self.out.lines += *emitted;
                 *emitted = 0;
                 self.reader.at(base + *i as u32, first_line + *lines);
-                let raw = &buf[*i..p.next - 1];
-                // The words again, with their spans for messages.
-                let mut fw = std::mem::take(&mut self.reader.fast_words);
-                let r = if crate::eval::read::fast::scan(raw, &mut fw) && !fw.is_empty() {
-                    self.exec_plain(file, base + *i as u32, raw, &fw)
-                } else {
-                    None
-                };
-                self.reader.fast_words = fw;
-                match r {
+                match self.exec_read(file, base, buf, *i, p) {
                     None => break,
                     Some(r) => r?,
                 }
@@ -742,6 +758,29 @@ impl Interp<'_> {
             *lines += 1;
         }
         Ok(false)
+    }
+
+    /// Runs the line at `buf[i..]` (the file's bytes from offset `base`)
+    /// that the loop read into `p` but does not run itself: its words, with
+    /// their spans for messages, on the general checks. `None` leaves it to
+    /// the general path. Kept out of the loop's code, as few lines take it.
+    #[inline(never)]
+    fn exec_read(
+        &mut self,
+        file: &Rc<FileIndex>,
+        base: u32,
+        buf: &[u8],
+        i: usize,
+        p: &Plain,
+    ) -> Option<Result<(), Error>> {
+        let raw = &buf[i..p.next - 1];
+        let mut room = self.reader.plain.take().unwrap_or_default();
+        let r = match plain_words(buf, i, p.text_end, &mut room) {
+            Some(words) => self.exec_plain(file, base + i as u32, raw, words),
+            None => None,
+        };
+        self.reader.plain = Some(room);
+        r
     }
 
     /// Runs a line of G0–G3, axis, F and S words (arcs in the XY plane with
