@@ -579,7 +579,9 @@ impl Machine {
                         to[a] = off[a].map(|o| v * rot - o);
                     }
                 }
-                let kind = if self.modes.motion == MotionMode::Rapid {
+                // The line's own G0 or G1 (it becomes the mode after the
+                // non-modal code), else the mode in effect.
+                let kind = if b.motion().unwrap_or(self.modes.motion) == MotionMode::Rapid {
                     MoveKind::Rapid
                 } else {
                     MoveKind::Feed
@@ -988,6 +990,22 @@ mod tests {
             let (m, _) = run(&["G0 X0 Y5 Z0", line]);
             assert_eq!(m.pos[..3], want.map(Some), "{line}");
         }
+    }
+
+    /// G53 moves in the line's own G0 or G1, else in the motion mode.
+    #[test]
+    fn machine_coordinate_moves_take_the_line_s_motion() {
+        let kind = |lines: &[&str]| {
+            let (_, ev) = run(lines);
+            match ev.last() {
+                Some(Motion::Line { kind, .. }) => *kind,
+                e => panic!("a line: {e:?}"),
+            }
+        };
+        assert_eq!(kind(&["G1 X5 F100", "G53 G0 X0"]), MoveKind::Rapid);
+        assert_eq!(kind(&["G0 X5", "G53 G1 X0 F100"]), MoveKind::Feed);
+        assert_eq!(kind(&["G0 X5", "G53 X0"]), MoveKind::Rapid);
+        assert_eq!(kind(&["G1 X5 F100", "G53 X0"]), MoveKind::Feed);
     }
 
     #[test]
