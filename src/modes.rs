@@ -221,8 +221,9 @@ impl ToolLength {
     /// offsets of its tool (`tool`: H's, or the one in the spindle), on
     /// every axis the tool data gives (Z, and X on lathes; the others are
     /// 0 unless the table gives them); G43.2 the offset in effect (`old`)
-    /// plus them; G43.1 the line's axis words (`words`), 0 on an axis
-    /// without one; G49 none. Unknown where what it needs is.
+    /// plus them; G43.1 the line's axis words (`words`), an axis without
+    /// one keeping its offset (as rs274 does); G49 none. Unknown where
+    /// what it needs is.
     #[inline]
     pub fn offset(
         self,
@@ -233,7 +234,8 @@ impl ToolLength {
         std::array::from_fn(|a| match self {
             ToolLength::Apply => Some(tool?[a]),
             ToolLength::Add => Some(old[a]? + tool?[a]),
-            ToolLength::Dynamic => Some(words[a].unwrap_or(0.0)),
+            // The axes G43.1 names; the others keep their offsets.
+            ToolLength::Dynamic => words[a].or(old[a]),
             ToolLength::Cancel => Some(0.0),
         })
     }
@@ -362,8 +364,12 @@ mod tests {
                 "{code:?}, no data"
             );
         }
+        // G43.1: the axes named; the others keep what was in effect (as
+        // rs274 does), unknown where that was.
         let dynamic = ToolLength::Dynamic.offset([None; 9], None, words);
-        assert_eq!((dynamic[2], dynamic[0]), (Some(3.0), Some(0.0)));
+        assert_eq!((dynamic[2], dynamic[0]), (Some(3.0), None));
+        let dynamic = ToolLength::Dynamic.offset(old, None, words);
+        assert_eq!((dynamic[2], dynamic[0]), (Some(3.0), old[0]));
         assert_eq!(
             ToolLength::Cancel.offset([None; 9], Some(tool), words),
             [Some(0.0); 9]

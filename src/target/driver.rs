@@ -25,6 +25,7 @@ use super::lower::{self, PlainLine};
 use super::profile::{Profile, ToolChange};
 
 mod arcs;
+mod inverse;
 mod plain;
 
 /// A problem found on a line: the word it is about and what it is.
@@ -553,7 +554,10 @@ impl Lowering {
         self.state_lines(b, before, d)?;
         // Compensated moves, or lowered motion, replace the line's motion
         // words.
-        let lowered = self.motion_lines(b, before, &mut d.fates)?;
+        let mut lowered = self.motion_lines(b, before, &mut d.fates)?;
+        if let Some(l) = lowered.as_mut() {
+            self.inverse_time_feeds(b, before, l);
+        }
         self.feed_words(b, before, &mut d.fates, &mut d.extra);
         // The line itself.
         let incremental_lowered = self.incremental_lowered(lowered.as_deref());
@@ -664,6 +668,19 @@ impl Lowering {
                 span: b.words.iter().find(|w| w.letter == b'R').map(|w| w.span),
                 kind: k,
             });
+        }
+        if let Some(ws) = self.dynamic_tool_length(b, before).map_err(|k| Problem {
+            span: g_span(b, 431, 431),
+            kind: k,
+        })? {
+            // The block's G43.1 and its axis words give way to the line.
+            for (i, w) in b.words.iter().enumerate() {
+                let axis = matches!(w.kind, WordKind::Value) && xyz_index(w.letter).is_some();
+                if axis || matches!(w.kind, WordKind::G(_)) && code10(w) == 431 {
+                    d.fates[i] = Fate::Drop;
+                }
+            }
+            d.pre_lines.push(ws);
         }
         if let Some(k) = self.linuxcnc_arc_refusal(b, before) {
             // At the line, as the evaluator reports it.
@@ -1211,6 +1228,11 @@ impl Lowering {
                     });
                     return Fate::Drop;
                 }
+                if !b.has_axis() {
+                    // Nothing changes (GRBL refuses it without an axis
+                    // word, error 26).
+                    return Fate::Drop;
+                }
                 // P0 (or none) is the active system, as LinuxCNC has it.
                 let k = match b.value(b'P').map(|v| v.round()) {
                     Some(v) if v >= 1.0 => v.min(255.0) as u8,
@@ -1461,6 +1483,47 @@ impl Lowering {
             return Err(self.refuse("G43", "the target has no tool length offset"));
         }
         Ok(vec![(b'G', 43.1), (b'Z', z / s)])
+    }
+
+    /// A G43.1 of the program on a target whose G43.1 takes a Z word alone
+    /// (GRBL refuses any other, error 37): `None` when it has that form,
+    /// else the target's `G43.1 Z` line for the offset it leaves (LinuxCNC
+    /// sets the axes it names and keeps the others' offsets); an offset
+    /// on another axis is refused.
+    fn dynamic_tool_length(
+        &self,
+        b: &Block,
+        before: &Machine,
+    ) -> Result<Option<Vec<(u8, f64)>>, ErrorKind> {
+        if b.tool_length() != Some(ToolLength::Dynamic) || !self.p.g43_1_z_only {
+            return Ok(None);
+        }
+        let axes = b.axes();
+        let z_alone =
+            axes[2].is_some() && axes.iter().enumerate().all(|(a, v)| a == 2 || v.is_none());
+        if z_alone {
+            return Ok(None);
+        }
+        let tlo = self.m.tlo;
+        if tlo
+            .iter()
+            .enumerate()
+            .any(|(a, v)| a != 2 && v.is_some_and(|v| v != 0.0))
+        {
+            return Err(self.refuse(
+                "G43.1 with an X or other non-Z tool offset",
+                "the target's G43.1 takes only Z",
+            ));
+        }
+        // In the units before the block, like the G43 line (see
+        // `tool_length_words`).
+        let z = tlo[2].ok_or_else(|| ErrorKind::TargetNeedsValue {
+            target: self.name(),
+            what: "G43.1 without a Z word".into(),
+            value: "the tool length offset in effect".into(),
+            option: "--tool-table (the tool table of the machine)".into(),
+        })?;
+        Ok(Some(vec![(b'G', 43.1), (b'Z', z / before.scale())]))
     }
 
     /// The value written for a kept word: X halved in G7, otherwise as is.
@@ -1719,6 +1782,15 @@ impl Lowering {
         } else {
             "G5.1"
         };
+        if self.m.modes.feed_mode == FeedMode::InverseTime {
+            return Err(ErrorKind::TargetLowering {
+                target: self.name(),
+                code: "E1004",
+                message: format!(
+                    "a spline ({name}) in G93 is not lowered; its segments would each need their own inverse-time feed"
+                ),
+            });
+        }
         let start = self.xy_known(before, &format!("{name} (spline)"))?;
         let end = self.xy_known(&self.m, &format!("{name} (spline)"))?;
         let tol = self.opts.tolerance_mm / self.m.scale();

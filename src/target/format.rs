@@ -68,7 +68,13 @@ impl LineWriter {
                 self.buf.extend_from_slice(self.num.as_bytes());
             }
         } else {
-            let d = self.decimals();
+            let mut d = self.decimals();
+            if letter == b'F' && v > 0.0 && v * pow10(usize::from(d)) < 0.5 {
+                // A feed the decimals would write as 0: GRBL refuses F0
+                // with a feed move (error 22), LinuxCNC moves at the feed.
+                // As many decimals as the significant digits allow.
+                d = self.p.max_digits;
+            }
             write_number(&mut self.buf, v, d, self.p.max_digits);
         }
     }

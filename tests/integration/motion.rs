@@ -100,6 +100,10 @@ struct Replay {
     /// Feed per revolution (G95): compared as the feed per minute at the
     /// spindle speed, which is what a lowering to G94 writes.
     per_rev: bool,
+    /// Inverse time (G93): rs274 prints each move's feed per minute, worked
+    /// out from its 4-decimal ends, so the moves a block is lowered into
+    /// differ by some 1e-5 of it.
+    inverse: bool,
 }
 
 impl Replay {
@@ -139,7 +143,7 @@ impl Replay {
             pts: run,
         }) = self.items.last_mut()
             && *k == kind
-            && (*f - feed).abs() <= 1e-6 * feed.abs().max(1.0)
+            && (*f - feed).abs() <= if self.inverse { 1e-4 } else { 1e-6 } * feed.abs().max(1.0)
         {
             run.extend(pts);
             return;
@@ -219,6 +223,7 @@ impl Replay {
             spindle: (0, 0.0),
             dwell: 0.0,
             per_rev: false,
+            inverse: false,
         };
         for l in lines {
             let Some((name, n, args)) = canon(l) else {
@@ -254,6 +259,9 @@ impl Replay {
                     }
                 }
                 "SET_FEED_RATE" if !n.is_empty() => r.feed = n[0] * s,
+                "COMMENT" if args.contains("feed mode set to") => {
+                    r.inverse = args.contains("inverse time");
+                }
                 "STRAIGHT_TRAVERSE" if n.len() >= 3 => r.line("rapid", &n),
                 "STRAIGHT_FEED" if n.len() >= 3 => r.line("feed", &n),
                 "STRAIGHT_PROBE" if n.len() >= 3 => r.line("probe", &n),
