@@ -57,8 +57,6 @@ pub struct Machine {
     pub rotated: bool,
     /// The R plane of the last canned cycle (program units as written).
     pub cycle_r: Option<f64>,
-    /// The Z before the first repeat of the running canned cycle, mm.
-    pub cycle_initial_z: Option<f64>,
     /// The program ended (M2/M30).
     pub ended: bool,
     events: Vec<Motion>,
@@ -124,7 +122,6 @@ impl Machine {
             zero_start: zs,
             rotated: false,
             cycle_r: None,
-            cycle_initial_z: None,
             ended: false,
             events: Vec::new(),
             record: true,
@@ -151,7 +148,6 @@ impl Machine {
             zero_start: self.zero_start,
             rotated: self.rotated,
             cycle_r: self.cycle_r,
-            cycle_initial_z: self.cycle_initial_z,
             ended: self.ended,
             events: Vec::new(),
             record: self.record,
@@ -421,11 +417,6 @@ impl Machine {
             None => false,
         } || b.tool_length() == Some(ToolLength::Dynamic) && b.motion().is_none();
         if let Some(m) = b.motion() {
-            if matches!(m, MotionMode::Cycle(_))
-                && !matches!(self.modes.motion, MotionMode::Cycle(_))
-            {
-                self.cycle_initial_z = self.pos[2];
-            }
             self.modes.motion = m;
         }
         if !motion_used && (b.has_axis() || b.motion().is_some_and(moves_without_axes)) {
