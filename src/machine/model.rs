@@ -672,17 +672,22 @@ impl Machine {
                             Some(scaled(a, v))
                         } else {
                             // L10/L11: the offset that makes the current
-                            // position read v (L11: in G59.3).
-                            let cs = if l == Some(11) {
-                                self.g5x[8][a]
-                            } else {
-                                self.g5x[self.modes.coord.index()][a]
-                            };
-                            match (self.pos[a], self.offset()[a], self.tlo[a], cs) {
-                                (Some(p), Some(o), Some(tl), Some(c)) => {
-                                    Some(p + o - tl - c - scaled(a, v))
+                            // position read v with it: L10 in the current
+                            // system and G92 (the offset in effect counted),
+                            // L11 in G59.3 without G92 (as rs274 writes
+                            // them: after G92 Z1 at Z5 with 7.5 in effect,
+                            // L10 Z2 gives 6.5, L11 Z2 then 13.5).
+                            let v = scaled(a, v);
+                            if l == Some(11) {
+                                match (self.pos[a], self.offset()[a], self.g5x[8][a]) {
+                                    (Some(p), Some(o), Some(c)) => Some(p + o - c - v),
+                                    _ => None,
                                 }
-                                _ => None,
+                            } else {
+                                match (self.pos[a], self.tlo[a]) {
+                                    (Some(p), Some(tl)) => Some(p + tl - v),
+                                    _ => None,
+                                }
                             }
                         };
                         match mm {
