@@ -979,7 +979,9 @@ fn check_unused_words(d: &Decoded<'_>) -> Check {
         d.g_on(|g| g == set_data || comp_on(g) || g == GCode::Motion(M::ThreadCycle))
             || (canned && d.motion != M::Cycle(74))
             || d.m_on(|m| matches!(m, MCode::Io(66) | MCode::Other(98)))
-            || d.g_on(|g| matches!(g, GCode::Motion(M::Nurbs | M::NurbsEnd))),
+            // A NURBS block's motion, on its line or in effect (its
+            // control points' lines).
+            || d.motion == M::Nurbs,
         BlockError::WordUnused { letter: 'l' },
     )?;
     uses(
