@@ -682,6 +682,7 @@ const SWEEP_SKIP: &[&str] = &[
     "g80-with-other-motion-code",
     "m73-auto-restore",
     "g5-3-moves-to-last-point",
+    "g5-2-order-on-a-point-line",
     "center-arc-radius-within-tolerance",
     "g28-home-position",
     "g43-1-with-motion-moves",
