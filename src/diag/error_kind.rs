@@ -240,10 +240,6 @@ pub enum ErrorKind {
     /// firmwares refuse a probe move to the point the tool is at
     /// (LinuxCNC accepts it and does nothing).
     TargetProbeInPlace { target: &'static str },
-    /// `G2 X1 R0.49997` with `--target grbl`: an R arc a little short of
-    /// half its chord, which LinuxCNC accepts and GRBL-class firmwares
-    /// refuse.
-    TargetArcRadiusShort { target: &'static str },
     /// A lowering that failed (its own code, E1100–E1149).
     TargetLowering {
         target: &'static str,
@@ -390,7 +386,6 @@ impl ErrorKind {
             TargetLineTooLong { .. } => "E1002",
             UnknownTarget { .. } => "E1003",
             TargetProbeInPlace { .. } => "E1050",
-            TargetArcRadiusShort { .. } => "E1051",
             TargetLowering { code, .. } => code,
             Internal { .. } => "E0700",
             ComputedSubLabel => "E0701",
@@ -819,10 +814,6 @@ impl ErrorKind {
             UnknownTarget { name } => {
                 write!(f, "unknown target '{name}' (`ngcflat targets` lists them)")
             }
-            TargetArcRadiusShort { target } => write!(
-                f,
-                "arc radius shorter than half the distance to the end point: LinuxCNC allows a little, {target} refuses it (its error 34); write the radius as half the chord or more"
-            ),
             TargetProbeInPlace { target } => write!(
                 f,
                 "probe move to the point the tool is already at: {target} refuses it (its error 33, invalid target)"

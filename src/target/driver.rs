@@ -663,12 +663,6 @@ impl Lowering {
                 kind: k,
             });
         }
-        if let Some(k) = self.arc_radius_short(b, before) {
-            return Err(Problem {
-                span: b.words.iter().find(|w| w.letter == b'R').map(|w| w.span),
-                kind: k,
-            });
-        }
         if let Some(ws) = self.dynamic_tool_length(b, before).map_err(|k| Problem {
             span: g_span(b, 431, 431),
             kind: k,
@@ -1014,30 +1008,6 @@ impl Lowering {
             .filter(|(l, _)| self.p.has_axis(**l))
             .all(|(_, (a, z))| matches!((a, z), (Some(a), Some(z)) if (a - z).abs() < 1e-9));
         same.then_some(ErrorKind::TargetProbeInPlace {
-            target: self.name(),
-        })
-    }
-
-    /// LinuxCNC accepts an R arc whose radius is up to 0.00005 in short of
-    /// half its chord (a half turn about the chord's middle); GRBL-class
-    /// firmwares refuse any radius short of it (error 34).
-    fn arc_radius_short(&self, b: &Block, before: &Machine) -> Option<ErrorKind> {
-        let motion = b.motion().unwrap_or(before.modes.motion);
-        if !matches!(motion, MotionMode::ArcCw | MotionMode::ArcCcw) || !b.has_axis() {
-            return None;
-        }
-        let r = b.value(b'R')?;
-        let (i, j) = match self.m.modes.plane {
-            Plane::XY => (0, 1),
-            Plane::XZ => (2, 0),
-            Plane::YZ => (1, 2),
-            _ => return None,
-        };
-        let d = |k: usize| Some(self.m.pos[k]? - before.pos[k]?);
-        let (dx, dy) = (d(i)?, d(j)?);
-        let chord2 = dx * dx + dy * dy;
-        let r = r * self.m.scale();
-        (4.0 * r * r < chord2 * (1.0 - 1e-9)).then(|| ErrorKind::TargetArcRadiusShort {
             target: self.name(),
         })
     }
