@@ -73,6 +73,13 @@ pub enum WarningKind {
         what: String,
         how: String,
     },
+    /// `M1` with `--target grbl`: written, and accepted, but the
+    /// controller does nothing with it where LinuxCNC may.
+    TargetIgnores {
+        target: &'static str,
+        what: String,
+        why: String,
+    },
 }
 
 impl WarningKind {
@@ -101,6 +108,7 @@ impl WarningKind {
             ConfigPathMissing { .. } => "W0903",
             TargetDropped { .. } => "W1000",
             TargetRewritten { .. } => "W1001",
+            TargetIgnores { .. } => "W1002",
         }
     }
 }
@@ -200,6 +208,9 @@ impl fmt::Display for WarningKind {
             }
             TargetRewritten { target, what, how } => {
                 write!(f, "{what} is written for {target} as {how}")
+            }
+            TargetIgnores { target, what, why } => {
+                write!(f, "{what} is written for {target}, which ignores it: {why}")
             }
         }
     }

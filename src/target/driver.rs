@@ -1284,6 +1284,15 @@ impl Lowering {
                 }
             };
         }
+        if m == (MCode::Pause { optional: true }) && !p.optional_stop {
+            let k = WarningKind::TargetIgnores {
+                target: self.name(),
+                what: "M1 (optional stop)".into(),
+                why: "the program does not pause there, where LinuxCNC stops if its optional-stop switch is on".into(),
+            };
+            self.warn(site.clone(), k);
+            return Fate::Keep;
+        }
         if p.has_m(n) && w.value.fract() == 0.0 {
             return Fate::Keep;
         }

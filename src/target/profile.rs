@@ -81,6 +81,9 @@ pub struct Profile {
     pub tool_change: ToolChange,
     /// G43.1 takes only a Z word.
     pub g43_1_z_only: bool,
+    /// M1 stops the program when the controller's optional-stop switch is
+    /// on, as on LinuxCNC (GRBL and FluidNC accept M1 and ignore it).
+    pub optional_stop: bool,
     /// Arcs take P (turns).
     pub arc_turns: bool,
 }

@@ -146,6 +146,11 @@ const WARNING_FIXTURES: &[(&str, &str, &[&str])] = &[
         &["--target", "grbl"],
     ),
     (
+        "W1002",
+        "fixtures/target/grbl/ok/m1-optional-stop.ngc",
+        &["--target", "grbl"],
+    ),
+    (
         "W1150",
         "fixtures/ok/comp/not-checked-without-tool-data.ngc",
         &[],

@@ -49,7 +49,8 @@ impl Codes {
         let axis = |l: u8| value(l) && axes & 1 << l != 0;
         Codes {
             g,
-            m: bits(&|n| p.has_m(n)),
+            // M1 where the target ignores it takes the way that warns.
+            m: bits(&|n| p.has_m(n) && (n != 1 || p.optional_stop)),
             words,
             axes,
             moves: [

@@ -46,4 +46,5 @@ pub(crate) const PROFILE: Profile = Profile {
     tool_change: ToolChange::Keep,
     arc_turns: false,
     g43_1_z_only: true,
+    optional_stop: false,
 };

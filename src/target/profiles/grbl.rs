@@ -42,4 +42,5 @@ pub(crate) const PROFILE: Profile = Profile {
     tool_change: ToolChange::Pause,
     arc_turns: false,
     g43_1_z_only: true,
+    optional_stop: false,
 };

@@ -60,4 +60,5 @@ pub(crate) const PROFILE: Profile = Profile {
     tool_change: ToolChange::Keep,
     arc_turns: true,
     g43_1_z_only: false,
+    optional_stop: true,
 };
