@@ -12,6 +12,8 @@ pub(crate) mod state;
 pub use expr::params;
 pub use state::tools;
 
+pub(crate) use read::validate::arc_refusal;
+
 use flow::{Flow, Frame, FrameKind, label_of_key};
 use out::Writer;
 use read::Reader;

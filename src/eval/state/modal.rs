@@ -7,12 +7,11 @@ use crate::diag::{Error, ErrorKind};
 use crate::program::FileIndex;
 
 use crate::codes::{
-    ArcDistance, CoordSystem, CutterComp, Distance, GCode, MCode, MotionMode, NonModal, Plane,
-    ToolLength, Units,
+    CoordSystem, CutterComp, Distance, GCode, MCode, MotionMode, NonModal, Plane, ToolLength, Units,
 };
 use crate::eval::Interp;
 use crate::eval::read::block::Words;
-use crate::eval::read::validate::{Checked, LineCodes};
+use crate::eval::read::validate::{Checked, LineCodes, arc_refusal};
 use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
 use crate::eval::state::nurbs::{NO_MOTION, NURBS};
@@ -873,41 +872,18 @@ impl Machine {
                 else {
                     return Ok(());
                 };
-                // The reference's checks (arc_data_r / arc_data_ijk), with
-                // its tolerances for the program's units.
-                use crate::geom::comp::{Arc, ArcCenter, CompError, Tolerances, arc_center};
-                let center = match word(b'r') {
-                    Some(r) => ArcCenter::Radius(r),
-                    None => ArcCenter::Offsets {
-                        i: word(c0).unwrap_or(0.0),
-                        j: word(c1).unwrap_or(0.0),
-                        distance: self.modal.arc_distance,
-                    },
-                };
-                let arc = Arc {
-                    ccw: motion == MotionMode::ArcCcw,
-                    center,
-                    turns: 1,
-                };
-                let tol = Tolerances::default_for(self.modal.units);
-                match arc_center(&tol, arc, [sx, sy], [ex, ey]) {
-                    Ok(_) => {}
-                    Err(CompError::ArcSamePoint) => return Err(bad(BlockError::ArcSamePoint)),
-                    Err(CompError::RadiusTooSmall) => {
-                        return Err(bad(BlockError::ArcRadiusTooSmall));
-                    }
-                    Err(CompError::ZeroRadiusArc) => return Err(bad(BlockError::ZeroRadiusArc)),
-                    Err(_) => {
-                        let (ci, cj) = (word(c0).unwrap_or(0.0), word(c1).unwrap_or(0.0));
-                        let (cx, cy) = if self.modal.arc_distance == ArcDistance::Absolute {
-                            (ci, cj)
-                        } else {
-                            (sx + ci, sy + cj)
-                        };
-                        let r1 = (sx - cx).hypot(sy - cy);
-                        let r2 = (ex - cx).hypot(ey - cy);
-                        return Err(bad(BlockError::ArcRadiiDiffer { r1, r2 }));
-                    }
+                // The reference's checks (arc_data_r / arc_data_ijk).
+                let refusal = arc_refusal(
+                    motion == MotionMode::ArcCcw,
+                    word(b'r'),
+                    [word(c0), word(c1)],
+                    self.modal.arc_distance,
+                    self.modal.units,
+                    [sx, sy],
+                    [ex, ey],
+                );
+                if let Some(e) = refusal {
+                    return Err(bad(e));
                 }
             }
             MotionMode::Probe(2 | 4) => {

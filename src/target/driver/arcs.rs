@@ -19,12 +19,13 @@
 
 use crate::block::{Block, MotionMode, NonModal, ToolLength};
 use crate::codes::{ArcDistance, Units};
-use crate::diag::{BlockError, ErrorKind};
-use crate::geom::comp::{Arc as CompArc, ArcCenter, CompError, Tolerances, arc_center};
+use crate::diag::ErrorKind;
+use crate::geom::comp::{Arc as CompArc, ArcCenter, Tolerances, arc_center};
 use crate::machine::{Machine, radius_center};
 use crate::target::format::format_number;
 
 use super::Lowering;
+use crate::eval::arc_refusal;
 
 /// GRBL's check of a centre-form arc (gcode.c): the end may be off the
 /// start's distance from the centre by 0.005 mm, or by more if that is
@@ -97,44 +98,15 @@ impl Lowering {
             [at(after, p)?, at(after, q)?],
         );
         let letters = [b'I', b'J', b'K'];
-        let center = match b.value(b'R') {
-            Some(r) => ArcCenter::Radius(r),
-            None => ArcCenter::Offsets {
-                i: b.value(letters[p]).unwrap_or(0.0),
-                j: b.value(letters[q]).unwrap_or(0.0),
-                distance: after.modes.arc_distance,
-            },
-        };
-        let arc = CompArc {
-            ccw: motion == MotionMode::ArcCcw,
-            center,
-            turns: 1,
-        };
-        let tol = Tolerances::default_for(after.modes.units);
-        let e = arc_center(&tol, arc, start, end).err()?;
-        let block = match e {
-            CompError::ArcSamePoint => BlockError::ArcSamePoint,
-            CompError::RadiusTooSmall => BlockError::ArcRadiusTooSmall,
-            CompError::ZeroRadiusArc => BlockError::ZeroRadiusArc,
-            _ => {
-                let c = match (b.value(b'R'), after.modes.arc_distance) {
-                    (Some(_), _) => return None,
-                    (None, ArcDistance::Incremental) => [
-                        start[0] + b.value(letters[p]).unwrap_or(0.0),
-                        start[1] + b.value(letters[q]).unwrap_or(0.0),
-                    ],
-                    (None, ArcDistance::Absolute) => [
-                        b.value(letters[p]).unwrap_or(0.0),
-                        b.value(letters[q]).unwrap_or(0.0),
-                    ],
-                };
-                let r = |e: [f64; 2]| (e[0] - c[0]).hypot(e[1] - c[1]);
-                BlockError::ArcRadiiDiffer {
-                    r1: r(start),
-                    r2: r(end),
-                }
-            }
-        };
+        let block = arc_refusal(
+            motion == MotionMode::ArcCcw,
+            b.value(b'R'),
+            [b.value(letters[p]), b.value(letters[q])],
+            after.modes.arc_distance,
+            after.modes.units,
+            start,
+            end,
+        )?;
         Some(ErrorKind::Block(block))
     }
 
