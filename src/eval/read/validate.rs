@@ -603,11 +603,12 @@ fn full_check(
 /// need to run (a feed rate, arc words, a canned cycle's state, cutter
 /// compensation), which the cycle checks itself, nor what its M codes
 /// need: they do not run there (a user M-code need not be declared).
-/// `modal` has the motion the contour has reached.
+/// `modal` has the motion the contour has reached. The line's codes, as
+/// decoded.
 pub(in crate::eval) fn check_contour_line(
     words: &[(u8, f64)],
     modal: &Modes,
-) -> Result<Checked, (ErrorKind, Option<usize>)> {
+) -> Result<LineCodes, (ErrorKind, Option<usize>)> {
     let r = read_codes(words, u128::MAX)?;
     let d = r.decoded(words, modal);
     check_axis_codes(&d)?;
@@ -616,7 +617,7 @@ pub(in crate::eval) fn check_contour_line(
     check_whole_numbers(&d, Lines::Contour)?;
     check_g10(&d)?;
     check_required_words(&d, Lines::Contour)?;
-    Ok(r.checked(&d))
+    Ok(LineCodes::of(d.gs, d.ms, r.g80_gave_way))
 }
 
 /// What the reference refuses while cutter compensation is on, and the

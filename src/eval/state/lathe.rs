@@ -406,9 +406,7 @@ impl Interp<'_> {
                 modal.motion = run.motion;
             }
             match check_contour_line(&words, &modal) {
-                // (A contour line's codes are always decoded.)
-                Ok(Checked::Simple) => {}
-                Ok(Checked::Line(c) | Checked::Lathe(c, _)) => {
+                Ok(c) => {
                     code = c.gs().iter().find_map(|g| match g {
                         GCode::Motion(m) => Some(*m),
                         _ => None,
