@@ -25,6 +25,7 @@ use super::lower::{self, PlainLine};
 use super::profile::{Profile, ToolChange};
 
 mod arcs;
+mod centres;
 mod inverse;
 mod plain;
 
@@ -45,9 +46,6 @@ struct Decided {
     /// Lines written before the line (G43.1 Z: an axis command of its own).
     pre_lines: Vec<Vec<(u8, f64)>>,
 }
-
-/// Why G90.1 is refused where the target lacks it.
-const ABSOLUTE_ARC_CENTRES: &str = "absolute arc centres (G90.1) are not lowered; the target reads I J K as offsets from the start";
 
 /// What happens to one word of a block.
 #[derive(Clone, Copy, PartialEq)]
@@ -116,6 +114,9 @@ pub struct Lowering {
     /// G5.2 control points collected until G5.3.
     nurbs: Option<NurbsCurve>,
     codes: plain::Codes,
+    /// The I J K written for the block's arc under G90.1 (offsets from
+    /// its start, by letter) where the target lacks G90.1 (centres.rs).
+    centres: Option<[Option<f64>; 3]>,
 }
 
 /// A NURBS being collected (G5.2 blocks), in program units.
@@ -181,6 +182,7 @@ impl Lowering {
             defer_block: None,
             plain: true,
             codes: plain::Codes::of(p),
+            centres: None,
         }
     }
 
@@ -551,6 +553,7 @@ impl Lowering {
         before: &Machine,
         d: &mut Decided,
     ) -> Result<Vec<Vec<u8>>, Problem> {
+        self.polar_arc_end(b, before)?;
         self.state_lines(b, before, d)?;
         // Compensated moves, or lowered motion, replace the line's motion
         // words.
@@ -558,6 +561,13 @@ impl Lowering {
         if let Some(l) = lowered.as_mut() {
             self.inverse_time_feeds(b, before, l);
         }
+        self.centres = match lowered {
+            Some(_) => None,
+            None => self.centre_offsets(b, before).map_err(|kind| Problem {
+                span: g_span(b, 20, 30),
+                kind,
+            })?,
+        };
         self.feed_words(b, before, &mut d.fates, &mut d.extra);
         // The line itself.
         let incremental_lowered = self.incremental_lowered(lowered.as_deref());
@@ -1159,11 +1169,8 @@ impl Lowering {
                 }
                 Fate::Drop
             }
-            GCode::ArcDistance(ArcDistance::Absolute) => {
-                problems.push(refuse(self, ABSOLUTE_ARC_CENTRES));
-                Fate::Drop
-            }
-            GCode::ArcDistance(ArcDistance::Incremental) | GCode::Retract(_) => Fate::Drop,
+            // Arcs are written with offsets from their start (centres.rs).
+            GCode::ArcDistance(_) | GCode::Retract(_) => Fate::Drop,
             GCode::ToolLength(ToolLength::Apply | ToolLength::Add) if p.has_g(431) => Fate::Drop,
             GCode::CutterComp(CutterComp::Off) => Fate::Drop,
             // Computed into the path (comp_block).
@@ -1505,8 +1512,16 @@ impl Lowering {
         Ok(Some(vec![(b'G', 43.1), (b'Z', z / before.scale())]))
     }
 
-    /// The value written for a kept word: X halved in G7, otherwise as is.
+    /// The value written for a kept word: X halved in G7, an arc's
+    /// absolute centre as an offset (G90.1 lowered), otherwise as is.
     fn out_value(&self, w: &Word, before: &Machine) -> f64 {
+        if let Some(c) = &self.centres
+            && matches!(w.kind, WordKind::Value)
+            && let Some(a) = w.letter.checked_sub(b'I').filter(|&a| a < 3)
+            && let Some(v) = c[usize::from(a)]
+        {
+            return v;
+        }
         if w.letter == b'X'
             && matches!(w.kind, WordKind::Value)
             && before.modes.lathe == LatheMode::Diameter
@@ -1578,7 +1593,9 @@ impl Lowering {
                         || b.value(b'J').is_some()
                         || b.value(b'K').is_some());
                 let p_ok = self.p.arc_turns;
-                if ijk_only || (turns != 1.0 && !p_ok) {
+                // Polar words name the end point (the target has none).
+                let polar = b.value(b'@').is_some() || b.value(b'^').is_some();
+                if ijk_only || polar || (turns != 1.0 && !p_ok) {
                     if other_axis_use {
                         return Ok(None);
                     }
@@ -1691,13 +1708,8 @@ impl Lowering {
         let plane = Self::plane(&self.m)?;
         let mut centre = start;
         if let Some(r) = b.value(b'R') {
-            if turns != 1.0 {
-                return Err(self.refuse(
-                    "an R-form arc with P turns",
-                    "only centre-form arcs are lowered",
-                ));
-            }
-            // LinuxCNC's centre for the radius (a checked arc).
+            // LinuxCNC's centre for the radius (a checked arc), the same
+            // whatever the turns: P turns go round it from there.
             let [p, q, _] = plane.axes();
             let arc = CompArc {
                 ccw: motion == MotionMode::ArcCcw,
@@ -1901,12 +1913,9 @@ impl Lowering {
     }
 
     /// G0/G1 with polar words as G0/G1 X Y (and Z).
-    fn lower_polar(
-        &mut self,
-        b: &Block,
-        before: &Machine,
-        motion: MotionMode,
-    ) -> Result<Vec<PlainLine>, ErrorKind> {
+    /// The X Y end point of a block with polar words (program units),
+    /// which the model then has.
+    fn polar_end(&mut self, b: &Block, before: &Machine) -> Result<[f64; 2], ErrorKind> {
         let current = self.xy_known(before, "polar coordinates (@ ^)")?;
         let input = lower::polar::PolarInput {
             distance: self.m.modes.distance,
@@ -1919,6 +1928,36 @@ impl Lowering {
         let s = self.m.scale();
         self.m.pos[0] = Some(x * s);
         self.m.pos[1] = Some(y * s);
+        Ok([x, y])
+    }
+
+    /// An arc with polar words: its end point is worked out before the
+    /// arc is checked and lowered (the model's is not LinuxCNC's).
+    fn polar_arc_end(&mut self, b: &Block, before: &Machine) -> Result<(), Problem> {
+        let motion = b.motion().unwrap_or(before.modes.motion);
+        let other_axis_use = b.non_modal().is_some_and(|n| !matches!(n, NonModal::Dwell))
+            || b.tool_length() == Some(ToolLength::Dynamic);
+        if !matches!(motion, MotionMode::ArcCw | MotionMode::ArcCcw)
+            || other_axis_use
+            || b.value(b'@').is_none() && b.value(b'^').is_none()
+        {
+            return Ok(());
+        }
+        self.polar_end(b, before)
+            .map(|_| ())
+            .map_err(|kind| Problem {
+                span: g_span(b, 20, 30),
+                kind,
+            })
+    }
+
+    fn lower_polar(
+        &mut self,
+        b: &Block,
+        before: &Machine,
+        motion: MotionMode,
+    ) -> Result<Vec<PlainLine>, ErrorKind> {
+        let [x, y] = self.polar_end(b, before)?;
         let g = if motion == MotionMode::Rapid {
             0.0
         } else {

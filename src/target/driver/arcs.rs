@@ -70,8 +70,9 @@ impl Lowering {
         let motion = b.motion().unwrap_or(before.modes.motion);
         let other_axis_use = b.non_modal().is_some_and(|n| !matches!(n, NonModal::Dwell))
             || b.tool_length() == Some(ToolLength::Dynamic);
+        let polar = b.value(b'@').is_some() || b.value(b'^').is_some();
         if !matches!(motion, MotionMode::ArcCw | MotionMode::ArcCcw)
-            || !b.has_axis()
+            || !(b.has_axis() || polar)
             || other_axis_use
         {
             return None;

@@ -152,14 +152,17 @@ impl Lowering {
     }
 
     /// Whether the state lets a line through the short way: nothing is
-    /// being lowered (compensation, G95, G7 on a target without it) and the
-    /// target is in the program's coordinate system.
+    /// being lowered (compensation, G95, G7 on a target without it, G90.1
+    /// arc centres on a target without it) and the target is in the
+    /// program's coordinate system.
     fn plain_state(&self) -> bool {
         !(self.comp.is_some()
             || self.after_off.is_some()
             || self.feed_rewrite
             // Positions in a coordinate system the target lacks are moved.
             || self.m.modes.coord != self.target_coord
+            // Arc centres rewritten as offsets (centres.rs).
+            || self.centres_rewritten()
             || self.m.modes.lathe == LatheMode::Diameter && !self.p.has_g(70))
     }
 
