@@ -991,8 +991,27 @@ pub(crate) trait LineSink {
 /// path keeps the words alone.
 #[inline(always)]
 pub(crate) fn read_flat_line<S: LineSink>(line: &[u8], sink: &mut S) -> Result<(), S::Error> {
-    let n = line.len().min(u16::MAX as usize);
-    let line = &line[..n];
+    read_flat_line_in(line, line.len(), sink)
+}
+
+/// [`read_flat_line`] of the line `buf[..len]`, where the bytes after it
+/// in `buf` (the rest of the file, say) may be loaded but are not read:
+/// numbers are read eight bytes at a time where eight bytes follow them
+/// in `buf`, however short the line.
+#[inline(always)]
+pub(crate) fn read_flat_line_in<S: LineSink>(
+    buf: &[u8],
+    len: usize,
+    sink: &mut S,
+) -> Result<(), S::Error> {
+    let n = len.min(buf.len()).min(u16::MAX as usize);
+    let line = &buf[..n];
+    // A number is read in `buf` (its digits and point) only where it ends
+    // in the line: where the line is followed by neither.
+    let buf = match buf.get(n) {
+        Some(c) if c.is_ascii_digit() || *c == b'.' => line,
+        _ => buf,
+    };
     let span = |a: usize, b: usize| Span {
         start: a as u16,
         end: b as u16,
@@ -1024,7 +1043,7 @@ pub(crate) fn read_flat_line<S: LineSink>(line: &[u8], sink: &mut S) -> Result<(
                     .into());
                 }
                 let (value, end, shape, spaced) =
-                    read_number(line, i + 1, S::SHAPES).ok_or(DecodeError {
+                    read_number(line, buf, i + 1, S::SHAPES).ok_or(DecodeError {
                         span: span(i, i + 1),
                         what: DecodeProblem::BadNumber,
                     })?;
@@ -1111,6 +1130,10 @@ fn skip_blanks(line: &[u8], mut i: usize) -> usize {
 /// read with blanks before or inside it (false: it starts at `start` and
 /// holds none). The shape is worked out only if `shapes` asks for it.
 ///
+/// `tail` is `line` and maybe bytes after it, the first of which is
+/// neither a digit nor a point: they may be loaded, but no number runs
+/// into them.
+///
 /// A number of at most 15 significant digits without blanks (every number
 /// the evaluator writes, and the usual CAM number) is read in one pass:
 /// its digits as an integer, exact below 2^53, divided by an exact power of
@@ -1119,7 +1142,12 @@ fn skip_blanks(line: &[u8], mut i: usize) -> usize {
 /// Longer numbers without blanks are parsed where they are written; the
 /// rest (blanks inside) is gathered first.
 #[inline(always)]
-fn read_number(line: &[u8], start: usize, shapes: bool) -> Option<(f64, usize, Shape, bool)> {
+fn read_number(
+    line: &[u8],
+    tail: &[u8],
+    start: usize,
+    shapes: bool,
+) -> Option<(f64, usize, Shape, bool)> {
     let mut i = start;
     let (neg, plus) = match line.get(i) {
         Some(b'-') => {
@@ -1134,7 +1162,7 @@ fn read_number(line: &[u8], start: usize, shapes: bool) -> Option<(f64, usize, S
     };
     let first = line.get(i).copied().unwrap_or(b' ');
     // The usual number, read eight bytes at a time.
-    if let Some(d) = digits_at(line, i) {
+    if let Some(d) = digits_at(tail, i) {
         let after = skip_blanks(line, d.end);
         if !matches!(line.get(after), Some(c) if c.is_ascii_digit() || *c == b'.') {
             let shape = if shapes {
@@ -1299,13 +1327,32 @@ mod tests {
         ) {
             let line = format!("X{text}");
             let start = at.min(line.len());
-            let fast = read_number(line.as_bytes(), start, true).map(|(v, e, _, _)| (v, e));
+            let fast = read_number(line.as_bytes(), line.as_bytes(), start, true).map(|(v, e, _, _)| (v, e));
             let slow = read_number_slow(line.as_bytes(), start);
             proptest::prop_assert_eq!(
                 fast.map(|(v, e)| (v.to_bits(), e)),
                 slow.map(|(v, e)| (v.to_bits(), e)),
                 "{:?}", line
             );
+        }
+
+        /// A line read with the bytes after it reads as the line alone:
+        /// the same block, or the same error.
+        #[test]
+        fn line_reads_the_same_with_bytes_after_it(
+            line in "[GXYM ]{0,3}[-+]?[0-9]{0,9}(\\.[0-9]{0,9})?( [XY][0-9.]{1,12})?",
+            tail in "[\r\n0-9.X ]{0,20}",
+        ) {
+            let buf = format!("{line}{tail}");
+            let mut alone = Block::default();
+            let want = alone.decode_into(line.as_bytes());
+            let mut within = Block::default();
+            within.clear();
+            let got = read_flat_line_in(buf.as_bytes(), line.len(), &mut within);
+            proptest::prop_assert_eq!(&got, &want, "{:?}", buf);
+            if want.is_ok() {
+                proptest::prop_assert_eq!(&within, &alone, "{:?}", buf);
+            }
         }
 
         #[test]
@@ -1319,7 +1366,7 @@ mod tests {
                 "X{}{int}.{frac:0width$} Y1",
                 if neg { "-" } else { "" },
             );
-            let got = read_number(line.as_bytes(), 1, true).map(|(v, e, _, _)| (v, e));
+            let got = read_number(line.as_bytes(), line.as_bytes(), 1, true).map(|(v, e, _, _)| (v, e));
             let want: f64 = line[1..line.len() - 3].parse().unwrap();
             proptest::prop_assert_eq!(got.map(|g| g.0.to_bits()), Some(want.to_bits()));
             proptest::prop_assert_eq!(got.map(|g| g.1), Some(line.len() - 3));

@@ -669,10 +669,13 @@ impl<'s> Interp<'s> {
         line_idx: u32,
         window: &mut Window,
     ) -> Result<(), Error> {
-        let (raw, next, terminated): (&[u8], u32, bool) = match file.file.memory() {
+        // The line and the bytes after it (the rest of the file, where it
+        // is in memory), which let its numbers be read eight bytes at a time.
+        let (raw, tail, next, terminated): (&[u8], &[u8], u32, bool) = match file.file.memory() {
             Some(data) => {
                 let (end, next, t) = next_line(data, start as usize);
-                (&data[start as usize..end], next as u32, t)
+                let tail = &data[start as usize..];
+                (&tail[..end - start as usize], tail, next as u32, t)
             }
             None => {
                 let l = window
@@ -680,13 +683,14 @@ impl<'s> Interp<'s> {
                     .map_err(|e| read_error(file, e))?;
                 let next = l.next;
                 let t = l.terminated;
-                (window.bytes(&l), next, t)
+                let raw = window.bytes(&l);
+                (raw, raw, next, t)
             }
         };
         self.flow.cur.pos = next;
         self.flow.cur.line += 1;
         let mut room = self.reader.plain.take().unwrap_or_default();
-        let plain = if plain::read_plain(raw, &mut room.words) {
+        let plain = if plain::read_plain_in(tail, raw.len(), &mut room.words) {
             self.exec_plain(file, start, raw, &room.words)
         } else {
             None

@@ -1,23 +1,23 @@
 //! Plain lines: a line of literal words, with an optional block delete and
 //! line number, needs no evaluation and is written exactly as read. On the
 //! general path such a line is read by the flat-line reader,
-//! [`read_flat_line`] (the one [`crate::block::Block::decode_into`] reads
+//! [`crate::block::read_flat_line`] (the one [`crate::block::Block::decode_into`] reads
 //! with), and kept to the lines the grammar reads the same way (a property
 //! test checks every line it takes against the grammar); any other goes to
 //! the grammar.
 
-use crate::block::{DecodeError, LineSink, RawLine, RawWord, Shape, Span, read_flat_line};
+use crate::block::{DecodeError, LineSink, RawLine, RawWord, Shape, Span, read_flat_line_in};
 use crate::parse::MAX_LINE;
 
 /// Room for a plain line's words: as the straight-line reader keeps them
-/// (`raw`), or as [`read_plain`] reads them (`words`).
+/// (`raw`), or as [`read_plain_in`] reads them (`words`).
 #[derive(Default)]
 pub(in crate::eval) struct PlainRoom {
     pub(in crate::eval) raw: RawLine,
     pub(in crate::eval) words: Vec<RawWord>,
 }
 
-/// Reads `line` (without its terminator) into `words` (letters upper case)
+/// Reads the line `buf[..len]` (without its terminator) into `words` (letters upper case)
 /// if it is a plain line with at least one word: blanks, an optional `/`,
 /// an optional line number `N` with digits first and no sign, then words
 /// of any letter but N and O, upper or lower case, each a number
@@ -25,17 +25,21 @@ pub(in crate::eval) struct PlainRoom {
 /// comment. False sends the line to the grammar (the flat-line reader
 /// reads more: comments, `%`, polar words, blanks inside numbers, N and O
 /// words).
-pub(in crate::eval) fn read_plain(line: &[u8], words: &mut Vec<RawWord>) -> bool {
+/// The bytes of `buf` after the line (the rest of the file) are not read,
+/// but let its numbers be read eight bytes at a time (see
+/// [`read_flat_line_in`]).
+#[inline]
+pub(in crate::eval) fn read_plain_in(buf: &[u8], len: usize, words: &mut Vec<RawWord>) -> bool {
     words.clear();
-    if line.len() > MAX_LINE {
+    if len > MAX_LINE || len > buf.len() {
         return false;
     }
     let mut sink = Plain {
-        line,
+        line: &buf[..len],
         words,
         numbered: false,
     };
-    read_flat_line(line, &mut sink).is_ok() && !sink.words.is_empty()
+    read_flat_line_in(buf, len, &mut sink).is_ok() && !sink.words.is_empty()
 }
 
 /// Why a line is not plain (or does not read).
@@ -139,6 +143,10 @@ mod tests {
     use crate::parse::ast::{ExprKind, Item, LineKind};
     use proptest::prelude::*;
 
+    fn read_plain(line: &[u8], words: &mut Vec<RawWord>) -> bool {
+        read_plain_in(line, line.len(), words)
+    }
+
     /// Words of a line as the grammar reads them (None if it is not a
     /// line of literal words).
     fn grammar_words(raw: &[u8]) -> Option<Vec<(u8, f64)>> {
@@ -159,7 +167,7 @@ mod tests {
         }
     }
 
-    /// The words `exec_plain` runs for a line [`read_plain`] takes: lower
+    /// The words `exec_plain` runs for a line `read_plain` takes: lower
     /// case letters and values, as the grammar hands them over.
     fn plain_words(line: &[u8]) -> Option<Vec<(u8, f64)>> {
         let mut words = Vec::new();

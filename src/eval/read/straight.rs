@@ -19,7 +19,7 @@ use crate::program::FileIndex;
 use crate::codes::{CutterComp, FeedMode, MotionMode, Plane};
 use crate::eval::Interp;
 use crate::eval::out::hook::FormBatch;
-use crate::eval::read::plain::{PlainRoom, read_plain};
+use crate::eval::read::plain::{PlainRoom, read_plain_in};
 use crate::eval::read::scan_ahead::{Ahead, Decoded, InPlace, LineRoom, Lines, Read, Shared};
 
 /// Word slots: G, X, Y, Z, A, B, C, F, S (the fast set), then I, J, K, R, P
@@ -535,7 +535,7 @@ fn plain_words<'r>(
         return None;
     }
     if !sink.finish() {
-        return read_plain(&buf[i..text_end], &mut room.words).then_some(&room.words[..]);
+        return read_plain_in(&buf[i..], text_end - i, &mut room.words).then_some(&room.words[..]);
     }
     let words = room.raw.words();
     (!room.raw.has_comment() && !words.is_empty()).then_some(words)
@@ -563,6 +563,15 @@ impl Interp<'_> {
         let max_lines = stop_line.saturating_sub(first_line);
         // Comments are copied unless they are to be stripped.
         let comments = !self.s.strip_comments;
+        if buf.first() != Some(&b'\n') && !read_line(buf, 0, &mut Plain::default(), comments) {
+            // The first line is not one the loop reads: what the loop would
+            // find at once, without setting it up (the general path runs
+            // such lines one at a time, each asking here first).
+            if self.out.count_lines(0) {
+                self.line_checkpoint()?;
+            }
+            return Ok(0);
+        }
         let mut run = Run::default();
         let chunk = self.s.scan_ahead;
         // The first bytes are read in place; a run that goes on past them
