@@ -1588,7 +1588,9 @@ impl Lowering {
             MotionMode::ArcCw | MotionMode::ArcCcw => {
                 self.cycles.end();
                 let turns = b.value(b'P').map_or(1.0, |p| p.round());
-                let ijk_only = !b.has_axis()
+                // A full circle or a helix (no axis word of its plane).
+                let xyz = [b'X', b'Y', b'Z'].map(|l| b.value(l));
+                let ijk_only = !plain::names_plane_axis(xyz, self.m.modes.plane)
                     && (b.value(b'I').is_some()
                         || b.value(b'J').is_some()
                         || b.value(b'K').is_some());

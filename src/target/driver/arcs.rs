@@ -209,9 +209,10 @@ impl Lowering {
         let (ws, we) = (start.map(written), end.map(written));
         let wr = written(r * scale);
         let chord2 = (we[0] - ws[0]).powi(2) + (we[1] - ws[1]).powi(2);
-        if chord2 == 0.0 || 4.0 * wr * wr < chord2 {
+        if chord2 == 0.0 || 4.0 * wr * wr - chord2 <= single_precision_slack(ws, we, wr) {
             // The target cannot place the centre (or LinuxCNC's is the
-            // chord's middle and the target's would be found otherwise).
+            // chord's middle and the target's would be found otherwise),
+            // or it may not, working in single precision.
             return true;
         }
         // The arcs share their ends (but for the rounding): they are
@@ -236,6 +237,23 @@ pub(super) fn ijk_refused(start: [f64; 2], end: [f64; 2], centre: [f64; 2], marg
     let (r0, r1) = (dist(start), dist(end));
     let delta = (r1 - r0).abs();
     delta > ARC_ABS_MM - margin && (delta > ARC_MAX_MM - margin || delta > ARC_REL * r0 - margin)
+}
+
+/// How far below zero GRBL-class firmwares may find `4 r² - d²` (mm²) for
+/// an R arc of radius `r` whose chord `d` runs from `start` to `end`
+/// (plane coordinates, mm, as written), where it is not: they work in
+/// single precision (`float`) from positions in mm, so a half circle by R
+/// (`G20 G0 X.1` then `G2 X.3 R.1`) may be refused (GRBL's error 34). A
+/// bound on that arithmetic's error: each difference of coordinates is off
+/// by a few units of the last place of the largest of them, R by a few of
+/// its own.
+fn single_precision_slack(start: [f64; 2], end: [f64; 2], r: f64) -> f64 {
+    let largest = start
+        .iter()
+        .chain(&end)
+        .fold(r.abs(), |m, v| m.max(v.abs()));
+    let chord = (end[0] - start[0]).hypot(end[1] - start[1]);
+    16.0 * f64::from(f32::EPSILON) * largest * (chord + 2.0 * r.abs())
 }
 
 /// The point halfway along the arc from `start` to `end` about `centre`
@@ -280,6 +298,50 @@ mod tests {
             [1000.0, 0.0],
             0.0003
         ));
+    }
+
+    /// GRBL's test of an R arc (gcode.c), in its single precision: the
+    /// positions and R as read in program units, made mm, then `4 r² - x²
+    /// - y²`; below zero is its error 34.
+    fn grbl_places_r_arc(start: [f64; 2], end: [f64; 2], r: f64, mm_per_unit: f32) -> bool {
+        let mm = |v: f64| v as f32 * mm_per_unit;
+        let (x, y) = (mm(end[0]) - mm(start[0]), mm(end[1]) - mm(start[1]));
+        let r = mm(r);
+        4.0 * r * r - x * x - y * y >= 0.0
+    }
+
+    #[test]
+    fn half_circles_grbl_may_refuse_are_found() {
+        // Half circles by R, written with 4 decimals (inch and mm),
+        // anywhere on a 1 m table: wherever GRBL's arithmetic refuses one
+        // (as `G20 G1 X.1` then `G2 X.3 R.1` on the first case), the
+        // slack covers it.
+        let mut refused = 0;
+        for (unit, scale) in [(25.4f32, 25.4), (1.0, 1.0)] {
+            for i in 0..4000u32 {
+                let at = f64::from(i % 400) * 0.1 * f64::from(i % 7 + 1) / scale;
+                let r = f64::from(i % 97 + 1) * 0.05 / scale;
+                let round = |v: f64| (v * 1e4).round() / 1e4;
+                let (start, r) = ([round(at), round(at / 3.0)], round(r));
+                let end = if i % 2 == 0 {
+                    [start[0] + 2.0 * r, start[1]]
+                } else {
+                    [start[0], start[1] - 2.0 * r]
+                };
+                let end = end.map(round);
+                if !grbl_places_r_arc(start, end, r, unit) {
+                    refused += 1;
+                    let mm = |p: [f64; 2]| p.map(|v| v * scale);
+                    let (ws, we, wr) = (mm(start), mm(end), r * scale);
+                    let chord2 = (we[0] - ws[0]).powi(2) + (we[1] - ws[1]).powi(2);
+                    assert!(
+                        4.0 * wr * wr - chord2 <= single_precision_slack(ws, we, wr),
+                        "{start:?} {end:?} R{r}"
+                    );
+                }
+            }
+        }
+        assert!(refused > 100, "the cases test nothing: {refused}");
     }
 
     #[test]

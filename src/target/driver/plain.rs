@@ -85,7 +85,6 @@ impl Lowering {
             MotionMode::ArcCw | MotionMode::ArcCcw => true,
             _ => return false,
         };
-        let mut axis = false;
         let mut ijk = false;
         for w in &b.words {
             let ok = match w.kind {
@@ -117,10 +116,7 @@ impl Lowering {
                     let bit = 1u128 << (w.letter & 0x7f);
                     let word = self.codes.words & bit != 0;
                     match w.letter {
-                        b'X' | b'Y' | b'Z' => {
-                            axis = true;
-                            word && self.codes.axes & bit != 0
-                        }
+                        b'X' | b'Y' | b'Z' => word && self.codes.axes & bit != 0,
                         b'I' | b'J' | b'K' => {
                             ijk = true;
                             word
@@ -134,8 +130,14 @@ impl Lowering {
                 return false;
             }
         }
-        // An arc given by its centre alone is a full circle (lowered).
-        !(arc && ijk && !axis)
+        // An arc without an axis word of its plane, given by its centre,
+        // is a full circle or a helix (lowered).
+        let plane = match b.code(2) {
+            Some(GCode::Plane(p)) => p,
+            _ => self.m.modes.plane,
+        };
+        let xyz = [b'X', b'Y', b'Z'].map(|l| b.value(l));
+        !(arc && ijk && !names_plane_axis(xyz, plane))
     }
 
     /// Whether a block [`Lowering::is_plain`] accepted is an arc to be
@@ -281,7 +283,7 @@ impl Lowering {
     #[inline]
     fn run_form(&mut self, v: &MoveValues) -> bool {
         let motion = v.motion.unwrap_or(self.m.modes.motion);
-        let Some((arc, axis)) = plain_form(v, motion) else {
+        let Some((arc, axis)) = plain_form(v, motion, self.m.modes.plane) else {
             return false;
         };
         if arc && self.form_arc_off(self.m_xyz(), v.xyz(), v.centre) {
@@ -369,7 +371,7 @@ impl Lowering {
         for l in lines {
             let v = &l.values;
             let m = v.motion.unwrap_or(motion);
-            let Some((arc, axis)) = plain_form(v, m) else {
+            let Some((arc, axis)) = plain_form(v, m, self.m.modes.plane) else {
                 break;
             };
             if arc && self.form_arc_off(self.start_of(&lines[..n]), v.xyz(), v.centre) {
@@ -471,14 +473,24 @@ impl Lowering {
 
 /// Whether a line of moves alone with values `v`, run in `motion` (its
 /// own or the modal one), is one [`Lowering::is_plain`] accepts with its
-/// block: G0 or G1 without I, J, K, G2/G3 with them and an axis word, or
-/// no word at all (a comment alone) in any of them. If so, whether it is
-/// run as an arc and whether it names an axis.
-fn plain_form(v: &MoveValues, motion: MotionMode) -> Option<(bool, bool)> {
+/// block: G0 or G1 without I, J, K, G2/G3 with them and an axis word of
+/// `plane`, or no word at all (a comment alone) in any of them. If so,
+/// whether it is run as an arc and whether it names an axis.
+fn plain_form(v: &MoveValues, motion: MotionMode, plane: Plane) -> Option<(bool, bool)> {
     let arc = matches!(motion, MotionMode::ArcCw | MotionMode::ArcCcw);
     let axis = v.has_axis();
     let plain = arc || matches!(motion, MotionMode::Rapid | MotionMode::Linear);
-    (plain && (v.ijk == arc && (!arc || axis) || v.is_blank())).then_some((arc, axis))
+    (plain && (v.ijk == arc && (!arc || names_plane_axis(v.xyz(), plane)) || v.is_blank()))
+        .then_some((arc, axis))
+}
+
+/// Whether an arc's X Y Z words `xyz` name an axis of its `plane`: GRBL-class
+/// firmwares refuse an arc without one (GRBL's error 32), which LinuxCNC
+/// runs as a full circle, or a helix when the third axis moves.
+pub(super) fn names_plane_axis(xyz: [Option<f64>; 3], plane: Plane) -> bool {
+    plane
+        .xyz_axes()
+        .is_some_and(|[p, q, _]| xyz[p].is_some() || xyz[q].is_some())
 }
 
 #[cfg(test)]
