@@ -215,6 +215,77 @@ impl Modes {
     }
 }
 
+/// A canned cycle line (G73, G74, G81–G89) as [`Modes::cycle_end`] reads
+/// it, in the length unit of the machine model that asks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CycleLine {
+    /// The line's words on the plane's two axes ([`Plane::cycle_axes`]),
+    /// X as a radius: where they send the axes in G90, the step of each
+    /// repeat in G91 (`None`: no word).
+    pub at: [Option<f64>; 2],
+    /// The R plane, the line's R or the last cycle's, as written: from
+    /// the series' level in G91.
+    pub r: Option<f64>,
+    /// The L word, 1 without one (the checks refuse 0).
+    pub repeats: u32,
+}
+
+impl Modes {
+    /// Where a canned cycle leaves the tool, the rule both machine models
+    /// follow, from its start on the plane's axes and the depth axis
+    /// ([`Plane::cycle_axes`]): the plane's axes end at the last repeat's
+    /// position (the words in G90, the start plus every repeat's step in
+    /// G91), the depth axis at the clear plane: R under G99, the higher of
+    /// the series' level and R under G98 (R counted from the level in
+    /// G91), as rs274 leaves it. Unknown where what it needs is.
+    ///
+    /// The level (`level`, kept by the model) is where the series of
+    /// cycles started on the depth axis: rs274 keeps the first cycle's
+    /// start until a line runs in another motion mode, G80 included, that
+    /// is while the motion mode stays a cycle (`series`: it was one before
+    /// the line), wherever the tool went since; it keeps its number when
+    /// the units change.
+    pub fn cycle_end(
+        &self,
+        start: [Option<f64>; 3],
+        level: &mut Option<f64>,
+        series: bool,
+        line: CycleLine,
+    ) -> [Option<f64>; 3] {
+        if !series {
+            *level = start[2];
+        }
+        let level = *level;
+        let r = match self.distance {
+            Distance::Absolute => line.r,
+            Distance::Incremental => level.zip(line.r).map(|(z, r)| z + r),
+        };
+        let mut at = [start[0], start[1]];
+        for _ in 0..line.repeats {
+            for (k, w) in line.at.iter().enumerate() {
+                at[k] = match self.distance {
+                    Distance::Absolute => w.or(at[k]),
+                    Distance::Incremental => at[k].map(|x| x + w.unwrap_or(0.0)),
+                };
+            }
+        }
+        let clear = match self.retract {
+            Retract::R => r,
+            Retract::Initial => level.zip(r).map(|(z, r)| z.max(r)),
+        };
+        [at[0], at[1], clear]
+    }
+}
+
+impl Plane {
+    /// The axes of a canned cycle in this plane: the plane's two (X and Y
+    /// in G17, Z and X in G18, Y and Z in G19) and the depth axis. The
+    /// UVW planes, whose cycles the checks refuse, read as G17.
+    pub fn cycle_axes(self) -> [usize; 3] {
+        self.xyz_axes().unwrap_or([0, 1, 2])
+    }
+}
+
 impl ToolLength {
     /// The tool length offset per axis (X … W) this code puts in effect,
     /// the rule both machine models follow, each in its own unit: G43 the
@@ -429,6 +500,47 @@ mod tests {
         // M2 leaves adaptive feed and feed hold as they were.
         (want.adaptive_feed, want.feed_hold) = (true, false);
         assert_eq!(m, want);
+    }
+
+    /// The cycle end: known where rs274's rule needs nothing unknown;
+    /// the level is taken when a series starts and kept while it runs.
+    #[test]
+    fn cycle_end_and_its_level() {
+        let mut m = Modes::default();
+        let line = CycleLine {
+            at: [Some(1.0), None],
+            r: Some(2.0),
+            repeats: 2,
+        };
+        let mut level = Some(9.0);
+        let unknown = [None, None, None];
+        // G90 G99: the hole and R, whatever the start.
+        assert_eq!(
+            m.cycle_end(unknown, &mut level, false, line),
+            [Some(1.0), None, Some(2.0)]
+        );
+        assert_eq!(level, None, "a new series takes the start");
+        m.retract = Retract::Initial;
+        assert_eq!(m.cycle_end(unknown, &mut level, true, line)[2], None);
+        let start = [Some(0.0), Some(5.0), Some(1.0)];
+        assert_eq!(
+            m.cycle_end(start, &mut level, false, line),
+            [Some(1.0), Some(5.0), Some(2.0)]
+        );
+        level = Some(7.0);
+        assert_eq!(m.cycle_end(start, &mut level, true, line)[2], Some(7.0));
+        // G91: L steps, R from the level.
+        m.distance = Distance::Incremental;
+        assert_eq!(
+            m.cycle_end(start, &mut level, true, line),
+            [Some(2.0), Some(5.0), Some(9.0)]
+        );
+        m.retract = Retract::R;
+        assert_eq!(
+            m.cycle_end(start, &mut level, false, line),
+            [Some(2.0), Some(5.0), Some(3.0)]
+        );
+        assert_eq!(level, Some(1.0));
     }
 
     #[test]

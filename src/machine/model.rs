@@ -18,9 +18,9 @@ use crate::fx_hasher::FxMap;
 use super::motion::{Feed, Motion, MoveKind, Point};
 use crate::block::{
     AXIS_LETTERS, ArcDistance, Block, CoordSystem, Distance, FeedMode, MCode, MotionMode, NonModal,
-    PathMode, Plane, Retract, SpindleDir, ToolLength, Units,
+    PathMode, Plane, SpindleDir, ToolLength, Units,
 };
-use crate::modes::{MachineCode, Modes, Switched};
+use crate::modes::{CycleLine, MachineCode, Modes, Switched};
 
 const MM_PER_INCH: f64 = 25.4;
 
@@ -57,6 +57,9 @@ pub struct Machine {
     pub rotated: bool,
     /// The R plane of the last canned cycle (program units as written).
     pub cycle_r: Option<f64>,
+    /// The level the last series of canned cycles started from, mm
+    /// ([`Modes::cycle_end`]).
+    pub cycle_level: Option<f64>,
     /// The program ended (M2/M30).
     pub ended: bool,
     events: Vec<Motion>,
@@ -122,6 +125,7 @@ impl Machine {
             zero_start: zs,
             rotated: false,
             cycle_r: None,
+            cycle_level: None,
             ended: false,
             events: Vec::new(),
             record: true,
@@ -148,6 +152,7 @@ impl Machine {
             zero_start: self.zero_start,
             rotated: self.rotated,
             cycle_r: self.cycle_r,
+            cycle_level: self.cycle_level,
             ended: self.ended,
             events: Vec::new(),
             record: self.record,
@@ -398,7 +403,13 @@ impl Machine {
         // system, non-modal code, motion).
         for g in b.modal_codes() {
             if let Some(MachineCode::Units(u)) = self.modes.set_mode(g) {
+                // The cycles' level keeps its number in program units.
+                let from = self.scale();
                 self.modes.units = u;
+                let to = self.scale();
+                if let Some(z) = &mut self.cycle_level {
+                    *z = *z / from * to;
+                }
             }
         }
         if let Some(t) = b.tool_length() {
@@ -416,11 +427,12 @@ impl Machine {
             }
             None => false,
         } || b.tool_length() == Some(ToolLength::Dynamic) && b.motion().is_none();
+        let series = self.modes.motion.is_canned_cycle();
         if let Some(m) = b.motion() {
             self.modes.motion = m;
         }
         if !motion_used && (b.has_axis() || b.motion().is_some_and(moves_without_axes)) {
-            self.motion(b);
+            self.motion(b, series);
         }
         for (m, _) in b.m_codes() {
             match m {
@@ -708,7 +720,9 @@ impl Machine {
         }
     }
 
-    fn motion(&mut self, b: &Block) {
+    /// The line's move in the motion mode (`series`: the mode was a canned
+    /// cycle before the line).
+    fn motion(&mut self, b: &Block, series: bool) {
         if self.rotated {
             self.pos = UNKNOWN;
             return;
@@ -732,54 +746,41 @@ impl Machine {
                     self.pos[2] = from[2];
                 }
             }
-            MotionMode::Cycle(_) => self.cycle(b, to),
+            MotionMode::Cycle(_) => self.cycle(b, to, series),
             // Splines and threading cycles end at their end point; their
             // path is left to the lowerings.
             _ => self.pos = to,
         }
     }
 
-    /// Where a canned cycle leaves the tool: each repeat at the target on
-    /// the plane's two axes (X and Y in G17, Z and X in G18, Y and Z in
-    /// G19), the third at the clear plane (the initial position under G98
-    /// when above R, else R), as rs274 leaves it. (The UVW planes, where
-    /// the checks refuse cycles, are read as G17.)
-    fn cycle(&mut self, b: &Block, to: MaybeAxes) {
+    /// Where a canned cycle leaves the tool: [`Modes::cycle_end`], in mm.
+    /// (Polar words in G90 are read as where they send X and Y.)
+    fn cycle(&mut self, b: &Block, to: MaybeAxes, series: bool) {
         let s = self.scale();
         if let Some(r) = b.value(b'R') {
             self.cycle_r = Some(r);
         }
-        let [p, q, n] = self.modes.plane.xyz_axes().unwrap_or([0, 1, 2]);
-        let initial = self.pos[n];
-        let r_mm = match (self.modes.distance, self.cycle_r) {
-            (Distance::Absolute, Some(r)) => Some(r * s),
-            (Distance::Incremental, Some(r)) => initial.map(|z| z + r * s),
-            _ => None,
-        };
-        let reps = b.value(b'L').map_or(1, |l| l.round().max(1.0) as usize);
-        let mut at = (self.pos[p], self.pos[q]);
-        for _ in 0..reps {
+        let axes = self.modes.plane.cycle_axes();
+        let words = b.axes();
+        let at = [0, 1].map(|k| {
+            let a = axes[k];
             match self.modes.distance {
-                Distance::Absolute => at = (to[p], to[q]),
-                Distance::Incremental => {
-                    let d = b.axes();
-                    at = (
-                        at.0.map(|x| x + d[p].unwrap_or(0.0) * s),
-                        at.1.map(|y| y + d[q].unwrap_or(0.0) * s),
-                    );
-                }
+                Distance::Absolute => to[a],
+                Distance::Incremental => words[a].map(|d| self.modes.radius_word(a, d) * s),
             }
-        }
-        let clear = match self.modes.retract {
-            Retract::R => r_mm,
-            Retract::Initial => match (initial, r_mm) {
-                (Some(z), Some(r)) => Some(z.max(r)),
-                _ => None,
-            },
+        });
+        let line = CycleLine {
+            at,
+            r: self.cycle_r.map(|r| r * s),
+            repeats: b.value(b'L').map_or(1, |l| l.round().max(1.0) as u32),
         };
-        self.pos[p] = at.0;
-        self.pos[q] = at.1;
-        self.pos[n] = clear;
+        let start = axes.map(|a| self.pos[a]);
+        let end = self
+            .modes
+            .cycle_end(start, &mut self.cycle_level, series, line);
+        for (k, a) in axes.into_iter().enumerate() {
+            self.pos[a] = end[k];
+        }
     }
 
     fn arc(&mut self, b: &Block, to: MaybeAxes) {
@@ -985,6 +986,48 @@ mod tests {
         ] {
             let (m, _) = run(&["G0 X0 Y5 Z0", line]);
             assert_eq!(m.pos[..3], want.map(Some), "{line}");
+        }
+    }
+
+    /// A series of cycles keeps the level its first cycle started from
+    /// until a line moves in another mode (G80 included); in G7 an X step
+    /// is a diameter; the level keeps its number in new units (the
+    /// positions rs274 reads after these lines, here in mm).
+    #[test]
+    fn cycle_series_keep_their_level() {
+        let start = "G0 X0 Y0 Z10";
+        for (lines, want) in [
+            (&["G98 G82 X2 Z-1 R2 P0.5"][..], [2.0, 0.0, 10.0]),
+            (
+                &["G99 G81 X1 Z-1 R2", "G98 G82 X2 Z-1 R2 P0.5"],
+                [2.0, 0.0, 10.0],
+            ),
+            (
+                &["G99 G81 X1 Z-1 R2", "G91 G99 G85 X1 Z-1 R-7"],
+                [2.0, 0.0, 3.0],
+            ),
+            (
+                &["G99 G81 X1 Z-1 R2", "G80", "G91 G98 G81 X1 Z-1 R1"],
+                [2.0, 0.0, 3.0],
+            ),
+            (
+                &["G99 G81 X1 Z-1 R2", "G0 Z1", "G91 G98 G81 X1 Z-1 R1"],
+                [2.0, 0.0, 2.0],
+            ),
+            (
+                &["G18 G7 G0 X2 Y2 Z2", "G91 G99 G81 X4 Z2 Y-1 R2"],
+                [3.0, 4.0, 4.0],
+            ),
+            (
+                &["Z25.4", "G98 G81 X1 Z-1 R2", "G20", "X0.5"],
+                [12.7, 0.0, 645.16],
+            ),
+        ] {
+            let (m, _) = run(&[&[start][..], lines].concat());
+            for a in 0..3 {
+                let got = m.pos[a].expect("known");
+                assert!((got - want[a]).abs() < 1e-9, "{lines:?}: {:?}", m.pos);
+            }
         }
     }
 

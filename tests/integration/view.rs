@@ -678,6 +678,7 @@ const SWEEP_SKIP: &[&str] = &[
     "comp/",
     "lathe-cycles/",
     "cycle-repeat-reuses-r-and-depth",
+    "position/cycle-",
     "g10-p-rounding",
     "g80-with-other-motion-code",
     "m73-auto-restore",

@@ -513,7 +513,7 @@ impl Interp<'_> {
                 if self.mach.modal.motion.is_canned_cycle() {
                     self.mach.note_cycle(words);
                 }
-                self.move_to(axis_words);
+                self.move_to(axis_words, w.l, motion_before.is_canned_cycle());
                 if (self.mach.comp.is_some() || self.mach.modal.cutter_comp != CutterComp::Off)
                     && let Err(k) = self.mach.comp_move(words, self.mach.modal.motion)
                 {
@@ -702,7 +702,9 @@ impl Interp<'_> {
         self.params.assign(5070, 0.0);
     }
 
-    fn move_to(&mut self, axis_words: &[(usize, f64)]) {
+    /// The line's move to its axis words in the motion mode (`l`: its L
+    /// word; `series`: the mode was a canned cycle before the line).
+    fn move_to(&mut self, axis_words: &[(usize, f64)], l: Option<f64>, series: bool) {
         self.mach.tlo_moved = false;
         if self.mach.rotated {
             self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "an XY rotation (G10 R)");
@@ -712,12 +714,13 @@ impl Interp<'_> {
         use MotionMode as M;
         match motion {
             M::Probe(_) => self.probe(axis_words),
-            M::Cycle(_) | M::ThreadCycle | M::Thread | M::RigidTap => {
-                // Canned cycles and threading end at positions that depend on
-                // retract rules and machine state.
+            M::Cycle(_) => self.mach.cycle_end(axis_words, l, series),
+            M::ThreadCycle | M::Thread | M::RigidTap => {
+                // Threading ends at positions that depend on retract rules
+                // and machine state.
                 let axes: Vec<usize> = axis_words.iter().map(|a| a.0).collect();
                 self.forget(&axes, "a canned cycle or threading move");
-                if !matches!(motion, M::Thread | M::RigidTap) {
+                if motion == M::ThreadCycle {
                     self.forget(&[2], "a canned cycle");
                 }
             }
