@@ -572,8 +572,8 @@ impl Lowering {
         // The line itself.
         let incremental_lowered = self.incremental_lowered(lowered.as_deref());
         let shift = self.target_shift(b, &d.fates, lowered.as_deref())?;
-        let waiting = self.waiting_words(b, before, &mut d.fates);
-        let written = self.own_line(b, text, before, d, lowered.as_deref(), shift)?;
+        let waiting = self.waiting_words(b, &mut d.fates);
+        let written = self.own_line(b, text, d, lowered.as_deref(), shift)?;
         let mut lines: Vec<Vec<u8>> = Vec::new();
         for l in &d.pre_lines {
             lines.push(self.plain_bytes(&words_line(l))?);
@@ -793,7 +793,6 @@ impl Lowering {
         &mut self,
         b: &Block,
         text: &[u8],
-        before: &Machine,
         d: &mut Decided,
         lowered: Option<&[PlainLine]>,
         shift: Option<[f64; 3]>,
@@ -816,7 +815,7 @@ impl Lowering {
                 d.extra_lines.push(vec![(b'M', w.value)]);
                 continue;
             }
-            let mut v = self.out_value(w, before);
+            let mut v = self.out_value(w);
             if let (Some(sh), WordKind::Value) = (word_shift, w.kind)
                 && let Some(a) = xyz_index(w.letter)
             {
@@ -838,7 +837,7 @@ impl Lowering {
     /// back (and a dwell's P), taken out of its own line: they wait for the
     /// held moves, while its modal words (G90/G91, ...) are written at once,
     /// as the moves written after them are read in those modes.
-    fn waiting_words(&self, b: &Block, before: &Machine, fates: &mut [Fate]) -> Vec<(u8, f64)> {
+    fn waiting_words(&self, b: &Block, fates: &mut [Fate]) -> Vec<(u8, f64)> {
         if self.defer_block.is_none() {
             return Vec::new();
         }
@@ -847,7 +846,7 @@ impl Lowering {
         for (i, w) in b.words.iter().enumerate() {
             let dwell_p = dwell && w.letter == b'P' && matches!(w.kind, WordKind::Value);
             if fates[i] == Fate::Keep && (Self::is_action(w) || dwell_p) {
-                words.push((w.letter, self.out_value(w, before)));
+                words.push((w.letter, self.out_value(w)));
                 fates[i] = Fate::Drop;
             }
         }
@@ -1512,9 +1511,11 @@ impl Lowering {
         Ok(Some(vec![(b'G', 43.1), (b'Z', z / before.scale())]))
     }
 
-    /// The value written for a kept word: X halved in G7, an arc's
-    /// absolute centre as an offset (G90.1 lowered), otherwise as is.
-    fn out_value(&self, w: &Word, before: &Machine) -> f64 {
+    /// The value written for a kept word: X halved in G7 (in the mode
+    /// after the block: a G7 or G8 on the line applies to its X words, as
+    /// rs274 has it), an arc's absolute centre as an offset (G90.1
+    /// lowered), otherwise as is.
+    fn out_value(&self, w: &Word) -> f64 {
         if let Some(c) = &self.centres
             && matches!(w.kind, WordKind::Value)
             && let Some(a) = w.letter.checked_sub(b'I').filter(|&a| a < 3)
@@ -1524,7 +1525,7 @@ impl Lowering {
         }
         if w.letter == b'X'
             && matches!(w.kind, WordKind::Value)
-            && before.modes.lathe == LatheMode::Diameter
+            && self.m.modes.lathe == LatheMode::Diameter
             && !self.p.has_g(70)
         {
             return w.value / 2.0;
