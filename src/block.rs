@@ -1042,13 +1042,12 @@ pub(crate) fn read_flat_line_in<S: LineSink>(
                     }
                     .into());
                 }
-                let (value, end, shape, spaced) =
-                    read_number(line, buf, i + 1, S::SHAPES).ok_or(DecodeError {
-                        span: span(i, i + 1),
-                        what: DecodeProblem::BadNumber,
-                    })?;
-                sink.on_word(letter, value, span(i, end), shape, spaced)?;
-                i = end;
+                let num = read_number(line, buf, i + 1, S::SHAPES).ok_or(DecodeError {
+                    span: span(i, i + 1),
+                    what: DecodeProblem::BadNumber,
+                })?;
+                sink.on_word(letter, num.value, span(i, num.end), num.shape, num.spaced)?;
+                i = num.next;
             }
         }
     }
@@ -1125,10 +1124,22 @@ fn skip_blanks(line: &[u8], mut i: usize) -> usize {
     i
 }
 
-/// Reads `[+-]digits[.digits]` with blanks allowed between its characters;
-/// returns the value, the end of the number, its shape and whether it was
-/// read with blanks before or inside it (false: it starts at `start` and
-/// holds none). The shape is worked out only if `shapes` asks for it.
+/// A number [`read_number`] read.
+struct Num {
+    value: f64,
+    /// The offset just after it.
+    end: usize,
+    /// How it is written ([`Shape::default`] unless asked for).
+    shape: Shape,
+    /// Read with blanks before or inside it (false: it starts where it was
+    /// looked for and holds none).
+    spaced: bool,
+    /// Where the line goes on: after the blanks that follow it.
+    next: usize,
+}
+
+/// Reads `[+-]digits[.digits]` with blanks allowed between its characters.
+/// The shape is worked out only if `shapes` asks for it.
 ///
 /// `tail` is `line` and maybe bytes after it, the first of which is
 /// neither a digit nor a point: they may be loaded, but no number runs
@@ -1142,12 +1153,7 @@ fn skip_blanks(line: &[u8], mut i: usize) -> usize {
 /// Longer numbers without blanks are parsed where they are written; the
 /// rest (blanks inside) is gathered first.
 #[inline(always)]
-fn read_number(
-    line: &[u8],
-    tail: &[u8],
-    start: usize,
-    shapes: bool,
-) -> Option<(f64, usize, Shape, bool)> {
+fn read_number(line: &[u8], tail: &[u8], start: usize, shapes: bool) -> Option<Num> {
     let mut i = start;
     let (neg, plus) = match line.get(i) {
         Some(b'-') => {
@@ -1160,6 +1166,7 @@ fn read_number(
         }
         _ => (false, false),
     };
+    let body = i;
     let first = line.get(i).copied().unwrap_or(b' ');
     // The usual number, read eight bytes at a time.
     if let Some(d) = digits_at(tail, i) {
@@ -1171,7 +1178,13 @@ fn read_number(
                 Shape::default()
             };
             let v = d.value();
-            return Some((if neg { -v } else { v }, d.end, shape, false));
+            return Some(Num {
+                value: if neg { -v } else { v },
+                end: d.end,
+                shape,
+                spaced: false,
+                next: after,
+            });
         }
     }
     let mut mant: u64 = 0;
@@ -1208,11 +1221,20 @@ fn read_number(
     let after = skip_blanks(line, i);
     let ends = !matches!(line.get(after), Some(c) if c.is_ascii_digit() || *c == b'.');
     if int + frac > 0 && ends {
+        let whole = |v: f64, shape| {
+            Some(Num {
+                value: if neg { -v } else { v },
+                end: i,
+                shape,
+                spaced: false,
+                next: after,
+            })
+        };
         if digits <= 15 && frac <= 22 {
             // Below 10^15: exact through i64 (one instruction, unlike u64).
             let v = mant as i64 as f64 / POW10[frac as usize];
             if !shapes {
-                return Some((if neg { -v } else { v }, i, Shape::default(), false));
+                return whole(v, Shape::default());
             }
             let lone_zero = int == 1 && first == b'0';
             let int_digits = if lone_zero { 0 } else { int };
@@ -1226,17 +1248,30 @@ fn read_number(
                 int: int_digits.min(255) as u8,
                 frac: frac.min(255) as u8,
             };
-            return Some((if neg { -v } else { v }, i, shape, false));
+            return whole(v, shape);
+        }
+        // Up to 19 digits (all kept in `mant`) that make an integer of at
+        // most 2^53 (the numbers of 16 or 17 digits the evaluator writes
+        // for values such as 0.07500000000000001): exact as a double too,
+        // so one division again.
+        if digits <= 19 && mant <= 1 << 53 && frac <= 22 {
+            return whole(mant as i64 as f64 / POW10[frac as usize], Shape::default());
         }
         // Long, but in one piece: read where it is written.
-        if let Some(v) = std::str::from_utf8(&line[start..i])
+        if let Some(v) = std::str::from_utf8(&line[body..i])
             .ok()
             .and_then(|t| t.parse::<f64>().ok())
         {
-            return Some((v, i, Shape::default(), false));
+            return whole(v, Shape::default());
         }
     }
-    read_number_slow(line, start).map(|(v, e)| (v, e, Shape::default(), true))
+    read_number_slow(line, start).map(|(value, end)| Num {
+        value,
+        end,
+        shape: Shape::default(),
+        spaced: true,
+        next: end,
+    })
 }
 
 /// [`read_number`] for numbers with blanks inside or many digits.
@@ -1327,7 +1362,7 @@ mod tests {
         ) {
             let line = format!("X{text}");
             let start = at.min(line.len());
-            let fast = read_number(line.as_bytes(), line.as_bytes(), start, true).map(|(v, e, _, _)| (v, e));
+            let fast = read_number(line.as_bytes(), line.as_bytes(), start, true).map(|n| (n.value, n.end));
             let slow = read_number_slow(line.as_bytes(), start);
             proptest::prop_assert_eq!(
                 fast.map(|(v, e)| (v.to_bits(), e)),
@@ -1355,6 +1390,34 @@ mod tests {
             }
         }
 
+        /// Numbers of 16 to 20 digits, near and past 2^53 as an integer,
+        /// read as `str::parse` reads them, wherever the point is.
+        #[test]
+        fn number_reader_reads_long_numbers_exactly(
+            mant in proptest::prop_oneof![
+                1_000_000_000_000_000u64..(1 << 53) + 2,
+                (1u64 << 53) - 2..100_000_000_000_000_000,
+                10_000_000_000_000_000_000u64..u64::MAX,
+            ],
+            lead in 0usize..3,
+            point in 0usize..21,
+            neg in proptest::bool::ANY,
+        ) {
+            let digits = format!("{}{mant}", "0".repeat(lead));
+            let at = point.min(digits.len());
+            let text = format!(
+                "{}{}.{}",
+                if neg { "-" } else { "" },
+                &digits[..at],
+                &digits[at..],
+            );
+            let line = format!("X{text} Y1");
+            let got = read_number(line.as_bytes(), line.as_bytes(), 1, true)
+                .map(|n| (n.value.to_bits(), n.end));
+            let want: f64 = text.parse().unwrap();
+            proptest::prop_assert_eq!(got, Some((want.to_bits(), 1 + text.len())), "{}", line);
+        }
+
         #[test]
         fn number_reader_reads_decimals_exactly(
             int in 0u64..100_000_000,
@@ -1366,7 +1429,7 @@ mod tests {
                 "X{}{int}.{frac:0width$} Y1",
                 if neg { "-" } else { "" },
             );
-            let got = read_number(line.as_bytes(), line.as_bytes(), 1, true).map(|(v, e, _, _)| (v, e));
+            let got = read_number(line.as_bytes(), line.as_bytes(), 1, true).map(|n| (n.value, n.end));
             let want: f64 = line[1..line.len() - 3].parse().unwrap();
             proptest::prop_assert_eq!(got.map(|g| g.0.to_bits()), Some(want.to_bits()));
             proptest::prop_assert_eq!(got.map(|g| g.1), Some(line.len() - 3));
