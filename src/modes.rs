@@ -277,6 +277,46 @@ impl Modes {
     }
 }
 
+impl Modes {
+    /// How far the standalone reference backs a probe move off its
+    /// target, in program units: 0.254 mm (0.01 inch).
+    pub fn probe_backoff(&self) -> f64 {
+        match self.units {
+            Units::Mm => 0.254,
+            Units::Inch => 0.01,
+        }
+    }
+}
+
+/// Where a probe move (G38.2–G38.5) from `start` to `target` leaves the
+/// tool in the standalone reference, whose probe never trips: the rule
+/// both machine models follow under `--zero-start`, each in its own unit.
+/// At the target, backed off `backoff` ([`Modes::probe_backoff`]) toward
+/// the start along the move's direction in X, Y and Z (an axis whose
+/// start is unknown counts as not moving); the other axes at the target.
+/// Unknown where the target is.
+pub(crate) fn probe_end(
+    start: [Option<f64>; 9],
+    target: [Option<f64>; 9],
+    backoff: f64,
+) -> [Option<f64>; 9] {
+    let dist: f64 = (0..3)
+        .map(|a| match (start[a], target[a]) {
+            (Some(s), Some(t)) => (t - s) * (t - s),
+            _ => 0.0,
+        })
+        .sum::<f64>()
+        .sqrt();
+    std::array::from_fn(|a| {
+        let t = target[a]?;
+        let back = match start[a] {
+            Some(s) if a < 3 && dist > 0.0 => (t - s) / dist * backoff,
+            _ => 0.0,
+        };
+        Some(t - back)
+    })
+}
+
 impl Plane {
     /// The axes of a canned cycle in this plane: the plane's two (X and Y
     /// in G17, Z and X in G18, Y and Z in G19) and the depth axis. The
@@ -541,6 +581,30 @@ mod tests {
             [Some(2.0), Some(5.0), Some(3.0)]
         );
         assert_eq!(level, Some(1.0));
+    }
+
+    /// The standalone probe end: backed off along the XYZ move only.
+    #[test]
+    fn probe_end_backs_off_along_the_move() {
+        let mut start = [Some(0.0); 9];
+        let mut target = start;
+        (target[0], target[1], target[3]) = (Some(3.0), Some(4.0), Some(90.0));
+        let end = probe_end(start, target, 0.5);
+        assert_eq!((end[0], end[1], end[2]), (Some(2.7), Some(3.6), Some(0.0)));
+        assert_eq!(end[3], Some(90.0), "a rotary axis is not backed off");
+        start[1] = None;
+        target[8] = None;
+        let end = probe_end(start, target, 0.5);
+        assert_eq!((end[0], end[1], end[8]), (Some(2.5), Some(4.0), None));
+        assert_eq!(probe_end(start, start, 0.5)[0], Some(0.0));
+        let inch = Modes {
+            units: Units::Inch,
+            ..Modes::default()
+        };
+        assert_eq!(
+            (Modes::default().probe_backoff(), inch.probe_backoff()),
+            (0.254, 0.01)
+        );
     }
 
     #[test]

@@ -20,7 +20,7 @@ use crate::block::{
     AXIS_LETTERS, ArcDistance, Block, CoordSystem, Distance, FeedMode, MCode, MotionMode, NonModal,
     PathMode, Plane, SpindleDir, ToolLength, Units,
 };
-use crate::modes::{CycleLine, MachineCode, Modes, Switched};
+use crate::modes::{CycleLine, MachineCode, Modes, Switched, probe_end};
 
 const MM_PER_INCH: f64 = 25.4;
 
@@ -733,10 +733,15 @@ impl Machine {
             MotionMode::Linear => self.line_to(MoveKind::Feed, to),
             MotionMode::ArcCw | MotionMode::ArcCcw => self.arc(b, to),
             MotionMode::Probe(_) => {
+                let from = self.pos;
                 self.line_to(MoveKind::Probe, to);
-                if !self.zero_start {
-                    self.pos = UNKNOWN;
-                }
+                // Where it trips only the machine knows; the standalone
+                // reference backs off the target.
+                self.pos = if self.zero_start {
+                    probe_end(from, to, self.modes.probe_backoff() * self.scale())
+                } else {
+                    UNKNOWN
+                };
             }
             MotionMode::Thread | MotionMode::RigidTap => {
                 let from = self.pos;

@@ -15,7 +15,7 @@ use crate::eval::read::validate::{Checked, LineCodes, arc_refusal};
 use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
 use crate::eval::state::nurbs::{NO_MOTION, NURBS};
-use crate::modes::MachineCode;
+use crate::modes::{MachineCode, probe_end};
 
 /// A motion code other than G80 (which gives way to one on its line).
 #[inline]
@@ -660,44 +660,20 @@ impl Interp<'_> {
             self.mach.probed_at = Some(self.line_no());
             return;
         }
-        let start: Vec<Option<f64>> = (0..9)
-            .map(|a| self.mach.pos.axes[a].as_ref().ok().copied())
-            .collect();
-        let mut target = start.clone();
+        let start: [Option<f64>; 9] =
+            std::array::from_fn(|a| self.mach.pos.axes[a].as_ref().ok().copied());
+        let mut target = start;
         for &(a, v) in axis_words {
-            target[a] = if self.mach.modal.distance == Distance::Absolute {
-                Some(v)
-            } else {
-                start[a].map(|s| s + v)
-            };
+            target[a] = self.mach.axis_end(a, v).ok();
         }
-        let backoff = match self.mach.modal.units {
-            Units::Mm => 0.254,
-            Units::Inch => 0.01,
-        };
-        let dist: f64 = (0..3)
-            .map(|a| match (start[a], target[a]) {
-                (Some(s), Some(t)) => (t - s) * (t - s),
-                _ => 0.0,
-            })
-            .sum::<f64>()
-            .sqrt();
+        let end = probe_end(start, target, self.mach.modal.probe_backoff());
         let line = self.line_no();
         for a in 0..9 {
             match target[a] {
-                Some(t) => {
-                    self.params.assign(5061 + a, t);
-                    let back = match start[a] {
-                        Some(s) if a < 3 && dist > 0.0 => (t - s) / dist * backoff,
-                        _ => 0.0,
-                    };
-                    self.mach.pos.axes[a] = Ok(t - back);
-                }
-                None => {
-                    self.params.known[5061 + a] = false;
-                    self.mach.pos.axes[a] = Err(Unknown::After("a probing move", line));
-                }
+                Some(t) => self.params.assign(5061 + a, t),
+                None => self.params.known[5061 + a] = false,
             }
+            self.mach.pos.axes[a] = end[a].ok_or(Unknown::After("a probing move", line));
         }
         self.params.assign(5070, 0.0);
     }
