@@ -20,7 +20,7 @@ use crate::machine::Machine;
 use crate::program::SourceFile;
 
 use super::TargetOptions;
-use super::format::LineWriter;
+use super::format::{AxisWords, LineWriter};
 use super::lower::{self, PlainLine};
 use super::profile::{Profile, ToolChange};
 
@@ -801,7 +801,7 @@ impl Lowering {
         let lowered = lowered.is_some();
         let mut written = Vec::new();
         let word_shift = shift.filter(|_| Self::positions_in_work(b, &self.m));
-        self.w.begin(b, self.m.modes.units);
+        self.w.begin(b, self.m.modes.units, self.axis_words(b));
         for (i, w) in b.words.iter().enumerate() {
             if d.fates[i] != Fate::Keep {
                 continue;
@@ -831,6 +831,24 @@ impl Lowering {
             return Err(Problem { span: None, kind });
         }
         Ok(written)
+    }
+
+    /// What the axis words of block `b`, which the model has run, are to
+    /// the target: increments in G91 motion (G0–G3), positions in G90
+    /// motion, neither for a code that takes them (G92, G10, G28, G53,
+    /// G43.1) or a canned cycle.
+    fn axis_words(&self, b: &Block) -> AxisWords {
+        let other = b.non_modal().is_some_and(NonModal::takes_axis_words)
+            || b.tool_length() == Some(ToolLength::Dynamic)
+            || !matches!(
+                self.m.modes.motion,
+                MotionMode::Rapid | MotionMode::Linear | MotionMode::ArcCw | MotionMode::ArcCcw
+            );
+        match self.m.modes.distance {
+            _ if other => AxisWords::Other,
+            Distance::Incremental => AxisWords::Increments,
+            Distance::Absolute => AxisWords::Positions,
+        }
     }
 
     /// The action words of a block run while compensated moves are held

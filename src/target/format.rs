@@ -1,20 +1,46 @@
 //! Writing lines for a target: numbers at the target's precision and never
 //! with an exponent, comments stripped or cleaned, every line measured as
 //! the firmware measures it and checked for bytes it acts on in real time.
+//!
+//! In G91 the target adds up what is written: an increment rounded to the
+//! target's decimals is off by up to half a unit of the last decimal, and a
+//! thousand of them by five hundred. So the writer keeps, per axis, what
+//! the rounding has left out so far ([`LineWriter::carry`]) and adds it to
+//! the next increment it rounds: the target's position stays within half a
+//! unit of the last decimal (of the last one rounded) of LinuxCNC's.
 
 use crate::block::{
-    Block, CommentKind, Spacing, Units, Word, WordKind, without_trailing_zeros, written_as_is,
+    AXIS_LETTERS, Block, CommentKind, Spacing, Units, Word, WordKind, without_trailing_zeros,
+    written_as_is,
 };
 use crate::diag::ErrorKind;
 
 use super::lower::PlainLine;
 use super::profile::{Comments, LineCount, Profile};
 
+/// What the axis words of the line being written are to the target.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum AxisWords {
+    /// Positions (G90 motion, lowered lines): nothing is carried on.
+    Positions,
+    /// Increments the target adds to its position (G91 motion): what
+    /// their rounding leaves out is carried on to the next.
+    Increments,
+    /// Neither (G92, G10, G43.1, G28's point, a canned cycle's words in
+    /// G91): written as they are, the carry untouched.
+    Other,
+}
+
 /// Puts one target line together.
 pub(super) struct LineWriter {
     p: &'static Profile,
     buf: Vec<u8>,
     units: Units,
+    axes: AxisWords,
+    /// Per axis (X Y Z A B C U V W), in `carry_units`: the increments
+    /// asked for less those written, since the last position written.
+    carry: [f64; 9],
+    carry_units: Units,
     num: String,
 }
 
@@ -24,13 +50,17 @@ impl LineWriter {
             p,
             buf: Vec::with_capacity(128),
             units: Units::Mm,
+            axes: AxisWords::Positions,
+            carry: [0.0; 9],
+            carry_units: Units::Mm,
             num: String::with_capacity(32),
         }
     }
 
-    /// Starts a line for block `b` (its units decide the decimals).
-    pub(super) fn begin(&mut self, b: &Block, units: Units) {
-        self.begin_words(units);
+    /// Starts a line for block `b` (its units decide the decimals), whose
+    /// axis words are `axes`.
+    pub(super) fn begin(&mut self, b: &Block, units: Units, axes: AxisWords) {
+        self.begin_words(units, axes);
         if let Some((n, _)) = b.line_number
             && n <= self.p.max_line_number
         {
@@ -39,9 +69,47 @@ impl LineWriter {
     }
 
     /// [`LineWriter::begin`] for a line of words alone (no line number).
-    pub(super) fn begin_words(&mut self, units: Units) {
+    pub(super) fn begin_words(&mut self, units: Units, axes: AxisWords) {
         self.buf.clear();
         self.units = units;
+        self.axes = axes;
+        if units != self.carry_units {
+            // Less than a unit of the last decimal either way: dropped.
+            self.carry = [0.0; 9];
+            self.carry_units = units;
+        }
+    }
+
+    /// The axis index of a value word `letter`, if it is an axis word.
+    #[inline]
+    fn axis(letter: u8) -> Option<usize> {
+        AXIS_LETTERS.iter().position(|&l| l == letter)
+    }
+
+    /// Writes axis word value `v` of axis `a` (its letter written), with
+    /// `d` decimals, carrying its rounding on in G91 (see the module doc):
+    /// an increment the decimals write exactly is written so (as the
+    /// short ways copy it), one they round gets what earlier roundings
+    /// left out added first.
+    fn push_axis(&mut self, a: usize, v: f64, d: u8) {
+        match self.axes {
+            AxisWords::Increments => {
+                let start = self.buf.len();
+                write_number(&mut self.buf, v, d, self.p.max_digits);
+                if read_back(&self.buf[start..]) == Some(v) {
+                    return;
+                }
+                let want = v + self.carry[a];
+                self.buf.truncate(start);
+                write_number(&mut self.buf, want, d, self.p.max_digits);
+                self.carry[a] = want - read_back(&self.buf[start..]).unwrap_or(want);
+            }
+            AxisWords::Positions => {
+                self.carry[a] = 0.0;
+                write_number(&mut self.buf, v, d, self.p.max_digits);
+            }
+            AxisWords::Other => write_number(&mut self.buf, v, d, self.p.max_digits),
+        }
     }
 
     fn push_word(&mut self, letter: u8, v: f64, code: bool) {
@@ -75,7 +143,10 @@ impl LineWriter {
                 // As many decimals as the significant digits allow.
                 d = self.p.max_digits;
             }
-            write_number(&mut self.buf, v, d, self.p.max_digits);
+            match Self::axis(letter) {
+                Some(a) => self.push_axis(a, v, d),
+                None => write_number(&mut self.buf, v, d, self.p.max_digits),
+            }
         }
     }
 
@@ -100,6 +171,12 @@ impl LineWriter {
         let number = text
             .get(w.span.start as usize + 1..w.span.end as usize)
             .unwrap_or_default();
+        if !code
+            && self.axes == AxisWords::Positions
+            && let Some(a) = Self::axis(w.letter)
+        {
+            self.carry[a] = 0.0;
+        }
         let kept = if written_as_is(w.shape, code, self.decimals(), self.p.max_digits) {
             number
         } else if let Some(n) = (!code)
@@ -240,14 +317,18 @@ impl LineWriter {
         units: Units,
         out: &mut Vec<u8>,
     ) -> Option<ErrorKind> {
-        self.buf.clear();
-        self.units = units;
+        self.begin_words(units, AxisWords::Positions);
         for w in &l.words {
             let code = matches!(w.letter, b'G' | b'M');
             self.push_word(w.letter, w.value, code);
         }
         self.finish_line(out)
     }
+}
+
+/// A number as written (digits, a sign and a point), as the target reads it.
+fn read_back(written: &[u8]) -> Option<f64> {
+    std::str::from_utf8(written).ok()?.parse().ok()
 }
 
 /// Bytes of a line without blanks and comments.
@@ -467,6 +548,60 @@ mod tests {
             w.push_word(b'G', v, true);
             assert_eq!(String::from_utf8_lossy(&w.buf), want, "{v}");
         }
+    }
+
+    /// Writes `steps` lines of increments `inc` (X and Y) the way the
+    /// driver does, with `axes`; what the target adds up (in its units)
+    /// against the exact sums.
+    fn summed(axes: AxisWords, units: Units, inc: [f64; 2], steps: u32) -> ([f64; 2], [f64; 2]) {
+        let mut w = LineWriter::new(&crate::target::profiles::grbl::PROFILE);
+        let mut sum = [0.0; 2];
+        for _ in 0..steps {
+            w.begin_words(units, axes);
+            w.word(b'X', inc[0], WordKind::Value);
+            w.word(b'Y', inc[1], WordKind::Value);
+            let line = String::from_utf8(w.buf.clone()).unwrap();
+            for (i, word) in line.split(' ').enumerate() {
+                sum[i] += word[1..].parse::<f64>().unwrap();
+            }
+        }
+        let exact = inc.map(|v| v * f64::from(steps));
+        (sum, exact)
+    }
+
+    #[test]
+    fn rounded_increments_do_not_add_up() {
+        // 0.000125 in is written 0.00013 or 0.00012 (5 decimals): over a
+        // thousand lines the target stays within half of 0.00001 in.
+        for (units, inc, half) in [
+            (Units::Inch, [0.0005, 0.000125], 0.000005),
+            (Units::Mm, [0.01234567, -1.0 / 3.0], 0.00005),
+            (Units::Mm, [2.0 / 3.0, 0.00004], 0.00005),
+        ] {
+            let (sum, exact) = summed(AxisWords::Increments, units, inc, 1000);
+            for i in 0..2 {
+                assert!(
+                    (sum[i] - exact[i]).abs() <= half * 1.0001,
+                    "{inc:?}: {sum:?} {exact:?}"
+                );
+            }
+            // Positions are written each on its own: nothing carried.
+            let (once, _) = summed(AxisWords::Positions, units, inc, 1);
+            let (again, _) = summed(AxisWords::Positions, units, inc, 2);
+            assert_eq!(again, once.map(|v| 2.0 * v));
+        }
+        // A change of units drops the carry (under a unit of the last
+        // decimal); the next increment starts afresh.
+        let mut w = LineWriter::new(&crate::target::profiles::grbl::PROFILE);
+        w.begin_words(Units::Inch, AxisWords::Increments);
+        w.word(b'X', 0.000004, WordKind::Value);
+        assert_eq!(w.buf, b"X0");
+        w.begin_words(Units::Mm, AxisWords::Increments);
+        w.word(b'X', 0.00004, WordKind::Value);
+        assert_eq!(w.buf, b"X0");
+        w.begin_words(Units::Mm, AxisWords::Increments);
+        w.word(b'X', 0.00004, WordKind::Value);
+        assert_eq!(w.buf, b"X0.0001");
     }
 
     /// The shape the decoder gives the number `t` (written after an X).

@@ -18,7 +18,7 @@ use crate::diag::Error;
 use crate::emit::Output;
 use crate::eval::{FormLine, FormLines, Origin};
 
-use super::{Lowering, Problem, Profile, io_error};
+use super::{AxisWords, Lowering, Problem, Profile, io_error};
 use crate::target::profile::Comments;
 
 /// The whole G and M codes below 128 the profile has, and its word and
@@ -153,6 +153,14 @@ impl Lowering {
             || self.arc_refused(b, &self.m, &after, motion).is_some()
     }
 
+    /// What the axis words of a line of moves (G0–G3) are to the target.
+    fn moves_axis_words(&self) -> AxisWords {
+        match self.m.modes.distance {
+            Distance::Incremental => AxisWords::Increments,
+            Distance::Absolute => AxisWords::Positions,
+        }
+    }
+
     /// Whether the state lets a line through the short way: nothing is
     /// being lowered (compensation, G95, G7 on a target without it, G90.1
     /// arc centres on a target without it) and the target is in the
@@ -229,7 +237,8 @@ impl Lowering {
             return Ok(Moves::Done);
         }
         // Numbers to write the target's way, as write_plain does.
-        self.w.begin_words(self.m.modes.units);
+        self.w
+            .begin_words(self.m.modes.units, self.moves_axis_words());
         for w in words {
             let kind = match (w.letter, motion) {
                 (b'G', Some(m)) => WordKind::G(GCode::Motion(m)),
@@ -432,7 +441,7 @@ impl Lowering {
             out.line(text).map_err(io_error)?;
             return Ok(Vec::new());
         }
-        self.w.begin(b, self.m.modes.units);
+        self.w.begin(b, self.m.modes.units, self.moves_axis_words());
         for w in &b.words {
             self.w.word_of(w, text);
         }
