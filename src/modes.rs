@@ -199,8 +199,10 @@ impl Modes {
     }
 
     /// What M2 and M30 reset, as LinuxCNC documents it: G54, G17, G90, G94,
-    /// M48, G40, M5, G1, M9.
+    /// M48, G40, M5, G1, M9; and the feed rate, which rs274 sets to 0. The
+    /// path mode (G61, G64) stays.
     pub fn end_of_program(&mut self) {
+        self.feed = 0.0;
         self.coord = CoordSystem::G54;
         self.plane = Plane::XY;
         self.distance = Distance::Absolute;
@@ -531,12 +533,13 @@ mod tests {
         (m.plane, m.distance, m.motion) = (Plane::YZ, Distance::Incremental, MotionMode::Rapid);
         (m.cutter_comp, m.spindle, m.mist) = (CutterComp::Left, SpindleDir::Cw, true);
         (m.coord, m.feed, m.units) = (CoordSystem(3), 5.0, Units::Inch);
+        m.path = PathMode::Exact;
         m.end_of_program();
         let mut want = Modes {
             motion: MotionMode::Linear,
             ..Modes::default()
         };
-        (want.feed, want.units) = (5.0, Units::Inch);
+        (want.path, want.units) = (PathMode::Exact, Units::Inch);
         // M2 leaves adaptive feed and feed hold as they were.
         (want.adaptive_feed, want.feed_hold) = (true, false);
         assert_eq!(m, want);

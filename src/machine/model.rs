@@ -18,7 +18,7 @@ use crate::fx_hasher::FxMap;
 use super::motion::{Feed, Motion, MoveKind, Point};
 use crate::block::{
     AXIS_LETTERS, ArcDistance, Block, CoordSystem, Distance, FeedMode, MCode, MotionMode, NonModal,
-    PathMode, Plane, SpindleDir, ToolLength, Units,
+    Plane, SpindleDir, ToolLength, Units,
 };
 use crate::modes::{CycleLine, MachineCode, Modes, Switched, probe_end};
 
@@ -211,6 +211,8 @@ impl Machine {
         let s = self.machine_scale();
         let d = match self.tools.data(t) {
             Some(d) => d,
+            // No tool: a machine has no offsets for it (the evaluator,
+            // after rs274, leaves it unknown once an M6 loaded a tool).
             None if t == 0 => ToolData::default(),
             None => return None,
         };
@@ -843,7 +845,6 @@ impl Machine {
     fn end(&mut self) {
         let before = self.offset();
         self.modes.end_of_program();
-        self.modes.path = PathMode::Blend;
         if self.g92_applied == Some(true) {
             // M2 keeps G92 offsets in LinuxCNC 2.9 (DISABLE_G92_PERSISTENCE
             // aside); nothing to change.
@@ -1034,6 +1035,17 @@ mod tests {
                 assert!((got - want[a]).abs() < 1e-9, "{lines:?}: {:?}", m.pos);
             }
         }
+    }
+
+    /// M2 resets the modes both machine models reset (the feed rate to 0,
+    /// as rs274 sets it) and keeps the path mode (rs274 leaves G61 on).
+    #[test]
+    fn program_end_keeps_the_path_mode() {
+        let (m, _) = run(&["G61 G1 X1 F50", "M2"]);
+        assert_eq!(
+            (m.modes.path, m.modes.feed),
+            (crate::codes::PathMode::Exact, 0.0)
+        );
     }
 
     /// G53 moves in the line's own G0 or G1, else in the motion mode.

@@ -17,13 +17,6 @@ use crate::modes::Modes;
 /// Axis letters in parameter order (X Y Z A B C U V W).
 pub(crate) const AXES: [u8; 9] = *b"xyzabcuvw";
 
-/// The state after M2/M30: LinuxCNC's ([`Modes::end_of_program`]) and no
-/// feed rate, as the standalone interpreter has it.
-pub(crate) fn reset_at_end(m: &mut Modes) {
-    m.end_of_program();
-    m.feed = 0.0;
-}
-
 /// Why a position became unknown.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum Unknown {

@@ -254,7 +254,7 @@ impl Interp<'_> {
             }
         }
         if w.ends {
-            super::reset_at_end(&mut self.mach.modal);
+            self.mach.modal.end_of_program();
         }
         Ok(w.ends)
     }
@@ -978,7 +978,7 @@ mod tests {
             (&["M50 P0"], false, |m| m.feed_override = false),
             (&["G91 M4 M7 S100", "M2"], true, |m| {
                 m.speed = 100.0;
-                crate::eval::state::reset_at_end(m);
+                m.end_of_program();
             }),
             // G0 taken by the fast acceptance and applied by the general
             // update (compensation is on).

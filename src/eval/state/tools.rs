@@ -40,6 +40,10 @@ pub struct Tools {
     pub current: Option<f64>,
     /// The tool the last T word selected (0 under `--zero-start`).
     pub selected: Option<f64>,
+    /// An M6 loaded a tool other than 0: the spindle's entry, which tool 0
+    /// reads without a row of its own, is no longer empty
+    /// ([`Tools::data`]).
+    pub loaded: bool,
 }
 
 impl Tools {
@@ -50,6 +54,7 @@ impl Tools {
             known: s.zero_start,
             current: (s.zero_start || !s.tool_table.is_empty()).then_some(0.0),
             selected: s.zero_start.then_some(0.0),
+            loaded: false,
         }
     }
 
@@ -66,6 +71,7 @@ impl Tools {
     #[inline]
     pub fn change(&mut self, modes: &mut Modes) -> bool {
         self.current = self.selected;
+        self.loaded |= self.selected.is_none_or(|t| t.round() != 0.0);
         let stops = modes.spindle != SpindleDir::Off;
         modes.spindle = SpindleDir::Off;
         stops
@@ -79,11 +85,14 @@ impl Tools {
     }
 
     /// The table's data of tool `t` (machine units): its row, or none
-    /// (all zero) when the table is complete; `None` when unknown.
+    /// (all zero) when the table is complete, and for tool 0 (no tool)
+    /// until an M6 loads another; `None` when unknown (tool 0 after such
+    /// an M6: rs274 then reads the spindle's entry, a copy of the last
+    /// tool loaded).
     pub fn data(&self, t: i64) -> Option<ToolData> {
         match self.table.get(&t) {
             Some(d) => Some(*d),
-            None if self.known => Some(ToolData::default()),
+            None if self.known || t == 0 && !self.loaded => Some(ToolData::default()),
             None => None,
         }
     }
@@ -301,9 +310,15 @@ mod tests {
         let mut t = Tools::new(&table);
         assert_eq!((t.current, t.selected), (Some(0.0), None));
         assert_eq!((t.data(2), t.data(3)), (Some(row), None));
+        assert_eq!(t.data(0), Some(ToolData::default()), "no tool yet");
         let mut modes = Modes::default();
+        t.select(0.2);
+        assert!(!t.change(&mut modes));
+        assert_eq!(t.data(0), Some(ToolData::default()), "T0 M6 loads none");
+        t.selected = None;
         assert!(!t.change(&mut modes));
         assert_eq!(t.current, None, "M6 with no tool selected");
+        assert_eq!(t.data(0), None, "the spindle's entry is a tool's");
         t.select(2.4);
         assert_eq!((t.current, t.selected), (None, Some(2.4)));
         modes.spindle = SpindleDir::Ccw;
