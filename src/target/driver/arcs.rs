@@ -23,6 +23,7 @@ use crate::diag::ErrorKind;
 use crate::geom::comp::{Arc as CompArc, ArcCenter, Tolerances, arc_center};
 use crate::machine::{Machine, radius_center};
 use crate::target::format::format_number;
+use crate::target::lower;
 
 use super::Lowering;
 use crate::eval::arc_refusal;
@@ -58,7 +59,7 @@ impl Lowering {
             Some(r) => self.r_arc_off(after, xyz(before), xyz(after), r, ccw),
             None => {
                 let words = [b'I', b'J', b'K'].map(|l| b.value(l).unwrap_or(0.0));
-                self.ijk_off(after, xyz(before), xyz(after), words)
+                self.ijk_off(after, xyz(before), xyz(after), words, ccw)
             }
         }
     }
@@ -119,6 +120,7 @@ impl Lowering {
         start: [Option<f64>; 3],
         xyz: [Option<f64>; 3],
         words: [f64; 3],
+        ccw: bool,
     ) -> bool {
         let s = self.m.scale();
         let mut end = start;
@@ -127,7 +129,7 @@ impl Lowering {
                 end[a] = self.m.axis_target(a, v, s);
             }
         }
-        self.ijk_off(&self.m, start, end, words)
+        self.ijk_off(&self.m, start, end, words, ccw)
     }
 
     /// The centre-form check: `start` and `end` are X Y Z in mm, `words`
@@ -140,6 +142,7 @@ impl Lowering {
         start: [Option<f64>; 3],
         end: [Option<f64>; 3],
         words: [f64; 3],
+        ccw: bool,
     ) -> bool {
         let Some([p, q, _]) = m.modes.plane.xyz_axes() else {
             return false;
@@ -156,7 +159,32 @@ impl Lowering {
         // refuses it too, where the evaluator did not.
         let (start, end) = ([s0, s1], [e0, e1]);
         let no_radius = |p: [f64; 2]| (p[0] - centre[0]).hypot(p[1] - centre[1]) < MIN_RADIUS_MM;
-        no_radius(start) || no_radius(end) || ijk_refused(start, end, centre, 6.0 * self.quantum(m))
+        no_radius(start)
+            || no_radius(end)
+            || ijk_refused(start, end, centre, 6.0 * self.quantum(m))
+            || self.barely_turns(start, end, centre, ccw)
+    }
+
+    /// Whether the arc from `start` to `end` about `centre` (plane
+    /// coordinates, mm; turning counter-clockwise when `ccw`) turns so
+    /// little that the target could take it for a full circle: see
+    /// [`lower::arc::barely_turns`]; lowered into a line.
+    fn barely_turns(&self, start: [f64; 2], end: [f64; 2], centre: [f64; 2], ccw: bool) -> bool {
+        if start == end {
+            // A full circle, as written.
+            return false;
+        }
+        let angle = |p: [f64; 2]| (p[1] - centre[1]).atan2(p[0] - centre[0]);
+        let mut sweep = if ccw {
+            angle(end) - angle(start)
+        } else {
+            angle(start) - angle(end)
+        };
+        while sweep <= 0.0 {
+            sweep += std::f64::consts::TAU;
+        }
+        let chord = (end[0] - start[0]).hypot(end[1] - start[1]);
+        lower::arc::barely_turns(sweep, chord, self.radius_step() * self.m.scale())
     }
 
     /// Half a unit of the last decimal the target is written with, in mm.
@@ -220,6 +248,7 @@ impl Lowering {
         let target = radius_center(ws, we, wr, ccw);
         let (a, b) = (middle(exact, start, end, ccw), middle(target, ws, we, ccw));
         (a[0] - b[0]).hypot(a[1] - b[1]) > self.opts.tolerance_mm
+            || self.barely_turns(start, end, exact, ccw)
     }
 
     /// The most the distance from the centre may change over one part of

@@ -295,7 +295,14 @@ impl Lowering {
         let Some((arc, axis)) = plain_form(v, motion, self.m.modes.plane) else {
             return false;
         };
-        if arc && self.form_arc_off(self.m_xyz(), v.xyz(), v.centre) {
+        if arc
+            && self.form_arc_off(
+                self.m_xyz(),
+                v.xyz(),
+                v.centre,
+                motion == MotionMode::ArcCcw,
+            )
+        {
             return false;
         }
         if !self.m.apply_plain_motion(v.motion, v.f(), v.xyz()) {
@@ -383,7 +390,14 @@ impl Lowering {
             let Some((arc, axis)) = plain_form(v, m, self.m.modes.plane) else {
                 break;
             };
-            if arc && self.form_arc_off(self.start_of(&lines[..n]), v.xyz(), v.centre) {
+            if arc
+                && self.form_arc_off(
+                    self.start_of(&lines[..n]),
+                    v.xyz(),
+                    v.centre,
+                    m == MotionMode::ArcCcw,
+                )
+            {
                 break;
             }
             motion = m;
@@ -599,6 +613,67 @@ mod tests {
         states.push(format!("{diags:?}"));
         out.finish().expect("written");
         (std::fs::read_to_string(path).expect("read"), states)
+    }
+
+    /// The G2/G3 lines of `out` (absolute, G17) as (start, end, centre),
+    /// each as the target reads it from the numbers written.
+    fn written_arcs(out: &str) -> Vec<([f64; 2], [f64; 2], [f64; 2])> {
+        let (mut at, mut arcs, mut motion) = ([0.0f64; 2], Vec::new(), 0.0);
+        for line in out.lines() {
+            let (mut end, mut ij) = (at, [0.0; 2]);
+            for w in line.split(' ') {
+                let v: f64 = w[1..].parse().unwrap_or(f64::NAN);
+                match w.as_bytes()[0] {
+                    b'G' if matches!(v as u32, 0..=3) => motion = v,
+                    b'X' => end[0] = v,
+                    b'Y' => end[1] = v,
+                    b'I' => ij[0] = v,
+                    b'J' => ij[1] = v,
+                    _ => {}
+                }
+            }
+            if motion >= 2.0 && line.contains(['X', 'Y']) {
+                arcs.push((at, end, [at[0] + ij[0], at[1] + ij[1]]));
+            }
+            at = end;
+        }
+        arcs
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        /// An arc that turns very little (a corner of a compensated path,
+        /// CAM output in fine steps) is never written so that the target
+        /// takes it for a full circle: its end written on its start, or an
+        /// angle under GRBL's 5e-7 rad. Each way (the block's, the short
+        /// way, the line of moves alone).
+        #[test]
+        fn arcs_that_barely_turn_are_not_written_as_full_circles(
+            radius in 0.05f64..2000.0,
+            from in -3.2f64..3.2,
+            sweep_exp in -12.0f64..-3.0,
+            ccw in proptest::bool::ANY,
+            ways in 0usize..3,
+        ) {
+            let sweep = 10f64.powf(sweep_exp);
+            let to = if ccw { from + sweep } else { from - sweep };
+            let (cx, cy) = (3.0, -7.0);
+            let point = |a: f64| [cx + radius * a.cos(), cy + radius * a.sin()];
+            let (s, e) = (point(from), point(to));
+            let lines = vec![
+                "G21 G90 G17 F100".to_string(),
+                format!("G0 X{} Y{}", s[0], s[1]),
+                format!("G{} X{} Y{} I{} J{}", if ccw { 3 } else { 2 }, e[0], e[1], cx - s[0], cy - s[1]),
+                "G1 X0 Y0".to_string(),
+            ];
+            let (out, _) = run_with(&lines, 1, true, ways > 0, ways == 2);
+            for (start, end, centre) in written_arcs(&out) {
+                prop_assert!(start != end, "{out}");
+                let angle = |p: [f64; 2]| (p[1] - centre[1]).atan2(p[0] - centre[0]);
+                let turned = (angle(end) - angle(start)).abs();
+                prop_assert!(turned > 5e-7 && turned < std::f64::consts::TAU - 5e-7, "{out}");
+            }
+        }
     }
 
     /// A number as a program or the evaluator may write it.

@@ -80,8 +80,25 @@ pub fn sweep(a: &ArcInput) -> Result<f64, LowerError> {
     Ok(base + 2.0 * PI * f64::from(a.turns.max(1) - 1))
 }
 
+/// GRBL's smallest angle an arc turns (radians): one that turns less, or
+/// whose end is written on its start, is a full circle there (LinuxCNC
+/// takes an end on the start for a full circle too). Ten times its
+/// `ARC_ANGULAR_TRAVEL_EPSILON`, for its single precision.
+const LEAST_SWEEP: f64 = 5e-6;
+
+/// Whether an arc turning `sweep` radians with chord `chord` is to be
+/// written as a line: it turns so little that a controller may take it for
+/// a full circle ([`LEAST_SWEEP`]), or its end is within `least_chord` of
+/// its start on less than half a turn, where the line is off the arc by
+/// at most half the chord.
+pub fn barely_turns(sweep: f64, chord: f64, least_chord: f64) -> bool {
+    sweep < LEAST_SWEEP || sweep < PI && chord < least_chord
+}
+
 /// Lowers a full circle, a P-turn arc or a spiral arc into arcs of less
-/// than half a turn without P (see the module doc for the rule).
+/// than half a turn without P (see the module doc for the rule); an arc
+/// that [`barely_turns`] (with `radius_step` as its least chord) is one
+/// G1 to its end.
 pub fn lower_arc(a: &ArcInput) -> Result<Vec<PlainLine>, LowerError> {
     let [p, q, n] = axes(a.plane)?;
     let radius = (a.start[q] - a.centre[q]).hypot(a.start[p] - a.centre[p]);
@@ -89,6 +106,10 @@ pub fn lower_arc(a: &ArcInput) -> Result<Vec<PlainLine>, LowerError> {
         return Err(LowerError::BadArc);
     }
     let total = sweep(a)?;
+    let chord = (a.end[q] - a.start[q]).hypot(a.end[p] - a.start[p]);
+    if barely_turns(total, chord, a.radius_step) {
+        return Ok(vec![PlainLine::motion(1.0, a.end)]);
+    }
     // The change of the distance from the centre over the whole sweep.
     let spiral = (a.end[q] - a.centre[q]).hypot(a.end[p] - a.centre[p]) - radius;
     let mut parts_f = (total / PI).floor() + 1.0;
