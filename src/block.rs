@@ -965,6 +965,10 @@ pub(crate) trait LineSink {
     /// Whether it takes the shapes of numbers ([`Shape::default`] for each
     /// if not).
     const SHAPES: bool;
+    /// Whether the words written the usual way are read by [`read_words`]
+    /// first (the same words, spans and shapes: only the tests read
+    /// without it, to compare).
+    const USUAL: bool = true;
     /// A `%` line (nothing but comments follow).
     fn on_percent(&mut self) -> Result<(), Self::Error>;
     /// `/` at the start.
@@ -1028,6 +1032,13 @@ pub(crate) fn read_flat_line_in<S: LineSink>(
         sink.on_block_delete();
         i = skip_blanks(line, i + 1);
     }
+    if S::USUAL {
+        // The words written the usual way first, then the rest.
+        match read_words(buf, i, n, &mut Usual { sink: &mut *sink })? {
+            WordsEnd::Line { .. } => return Ok(()),
+            WordsEnd::At(k) => i = k,
+        }
+    }
     while i < n {
         let c = line[i];
         match c {
@@ -1052,6 +1063,225 @@ pub(crate) fn read_flat_line_in<S: LineSink>(
         }
     }
     Ok(())
+}
+
+/// No letter: [`WordSink::LETTERS`] of a byte that does not start a word.
+pub(crate) const NO_LETTER: u8 = 0xff;
+
+/// What [`read_words`] hands on as it reads the words of a line written
+/// the usual way: a letter, a sign maybe, the digits with no blank among
+/// them, then blanks maybe.
+pub(crate) trait WordSink {
+    /// What stops the reading besides the end of the words.
+    type Error;
+    /// What each byte is as a word's letter: [`NO_LETTER`] where it starts
+    /// no word the reading takes.
+    const LETTERS: &'static [u8; 256];
+    /// Whether the line ends at the length given (else at a newline, which
+    /// [`WordSink::ends`] tells).
+    const BOUNDED: bool;
+    /// Whether each word is handed on as soon as its number is read, before
+    /// the bytes after it show it complete: for a sink that drops the line
+    /// whole where the reading stops with [`WordsEnd::At`] at anything but
+    /// the comment it reads (a number going on after blanks then stops it
+    /// at the digit or point that follows them).
+    const EARLY: bool;
+    /// The digits at `buf[i..]` read eight bytes at a time, if they are
+    /// there ([`crate::number::digits_in`] or [`digits_at`]).
+    fn digits(buf: &[u8], i: usize) -> Option<Digits>;
+    /// A number [`WordSink::digits`] did not read, at `buf[i..]`: its value
+    /// and end, or `None` to stop before its word.
+    fn slow_number(buf: &[u8], i: usize) -> Option<(f64, usize)>;
+    /// Whether the byte `c` at `buf[k]`, after a word and its blanks, ends
+    /// the line (unbounded lines only).
+    fn ends(&self, buf: &[u8], k: usize, c: u8) -> bool;
+    /// A word: its letter's offset and [`WordSink::LETTERS`] value, the
+    /// byte after the letter (its sign, if `-` or `+`), where its digits
+    /// start, its value and end, and its digits as read eight bytes at a
+    /// time (`None`: read by [`WordSink::slow_number`]).
+    #[allow(clippy::too_many_arguments)]
+    fn word(
+        &mut self,
+        buf: &[u8],
+        at: usize,
+        letter: u8,
+        sign: u8,
+        num: usize,
+        value: f64,
+        end: usize,
+        digits: Option<&Digits>,
+    ) -> Result<(), Self::Error>;
+}
+
+/// Where [`read_words`] stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum WordsEnd {
+    /// The line ended: its text ends at `text_end` (after the last word),
+    /// its blanks at `end` (the newline, or the length given).
+    Line { text_end: usize, end: usize },
+    /// At `buf[i]`, something else: a byte that starts no word, or a word
+    /// not handed on (its number is not written the usual way, or goes on
+    /// after blanks).
+    At(usize),
+}
+
+/// The one reader of words written the usual way, from `buf[i..]` (the
+/// line `buf[..n]` for a [`WordSink::BOUNDED`] sink, else up to the newline
+/// [`WordSink::ends`] takes): each word is handed to `sink` once the
+/// bytes after it show it complete, until the line ends or something else
+/// comes. The straight-line loop reads its lines' words with it (its own
+/// letters, to a newline); the flat-line reader ([`read_flat_line_in`])
+/// starts with it (every letter, to the line's length) and reads the rest
+/// of a line (numbers with blanks, comments, any byte) itself.
+#[inline(always)]
+pub(crate) fn read_words<S: WordSink>(
+    buf: &[u8],
+    mut i: usize,
+    n: usize,
+    sink: &mut S,
+) -> Result<WordsEnd, S::Error> {
+    let text = if S::BOUNDED {
+        &buf[..n.min(buf.len())]
+    } else {
+        buf
+    };
+    let at = |j: usize| text.get(j).copied().unwrap_or(0);
+    loop {
+        let letter = S::LETTERS[usize::from(at(i))];
+        if letter == NO_LETTER {
+            return Ok(WordsEnd::At(i));
+        }
+        let letter_at = i;
+        i += 1;
+        let sign = at(i);
+        let neg = sign == b'-';
+        if matches!(sign, b'-' | b'+') {
+            i += 1;
+        }
+        let num = i;
+        // The blanks after the number, and whether it goes on after them.
+        let after = |end: usize| {
+            let mut k = end;
+            while matches!(at(k), b' ' | b'\t' | b'\r') {
+                k += 1;
+            }
+            let c = at(k);
+            (k, c, c.is_ascii_digit() || c == b'.')
+        };
+        let (k, c) = match S::digits(buf, i) {
+            Some(d) => {
+                let v = d.value();
+                let value = if neg { -v } else { v };
+                if S::EARLY {
+                    sink.word(buf, letter_at, letter, sign, num, value, d.end, Some(&d))?;
+                }
+                let (k, c, goes_on) = after(d.end);
+                if goes_on && !S::EARLY {
+                    return Ok(WordsEnd::At(letter_at));
+                }
+                if !S::EARLY {
+                    sink.word(buf, letter_at, letter, sign, num, value, d.end, Some(&d))?;
+                }
+                i = d.end;
+                (k, c)
+            }
+            None => {
+                let Some((v, end)) = S::slow_number(buf, i) else {
+                    return Ok(WordsEnd::At(letter_at));
+                };
+                let value = if neg { -v } else { v };
+                if S::EARLY {
+                    sink.word(buf, letter_at, letter, sign, num, value, end, None)?;
+                }
+                let (k, c, goes_on) = after(end);
+                if goes_on && !S::EARLY {
+                    return Ok(WordsEnd::At(letter_at));
+                }
+                if !S::EARLY {
+                    sink.word(buf, letter_at, letter, sign, num, value, end, None)?;
+                }
+                i = end;
+                (k, c)
+            }
+        };
+        let ended = if S::BOUNDED {
+            k >= n
+        } else {
+            sink.ends(buf, k, c)
+        };
+        if ended {
+            return Ok(WordsEnd::Line {
+                text_end: i,
+                end: k,
+            });
+        }
+        i = k;
+    }
+}
+
+/// Every letter (upper case) and `@`, `^`: the words of a flat line.
+static FLAT_LETTERS: [u8; 256] = {
+    let mut t = [NO_LETTER; 256];
+    let mut c = 0;
+    while c < 256 {
+        let b = c as u8;
+        if b.is_ascii_alphabetic() || b == b'@' || b == b'^' {
+            t[c] = b.to_ascii_uppercase();
+        }
+        c += 1;
+    }
+    t
+};
+
+/// The flat-line reader's words read the usual way by [`read_words`],
+/// handed to its sink as it hands them.
+struct Usual<'s, S> {
+    sink: &'s mut S,
+}
+
+impl<S: LineSink> WordSink for Usual<'_, S> {
+    type Error = S::Error;
+    const LETTERS: &'static [u8; 256] = &FLAT_LETTERS;
+    const BOUNDED: bool = true;
+    const EARLY: bool = false;
+
+    #[inline(always)]
+    fn digits(buf: &[u8], i: usize) -> Option<Digits> {
+        digits_at(buf, i)
+    }
+
+    #[inline(always)]
+    fn slow_number(_: &[u8], _: usize) -> Option<(f64, usize)> {
+        None
+    }
+
+    #[inline(always)]
+    fn ends(&self, _: &[u8], _: usize, _: u8) -> bool {
+        false
+    }
+
+    #[inline(always)]
+    fn word(
+        &mut self,
+        buf: &[u8],
+        at: usize,
+        letter: u8,
+        sign: u8,
+        num: usize,
+        value: f64,
+        end: usize,
+        digits: Option<&Digits>,
+    ) -> Result<(), S::Error> {
+        let shape = match digits {
+            Some(d) if S::SHAPES => Shape::of(d, buf, num, sign == b'-', sign == b'+'),
+            _ => Shape::default(),
+        };
+        let span = Span {
+            start: at as u16,
+            end: end as u16,
+        };
+        self.sink.on_word(letter, value, span, shape, false)
+    }
 }
 
 fn comments_only<S: LineSink>(line: &[u8], mut i: usize, sink: &mut S) -> Result<(), S::Error> {
@@ -1318,7 +1548,74 @@ fn read_number_slow(line: &[u8], start: usize) -> Option<(f64, usize)> {
 mod tests {
     use super::*;
 
+    /// The block sink reading every word itself, without [`read_words`].
+    struct Unusual(Block);
+
+    impl LineSink for Unusual {
+        type Error = DecodeError;
+        const SHAPES: bool = true;
+        const USUAL: bool = false;
+
+        fn on_percent(&mut self) -> Result<(), DecodeError> {
+            self.0.on_percent()
+        }
+
+        fn on_block_delete(&mut self) {
+            self.0.on_block_delete();
+        }
+
+        fn on_word(
+            &mut self,
+            letter: u8,
+            value: f64,
+            span: Span,
+            shape: Shape,
+            spaced: bool,
+        ) -> Result<(), DecodeError> {
+            self.0.on_word(letter, value, span, shape, spaced)
+        }
+
+        fn on_comment(&mut self, line: &[u8], start: usize, end: usize) -> Result<(), DecodeError> {
+            self.0.on_comment(line, start, end)
+        }
+    }
+
     proptest::proptest! {
+        /// The words written the usual way, read by `read_words`, make
+        /// the block (or the error) the flat-line reader makes reading
+        /// every word itself, with or without bytes after the line.
+        #[test]
+        fn usual_words_read_as_the_whole_reader_reads_them(
+            parts in proptest::collection::vec(
+                proptest::prop_oneof![
+                    "[gGxXyYzZmMnNfF@^][+-]?[0-9]{0,5}(\\.[0-9]{0,4})?",
+                    "[gGxXyYzZmMnNfF@^]",
+                    "[ \t\r]{0,2}[0-9.]{1,3}",
+                    "[+-]?[0-9]{14,20}",
+                    "[ \t\r]{0,2}",
+                    "[/%;()#\n.]",
+                    "\\([a-z ,]{0,5}\\)",
+                ],
+                0..12,
+            ),
+            tail in "[\n0-9. X]{0,20}",
+        ) {
+            let line = parts.concat();
+            let buf = format!("{line}{tail}");
+            for b in [line.as_bytes(), buf.as_bytes()] {
+                let mut usual = Block::default();
+                usual.clear();
+                let got = read_flat_line_in(b, line.len(), &mut usual);
+                let mut whole = Unusual(Block::default());
+                whole.0.clear();
+                let want = read_flat_line_in(b, line.len(), &mut whole);
+                proptest::prop_assert_eq!(&got, &want, "{:?}", buf);
+                if want.is_ok() {
+                    proptest::prop_assert_eq!(&usual, &whole.0, "{:?}", buf);
+                }
+            }
+        }
+
         /// The one-step rule of the straight-line reader gives what the
         /// shape of the number and the writer's two tests give, for value
         /// words at any place in a line (the eight-byte read of their end

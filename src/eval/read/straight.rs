@@ -7,15 +7,16 @@
 //! same result line by line; a property test and a fuzz target compare the
 //! two.
 //!
-//! Its reader is its own, not a sink on [`crate::block::read_flat_line`]
-//! (whose lines are a superset): reading is most of the loop's work, and
-//! the loop's lines read through that reader cost 8.5% to 15% more
-//! instructions on a CAM program (see the README's readers).
+//! Its words are read by the flat-line reader's word reader,
+//! [`crate::block::read_words`], through a sink of the loop's letters
+//! ([`Slots`]); the line number before them and the inert comment after
+//! them are the loop's own steps.
 
 use std::rc::Rc;
 
 use crate::block::{
-    Cuts, MoveValues, MovesRule, RawLine, RawWord, Shape, Spacing, Span, kept_digits,
+    Cuts, MoveValues, MovesRule, RawLine, RawWord, Shape, Spacing, Span, WordSink as ReadWords,
+    WordsEnd, kept_digits, read_words,
 };
 use crate::diag::Error;
 use crate::number::{Digits, POW10, digits_in};
@@ -404,55 +405,79 @@ pub(in crate::eval) fn read_line_into(
             i += 1;
         }
     }
-    loop {
-        let slot = SLOT[at(i) as usize];
-        if slot == NONE {
-            return comments && at(i) == b'(' && read_comment(buf, line, i, p, sink);
+    let mut words = Slots {
+        p: &mut *p,
+        sink: &mut *sink,
+        line,
+    };
+    match read_words(buf, i, buf.len(), &mut words) {
+        Ok(WordsEnd::Line { text_end, end }) => {
+            p.text_end = text_end;
+            p.next = end + 1;
+            true
         }
-        let letter_at = i;
-        i += 1;
-        let sign = at(i);
-        let neg = sign == b'-';
-        if matches!(sign, b'-' | b'+') {
-            i += 1;
-        }
-        let v = match digits_in(buf, i) {
-            Some(d) => {
-                sink.word(buf, letter_at, sign, i, &d);
-                i = d.end;
-                d.value()
-            }
-            None => {
-                let (v, end) = match number_slow(buf, i) {
-                    Some(r) => r,
-                    None => return false,
-                };
-                sink.slow_word();
-                i = end;
-                v
-            }
-        };
+        Ok(WordsEnd::At(k)) => comments && at(k) == b'(' && read_comment(buf, line, k, p, sink),
+        Err(Refused) => false,
+    }
+}
+
+/// A word the loop does not take (a letter twice).
+struct Refused;
+
+/// The loop's words as [`read_words`] reads them: its letters (by slot),
+/// its record of the line, and `sink`.
+struct Slots<'a, W> {
+    p: &'a mut Plain,
+    sink: &'a mut W,
+    /// Offset of the line's start.
+    line: usize,
+}
+
+impl<W: WordSink> ReadWords for Slots<'_, W> {
+    type Error = Refused;
+    const LETTERS: &'static [u8; 256] = &SLOT;
+    const BOUNDED: bool = false;
+    const EARLY: bool = true;
+
+    #[inline(always)]
+    fn digits(buf: &[u8], i: usize) -> Option<Digits> {
+        digits_in(buf, i)
+    }
+
+    #[inline(always)]
+    fn slow_number(buf: &[u8], i: usize) -> Option<(f64, usize)> {
+        number_slow(buf, i)
+    }
+
+    #[inline(always)]
+    fn ends(&self, _: &[u8], k: usize, c: u8) -> bool {
+        c == b'\n' && k - self.line <= crate::parse::MAX_LINE
+    }
+
+    #[inline(always)]
+    fn word(
+        &mut self,
+        buf: &[u8],
+        at: usize,
+        slot: u8,
+        sign: u8,
+        num: usize,
+        value: f64,
+        _: usize,
+        digits: Option<&Digits>,
+    ) -> Result<(), Refused> {
         let bit = 1u32 << slot;
-        if p.mask & bit != 0 {
-            return false;
+        if self.p.mask & bit != 0 {
+            return Err(Refused);
         }
-        p.mask |= bit;
-        let v = if neg { -v } else { v };
-        p.vals[slot as usize] = v;
-        p.count += 1;
-        let text_end = i;
-        while is_blank(at(i)) {
-            i += 1;
+        self.p.mask |= bit;
+        self.p.vals[usize::from(slot)] = value;
+        self.p.count += 1;
+        match digits {
+            Some(d) => self.sink.word(buf, at, sign, num, d),
+            None => self.sink.slow_word(),
         }
-        match at(i) {
-            b'\n' if i - line <= crate::parse::MAX_LINE => {
-                p.text_end = text_end;
-                p.next = i + 1;
-                return true;
-            }
-            c if SLOT[c as usize] != NONE || c == b'(' => {}
-            _ => return false,
-        }
+        Ok(())
     }
 }
 
@@ -1138,6 +1163,34 @@ mod tests {
         }
     }
 
+    /// The words of a line as the grammar reads them (letter, value bits).
+    fn grammar_words(line: &[u8]) -> Option<Vec<(u8, u64)>> {
+        use crate::parse::ast::{ExprKind, Item, LineKind};
+        let parsed = crate::parse::LineParser::default().parse(line, true).ok()?;
+        let LineKind::Items(items) = parsed.kind else {
+            return Some(Vec::new());
+        };
+        items
+            .iter()
+            .filter_map(|i| match i {
+                Item::Word(w) => Some(match w.value.kind {
+                    ExprKind::Num(v) => Some((w.letter, v.to_bits())),
+                    _ => None,
+                }),
+                _ => None,
+            })
+            .collect()
+    }
+
+    fn raw_words(raw: &RawLine) -> Option<Vec<(u8, u64)>> {
+        Some(
+            raw.words()
+                .iter()
+                .map(|w| (w.letter.to_ascii_lowercase(), w.value.to_bits()))
+                .collect(),
+        )
+    }
+
     /// The block made from a straight read's words, and whether it holds
     /// the line, against the block decoder's on the same text; a line of
     /// moves alone gives that block from its words alone.
@@ -1151,7 +1204,8 @@ mod tests {
         }
         let line = &buf[..p.text_end];
         let mut built = Block::default();
-        let ok = if sink.finish() {
+        let kept = sink.finish();
+        let ok = if kept {
             built.replay(&raw, line).is_ok()
         } else {
             built.decode_into(line).is_ok()
@@ -1159,6 +1213,10 @@ mod tests {
         let mut decoded = Block::default();
         let want = decoded.decode_into(line).is_ok();
         prop_assert_eq!(ok, want, "{:?}", text);
+        if kept {
+            // The grammar reads the same words.
+            prop_assert_eq!(raw_words(&raw), grammar_words(line), "{:?}", text);
+        }
         if want {
             prop_assert_eq!(&built, &decoded, "{:?}", text);
         }
