@@ -1613,6 +1613,11 @@ impl Lowering {
                     && (b.value(b'I').is_some()
                         || b.value(b'J').is_some()
                         || b.value(b'K').is_some());
+                if !(moves || ijk_only) {
+                    // No arc on this line (`G4 P2` under G2 is a dwell):
+                    // its P is not turns.
+                    return Ok(None);
+                }
                 let p_ok = self.p.arc_turns;
                 // Polar words name the end point (the target has none).
                 let polar = b.value(b'@').is_some() || b.value(b'^').is_some();
