@@ -319,6 +319,56 @@ pub(crate) fn probe_end(
     })
 }
 
+/// Where polar words (`@` radius, `^` angle in degrees, G17) send X
+/// and Y from `current` (X, Y), rs274's rule, about the origin of the
+/// work coordinates: in G90 the end is `@`·(cos `^`, sin `^`), a
+/// missing `@` the current distance from the origin, a missing `^` the
+/// current angle; in G91 `@` is added to the current distance (angle
+/// kept), then `^` to the angle (distance kept). `None` where no angle
+/// is defined (at the origin: an `@` alone in G90, a G91 step), which
+/// rs274 refuses. The evaluator, the machine model and the targets'
+/// lowering ask it.
+pub(crate) fn polar_end(
+    distance: Distance,
+    current: [f64; 2],
+    radius: Option<f64>,
+    angle: Option<f64>,
+) -> Option<[f64; 2]> {
+    let [x, y] = current;
+    match distance {
+        Distance::Absolute => {
+            if angle.is_none() && x == 0.0 && y == 0.0 {
+                return None;
+            }
+            let radius = radius.unwrap_or_else(|| y.hypot(x));
+            let theta = angle.map(f64::to_radians).unwrap_or_else(|| y.atan2(x));
+            Some([radius * theta.cos(), radius * theta.sin()])
+        }
+        Distance::Incremental => {
+            let (mut x, mut y) = (x, y);
+            if let Some(step) = radius {
+                if x == 0.0 && y == 0.0 {
+                    return None;
+                }
+                let theta = y.atan2(x);
+                let radius = y.hypot(x) + step;
+                x = radius * theta.cos();
+                y = radius * theta.sin();
+            }
+            if let Some(step) = angle {
+                if x == 0.0 && y == 0.0 {
+                    return None;
+                }
+                let theta = y.atan2(x) + step.to_radians();
+                let radius = y.hypot(x);
+                x = radius * theta.cos();
+                y = radius * theta.sin();
+            }
+            Some([x, y])
+        }
+    }
+}
+
 impl Plane {
     /// The axes of a canned cycle in this plane: the plane's two (X and Y
     /// in G17, Z and X in G18, Y and Z in G19) and the depth axis. The

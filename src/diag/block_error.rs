@@ -137,6 +137,11 @@ pub enum BlockError {
     WordUnused {
         letter: char,
     },
+    /// polar coordinates at the origin, where no angle is defined: an
+    /// `@` alone in G90, any polar word in G91
+    PolarAtOrigin {
+        incremental: bool,
+    },
 }
 
 impl BlockError {
@@ -204,6 +209,7 @@ impl BlockError {
             CycleRBelowDepth { .. } => "E0660",
             ArcRadiiDiffer { .. } => "E0661",
             WordUnused { .. } => "E0662",
+            PolarAtOrigin { .. } => "E0663",
         }
     }
 }
@@ -285,6 +291,12 @@ impl fmt::Display for BlockError {
                     f,
                     "radius to end of arc differs from radius to start (r1={r1:.4} r2={r2:.4})"
                 );
+            }
+            PolarAtOrigin { incremental: true } => {
+                "incremental motion with polar coordinates is indeterminate at the origin"
+            }
+            PolarAtOrigin { incremental: false } => {
+                "polar coordinates at the origin need an angle (^)"
             }
             WordUnused { letter } => match letter {
                 'i' => "I word with no G2, G3, G5, G5.1, G10, G33.1, G76 or G87 to use it",

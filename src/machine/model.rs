@@ -20,7 +20,7 @@ use crate::block::{
     AXIS_LETTERS, ArcDistance, Block, CoordSystem, Distance, FeedMode, MCode, MotionMode, NonModal,
     Plane, SpindleDir, ToolLength, Units,
 };
-use crate::modes::{CycleLine, MachineCode, Modes, Switched, probe_end};
+use crate::modes::{CycleLine, MachineCode, Modes, Switched, polar_end, probe_end};
 
 const MM_PER_INCH: f64 = 25.4;
 
@@ -433,7 +433,8 @@ impl Machine {
         if let Some(m) = b.motion() {
             self.modes.motion = m;
         }
-        if !motion_used && (b.has_axis() || b.motion().is_some_and(moves_without_axes)) {
+        let polar = b.value(b'@').is_some() || b.value(b'^').is_some();
+        if !motion_used && (b.has_axis() || polar || b.motion().is_some_and(moves_without_axes)) {
             self.motion(b, series);
         }
         for (m, _) in b.m_codes() {
@@ -500,23 +501,16 @@ impl Machine {
                 t[a] = self.axis_target(a, v, s);
             }
         }
-        // Polar words: @ radius, ^ angle (XY plane).
-        if b.value(b'@').is_some() || b.value(b'^').is_some() {
-            let (r, ang) = (b.value(b'@').unwrap_or(0.0), b.value(b'^').unwrap_or(0.0));
-            let (dx, dy) = (
-                r * s * ang.to_radians().cos(),
-                r * s * ang.to_radians().sin(),
-            );
-            match self.modes.distance {
-                Distance::Absolute => {
-                    t[0] = Some(dx);
-                    t[1] = Some(dy);
-                }
-                Distance::Incremental => {
-                    t[0] = self.pos[0].map(|p| p + dx);
-                    t[1] = self.pos[1].map(|p| p + dy);
-                }
-            }
+        // Polar words: @ radius, ^ angle (XY plane), by the rule the
+        // targets lower them with; unknown at the origin, where rs274
+        // refuses them.
+        let (radius, angle) = (b.value(b'@'), b.value(b'^'));
+        if radius.is_some() || angle.is_some() {
+            let end = self.pos[0]
+                .zip(self.pos[1])
+                .and_then(|(x, y)| polar_end(self.modes.distance, [x / s, y / s], radius, angle));
+            t[0] = end.map(|e| e[0] * s);
+            t[1] = end.map(|e| e[1] * s);
         }
         t
     }

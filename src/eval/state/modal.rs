@@ -15,7 +15,7 @@ use crate::eval::read::validate::{Checked, LineCodes, arc_refusal};
 use crate::eval::state::Machine;
 use crate::eval::state::Unknown;
 use crate::eval::state::nurbs::{NO_MOTION, NURBS};
-use crate::modes::{MachineCode, probe_end};
+use crate::modes::{MachineCode, polar_end, probe_end};
 
 /// A motion code other than G80 (which gives way to one on its line).
 #[inline]
@@ -506,14 +506,15 @@ impl Interp<'_> {
             // G43.1's axis words are a move too when the line has a
             // motion code.
             let explicit_motion = w.gs().iter().any(|&g| is_moving_code(g));
-            if !axis_words.is_empty() && (!dynamic_tlo || explicit_motion) {
+            let moves = !axis_words.is_empty() || polar_words(words).is_some();
+            if moves && (!dynamic_tlo || explicit_motion) {
                 if let Err(k) = self.mach.check_motion(words, axis_words) {
                     return Err(self.error(k, file, start, start));
                 }
                 if self.mach.modal.motion.is_canned_cycle() {
                     self.mach.note_cycle(words);
                 }
-                self.move_to(axis_words, w.l, motion_before.is_canned_cycle());
+                self.move_to(words, axis_words, w.l, motion_before.is_canned_cycle());
                 if (self.mach.comp.is_some() || self.mach.modal.cutter_comp != CutterComp::Off)
                     && let Err(k) = self.mach.comp_move(words, self.mach.modal.motion)
                 {
@@ -680,7 +681,13 @@ impl Interp<'_> {
 
     /// The line's move to its axis words in the motion mode (`l`: its L
     /// word; `series`: the mode was a canned cycle before the line).
-    fn move_to(&mut self, axis_words: &[(usize, f64)], l: Option<f64>, series: bool) {
+    fn move_to(
+        &mut self,
+        words: &[(u8, f64)],
+        axis_words: &[(usize, f64)],
+        l: Option<f64>,
+        series: bool,
+    ) {
         self.mach.tlo_moved = false;
         if self.mach.rotated {
             self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "an XY rotation (G10 R)");
@@ -690,7 +697,13 @@ impl Interp<'_> {
         use MotionMode as M;
         match motion {
             M::Probe(_) => self.probe(axis_words),
-            M::Cycle(_) => self.mach.cycle_end(axis_words, l, series),
+            M::Cycle(_) => {
+                self.mach.cycle_end(axis_words, l, series);
+                if polar_words(words).is_some() {
+                    // Polar holes are not followed.
+                    self.forget(&[0, 1], "a canned cycle with polar coordinates");
+                }
+            }
             M::ThreadCycle | M::Thread | M::RigidTap => {
                 // Threading ends at positions that depend on retract rules
                 // and machine state.
@@ -705,6 +718,16 @@ impl Interp<'_> {
                 // which is what the reference reads missing words from.
                 for &(a, v) in axis_words {
                     self.mach.move_axis(a, v);
+                }
+                if polar_words(words).is_some() {
+                    let line = self.line_no();
+                    let why = Unknown::After("a move by polar coordinates", line);
+                    let [x, y] = self
+                        .mach
+                        .polar_xy(words)
+                        .map_or([None, None], |p| p.map(Some));
+                    self.mach.pos.axes[0] = x.ok_or(why.clone());
+                    self.mach.pos.axes[1] = y.ok_or(why);
                 }
             }
         }
@@ -757,7 +780,23 @@ impl LineWords<'_> {
     }
 }
 
+/// The line's polar words (`@` radius, `^` angle), if it has any.
+fn polar_words(words: &[(u8, f64)]) -> Option<(Option<f64>, Option<f64>)> {
+    let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
+    let (r, a) = (word(b'@'), word(b'^'));
+    (r.is_some() || a.is_some()).then_some((r, a))
+}
+
 impl Machine {
+    /// Where the line's polar words send X and Y (program units),
+    /// [`polar_end`]: `None` where the position is unknown, or at the
+    /// origin, where rs274 refuses them.
+    fn polar_xy(&self, words: &[(u8, f64)]) -> Option<[f64; 2]> {
+        let (radius, angle) = polar_words(words)?;
+        let at = |a: usize| self.pos.axes[a].as_ref().ok().copied();
+        polar_end(self.modal.distance, [at(0)?, at(1)?], radius, angle)
+    }
+
     /// The common line (G0/G1, axis, F and S words, each at most once) in
     /// a plain state: as the general update below, in a few steps. False
     /// leaves the state untouched.
@@ -831,14 +870,26 @@ impl Machine {
     ) -> Result<(), ErrorKind> {
         let motion = self.modal.motion;
         let start = |a: usize| self.pos.axes[a].as_ref().ok().copied();
+        let polar = polar_words(words).map(|_| self.polar_xy(words));
         let end = |a: usize| -> Option<f64> {
-            match axis_words.iter().find(|w| w.0 == a) {
-                Some(&(_, v)) => self.axis_end(a, v).ok(),
-                None => start(a),
+            match (axis_words.iter().find(|w| w.0 == a), polar) {
+                (_, Some(xy)) if a < 2 => Some(xy?[a]),
+                (Some(&(_, v)), _) => self.axis_end(a, v).ok(),
+                (None, _) => start(a),
             }
         };
         let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
         let bad = ErrorKind::Block;
+        // Polar words from a known position with no end: at the origin
+        // (not in a cycle, which reads an angle of 0 there in G90).
+        if polar.is_some_and(|xy| xy.is_none())
+            && !motion.is_canned_cycle()
+            && start(0).is_some()
+            && start(1).is_some()
+        {
+            let incremental = self.modal.distance == Distance::Incremental;
+            return Err(bad(BlockError::PolarAtOrigin { incremental }));
+        }
         match motion {
             MotionMode::ArcCw | MotionMode::ArcCcw => {
                 let (a0, a1, c0, c1) = match self.modal.plane {

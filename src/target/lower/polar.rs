@@ -19,6 +19,7 @@
 
 use super::LowerError;
 use crate::codes::Distance;
+use crate::modes::polar_end;
 
 /// The polar words of a block and where the tool is.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -32,41 +33,11 @@ pub struct PolarInput {
     pub angle: Option<f64>,
 }
 
-/// The X Y end point of a block with polar words (absolute).
+/// The X Y end point of a block with polar words (absolute):
+/// [`polar_end`], the rule the evaluator and the machine model follow
+/// too.
 pub fn polar_target(p: &PolarInput) -> Result<[f64; 2], LowerError> {
-    let [x, y] = p.current;
-    match p.distance {
-        Distance::Absolute => {
-            if p.angle.is_none() && x == 0.0 && y == 0.0 {
-                return Err(LowerError::PolarAtOrigin);
-            }
-            let radius = p.radius.unwrap_or_else(|| y.hypot(x));
-            let theta = p.angle.map(f64::to_radians).unwrap_or_else(|| y.atan2(x));
-            Ok([radius * theta.cos(), radius * theta.sin()])
-        }
-        Distance::Incremental => {
-            let (mut x, mut y) = (x, y);
-            if let Some(step) = p.radius {
-                if x == 0.0 && y == 0.0 {
-                    return Err(LowerError::PolarAtOrigin);
-                }
-                let theta = y.atan2(x);
-                let radius = y.hypot(x) + step;
-                x = radius * theta.cos();
-                y = radius * theta.sin();
-            }
-            if let Some(step) = p.angle {
-                if x == 0.0 && y == 0.0 {
-                    return Err(LowerError::PolarAtOrigin);
-                }
-                let theta = y.atan2(x) + step.to_radians();
-                let radius = y.hypot(x);
-                x = radius * theta.cos();
-                y = radius * theta.sin();
-            }
-            Ok([x, y])
-        }
-    }
+    polar_end(p.distance, p.current, p.radius, p.angle).ok_or(LowerError::PolarAtOrigin)
 }
 
 #[cfg(test)]
