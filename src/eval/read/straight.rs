@@ -903,7 +903,8 @@ impl Interp<'_> {
 
     /// The arc geometry checks of the general path, on an XY arc line.
     fn arc_ok(&mut self, p: &Plain, motion: MotionMode) -> bool {
-        if p.mask & AXIS_MASK == 0 {
+        if p.mask & (AXIS_MASK | 1 << I | 1 << J | 1 << R) == 0 {
+            // No arc on the line (a full circle `G2 I5` is one).
             return true;
         }
         // The words by letter (each at most once, so order is not needed).

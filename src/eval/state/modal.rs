@@ -507,6 +507,15 @@ impl Interp<'_> {
             // motion code.
             let explicit_motion = w.gs().iter().any(|&g| is_moving_code(g));
             let moves = !axis_words.is_empty() || polar_words(words).is_some();
+            let full_circle = !moves
+                && w.gs()
+                    .iter()
+                    .any(|g| matches!(g, GCode::Motion(MotionMode::ArcCw | MotionMode::ArcCcw)));
+            if full_circle && let Err(k) = self.mach.check_motion(words, axis_words) {
+                // A full circle without end point (`G2 I5`): the reference
+                // checks its radius as for any arc.
+                return Err(self.error(k, file, start, start));
+            }
             if moves && (!dynamic_tlo || explicit_motion) {
                 if let Err(k) = self.mach.check_motion(words, axis_words) {
                     return Err(self.error(k, file, start, start));
