@@ -2036,6 +2036,12 @@ impl Lowering {
             retract: m.retract,
             spindle: m.spindle,
         };
+        // A series of cycles runs while the motion mode stays a cycle
+        // (rs274 keeps its level until a line runs in another mode, G80
+        // or a motion code without axis words included).
+        if !before.modes.motion.is_canned_cycle() {
+            self.cycles.end();
+        }
         let pos = self.prog_pos(before);
         let out = self
             .cycles
