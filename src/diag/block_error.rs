@@ -62,6 +62,9 @@ pub enum BlockError {
     AxesWithoutGCode,
     /// polar coordinates and X/Y words together
     PolarWithXY,
+    /// polar coordinates while the plane is not G17 (the plane before the
+    /// line: a G17 on it comes too late)
+    PolarOutsideXY,
     /// negative L word
     NegativeL,
     /// negative F word
@@ -176,6 +179,7 @@ impl BlockError {
             AxesWithG80 => "E0627",
             AxesWithoutGCode => "E0628",
             PolarWithXY => "E0629",
+            PolarOutsideXY => "E0664",
             NegativeL => "E0630",
             NegativeF => "E0631",
             NegativeS => "E0632",
@@ -248,6 +252,7 @@ impl fmt::Display for BlockError {
             AxesWithG80 => "axis values with G80",
             AxesWithoutGCode => "axis values without a G-code that uses them",
             PolarWithXY => "polar coordinates and X/Y words together",
+            PolarOutsideXY => "polar coordinates outside the G17 plane",
             NegativeL => "negative L word",
             NegativeF => "negative F word",
             NegativeS => "negative spindle speed",

@@ -915,6 +915,12 @@ fn check_axis_values(d: &Decoded<'_>) -> Check {
     {
         return bad(BlockError::PolarWithXY, d.has_at(b'@').or(d.has_at(b'^')));
     }
+    // rs274 checks the plane in effect before the line.
+    if d.modal.plane != Plane::XY
+        && let Some(i) = d.has_at(b'@').or(d.has_at(b'^'))
+    {
+        return bad(BlockError::PolarOutsideXY, Some(i));
+    }
     Ok(())
 }
 
