@@ -167,8 +167,10 @@ impl Lowering {
 
     /// Whether the arc from `start` to `end` about `centre` (plane
     /// coordinates, mm; turning counter-clockwise when `ccw`) turns so
-    /// little that the target could take it for a full circle: see
-    /// [`lower::arc::barely_turns`]; lowered into a line.
+    /// little that the target could take it for a full circle: under
+    /// GRBL's least angle, or its ends may be written as one point (see
+    /// [`lower::arc::barely_turns`]); lowered into a line. An arc whose
+    /// ends are written apart stays an arc.
     fn barely_turns(&self, start: [f64; 2], end: [f64; 2], centre: [f64; 2], ccw: bool) -> bool {
         if start == end {
             // A full circle, as written.
@@ -184,7 +186,10 @@ impl Lowering {
             sweep += std::f64::consts::TAU;
         }
         let chord = (end[0] - start[0]).hypot(end[1] - start[1]);
-        lower::arc::barely_turns(sweep, chord, self.radius_step() * self.m.scale())
+        // Ends that may be written as one point: within one and a half
+        // units of the last decimal (each coordinate rounds by half a unit).
+        let unit = 2.0 * self.quantum(&self.m);
+        lower::arc::barely_turns(sweep, chord, 1.5 * unit)
     }
 
     /// Half a unit of the last decimal the target is written with, in mm.
