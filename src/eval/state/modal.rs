@@ -506,18 +506,19 @@ impl Interp<'_> {
             // G43.1's axis words are a move too when the line has a
             // motion code.
             let explicit_motion = w.gs().iter().any(|&g| is_moving_code(g));
-            let moves = !axis_words.is_empty() || polar_words(words).is_some();
+            let polar = polar_words(words).map(|_| self.mach.polar_xy(words));
+            let moves = !axis_words.is_empty() || polar.is_some();
             let full_circle = !moves
                 && w.gs()
                     .iter()
                     .any(|g| matches!(g, GCode::Motion(MotionMode::ArcCw | MotionMode::ArcCcw)));
-            if full_circle && let Err(k) = self.mach.check_motion(words, axis_words) {
+            if full_circle && let Err(k) = self.mach.check_motion_polar(words, axis_words, polar) {
                 // A full circle without end point (`G2 I5`): the reference
                 // checks its radius as for any arc.
                 return Err(self.error(k, file, start, start));
             }
             if moves && (!dynamic_tlo || explicit_motion) {
-                if let Err(k) = self.mach.check_motion(words, axis_words) {
+                if let Err(k) = self.mach.check_motion_polar(words, axis_words, polar) {
                     return Err(self.error(k, file, start, start));
                 }
                 if self.mach.modal.motion.is_canned_cycle() {
@@ -790,7 +791,12 @@ impl LineWords<'_> {
 }
 
 /// The line's polar words (`@` radius, `^` angle), if it has any.
+#[inline]
 fn polar_words(words: &[(u8, f64)]) -> Option<(Option<f64>, Option<f64>)> {
+    // One pass for the common line without them (arcs on the fast path).
+    if !words.iter().any(|w| matches!(w.0, b'@' | b'^')) {
+        return None;
+    }
     let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
     let (r, a) = (word(b'@'), word(b'^'));
     (r.is_some() || a.is_some()).then_some((r, a))
@@ -870,16 +876,28 @@ impl Machine {
         }
     }
 
-    /// Checks the reference makes with the start position: arc geometry and
-    /// probe distance. Skipped where the position is not known.
+    /// [`Machine::check_motion_polar`] for a line without polar words
+    /// (the straight-line loop takes none).
     pub(in crate::eval) fn check_motion(
         &self,
         words: &[(u8, f64)],
         axis_words: &[(usize, f64)],
     ) -> Result<(), ErrorKind> {
+        self.check_motion_polar(words, axis_words, None)
+    }
+
+    /// Checks the reference makes with the start position: arc geometry,
+    /// probe distance, polar words at the origin; `polar`: where the
+    /// line's polar words send X and Y, if it has any
+    /// ([`Machine::polar_xy`]). Skipped where the position is not known.
+    pub(in crate::eval) fn check_motion_polar(
+        &self,
+        words: &[(u8, f64)],
+        axis_words: &[(usize, f64)],
+        polar: Option<Option<[f64; 2]>>,
+    ) -> Result<(), ErrorKind> {
         let motion = self.modal.motion;
         let start = |a: usize| self.pos.axes[a].as_ref().ok().copied();
-        let polar = polar_words(words).map(|_| self.polar_xy(words));
         let end = |a: usize| -> Option<f64> {
             match (axis_words.iter().find(|w| w.0 == a), polar) {
                 (_, Some(xy)) if a < 2 => Some(xy?[a]),
