@@ -176,6 +176,14 @@ impl Lowering {
             // A full circle, as written.
             return false;
         }
+        // Most arcs: a chord longer than both bounds below can be neither
+        // (it is at most the radius times the angle), without the angles.
+        let unit = 2.0 * self.quantum(&self.m);
+        let chord2 = (end[0] - start[0]).powi(2) + (end[1] - start[1]).powi(2);
+        let radius2 = (start[0] - centre[0]).powi(2) + (start[1] - centre[1]).powi(2);
+        if chord2 > (1.5 * unit).powi(2) && chord2 > radius2 * 1e-10 {
+            return false;
+        }
         let angle = |p: [f64; 2]| (p[1] - centre[1]).atan2(p[0] - centre[0]);
         let mut sweep = if ccw {
             angle(end) - angle(start)
@@ -185,11 +193,9 @@ impl Lowering {
         while sweep <= 0.0 {
             sweep += std::f64::consts::TAU;
         }
-        let chord = (end[0] - start[0]).hypot(end[1] - start[1]);
         // Ends that may be written as one point: within one and a half
         // units of the last decimal (each coordinate rounds by half a unit).
-        let unit = 2.0 * self.quantum(&self.m);
-        lower::arc::barely_turns(sweep, chord, 1.5 * unit)
+        lower::arc::barely_turns(sweep, chord2.sqrt(), 1.5 * unit)
     }
 
     /// Half a unit of the last decimal the target is written with, in mm.
