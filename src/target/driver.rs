@@ -844,10 +844,10 @@ impl Lowering {
                 self.m.modes.motion,
                 MotionMode::Rapid | MotionMode::Linear | MotionMode::ArcCw | MotionMode::ArcCcw
             );
-        match self.m.modes.distance {
-            _ if other => AxisWords::Other,
-            Distance::Incremental => AxisWords::Increments,
-            Distance::Absolute => AxisWords::Positions,
+        if other {
+            AxisWords::Other
+        } else {
+            self.moves_axis_words()
         }
     }
 

@@ -593,33 +593,55 @@ fn lowered_offsets_move_as_rs274() {
     let seeds = oracle::suite_seeds("NGCFLAT_OFFSETS", 30);
     let results = oracle::on_threads(seeds, 1, |seed| {
         let program = offsets_program(seed);
-        let target = ["grbl", "grblhal", "fluidnc"][(seed % 3) as usize];
-        let dir = crate::tmp();
-        crate::put(dir.path(), "p.ngc", &program);
-        let (code, out, err) =
-            crate::run(dir.path(), &["--target", target, "--zero-start", "p.ngc"]);
+        let target = random_target(seed);
+        let (code, out, err) = lower(&program, target);
         if code != 0 {
             return Err(format!("{target}: ngcflat refuses it: {err}"));
         }
         let a =
             rs274(program.as_bytes(), None).map_err(|e| format!("rs274 on the original: {e}"))?;
-        let b = rs274(out.as_bytes(), None)
-            .map_err(|e| format!("{target}: rs274 rejects the output: {e}\n{out}"))?;
-        // rs274 prints offsets and positions with 4 decimals in the
-        // current units: 0.00254 mm in inches.
-        let tol = if program.contains("G20") {
-            0.004
-        } else {
-            0.002
-        };
-        compare(&Replay::run(&a), &Replay::run(&b), tol)
-            .map_err(|e| format!("{target}: {e}\n--- lowered:\n{out}"))
+        moves_as(&a, &program, target, &out)
     });
+    all_pass(results, offsets_program);
+}
+
+/// The GRBL-class target a random program `seed` is lowered for.
+fn random_target(seed: u64) -> &'static str {
+    ["grbl", "grblhal", "fluidnc"][(seed % 3) as usize]
+}
+
+/// `program` lowered for `target` with `--zero-start`: exit code, output,
+/// diagnostics.
+fn lower(program: &str, target: &str) -> (i32, String, String) {
+    let dir = crate::tmp();
+    crate::put(dir.path(), "p.ngc", program);
+    crate::run(dir.path(), &["--target", target, "--zero-start", "p.ngc"])
+}
+
+/// Whether `out`, `program` lowered for `target`, moves under rs274 as
+/// the original's canon `a` does.
+fn moves_as(a: &[String], program: &str, target: &str, out: &str) -> Result<(), String> {
+    let b = rs274(out.as_bytes(), None)
+        .map_err(|e| format!("{target}: rs274 rejects the output: {e}\n{out}"))?;
+    // rs274 prints offsets and positions with 4 decimals in the current
+    // units: 0.00254 mm in inches.
+    let tol = if program.contains("G20") {
+        0.004
+    } else {
+        0.002
+    };
+    compare(&Replay::run(a), &Replay::run(&b), tol)
+        .map_err(|e| format!("{target}: {e}\n--- lowered:\n{out}"))
+}
+
+/// Fails with every seed of a random suite whose check failed, and its
+/// program (written again by `program`).
+fn all_pass(results: Vec<(u64, Result<(), String>)>, program: fn(u64) -> String) {
     let failures: Vec<String> = results
         .into_iter()
         .filter_map(|(seed, r)| {
             r.err()
-                .map(|e| format!("seed {seed}: {e}\n--- program:\n{}", offsets_program(seed)))
+                .map(|e| format!("seed {seed}: {e}\n--- program:\n{}", program(seed)))
         })
         .collect();
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
@@ -852,47 +874,18 @@ fn lowered_arcs_move_as_rs274() {
     let seeds = oracle::suite_seeds("NGCFLAT_ARCS", 20);
     let results = oracle::on_threads(seeds, 1, |seed| {
         let program = arcs_program(seed);
-        let target = ["grbl", "grblhal", "fluidnc"][(seed % 3) as usize];
-        let a = match rs274(program.as_bytes(), None) {
-            Ok(a) => a,
+        let target = random_target(seed);
+        let (code, out, err) = lower(&program, target);
+        match (rs274(program.as_bytes(), None), code) {
+            (Ok(a), 0) => moves_as(&a, &program, target, &out),
+            (Ok(_), _) => Err(format!("{target}: ngcflat refuses it: {err}")),
             // LinuxCNC refuses it (an R arc it cannot place, say): so
             // must the lowering.
-            Err(_) => {
-                let dir = crate::tmp();
-                crate::put(dir.path(), "p.ngc", &program);
-                let (code, out, _) =
-                    crate::run(dir.path(), &["--target", target, "--zero-start", "p.ngc"]);
-                return match code {
-                    0 => Err(format!(
-                        "{target}: rs274 refuses it, ngcflat writes:\n{out}"
-                    )),
-                    _ => Ok(()),
-                };
-            }
-        };
-        let dir = crate::tmp();
-        crate::put(dir.path(), "p.ngc", &program);
-        let (code, out, err) =
-            crate::run(dir.path(), &["--target", target, "--zero-start", "p.ngc"]);
-        if code != 0 {
-            return Err(format!("{target}: ngcflat refuses it: {err}"));
+            (Err(_), 0) => Err(format!(
+                "{target}: rs274 refuses it, ngcflat writes:\n{out}"
+            )),
+            (Err(_), _) => Ok(()),
         }
-        let b = rs274(out.as_bytes(), None)
-            .map_err(|e| format!("{target}: rs274 rejects the output: {e}\n{out}"))?;
-        let tol = if program.contains("G20") {
-            0.004
-        } else {
-            0.002
-        };
-        compare(&Replay::run(&a), &Replay::run(&b), tol)
-            .map_err(|e| format!("{target}: {e}\n--- lowered:\n{out}"))
     });
-    let failures: Vec<String> = results
-        .into_iter()
-        .filter_map(|(seed, r)| {
-            r.err()
-                .map(|e| format!("seed {seed}: {e}\n--- program:\n{}", arcs_program(seed)))
-        })
-        .collect();
-    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+    all_pass(results, arcs_program);
 }

@@ -162,37 +162,37 @@ impl Lowering {
         no_radius(start)
             || no_radius(end)
             || ijk_refused(start, end, centre, 6.0 * self.quantum(m))
-            || self.barely_turns(start, end, centre, ccw)
+            || self.barely_turns(m, start, end, centre, ccw)
     }
 
     /// Whether the arc from `start` to `end` about `centre` (plane
-    /// coordinates, mm; turning counter-clockwise when `ccw`) turns so
+    /// coordinates, mm; turning counter-clockwise when `ccw`; `m` the
+    /// state it runs in) turns so
     /// little that the target could take it for a full circle: under
     /// GRBL's least angle, or its ends may be written as one point (see
     /// [`lower::arc::barely_turns`]); lowered into a line. An arc whose
     /// ends are written apart stays an arc.
-    fn barely_turns(&self, start: [f64; 2], end: [f64; 2], centre: [f64; 2], ccw: bool) -> bool {
+    fn barely_turns(
+        &self,
+        m: &Machine,
+        start: [f64; 2],
+        end: [f64; 2],
+        centre: [f64; 2],
+        ccw: bool,
+    ) -> bool {
         if start == end {
             // A full circle, as written.
             return false;
         }
         // Most arcs: a chord longer than both bounds below can be neither
         // (it is at most the radius times the angle), without the angles.
-        let unit = 2.0 * self.quantum(&self.m);
+        let unit = 2.0 * self.quantum(m);
         let chord2 = (end[0] - start[0]).powi(2) + (end[1] - start[1]).powi(2);
         let radius2 = (start[0] - centre[0]).powi(2) + (start[1] - centre[1]).powi(2);
         if chord2 > (1.5 * unit).powi(2) && chord2 > radius2 * 1e-10 {
             return false;
         }
-        let angle = |p: [f64; 2]| (p[1] - centre[1]).atan2(p[0] - centre[0]);
-        let mut sweep = if ccw {
-            angle(end) - angle(start)
-        } else {
-            angle(start) - angle(end)
-        };
-        while sweep <= 0.0 {
-            sweep += std::f64::consts::TAU;
-        }
+        let (_, sweep) = turn(centre, start, end, ccw);
         // Ends that may be written as one point: within one and a half
         // units of the last decimal (each coordinate rounds by half a unit).
         lower::arc::barely_turns(sweep, chord2.sqrt(), 1.5 * unit)
@@ -259,7 +259,7 @@ impl Lowering {
         let target = radius_center(ws, we, wr, ccw);
         let (a, b) = (middle(exact, start, end, ccw), middle(target, ws, we, ccw));
         (a[0] - b[0]).hypot(a[1] - b[1]) > self.opts.tolerance_mm
-            || self.barely_turns(start, end, exact, ccw)
+            || self.barely_turns(m, start, end, exact, ccw)
     }
 
     /// The most the distance from the centre may change over one part of
@@ -296,15 +296,26 @@ fn single_precision_slack(start: [f64; 2], end: [f64; 2], r: f64) -> f64 {
     16.0 * f64::from(f32::EPSILON) * largest * (chord + 2.0 * r.abs())
 }
 
+/// The angle of `start` about `centre` and the angle (above 0, at most a
+/// turn) the arc from `start` to `end` turns through, counter-clockwise
+/// when `ccw` (plane coordinates).
+fn turn(centre: [f64; 2], start: [f64; 2], end: [f64; 2], ccw: bool) -> (f64, f64) {
+    let angle = |p: [f64; 2]| (p[1] - centre[1]).atan2(p[0] - centre[0]);
+    let (a0, a1) = (angle(start), angle(end));
+    let sweep = if ccw { a1 - a0 } else { a0 - a1 };
+    // atan2 differences lie within a turn either way.
+    let sweep = if sweep <= 0.0 {
+        sweep + std::f64::consts::TAU
+    } else {
+        sweep
+    };
+    (a0, sweep)
+}
+
 /// The point halfway along the arc from `start` to `end` about `centre`
 /// (plane coordinates, turning counter-clockwise when `ccw`).
 fn middle(centre: [f64; 2], start: [f64; 2], end: [f64; 2], ccw: bool) -> [f64; 2] {
-    let angle = |p: [f64; 2]| (p[1] - centre[1]).atan2(p[0] - centre[0]);
-    let (a0, a1) = (angle(start), angle(end));
-    let mut sweep = if ccw { a1 - a0 } else { a0 - a1 };
-    if sweep <= 0.0 {
-        sweep += std::f64::consts::TAU;
-    }
+    let (a0, sweep) = turn(centre, start, end, ccw);
     let mid = if ccw {
         a0 + sweep / 2.0
     } else {

@@ -154,7 +154,7 @@ impl Lowering {
     }
 
     /// What the axis words of a line of moves (G0–G3) are to the target.
-    fn moves_axis_words(&self) -> AxisWords {
+    pub(super) fn moves_axis_words(&self) -> AxisWords {
         match self.m.modes.distance {
             Distance::Incremental => AxisWords::Increments,
             Distance::Absolute => AxisWords::Positions,
