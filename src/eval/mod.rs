@@ -2,6 +2,7 @@
 //! writes the lines it executes, with every parameter and expression replaced
 //! by its value.
 
+mod exec;
 mod expr;
 mod flow;
 mod out;

@@ -1,0 +1,13 @@
+//! The evaluator's steps: what running a line, a statement or a call does
+//! across the parts of [`super::Interp`]. Each part (the machine model in
+//! `state`, parameters and expressions in `expr`, control flow in `flow`,
+//! the reader in `read`, the output in `out`) changes only through its own
+//! methods and knows nothing of `Interp`; only the steps here (and the
+//! entry points in `eval/mod.rs`) hold all of them, and each hands a part
+//! method the other parts it reads or changes as arguments.
+
+// Machine model steps (codes, motion, tools, cycles).
+
+// Expression, reading and output steps.
+
+// Control-flow steps (O-words, calls, returns).
