@@ -18,7 +18,8 @@ use crate::diag::Error;
 use crate::emit::Output;
 use crate::eval::{FormLine, FormLines, Origin};
 
-use super::{AxisWords, Lowering, Problem, Profile, io_error};
+use super::{Lowering, Problem, Profile, io_error};
+use crate::target::format::AxisWords;
 use crate::target::profile::Comments;
 
 /// The whole G and M codes below 128 the profile has, and its word and
