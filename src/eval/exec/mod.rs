@@ -11,3 +11,4 @@
 // Expression, reading and output steps.
 
 // Control-flow steps (O-words, calls, returns).
+mod control;

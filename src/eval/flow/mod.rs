@@ -2,8 +2,6 @@
 //! their frames, the subroutines known, and the parsed lines of bodies that
 //! run again.
 
-pub(super) mod control;
-
 use std::rc::Rc;
 
 use crate::diag::Site;
@@ -11,6 +9,8 @@ use crate::fx_hasher::{FxMap, FxSet};
 use crate::parse::Name;
 use crate::parse::ast::{Line, OKind};
 use crate::program::FileIndex;
+
+use super::expr::params::Params;
 
 /// Deepest nesting of active calls (the tenth nested call fails).
 pub(super) const MAX_CALL_LEVEL: usize = 9;
@@ -123,7 +123,7 @@ pub(super) fn stack_of(frames: &[Box<Frame>]) -> Vec<Site> {
         .rev()
         .filter_map(|f| {
             let (ret, oidx) = (f.ret.as_ref()?, f.call_oidx?);
-            let (a, b) = control::osite_of(&ret.file, oidx);
+            let (a, b) = osite_of(&ret.file, oidx);
             Some(Site::new(&ret.file.file, a, b))
         })
         .collect()
@@ -230,5 +230,198 @@ impl Flow {
             }
             None => Box::new(Frame::new(kind, name)),
         }
+    }
+}
+
+/// Span of O-line `oidx` of `file`, from its O-word to its last non-blank.
+pub(in crate::eval) fn osite_of(file: &Rc<FileIndex>, oidx: u32) -> (u32, u32) {
+    let o = &file.olines[oidx as usize];
+    let end = o.start + o.line_len();
+    // Point at the O-word, not at the indentation before it.
+    let lead = file.file.memory().map_or(0, |d| {
+        d[o.start as usize..end as usize]
+            .iter()
+            .take_while(|b| matches!(b, b' ' | b'\t'))
+            .count() as u32
+    });
+    let mut e = end;
+    if let Some(d) = file.file.memory() {
+        while e > o.start + lead && matches!(d[e as usize - 1], b' ' | b'\t' | b'\r') {
+            e -= 1;
+        }
+    }
+    (o.start + lead, e)
+}
+
+/// The sub name of a call label, as a key (the label itself when it is
+/// already bare).
+pub(in crate::eval) fn base_key(label: &Name) -> Name {
+    let base = base_name(label);
+    if base.len() == label.len() {
+        label.clone()
+    } else {
+        Name::new(base)
+    }
+}
+
+/// The sub name of a call label: its part after the last `/`.
+fn base_name(label: &str) -> &str {
+    // Labels are short: a plain search beats setting up a vector one.
+    match label.bytes().rposition(|b| b == b'/') {
+        Some(i) => &label[i + 1..],
+        None => label,
+    }
+}
+
+impl Flow {
+    /// Moves reading to an O-line (`after`: to the line after it).
+    pub(in crate::eval) fn goto(&mut self, file: &Rc<FileIndex>, oidx: u32, after: bool) {
+        let o = &file.olines[oidx as usize];
+        if Rc::ptr_eq(&self.cur.file, file) {
+            // The same file (any jump within a body): no count to touch.
+            let c = &mut self.cur;
+            (c.pos, c.line, c.next_o) = if after {
+                (o.next, o.line_idx + 1, oidx as usize + 1)
+            } else {
+                (o.start, o.line_idx, oidx as usize)
+            };
+            return;
+        }
+        self.cur = if after {
+            Cursor {
+                file: file.clone(),
+                pos: o.next,
+                line: o.line_idx + 1,
+                next_o: oidx as usize + 1,
+            }
+        } else {
+            Cursor {
+                file: file.clone(),
+                pos: o.start,
+                line: o.line_idx,
+                next_o: oidx as usize,
+            }
+        };
+    }
+
+    pub(in crate::eval) fn note_loop(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) {
+        let line = file.olines[oidx as usize].line_idx;
+        // The key is kept as it is (no allocation per pass); the label is
+        // cut from it only for a message.
+        let same = matches!(&self.last_loop, Some((k, l, f)) if *l == line && k == key && Rc::ptr_eq(f, file));
+        if !same {
+            self.last_loop = Some((key.clone(), line, file.clone()));
+        }
+    }
+}
+
+impl Flow {
+    /// The record of `key` in the innermost frame.
+    #[inline]
+    pub(in crate::eval) fn label(&mut self, key: &Name) -> Option<LabelRec> {
+        self.frame().labels.get(key).copied()
+    }
+
+    /// Records control label `key` of O-line `oidx` (on 0-based line
+    /// `line`) as opening a block of `kind`, not yet counting.
+    #[inline]
+    pub(in crate::eval) fn set_label(&mut self, key: &Name, kind: OKind, oidx: u32, line: u32) {
+        let rec = LabelRec {
+            kind,
+            oidx,
+            line,
+            repeat: -1,
+        };
+        self.frame().labels.insert(key.clone(), rec);
+    }
+
+    /// Whether a repeat loop of the innermost frame is counting.
+    #[inline]
+    pub(in crate::eval) fn repeat_running(&mut self) -> bool {
+        self.frame()
+            .labels
+            .values()
+            .any(|r| r.kind == OKind::Repeat && r.repeat >= 0)
+    }
+
+    /// Sets `#<_value>`: the value returned, or 0 and none.
+    #[inline]
+    pub(in crate::eval) fn set_value(&mut self, v: Option<f64>) {
+        self.value = v.unwrap_or(0.0);
+        self.value_returned = v.is_some();
+    }
+
+    /// Notes the sub `name`, found at `target`, as called (registering it
+    /// if it was found in a file or further down).
+    #[inline]
+    pub(in crate::eval) fn note_called(&mut self, name: &Name, target: &SubRec) {
+        self.subs
+            .entry(name.clone())
+            .or_insert_with(|| target.clone());
+        self.called.insert(name.clone());
+    }
+
+    /// Enters a call of `kind` to `name` made by O-line `call_oidx`,
+    /// returning to `ret`; false (nothing entered) past
+    /// [`MAX_CALL_LEVEL`].
+    #[inline]
+    pub(in crate::eval) fn enter(
+        &mut self,
+        kind: FrameKind,
+        name: Name,
+        ret: Cursor,
+        call_oidx: u32,
+    ) -> bool {
+        if self.level() + 1 > MAX_CALL_LEVEL {
+            return false;
+        }
+        let mut f = self.new_frame(kind, name);
+        f.ret = Some(ret);
+        f.call_oidx = Some(call_oidx);
+        self.frames.push(f);
+        true
+    }
+
+    /// Gives the frame just entered its arguments: #1-#30 of `params`
+    /// saved in it (the caller gets them back on return) and set to
+    /// `argv`, and `n_args` when `oword_nargs`.
+    #[inline]
+    pub(in crate::eval) fn bind_args(
+        &mut self,
+        params: &mut Params,
+        argv: &[f64; 30],
+        nargs: f64,
+        oword_nargs: bool,
+    ) {
+        let mut saved = self.saved_pool.pop().unwrap_or_else(|| Box::new([0.0; 30]));
+        saved.copy_from_slice(&params.values[1..31]);
+        params.values[1..31].copy_from_slice(argv);
+        params.set[1..31].fill(true);
+        let f = self.frame();
+        f.saved = Some(saved);
+        if oword_nargs {
+            f.locals.insert(Name::new("n_args"), nargs);
+        }
+    }
+
+    /// Leaves the innermost call: its frame, with the caller's #1-#30 put
+    /// back into `params`. [`Flow::resume`] then goes back to the caller.
+    #[inline]
+    pub(in crate::eval) fn pop_call(&mut self, params: &mut Params) -> Box<Frame> {
+        let mut f = self.frames.pop().expect("call frame");
+        if let Some(saved) = f.saved.take() {
+            params.values[1..31].copy_from_slice(&saved[..]);
+            self.saved_pool.push(saved);
+        }
+        f
+    }
+
+    /// Reading goes on where the call of `f`, just left, was made; its
+    /// frame is kept for the next call.
+    // Hot on every return; left to itself the compiler calls it.
+    #[inline(always)]
+    pub(in crate::eval) fn resume(&mut self, mut f: Box<Frame>) {
+        self.cur = f.ret.take().expect("return cursor");
+        self.frame_pool.push(f);
     }
 }

@@ -11,7 +11,9 @@ use crate::program::{FileIndex, ParsedO, control_key};
 
 use crate::eval::Interp;
 use crate::eval::expr::round_half_even_int;
-use crate::eval::flow::{Cursor, Flow, FrameKind, LabelRec, MAX_CALL_LEVEL, SubRec, label_of_key};
+use crate::eval::flow::{
+    Cursor, FrameKind, LabelRec, MAX_CALL_LEVEL, SubRec, base_key, label_of_key, osite_of,
+};
 
 /// What a forward search was looking for (for the error when nothing is found).
 enum Seek {
@@ -29,26 +31,6 @@ impl Interp<'_> {
     pub(in crate::eval) fn osite(&self, file: &Rc<FileIndex>, oidx: u32) -> (u32, u32) {
         osite_of(file, oidx)
     }
-}
-
-/// Span of O-line `oidx` of `file`, from its O-word to its last non-blank.
-pub(in crate::eval) fn osite_of(file: &Rc<FileIndex>, oidx: u32) -> (u32, u32) {
-    let o = &file.olines[oidx as usize];
-    let end = o.start + o.line_len();
-    // Point at the O-word, not at the indentation before it.
-    let lead = file.file.memory().map_or(0, |d| {
-        d[o.start as usize..end as usize]
-            .iter()
-            .take_while(|b| matches!(b, b' ' | b'\t'))
-            .count() as u32
-    });
-    let mut e = end;
-    if let Some(d) = file.file.memory() {
-        while e > o.start + lead && matches!(d[e as usize - 1], b' ' | b'\t' | b'\r') {
-            e -= 1;
-        }
-    }
-    (o.start + lead, e)
 }
 
 impl Interp<'_> {
@@ -214,7 +196,7 @@ impl Interp<'_> {
         kind: OKind,
     ) -> Result<(), Error> {
         let line = file.olines[oidx as usize].line_idx;
-        if let Some(rec) = self.flow.frame().labels.get(key).copied() {
+        if let Some(rec) = self.flow.label(key) {
             if rec.line != line && matches!(kind, OKind::If | OKind::While | OKind::Repeat) {
                 let first_line = rec.line + 1;
                 let label = self.label_text(file, oidx)?.to_string();
@@ -229,15 +211,7 @@ impl Interp<'_> {
                 self.warn(WarningKind::LabelReused { first_line }, file, a, b);
             }
         }
-        self.flow.frame().labels.insert(
-            key.clone(),
-            LabelRec {
-                kind,
-                oidx,
-                line,
-                repeat: -1,
-            },
-        );
+        self.flow.set_label(key, kind, oidx, line);
         Ok(())
     }
 
@@ -251,7 +225,7 @@ impl Interp<'_> {
         _expected: &'static str,
     ) -> Result<LabelRec, Error> {
         let label = || label_of_key(key);
-        match self.flow.frame().labels.get(key).copied() {
+        match self.flow.label(key) {
             None => Err(self.oerr(ErrorKind::UndefinedLabel { label: label() }, file, oidx)),
             Some(rec) if kinds.contains(&rec.kind) => Ok(rec),
             Some(rec) => Err(self.oerr(
@@ -447,7 +421,7 @@ impl Interp<'_> {
     /// `do`: records the loop start.
     fn exec_do(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) -> Result<(), Error> {
         // The reference records a do label only on first sight.
-        match self.flow.frame().labels.get(key).copied() {
+        match self.flow.label(key) {
             Some(rec) if rec.oidx != oidx => {
                 let (a, b) = self.osite(file, oidx);
                 let first_line = rec.line + 1;
@@ -705,7 +679,7 @@ impl Interp<'_> {
     fn stray(&mut self, file: &Rc<FileIndex>, t: u32, key: &Name) -> Result<(), Error> {
         let label = label_of_key(key);
         let found = file.kind_of(t).map(|k| k.name()).unwrap_or("?");
-        let rec = self.flow.frame().labels.get(key).copied();
+        let rec = self.flow.label(key);
         if let Some(r) = &rec
             && file.kind_of(t) == Some(r.kind)
             && matches!(r.kind, OKind::If | OKind::While | OKind::Repeat)
@@ -874,8 +848,7 @@ impl Interp<'_> {
             match expr {
                 Some(e) => match self.o_eval(file, j, &e) {
                     Ok(v) => {
-                        self.flow.value = v;
-                        self.flow.value_returned = true;
+                        self.flow.set_value(Some(v));
                     }
                     Err(e) => {
                         self.flow.defining = false;
@@ -883,8 +856,7 @@ impl Interp<'_> {
                     }
                 },
                 None => {
-                    self.flow.value = 0.0;
-                    self.flow.value_returned = false;
+                    self.flow.set_value(None);
                 }
             }
         }
@@ -946,8 +918,7 @@ impl Interp<'_> {
             if sub_file.m99_lines.first().is_some_and(|&l| l < until) {
                 // The reference reads M99 lines while seeking, which clears
                 // #<_value>.
-                self.flow.value = 0.0;
-                self.flow.value_returned = false;
+                self.flow.set_value(None);
             }
             return Ok(SubRec {
                 file: sub_file,
@@ -968,8 +939,7 @@ impl Interp<'_> {
         match t {
             Ok(t) => {
                 if file.m99_between(line, file.olines[t as usize].line_idx) {
-                    self.flow.value = 0.0;
-                    self.flow.value_returned = false;
+                    self.flow.set_value(None);
                 }
                 Ok(SubRec {
                     file: file.clone(),
@@ -991,6 +961,8 @@ impl Interp<'_> {
         }
     }
 
+    /// Enters a call made by O-line `oidx` of `file`: the error past
+    /// [`MAX_CALL_LEVEL`] nested calls.
     fn push_frame(
         &mut self,
         file: &Rc<FileIndex>,
@@ -999,21 +971,12 @@ impl Interp<'_> {
         name: Name,
         ret: Cursor,
     ) -> Result<(), Error> {
-        if self.flow.level() + 1 > MAX_CALL_LEVEL {
-            return Err(self.oerr(
-                ErrorKind::TooDeep {
-                    limit: MAX_CALL_LEVEL,
-                },
-                file,
-                oidx,
-            ));
-        }
-        let mut f = self.flow.new_frame(kind, name);
         debug_assert!(Rc::ptr_eq(&ret.file, file));
-        f.ret = Some(ret);
-        f.call_oidx = Some(oidx);
-        self.flow.frames.push(f);
-        Ok(())
+        if self.flow.enter(kind, name, ret, oidx) {
+            return Ok(());
+        }
+        let limit = MAX_CALL_LEVEL;
+        Err(self.oerr(ErrorKind::TooDeep { limit }, file, oidx))
     }
 
     fn call(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) -> Result<(), Error> {
@@ -1036,23 +999,12 @@ impl Interp<'_> {
         }
         // Recursion from inside a running repeat shares its counter in the
         // reference.
-        if self.flow.frame().name == base
-            && self
-                .flow
-                .frame()
-                .labels
-                .values()
-                .any(|r| r.kind == OKind::Repeat && r.repeat >= 0)
-        {
+        if self.flow.frame().name == base && self.flow.repeat_running() {
             let (a, b) = self.osite(file, oidx);
             self.warn(WarningKind::QuirkRepeatRecursion, file, a, b);
         }
         if self.flow.last_called.as_ref() != Some(&base) {
-            self.flow
-                .subs
-                .entry(base.clone())
-                .or_insert_with(|| target.clone());
-            self.flow.called.insert(base.clone());
+            self.flow.note_called(&base, &target);
             self.flow.last_called = Some(base.clone());
         }
         let o_info = &file.olines[oidx as usize];
@@ -1068,24 +1020,11 @@ impl Interp<'_> {
         Ok(())
     }
 
-    /// Gives the frame just pushed its arguments: #1-#30 saved in it (the
-    /// caller gets them back on return) and set to `argv`, and `n_args`
-    /// when the INI asks for it.
+    /// Gives the frame just entered its arguments (see `Flow::bind_args`).
     pub(in crate::eval) fn bind_args(&mut self, argv: &[f64; 30], nargs: f64) {
-        let mut saved = self
-            .flow
-            .saved_pool
-            .pop()
-            .unwrap_or_else(|| Box::new([0.0; 30]));
-        saved.copy_from_slice(&self.params.values[1..31]);
-        self.params.values[1..31].copy_from_slice(argv);
-        self.params.set[1..31].fill(true);
         let oword_nargs = self.s.oword_nargs;
-        let f = self.flow.frame();
-        f.saved = Some(saved);
-        if oword_nargs {
-            f.locals.insert(Name::new("n_args"), nargs);
-        }
+        self.flow
+            .bind_args(&mut self.params, argv, nargs, oword_nargs);
     }
 
     fn return_from_call(
@@ -1094,38 +1033,18 @@ impl Interp<'_> {
         oidx: u32,
         v: Option<f64>,
     ) -> Result<(), Error> {
-        match v {
-            Some(v) => {
-                self.flow.value = v;
-                self.flow.value_returned = true;
-            }
-            None => {
-                self.flow.value = 0.0;
-                self.flow.value_returned = false;
-            }
-        }
-        if self
-            .flow
-            .frame()
-            .labels
-            .values()
-            .any(|r| r.kind == OKind::Repeat && r.repeat >= 0)
-        {
+        self.flow.set_value(v);
+        if self.flow.repeat_running() {
             let (a, b) = self.osite(file, oidx);
             self.warn(WarningKind::QuirkRepeatCount, file, a, b);
         }
-        let mut f = self.flow.frames.pop().expect("call frame");
-        if let Some(saved) = f.saved.take() {
-            self.params.values[1..31].copy_from_slice(&saved[..]);
-            self.flow.saved_pool.push(saved);
-        }
+        let mut f = self.flow.pop_call(&mut self.params);
         if f.auto_restore
             && let Some(m) = f.saved_modal.take()
         {
             self.restore_modal(&m)?;
         }
-        self.flow.cur = f.ret.take().expect("return cursor");
-        self.flow.frame_pool.push(f);
+        self.flow.resume(f);
         Ok(())
     }
 
@@ -1139,16 +1058,15 @@ impl Interp<'_> {
         if self.flow.frame().kind != FrameKind::M98 {
             return Err(self.error(ErrorKind::M99InSub, file, start, start + len));
         }
-        self.flow.value = 0.0;
-        self.flow.value_returned = false;
-        let mut f = self.flow.frames.pop().expect("M98 frame");
+        self.flow.set_value(None);
+        // An M98 frame saved no arguments: `params` stays as it is.
+        let mut f = self.flow.pop_call(&mut self.params);
         if f.auto_restore
             && let Some(m) = f.saved_modal.take()
         {
             self.restore_modal(&m)?;
         }
-        self.flow.cur = f.ret.take().expect("return cursor");
-        self.flow.frame_pool.push(f);
+        self.flow.resume(f);
         Ok(())
     }
 
@@ -1207,11 +1125,7 @@ impl Interp<'_> {
                 oidx,
             ));
         }
-        self.flow
-            .subs
-            .entry(name.clone())
-            .or_insert_with(|| target.clone());
-        self.flow.called.insert(name.clone());
+        self.flow.note_called(&name, &target);
         let info = &file.olines[oidx as usize];
         let ret = Cursor {
             file: file.clone(),
@@ -1222,67 +1136,5 @@ impl Interp<'_> {
         self.push_frame(file, oidx, FrameKind::M98, name, ret)?;
         self.flow.goto(&target.file, target.oidx, true);
         Ok(())
-    }
-}
-
-/// The sub name of a call label, as a key (the label itself when it is
-/// already bare).
-fn base_key(label: &Name) -> Name {
-    let base = base_name(label);
-    if base.len() == label.len() {
-        label.clone()
-    } else {
-        Name::new(base)
-    }
-}
-
-/// The sub name of a call label: its part after the last `/`.
-fn base_name(label: &str) -> &str {
-    // Labels are short: a plain search beats setting up a vector one.
-    match label.bytes().rposition(|b| b == b'/') {
-        Some(i) => &label[i + 1..],
-        None => label,
-    }
-}
-
-impl Flow {
-    /// Moves reading to an O-line (`after`: to the line after it).
-    pub(in crate::eval) fn goto(&mut self, file: &Rc<FileIndex>, oidx: u32, after: bool) {
-        let o = &file.olines[oidx as usize];
-        if Rc::ptr_eq(&self.cur.file, file) {
-            // The same file (any jump within a body): no count to touch.
-            let c = &mut self.cur;
-            (c.pos, c.line, c.next_o) = if after {
-                (o.next, o.line_idx + 1, oidx as usize + 1)
-            } else {
-                (o.start, o.line_idx, oidx as usize)
-            };
-            return;
-        }
-        self.cur = if after {
-            Cursor {
-                file: file.clone(),
-                pos: o.next,
-                line: o.line_idx + 1,
-                next_o: oidx as usize + 1,
-            }
-        } else {
-            Cursor {
-                file: file.clone(),
-                pos: o.start,
-                line: o.line_idx,
-                next_o: oidx as usize,
-            }
-        };
-    }
-
-    fn note_loop(&mut self, file: &Rc<FileIndex>, oidx: u32, key: &Name) {
-        let line = file.olines[oidx as usize].line_idx;
-        // The key is kept as it is (no allocation per pass); the label is
-        // cut from it only for a message.
-        let same = matches!(&self.last_loop, Some((k, l, f)) if *l == line && k == key && Rc::ptr_eq(f, file));
-        if !same {
-            self.last_loop = Some((key.clone(), line, file.clone()));
-        }
     }
 }
