@@ -61,8 +61,6 @@ struct Diags {
     warnings: Vec<Diagnostic>,
     /// Warnings already given, to report each site once.
     warned: HashSet<(&'static str, usize, u32)>,
-    /// Tools a warning named as missing from the tool table.
-    unknown_tools: HashSet<i64>,
 }
 
 impl Diags {

@@ -331,7 +331,7 @@ impl Interp<'_> {
             self.note_m61(span, i != 5400);
         }
         if (5400..=5413).contains(&i)
-            && let Some(v) = self.tool_param(i)
+            && let Some(v) = self.mach.tool_param(i)
         {
             return Ok(v);
         }

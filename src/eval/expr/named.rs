@@ -218,7 +218,7 @@ impl Interp<'_> {
         }
         if let Some(axis) = name.strip_prefix("_abs_").filter(|a| a.len() == 1)
             && let Some(i) = AXES.iter().position(|&c| c == axis.as_bytes()[0])
-            && let Some(v) = self.abs_position(i)
+            && let Some(v) = self.mach.abs_position(self.s, &self.params, i)
         {
             self.note_standalone_drift(span);
             return Some(Ok(v));

@@ -13,9 +13,10 @@
 use crate::diag::{ErrorKind, WarningKind};
 use crate::geom::comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
 
+use super::Machine;
+use super::tools::{ToolData, standalone_diameter};
 use crate::codes::{CutterComp, Distance, MotionMode, Plane, Units};
-use crate::eval::Interp;
-use crate::eval::state::Machine;
+use crate::eval::settings::Settings;
 
 /// A G70 entered with compensation when the output keeps G41/G42
 /// (LinuxCNC): G-code with G41/G42 cannot put LinuxCNC's compensation in
@@ -56,15 +57,16 @@ fn geom(error: CompError) -> ErrorKind {
     ErrorKind::CutterComp { error }
 }
 
-impl Interp<'_> {
+impl Machine {
     /// G41/G42 or G41.1/G42.1 (`g`) on the block with `words`; the block
-    /// checks have accepted them.
+    /// checks have accepted them. A warning that the path is not checked
+    /// goes to `warnings`.
     pub(in crate::eval) fn comp_on(
         &mut self,
+        s: &Settings,
         g: CutterComp,
         words: &[(u8, f64)],
-        file: &std::rc::Rc<crate::program::FileIndex>,
-        start: u32,
+        warnings: &mut Vec<WarningKind>,
     ) -> Result<(), ErrorKind> {
         let word = |l: u8| words.iter().rev().find(|w| w.0 == l).map(|w| w.1);
         let side = if g.side() == CutterComp::Left {
@@ -72,24 +74,24 @@ impl Interp<'_> {
         } else {
             Side::Right
         };
-        let xz = self.mach.modal.plane == Plane::XZ;
+        let xz = self.modal.plane == Plane::XZ;
         let tool = if matches!(g, CutterComp::DynamicLeft | CutterComp::DynamicRight) {
             word(b'd').map(|d| (d / 2.0, word(b'l').map_or(0, |l| l.round() as i32)))
         } else {
             let number = match word(b'd') {
                 Some(d) => {
                     let t = ((d + 0.5) as i64) as f64;
-                    if !self.s.tool_table.is_empty()
+                    if !s.tool_table.is_empty()
                         && t != 0.0
-                        && !self.mach.tools.table.contains_key(&(t as i64))
+                        && !self.tools.table.contains_key(&(t as i64))
                     {
                         return Err(ErrorKind::ToolNotInTable { tool: t as i64 });
                     }
                     Some(t)
                 }
-                None => self.mach.tools.current,
+                None => self.tools.current,
             };
-            match number.and_then(|t| self.comp_tool(t)) {
+            match number.and_then(|t| self.comp_tool(s, t)) {
                 Some(data) => {
                     let o = data.orientation.round() as i32;
                     if !xz && o != 0 && o != 9 {
@@ -100,14 +102,14 @@ impl Interp<'_> {
                         };
                         return Err(ErrorKind::CompLatheTool { what });
                     }
-                    Some((self.user_to_program(data.diameter) / 2.0, o))
+                    Some((self.user_to_program(s, data.diameter) / 2.0, o))
                 }
                 None => None,
             }
         };
-        let pos = self.mach.comp_pos();
-        let tol = Tolerances::default_for(self.mach.modal.units);
-        let run = self.mach.comp.get_or_insert_with(|| {
+        let pos = self.comp_pos();
+        let tol = Tolerances::default_for(self.modal.units);
+        let run = self.comp.get_or_insert_with(|| {
             Box::new(CompRun {
                 comp: Comp::new(tol),
                 known: false,
@@ -127,7 +129,7 @@ impl Interp<'_> {
                 } else {
                     "the position is not known (give --start-position, or --zero-start)"
                 };
-                self.warn(WarningKind::CompNotChecked { why }, file, start, start);
+                warnings.push(WarningKind::CompNotChecked { why });
             }
         }
         Ok(())
@@ -136,15 +138,15 @@ impl Interp<'_> {
     /// A tool's data for G41/G42. Under `--zero-start` without a tool
     /// table, tools the program has not set itself have the data of the
     /// standalone interpreter's built-in table (T1-T3 have diameters).
-    fn comp_tool(&self, t: f64) -> Option<crate::eval::state::tools::ToolData> {
+    fn comp_tool(&self, s: &Settings, t: f64) -> Option<ToolData> {
         let n = t.round() as i64;
-        if self.s.zero_start
-            && self.s.tool_table.is_empty()
-            && !self.mach.tools.table.contains_key(&n)
-            && !self.diags.unknown_tools.contains(&n)
+        if s.zero_start
+            && s.tool_table.is_empty()
+            && !self.tools.table.contains_key(&n)
+            && !self.unknown_tools.contains(&n)
         {
-            return Some(crate::eval::state::tools::ToolData {
-                diameter: crate::eval::state::tools::standalone_diameter(n),
+            return Some(ToolData {
+                diameter: standalone_diameter(n),
                 ..Default::default()
             });
         }
@@ -155,14 +157,14 @@ impl Interp<'_> {
     /// computed as the reference does: through millimetres, with the
     /// standalone interpreter's inch factor (the boundary cases of the
     /// entry-move check depend on the last bit).
-    fn user_to_program(&self, v: f64) -> f64 {
-        let ext = if self.s.machine_metric {
+    fn user_to_program(&self, s: &Settings, v: f64) -> f64 {
+        let ext = if s.machine_metric {
             1.0
         } else {
             0.03937007874016
         };
         let mm = v / ext;
-        match self.mach.modal.units {
+        match self.modal.units {
             Units::Mm => mm,
             Units::Inch => mm / 25.4,
         }

@@ -2,8 +2,8 @@
 //! and the depth of the last one, which a repeat of the same cycle reuses
 //! when its line leaves them out.
 
+use super::Machine;
 use crate::codes::Plane;
-use crate::eval::state::Machine;
 use crate::modes::CycleLine;
 
 /// The depth axis of cycles in a plane (G17 → Z, G18 → Y, G19 → X), as a

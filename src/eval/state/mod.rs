@@ -10,8 +10,11 @@ pub(super) mod nurbs;
 pub(super) mod restore;
 pub mod tools;
 
+use std::collections::HashSet;
+
 use crate::codes::CoordSystem;
-use crate::eval::Settings;
+use crate::eval::expr::params::Params;
+use crate::eval::settings::{Define, Settings};
 use crate::modes::Modes;
 
 /// Axis letters in parameter order (X Y Z A B C U V W).
@@ -90,6 +93,20 @@ pub(super) struct Machine {
     pub(super) comp_written: ccomp::Written,
     /// A lathe cycle whose contour subroutine is running.
     pub(super) lathe: Option<Box<lathe::LatheRun>>,
+    /// Tools whose data a G10 left unknown (a tool-data read of one is
+    /// unknown, whatever the table held).
+    pub(super) unknown_tools: HashSet<i64>,
+}
+
+/// What an update of the machine model reads and changes besides the
+/// machine: the settings (read only), the numbered parameters (where the
+/// offsets are kept, as in LinuxCNC, and the probe's results: an update
+/// writes them), and the number of the line it runs for (a position that
+/// becomes unknown names it).
+pub(in crate::eval) struct Env<'a> {
+    pub(in crate::eval) s: &'a Settings,
+    pub(in crate::eval) params: &'a mut Params,
+    pub(in crate::eval) line: u32,
 }
 
 impl Machine {
@@ -108,7 +125,7 @@ impl Machine {
         // last value of #5220), as the machine model after evaluation
         // starts.
         let coord = s.defines.iter().rev().find_map(|d| match d {
-            crate::eval::Define::Numbered(5220, v) => Some(CoordSystem::from_parameter(*v)),
+            Define::Numbered(5220, v) => Some(CoordSystem::from_parameter(*v)),
             _ => None,
         });
         Machine {
@@ -132,6 +149,7 @@ impl Machine {
             comp_pending: false,
             comp_written: ccomp::Written::No,
             lathe: None,
+            unknown_tools: HashSet::new(),
         }
     }
 }

@@ -1,20 +1,15 @@
 //! Updates of the state model from the words of an executed line.
 
-use std::rc::Rc;
+use crate::diag::{BlockError, ErrorKind, WarningKind};
 
-use crate::diag::BlockError;
-use crate::diag::{Error, ErrorKind};
-use crate::program::FileIndex;
-
+use super::nurbs::{NO_MOTION, NURBS};
+use super::{AXES, Env, Machine, Unknown};
 use crate::codes::{
     CoordSystem, CutterComp, Distance, GCode, MCode, MotionMode, NonModal, Plane, ToolLength, Units,
 };
-use crate::eval::Interp;
-use crate::eval::read::block::Words;
+use crate::eval::expr::params::Params;
 use crate::eval::read::validate::{Checked, LineCodes, arc_refusal};
-use crate::eval::state::Machine;
-use crate::eval::state::Unknown;
-use crate::eval::state::nurbs::{NO_MOTION, NURBS};
+use crate::eval::settings::Settings;
 use crate::modes::{MachineCode, polar_end, probe_end};
 
 /// A motion code other than G80 (which gives way to one on its line).
@@ -26,26 +21,32 @@ fn is_moving_code(g: GCode) -> bool {
 const LINEAR: [bool; 9] = [true, true, true, false, false, false, true, true, true];
 
 fn axis_index(letter: u8) -> Option<usize> {
-    crate::eval::state::AXES.iter().position(|&c| c == letter)
+    AXES.iter().position(|&c| c == letter)
 }
 
-impl Interp<'_> {
-    fn line_no(&self) -> u32 {
-        self.reader.line_idx + 1
-    }
+/// How a line the general update ran ends (see [`Machine::end_line`]).
+#[derive(Clone, Copy)]
+pub(in crate::eval) struct LineEnd {
+    /// The line ends the program.
+    pub(in crate::eval) ends: bool,
+    /// The line stops the program (M0, M1, M60) or ends it while
+    /// compensation state exists.
+    stops: bool,
+}
 
-    pub(in crate::eval) fn forget(&mut self, axes: &[usize], what: &'static str) {
-        let line = self.line_no();
+impl Machine {
+    /// The positions of `axes` become unknown after `what` on `line`.
+    pub(in crate::eval) fn forget(&mut self, axes: &[usize], what: &'static str, line: u32) {
         for &a in axes {
-            self.mach.pos.axes[a] = Err(Unknown::After(what, line));
+            self.pos.axes[a] = Err(Unknown::After(what, line));
         }
     }
 
     /// Factor from machine units (parameter storage) to program units.
-    pub(in crate::eval) fn to_prog(&self, axis: usize) -> f64 {
-        if !LINEAR[axis] || self.s.machine_metric == (self.mach.modal.units == Units::Mm) {
+    pub(in crate::eval) fn to_prog(&self, s: &Settings, axis: usize) -> f64 {
+        if !LINEAR[axis] || s.machine_metric == (self.modal.units == Units::Mm) {
             1.0
-        } else if self.s.machine_metric {
+        } else if s.machine_metric {
             1.0 / 25.4
         } else {
             25.4
@@ -53,75 +54,94 @@ impl Interp<'_> {
     }
 
     /// A length parameter in program units, if known.
-    fn param_prog(&self, i: usize, axis: usize) -> Option<f64> {
-        self.params.known[i].then(|| self.params.values[i] * self.to_prog(axis))
+    fn param_prog(&self, s: &Settings, params: &Params, i: usize, axis: usize) -> Option<f64> {
+        params.known[i].then(|| params.values[i] * self.to_prog(s, axis))
     }
 
-    fn set_param_prog(&mut self, i: usize, axis: usize, v: Option<f64>) {
+    fn set_param_prog(&self, env: &mut Env<'_>, i: usize, axis: usize, v: Option<f64>) {
         match v {
             Some(v) => {
-                let f = self.to_prog(axis);
-                self.params.assign(i, v / f)
+                let f = self.to_prog(env.s, axis);
+                env.params.assign(i, v / f)
             }
-            None => self.params.known[i] = false,
-        }
-    }
-
-    /// Before G92 or G52 writes the offset parameters: axes without a word
-    /// keep the offsets in effect, which are none after G92.2 (whose
-    /// parameters still hold the old values).
-    fn keep_active_g92(&mut self) {
-        if !self.params.g92_applied() {
-            for a in 0..9 {
-                self.params.assign(5211 + a, 0.0);
-            }
+            None => env.params.known[i] = false,
         }
     }
 
     /// G5x offset of coordinate system `cs` on an axis, program units.
-    fn g5x_offset(&self, cs: CoordSystem, axis: usize) -> Option<f64> {
-        self.param_prog(cs.parameters() + axis, axis)
+    fn g5x_offset(
+        &self,
+        s: &Settings,
+        params: &Params,
+        cs: CoordSystem,
+        axis: usize,
+    ) -> Option<f64> {
+        self.param_prog(s, params, cs.parameters() + axis, axis)
     }
 
     /// Applied G92 offset, program units.
-    fn g92_offset(&self, axis: usize) -> Option<f64> {
-        if !self.params.g92_applied() {
+    fn g92_offset(&self, s: &Settings, params: &Params, axis: usize) -> Option<f64> {
+        if !params.g92_applied() {
             return Some(0.0);
         }
-        self.param_prog(5211 + axis, axis)
+        self.param_prog(s, params, 5211 + axis, axis)
     }
 
     /// Machine position (without tool offsets), program units.
-    fn machine_pos(&self, axis: usize) -> Option<f64> {
-        let p = self.mach.pos.axes[axis].as_ref().ok()?;
-        Some(p + self.g5x_offset(self.mach.modal.coord, axis)? + self.g92_offset(axis)?)
+    fn machine_pos(&self, s: &Settings, params: &Params, axis: usize) -> Option<f64> {
+        let p = self.pos.axes[axis].as_ref().ok()?;
+        Some(
+            p + self.g5x_offset(s, params, self.modal.coord, axis)?
+                + self.g92_offset(s, params, axis)?,
+        )
+    }
+
+    /// The machine positions of all axes (program units).
+    fn machine_all(&self, env: &Env<'_>) -> Vec<Option<f64>> {
+        (0..9)
+            .map(|a| self.machine_pos(env.s, env.params, a))
+            .collect()
     }
 
     /// Absolute machine position including the tool length offset, program
     /// units (for `#<_abs_x>`...).
-    pub(in crate::eval) fn abs_position(&self, axis: usize) -> Option<f64> {
-        let tlo = self.mach.tlo?[axis] * self.to_prog(axis);
-        Some(self.machine_pos(axis)? + tlo)
+    pub(in crate::eval) fn abs_position(
+        &self,
+        s: &Settings,
+        params: &Params,
+        axis: usize,
+    ) -> Option<f64> {
+        let tlo = self.tlo?[axis] * self.to_prog(s, axis);
+        Some(self.machine_pos(s, params, axis)? + tlo)
     }
 
     /// Sets the position from a machine position (program units).
-    fn set_from_machine(&mut self, axis: usize, m: Option<f64>, what: &'static str) {
-        let line = self.line_no();
+    fn set_from_machine(&mut self, env: &Env<'_>, axis: usize, m: Option<f64>, what: &'static str) {
+        let (s, params) = (env.s, &*env.params);
         let v = m.and_then(|m| {
-            Some(m - self.g5x_offset(self.mach.modal.coord, axis)? - self.g92_offset(axis)?)
+            Some(
+                m - self.g5x_offset(s, params, self.modal.coord, axis)?
+                    - self.g92_offset(s, params, axis)?,
+            )
         });
-        self.mach.pos.axes[axis] = v.ok_or(Unknown::After(what, line));
+        self.pos.axes[axis] = v.ok_or(Unknown::After(what, env.line));
     }
 
     /// A tool length code: G43 or G43.2 with the tool of `h` or the
     /// current one, G43.1 with the line's axis words, G49; the offset by
     /// [`ToolLength::offset`], in machine units, moving the program
     /// position the other way.
-    fn tool_length(&mut self, code: ToolLength, h: Option<f64>, axis_words: &[(usize, f64)]) {
-        self.mach.modal.tool_length = code;
+    fn tool_length(
+        &mut self,
+        env: &Env<'_>,
+        code: ToolLength,
+        h: Option<f64>,
+        axis_words: &[(usize, f64)],
+    ) {
+        self.modal.tool_length = code;
         let tool = match code {
             ToolLength::Apply | ToolLength::Add => h
-                .or(self.mach.tools.current)
+                .or(self.tools.current)
                 .and_then(|t| self.tool(t))
                 .map(|d| d.offsets),
             ToolLength::Dynamic | ToolLength::Cancel => None,
@@ -129,10 +149,10 @@ impl Interp<'_> {
         let mut words = [None; 9];
         if code == ToolLength::Dynamic {
             for &(a, v) in axis_words {
-                words[a] = Some(v / self.to_prog(a));
+                words[a] = Some(v / self.to_prog(env.s, a));
             }
         }
-        let old = self.mach.tlo.map_or([None; 9], |t| t.map(Some));
+        let old = self.tlo.map_or([None; 9], |t| t.map(Some));
         let new = code.offset(old, tool, words);
         let new = new
             .iter()
@@ -145,52 +165,56 @@ impl Interp<'_> {
                 "a tool length offset (G43) of a tool whose data is unknown"
             }
         };
-        self.set_tlo(new, what);
+        self.set_tlo(env.s, env.line, new, what);
     }
 
     /// G43 without H (`on`: the current tool's offset) or G49, as M72
     /// restores them.
-    pub(in crate::eval) fn tool_offset_words(&mut self, on: bool) {
+    pub(in crate::eval) fn tool_offset_words(&mut self, env: &Env<'_>, on: bool) {
         let code = if on {
             ToolLength::Apply
         } else {
             ToolLength::Cancel
         };
-        self.tool_length(code, None, &[]);
+        self.tool_length(env, code, None, &[]);
     }
 
     /// G92.3 (`on`) applies the offsets kept in the parameters, G92.2 stops
     /// applying them and keeps the parameters; the machine does not move.
-    pub(in crate::eval) fn g92_switch(&mut self, on: bool) {
-        let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
-        self.params.assign(5210, if on { 1.0 } else { 0.0 });
+    pub(in crate::eval) fn g92_switch(&mut self, env: &mut Env<'_>, on: bool) {
+        let machine = self.machine_all(env);
+        env.params.assign(5210, if on { 1.0 } else { 0.0 });
         let what = if on { "G92.3" } else { "G92.1/G92.2" };
         for (a, m) in machine.into_iter().enumerate() {
-            self.set_from_machine(a, m, what);
+            self.set_from_machine(env, a, m, what);
         }
     }
 
     /// Sets the position from a machine position of the tool tip (G53, G28,
     /// G30 targets), which includes the tool length offset.
-    fn set_from_machine_tip(&mut self, axis: usize, m: Option<f64>, what: &'static str) {
-        let tlo = self.mach.tlo.map(|t| t[axis] * self.to_prog(axis));
-        self.set_from_machine(axis, m.zip(tlo).map(|(m, t)| m - t), what);
+    fn set_from_machine_tip(
+        &mut self,
+        env: &Env<'_>,
+        axis: usize,
+        m: Option<f64>,
+        what: &'static str,
+    ) {
+        let tlo = self.tlo.map(|t| t[axis] * self.to_prog(env.s, axis));
+        self.set_from_machine(env, axis, m.zip(tlo).map(|(m, t)| m - t), what);
     }
 
     /// Applies the line's words to the model, with its G and M codes as
-    /// the checks decoded them (`checked`). Returns true when the line ends
-    /// the program.
-    pub(in crate::eval) fn apply_words(
+    /// the checks decoded them (`checked`), up to what follows the line's
+    /// output of [`Machine::retain_line`] ([`Machine::end_line`]). The
+    /// warnings it gives go to `warnings`.
+    pub(in crate::eval) fn apply_codes(
         &mut self,
-        file: &Rc<FileIndex>,
-        start: u32,
-        words: &Words,
+        env: &mut Env<'_>,
+        words: &[(u8, f64)],
         checked: &Checked,
         m99: bool,
-    ) -> Result<bool, Error> {
-        if !m99 && self.mach.apply_simple(words) {
-            return Ok(false);
-        }
+        warnings: &mut Vec<WarningKind>,
+    ) -> Result<LineEnd, ErrorKind> {
         let simple;
         let codes = match checked {
             Checked::Line(c) | Checked::Lathe(c, _) => c,
@@ -199,64 +223,66 @@ impl Interp<'_> {
                 &simple
             }
         };
-        let motion_before = self.mach.modal.motion;
+        let motion_before = self.modal.motion;
         // Filled in place: returning it would copy it.
         let mut w = LineWords::new(m99, codes);
-        self.read_words(file, start, words, &mut w)?;
+        self.read_words(env.s, words, &mut w)?;
         // The M codes act after the F, S and T words, whatever their place
         // on the line (the reference's order: a T word selects the tool an
         // M6 on its line loads), with the line's P and Q.
         let codes = w.codes;
         for &m in codes.ms() {
-            self.apply_m(m, &mut w);
+            self.apply_m(m, &mut w, env.line);
         }
         // RETAIN_G43: a tool change while G43 is in effect applies the new
         // tool's offset, and unloading the tool (T0) cancels G43, before the
         // line's own G43/G49. The output says so in a line of its own.
-        if w.tool_changed && self.s.retain_g43 && self.mach.modal.tool_length.in_effect() {
-            let on = self.mach.tools.current != Some(0.0);
-            self.tool_offset_words(on);
+        if w.tool_changed && env.s.retain_g43 && self.modal.tool_length.in_effect() {
+            let on = self.tools.current != Some(0.0);
+            self.tool_offset_words(env, on);
             if !w.gs().iter().any(|g| matches!(g, GCode::ToolLength(_))) {
-                self.mach.retain_line = Some(on);
+                self.retain_line = Some(on);
             }
         }
-        let (special, dynamic_tlo) = self.apply_g_modes(&w);
-        let _ = self.line_no();
-        if self.mach.comp.is_some() || self.mach.modal.cutter_comp != CutterComp::Off {
+        let (special, dynamic_tlo) = self.apply_g_modes(env, &w);
+        if self.comp.is_some() || self.modal.cutter_comp != CutterComp::Off {
             for &g in w.gs() {
-                let r = match g {
-                    GCode::CutterComp(CutterComp::Off) => self.mach.comp_off(),
-                    GCode::CutterComp(c) => self.comp_on(c, words, file, start),
-                    _ => Ok(()),
-                };
-                if let Err(k) = r {
-                    return Err(self.error(k, file, start, start));
+                match g {
+                    GCode::CutterComp(CutterComp::Off) => self.comp_off()?,
+                    GCode::CutterComp(c) => self.comp_on(env.s, c, words, warnings)?,
+                    _ => {}
                 }
             }
         }
         if let Some(g) = special {
-            self.apply_non_modal(file, start, g, words, &w)?;
+            self.apply_non_modal(env, g, words, &w)?;
         }
         if !special.is_some_and(NonModal::takes_axis_words) {
-            self.apply_motion(file, start, words, &w, motion_before, dynamic_tlo)?;
+            self.apply_motion(env, words, &w, motion_before, dynamic_tlo)?;
         }
-        if let Some(on) = self.mach.retain_line.take() {
-            self.emit_raw(if on { b"G43" } else { b"G49" })?;
-        }
-        if self.mach.comp.is_some() {
-            let stop = w.ends
+        let stops = self.comp.is_some()
+            && (w.ends
                 || w.codes
                     .ms()
                     .iter()
-                    .any(|m| matches!(m, MCode::Pause { .. } | MCode::PalletPause));
-            if stop && let Err(k) = self.mach.comp_stop(w.ends) {
-                return Err(self.error(k, file, start, start));
-            }
+                    .any(|m| matches!(m, MCode::Pause { .. } | MCode::PalletPause)));
+        Ok(LineEnd {
+            ends: w.ends,
+            stops,
+        })
+    }
+
+    /// The end of a line [`Machine::apply_codes`] ran, after its output:
+    /// a program stop or end releases the compensation's held moves; an
+    /// end resets the modes.
+    pub(in crate::eval) fn end_line(&mut self, end: LineEnd) -> Result<(), ErrorKind> {
+        if end.stops {
+            self.comp_stop(end.ends)?;
         }
-        if w.ends {
-            self.mach.modal.end_of_program();
+        if end.ends {
+            self.modal.end_of_program();
         }
-        Ok(w.ends)
+        Ok(())
     }
 
     /// First pass over the line's words: F, S and T words act in order;
@@ -265,27 +291,22 @@ impl Interp<'_> {
     #[inline(always)]
     fn read_words(
         &mut self,
-        file: &Rc<FileIndex>,
-        start: u32,
-        words: &Words,
+        s: &Settings,
+        words: &[(u8, f64)],
         w: &mut LineWords<'_>,
-    ) -> Result<(), Error> {
+    ) -> Result<(), ErrorKind> {
         for &(l, v) in words {
             match l {
-                b'f' => self.mach.modal.feed = v,
-                b's' => self.mach.modal.speed = v,
+                b'f' => self.modal.feed = v,
+                b's' => self.modal.speed = v,
                 b't' => {
                     // With a tool table, a tool must be in it (T0: none).
                     let t = v.round() as i64;
-                    if !self.s.tool_table.is_empty()
-                        && t != 0
-                        && !self.mach.tools.table.contains_key(&t)
-                    {
-                        let k = ErrorKind::ToolNotInTable { tool: t };
-                        return Err(self.error(k, file, start, start));
+                    if !s.tool_table.is_empty() && t != 0 && !self.tools.table.contains_key(&t) {
+                        return Err(ErrorKind::ToolNotInTable { tool: t });
                     }
-                    self.mach.tools.select(v);
-                    if let Some(p) = &mut self.mach.pockets {
+                    self.tools.select(v);
+                    if let Some(p) = &mut self.pockets {
                         p.1 = v;
                     }
                 }
@@ -313,8 +334,8 @@ impl Interp<'_> {
     /// (M6, M61 with its Q); M2/M30 end the program.
     // One call site, on the hot path: kept inline as before the split.
     #[inline(always)]
-    fn apply_m(&mut self, m: MCode, w: &mut LineWords<'_>) {
-        if self.mach.modal.set_switch(m, w.p).is_some() {
+    fn apply_m(&mut self, m: MCode, w: &mut LineWords<'_>, line: u32) {
+        if self.modal.set_switch(m, w.p).is_some() {
             return;
         }
         match m {
@@ -322,23 +343,23 @@ impl Interp<'_> {
             MCode::ToolChange => {
                 // The spindle stops for the change, as in the model after
                 // evaluation (no event here: the line is written as is).
-                self.mach.tools.change(&mut self.mach.modal);
-                if let Some(p) = &mut self.mach.pockets {
+                self.tools.change(&mut self.modal);
+                if let Some(p) = &mut self.pockets {
                     p.0 = p.1;
                 }
-                self.mach.m61 = None;
-                self.tool_change_sync();
+                self.m61 = None;
+                self.tool_change_sync(line);
                 w.tool_changed = true;
             }
             MCode::SetTool => {
-                if self.mach.m61.is_none() {
-                    self.mach.m61 = Some((self.line_no(), self.mach.tools.current));
+                if self.m61.is_none() {
+                    self.m61 = Some((line, self.tools.current));
                 }
-                self.mach.tools.set_current(w.q);
-                if let (Some(p), Some(q)) = (&mut self.mach.pockets, w.q) {
+                self.tools.set_current(w.q);
+                if let (Some(p), Some(q)) = (&mut self.pockets, w.q) {
                     p.0 = q;
                 }
-                self.tool_change_sync();
+                self.tool_change_sync(line);
                 w.tool_changed = true;
             }
             _ => {}
@@ -353,23 +374,23 @@ impl Interp<'_> {
     /// code is not among the codes: the checks left it out.)
     // One call site, on the hot path: kept inline as before the split.
     #[inline(always)]
-    fn apply_g_modes(&mut self, w: &LineWords<'_>) -> (Option<NonModal>, bool) {
+    fn apply_g_modes(&mut self, env: &mut Env<'_>, w: &LineWords<'_>) -> (Option<NonModal>, bool) {
         let mut special = None;
         let mut dynamic_tlo = false;
         for &g in w.gs() {
-            let Some(code) = self.mach.modal.set_mode(g) else {
+            let Some(code) = self.modal.set_mode(g) else {
                 continue;
             };
             match code {
                 // G5.3 ends a NURBS block without choosing a motion.
                 MachineCode::Motion(MotionMode::NurbsEnd) => {}
-                MachineCode::Motion(m) => self.mach.modal.motion = m,
-                MachineCode::Units(u) => self.set_units(u),
+                MachineCode::Motion(m) => self.modal.motion = m,
+                MachineCode::Units(u) => self.set_units(env.line, u),
                 MachineCode::ToolLength(t) => {
-                    self.tool_length(t, w.h, w.axis_words());
+                    self.tool_length(env, t, w.h, w.axis_words());
                     dynamic_tlo |= t == ToolLength::Dynamic;
                 }
-                MachineCode::Coord(cs) => self.select_cs(cs),
+                MachineCode::Coord(cs) => self.select_cs(env, cs),
                 // G4 acts in the output alone.
                 MachineCode::NonModal(NonModal::Dwell) => {}
                 MachineCode::NonModal(n) => special = Some(n),
@@ -382,53 +403,52 @@ impl Interp<'_> {
     /// G92.1-G92.3, G52, G10, G28/G30 and their .1, G53.
     fn apply_non_modal(
         &mut self,
-        file: &Rc<FileIndex>,
-        start: u32,
+        env: &mut Env<'_>,
         special: NonModal,
-        words: &Words,
+        words: &[(u8, f64)],
         w: &LineWords<'_>,
-    ) -> Result<(), Error> {
+    ) -> Result<(), ErrorKind> {
         match special {
             NonModal::SetG92 => {
-                self.keep_active_g92();
+                keep_active_g92(env.params);
                 for &(a, v) in w.axis_words() {
                     // The position becomes the given value; the offset is
                     // known only if the machine position was.
-                    let m = self.machine_pos(a);
-                    let g5x = self.g5x_offset(self.mach.modal.coord, a);
+                    let m = self.machine_pos(env.s, env.params, a);
+                    let g5x = self.g5x_offset(env.s, env.params, self.modal.coord, a);
                     let off = m.zip(g5x).map(|(m, o)| m - o - v);
-                    self.set_param_prog(5211 + a, a, off);
-                    self.mach.pos.axes[a] = Ok(v);
+                    self.set_param_prog(env, 5211 + a, a, off);
+                    self.pos.axes[a] = Ok(v);
                 }
-                self.params.assign(5210, 1.0);
+                env.params.assign(5210, 1.0);
             }
             NonModal::ResetG92 | NonModal::SuspendG92 => {
-                self.g92_switch(false);
+                self.g92_switch(env, false);
                 // G92.1 also clears the parameters (no longer applied).
                 if special == NonModal::ResetG92 {
                     for a in 0..9 {
-                        self.params.assign(5211 + a, 0.0);
+                        env.params.assign(5211 + a, 0.0);
                     }
                 }
             }
             NonModal::LocalOffset => {
                 // G52: a local offset kept in the G92 parameters.
-                let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
-                self.keep_active_g92();
+                let machine = self.machine_all(env);
+                keep_active_g92(env.params);
                 for &(a, v) in w.axis_words() {
-                    self.set_param_prog(5211 + a, a, Some(v));
+                    self.set_param_prog(env, 5211 + a, a, Some(v));
                 }
-                self.params.assign(5210, 1.0);
+                env.params.assign(5210, 1.0);
                 for (a, m) in machine.into_iter().enumerate() {
-                    if self.mach.pos.axes[a].is_ok() {
-                        self.set_from_machine(a, m, "G52");
+                    if self.pos.axes[a].is_ok() {
+                        self.set_from_machine(env, a, m, "G52");
                     }
                 }
             }
-            NonModal::RestoreG92 => self.g92_switch(true),
+            NonModal::RestoreG92 => self.g92_switch(env, true),
             NonModal::SetData => match w.l.map(|v| v.round() as i32) {
-                Some(l @ (1 | 10 | 11)) => self.g10_tool(l, w.p, w.r, words, w.axis_words()),
-                _ => self.g10(w.l, w.p, w.r, w.axis_words()),
+                Some(l @ (1 | 10 | 11)) => self.g10_tool(env, l, w.p, w.r, words, w.axis_words()),
+                _ => self.g10(env, w.l, w.p, w.r, w.axis_words()),
             },
             NonModal::Home | NonModal::Home2 => {
                 let base = if special == NonModal::Home {
@@ -442,9 +462,9 @@ impl Interp<'_> {
                     w.axis_words().iter().map(|a| a.0).collect()
                 };
                 for a in axes {
-                    let home = self.param_prog(base + a, a);
+                    let home = self.param_prog(env.s, env.params, base + a, a);
                     let what = "G28/G30 (a move to a home position)";
-                    self.set_from_machine_tip(a, home, what);
+                    self.set_from_machine_tip(env, a, home, what);
                 }
             }
             NonModal::SetHome | NonModal::SetHome2 => {
@@ -454,20 +474,19 @@ impl Interp<'_> {
                     5181
                 };
                 for a in 0..9 {
-                    let m = self.machine_pos(a);
-                    self.set_param_prog(base + a, a, m);
+                    let m = self.machine_pos(env.s, env.params, a);
+                    self.set_param_prog(env, base + a, a, m);
                 }
             }
             NonModal::MachineCoords => {
-                if self.mach.comp_offsetting() {
-                    let k = ErrorKind::CompForbids { action: "use G53" };
-                    return Err(self.error(k, file, start, start));
+                if self.comp_offsetting() {
+                    return Err(ErrorKind::CompForbids { action: "use G53" });
                 }
-                if self.mach.modal.cutter_comp != CutterComp::Off {
-                    self.forget(&[0, 1, 2], "cutter radius compensation");
+                if self.modal.cutter_comp != CutterComp::Off {
+                    self.forget(&[0, 1, 2], "cutter radius compensation", env.line);
                 }
                 for &(a, v) in w.axis_words() {
-                    self.set_from_machine_tip(a, Some(v), "a G53 machine-coordinate move");
+                    self.set_from_machine_tip(env, a, Some(v), "a G53 machine-coordinate move");
                 }
             }
             _ => {}
@@ -481,115 +500,85 @@ impl Interp<'_> {
     #[inline(always)]
     fn apply_motion(
         &mut self,
-        file: &Rc<FileIndex>,
-        start: u32,
-        words: &Words,
+        env: &mut Env<'_>,
+        words: &[(u8, f64)],
         w: &LineWords<'_>,
         motion_before: MotionMode,
         dynamic_tlo: bool,
-    ) -> Result<(), Error> {
+    ) -> Result<(), ErrorKind> {
         let axis_words = w.axis_words();
         if w.gs().contains(&GCode::Motion(MotionMode::NurbsEnd)) {
             // G5.3 ends the block; axis words on its line start another
             // one (the reference runs them as G5.2).
-            self.nurbs_end();
+            self.nurbs_end(env.line);
             if !axis_words.is_empty() {
-                self.mach.nurbs_point(NO_MOTION, axis_words, w.l);
+                self.nurbs_point(NO_MOTION, axis_words, w.l);
             }
         } else if w.gs().contains(&GCode::Motion(NURBS))
-            || (motion_before == NURBS && self.mach.modal.motion == NURBS && !axis_words.is_empty())
+            || (motion_before == NURBS && self.modal.motion == NURBS && !axis_words.is_empty())
         {
             // (Axis words in a G5.2 block are a control point; a line with
             // another motion code, G3 say, moves in that mode instead.)
-            self.mach.nurbs_point(motion_before, axis_words, w.l);
+            self.nurbs_point(motion_before, axis_words, w.l);
         } else {
             // G43.1's axis words are a move too when the line has a
             // motion code.
             let explicit_motion = w.gs().iter().any(|&g| is_moving_code(g));
-            let polar = polar_words(words).map(|_| self.mach.polar_xy(words));
+            let polar = polar_words(words).map(|_| self.polar_xy(words));
             let moves = !axis_words.is_empty() || polar.is_some();
             let full_circle = !moves
                 && w.gs()
                     .iter()
                     .any(|g| matches!(g, GCode::Motion(MotionMode::ArcCw | MotionMode::ArcCcw)));
-            if full_circle && let Err(k) = self.mach.check_motion_polar(words, axis_words, polar) {
+            if full_circle {
                 // A full circle without end point (`G2 I5`): the reference
                 // checks its radius as for any arc.
-                return Err(self.error(k, file, start, start));
+                self.check_motion_polar(words, axis_words, polar)?;
             }
             if moves && (!dynamic_tlo || explicit_motion) {
-                if let Err(k) = self.mach.check_motion_polar(words, axis_words, polar) {
-                    return Err(self.error(k, file, start, start));
+                self.check_motion_polar(words, axis_words, polar)?;
+                if self.modal.motion.is_canned_cycle() {
+                    self.note_cycle(words);
                 }
-                if self.mach.modal.motion.is_canned_cycle() {
-                    self.mach.note_cycle(words);
-                }
-                self.move_to(words, axis_words, w.l, motion_before.is_canned_cycle());
-                if (self.mach.comp.is_some() || self.mach.modal.cutter_comp != CutterComp::Off)
-                    && let Err(k) = self.mach.comp_move(words, self.mach.modal.motion)
-                {
-                    return Err(self.error(k, file, start, start));
+                self.move_to(env, words, axis_words, w.l, motion_before.is_canned_cycle());
+                if self.comp.is_some() || self.modal.cutter_comp != CutterComp::Off {
+                    self.comp_move(words, self.modal.motion)?;
                 }
             }
         }
         Ok(())
     }
 
-    /// M6 or M61: the standalone reference takes the position from its last
-    /// move, which misses a tool length offset changed since (the machine
-    /// does not move).
-    fn tool_change_sync(&mut self) {
-        if self.mach.tlo_moved {
-            let line = self.line_no();
-            self.mach.standalone_drift = Some((
+    /// M6 or M61 on `line`: the standalone reference takes the position
+    /// from its last move, which misses a tool length offset changed since
+    /// (the machine does not move).
+    fn tool_change_sync(&mut self, line: u32) {
+        if self.tlo_moved {
+            self.standalone_drift = Some((
                 "a tool change after the tool length offset changed without a move",
                 line,
             ));
         }
     }
 
-    /// A read of the position after the standalone reference's position
-    /// departed from the machine's: warning W0110 at the read.
-    pub(in crate::eval) fn note_standalone_drift(&mut self, span: crate::parse::ast::Span) {
-        if let Some((why, line)) = self.mach.standalone_drift {
-            self.warn_standalone(why, line, span);
-        }
+    /// A read of the current tool (`data`: or of its data) after M61,
+    /// which the standalone reference does not apply, if the value differs
+    /// there: the line of the M61.
+    pub(in crate::eval) fn m61_read_differs(&self, data: bool) -> Option<u32> {
+        let (line, old) = self.m61?;
+        (old != self.tools.current
+            && (!data
+                || old.and_then(|t| self.tool(t)) != self.tools.current.and_then(|t| self.tool(t))))
+        .then_some(line)
     }
 
-    /// Warning W0110 at `span` of the current line.
-    fn warn_standalone(&mut self, why: &'static str, line: u32, span: crate::parse::ast::Span) {
-        let file = self.flow.cur.file.clone();
-        let at = self.reader.line_start;
-        self.warn(
-            crate::diag::WarningKind::QuirkStandalone { why, line },
-            &file,
-            at + span.start,
-            at + span.end,
-        );
-    }
-
-    /// A read of the current tool (`data`: or of its data) after M61, which
-    /// the standalone reference does not apply: warning W0110 at the read if
-    /// the value differs there.
-    pub(in crate::eval) fn note_m61(&mut self, span: crate::parse::ast::Span, data: bool) {
-        if let Some((line, old)) = self.mach.m61
-            && (old != self.mach.tools.current
-                && (!data
-                    || old.and_then(|t| self.tool(t))
-                        != self.mach.tools.current.and_then(|t| self.tool(t))))
-        {
-            let why = "M61 (the standalone interpreter keeps its current tool)";
-            self.warn_standalone(why, line, span);
-        }
-    }
-
-    pub(in crate::eval) fn set_units(&mut self, units: Units) {
-        if self.mach.modal.units == units {
+    /// G20 or G21 (`units`) on `line`: the position is converted.
+    pub(in crate::eval) fn set_units(&mut self, line: u32, units: Units) {
+        if self.modal.units == units {
             return;
         }
-        if self.mach.tlo.is_some_and(|t| t.iter().any(|&v| v != 0.0)) {
-            let line = self.line_no();
-            self.mach.standalone_drift = Some((
+        if self.tlo.is_some_and(|t| t.iter().any(|&v| v != 0.0)) {
+            self.standalone_drift = Some((
                 "a change of units with a tool length offset in effect",
                 line,
             ));
@@ -599,58 +588,71 @@ impl Interp<'_> {
             Units::Inch => 1.0 / 25.4,
         };
         for (a, lin) in LINEAR.iter().enumerate() {
-            if *lin && let Ok(p) = &mut self.mach.pos.axes[a] {
+            if *lin && let Ok(p) = &mut self.pos.axes[a] {
                 *p *= f;
             }
         }
-        self.mach.modal.units = units;
-        self.mach.comp_units(units);
+        self.modal.units = units;
+        self.comp_units(units);
     }
 
-    pub(in crate::eval) fn select_cs(&mut self, cs: CoordSystem) {
-        let machine: Vec<Option<f64>> = (0..9).map(|a| self.machine_pos(a)).collect();
-        self.mach.modal.coord = cs;
-        self.params.assign(5220, cs.0 as f64);
+    /// G54–G59.3 (`cs`): the position moves to the new system's
+    /// coordinates; `#5220` says which system is active.
+    pub(in crate::eval) fn select_cs(&mut self, env: &mut Env<'_>, cs: CoordSystem) {
+        let machine = self.machine_all(env);
+        self.modal.coord = cs;
+        env.params.assign(5220, cs.0 as f64);
         for (a, m) in machine.into_iter().enumerate() {
-            if self.mach.pos.axes[a].is_ok() {
-                self.set_from_machine(a, m, "a coordinate system change");
+            if self.pos.axes[a].is_ok() {
+                self.set_from_machine(env, a, m, "a coordinate system change");
             }
         }
     }
 
-    fn g10(&mut self, l: Option<f64>, p: Option<f64>, r: Option<f64>, axis_words: &[(usize, f64)]) {
+    /// G10 L2 or L20 (and G10 L1, L10, L11, which change no position).
+    fn g10(
+        &mut self,
+        env: &mut Env<'_>,
+        l: Option<f64>,
+        p: Option<f64>,
+        r: Option<f64>,
+        axis_words: &[(usize, f64)],
+    ) {
         let l = l.map(|v| v.round() as i32);
         let cs = match p.map(|v| v.round() as i32) {
-            Some(0) | None => self.mach.modal.coord,
+            Some(0) | None => self.modal.coord,
             Some(n) => CoordSystem(n.clamp(1, 9) as u8),
         };
         let base = cs.parameters();
-        let active = cs == self.mach.modal.coord;
+        let active = cs == self.modal.coord;
         match l {
             Some(2) | Some(20) => {
                 if r.is_some_and(|r| r != 0.0) {
                     // XY rotation is not modelled: positions become unknown.
-                    self.mach.rotated = true;
-                    self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "an XY rotation (G10 R)");
+                    self.rotated = true;
+                    let what = "an XY rotation (G10 R)";
+                    self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], what, env.line);
                 }
                 for &(a, v) in axis_words {
-                    let m = self.machine_pos(a);
+                    let m = self.machine_pos(env.s, env.params, a);
                     let new_off = if l == Some(2) {
                         Some(v)
                     } else {
-                        m.zip(self.g92_offset(a)).map(|(m, g)| m - g - v)
+                        m.zip(self.g92_offset(env.s, env.params, a))
+                            .map(|(m, g)| m - g - v)
                     };
-                    self.set_param_prog(base + a, a, new_off);
+                    self.set_param_prog(env, base + a, a, new_off);
                     if active {
                         if l == Some(20) {
-                            self.mach.pos.axes[a] = Ok(v);
+                            self.pos.axes[a] = Ok(v);
                         } else {
-                            self.set_from_machine(a, m, "G10 L2 on the active coordinate system");
+                            let what = "G10 L2 on the active coordinate system";
+                            self.set_from_machine(env, a, m, what);
                         }
                     }
                 }
                 if let Some(r) = r {
-                    self.params.assign(base + 9, r);
+                    env.params.assign(base + 9, r);
                 }
             }
             _ => {
@@ -662,89 +664,98 @@ impl Interp<'_> {
     /// G38.x: results only the machine knows. With --zero-start, as the
     /// standalone interpreter: the probe does not trip, #5061.. hold the
     /// target, and the position is the target backed off 0.254 mm.
-    fn probe(&mut self, axis_words: &[(usize, f64)]) {
-        if !self.s.zero_start {
-            self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "a probing move");
+    fn probe(&mut self, env: &mut Env<'_>, axis_words: &[(usize, f64)]) {
+        let line = env.line;
+        if !env.s.zero_start {
+            self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "a probing move", line);
             for i in 5061..=5070 {
-                self.params.known[i] = false;
+                env.params.known[i] = false;
             }
-            self.mach.probed_at = Some(self.line_no());
+            self.probed_at = Some(line);
             return;
         }
         let start: [Option<f64>; 9] =
-            std::array::from_fn(|a| self.mach.pos.axes[a].as_ref().ok().copied());
+            std::array::from_fn(|a| self.pos.axes[a].as_ref().ok().copied());
         let mut target = start;
         for &(a, v) in axis_words {
-            target[a] = self.mach.axis_end(a, v).ok();
+            target[a] = self.axis_end(a, v).ok();
         }
-        let end = probe_end(start, target, self.mach.modal.probe_backoff());
-        let line = self.line_no();
+        let end = probe_end(start, target, self.modal.probe_backoff());
         for a in 0..9 {
             match target[a] {
-                Some(t) => self.params.assign(5061 + a, t),
-                None => self.params.known[5061 + a] = false,
+                Some(t) => env.params.assign(5061 + a, t),
+                None => env.params.known[5061 + a] = false,
             }
-            self.mach.pos.axes[a] = end[a].ok_or(Unknown::After("a probing move", line));
+            self.pos.axes[a] = end[a].ok_or(Unknown::After("a probing move", line));
         }
-        self.params.assign(5070, 0.0);
+        env.params.assign(5070, 0.0);
     }
 
     /// The line's move to its axis words in the motion mode (`l`: its L
     /// word; `series`: the mode was a canned cycle before the line).
     fn move_to(
         &mut self,
+        env: &mut Env<'_>,
         words: &[(u8, f64)],
         axis_words: &[(usize, f64)],
         l: Option<f64>,
         series: bool,
     ) {
-        self.mach.tlo_moved = false;
-        if self.mach.rotated {
-            self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "an XY rotation (G10 R)");
+        let line = env.line;
+        self.tlo_moved = false;
+        if self.rotated {
+            self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "an XY rotation (G10 R)", line);
             return;
         }
-        let motion = self.mach.modal.motion;
+        let motion = self.modal.motion;
         use MotionMode as M;
         match motion {
-            M::Probe(_) => self.probe(axis_words),
+            M::Probe(_) => self.probe(env, axis_words),
             M::Cycle(_) => {
-                self.mach.cycle_end(axis_words, l, series);
+                self.cycle_end(axis_words, l, series);
                 if polar_words(words).is_some() {
                     // Polar holes are not followed.
-                    self.forget(&[0, 1], "a canned cycle with polar coordinates");
+                    self.forget(&[0, 1], "a canned cycle with polar coordinates", line);
                 }
             }
             M::ThreadCycle | M::Thread | M::RigidTap => {
                 // Threading ends at positions that depend on retract rules
                 // and machine state.
                 let axes: Vec<usize> = axis_words.iter().map(|a| a.0).collect();
-                self.forget(&axes, "a canned cycle or threading move");
+                self.forget(&axes, "a canned cycle or threading move", line);
                 if motion == M::ThreadCycle {
-                    self.forget(&[2], "a canned cycle");
+                    self.forget(&[2], "a canned cycle", line);
                 }
             }
             _ => {
                 // With compensation on this is the programmed position,
                 // which is what the reference reads missing words from.
                 for &(a, v) in axis_words {
-                    self.mach.move_axis(a, v);
+                    self.move_axis(a, v);
                 }
                 if polar_words(words).is_some() {
-                    let line = self.line_no();
                     let why = Unknown::After("a move by polar coordinates", line);
-                    let [x, y] = self
-                        .mach
-                        .polar_xy(words)
-                        .map_or([None, None], |p| p.map(Some));
-                    self.mach.pos.axes[0] = x.ok_or(why.clone());
-                    self.mach.pos.axes[1] = y.ok_or(why);
+                    let [x, y] = self.polar_xy(words).map_or([None, None], |p| p.map(Some));
+                    self.pos.axes[0] = x.ok_or(why.clone());
+                    self.pos.axes[1] = y.ok_or(why);
                 }
             }
         }
     }
 }
 
-/// A line's words as `apply_words` gathers them in its first pass, with
+/// Before G92 or G52 writes the offset parameters: axes without a word
+/// keep the offsets in effect, which are none after G92.2 (whose
+/// parameters still hold the old values).
+fn keep_active_g92(params: &mut Params) {
+    if !params.g92_applied() {
+        for a in 0..9 {
+            params.assign(5211 + a, 0.0);
+        }
+    }
+}
+
+/// A line's words as `apply_codes` gathers them in its first pass, with
 /// its codes as the checks decoded them.
 struct LineWords<'c> {
     codes: &'c LineCodes,
@@ -815,7 +826,7 @@ impl Machine {
     /// The common line (G0/G1, axis, F and S words, each at most once) in
     /// a plain state: as the general update below, in a few steps. False
     /// leaves the state untouched.
-    fn apply_simple(&mut self, words: &[(u8, f64)]) -> bool {
+    pub(in crate::eval) fn apply_simple(&mut self, words: &[(u8, f64)]) -> bool {
         if self.rotated || self.modal.cutter_comp != CutterComp::Off || self.comp_pending {
             return false;
         }
@@ -961,136 +972,5 @@ impl Machine {
             _ => {}
         }
         Ok(())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use std::rc::Rc;
-    use std::sync::Arc;
-
-    use crate::codes::{
-        ArcDistance, CutterComp, Distance, FeedMode, MotionMode, Plane, SpindleDir, Units,
-    };
-    use crate::emit::{Destination, MemoryOut, Sink};
-    use crate::eval::read::validate::check_block;
-    use crate::eval::{Interp, Settings};
-    use crate::modes::Modes;
-    use crate::program::{FileIndex, Loader, SearchPath, SourceFile};
-
-    /// A line's words: `G80 G1 X1` → g 80, g 1, x 1.
-    fn words(line: &str) -> Vec<(u8, f64)> {
-        line.split_whitespace()
-            .map(|w| {
-                let v = w[1..].parse().expect("a number");
-                (w.as_bytes()[0].to_ascii_lowercase(), v)
-            })
-            .collect()
-    }
-
-    /// Checks and applies each line in a fresh evaluator, as the reader
-    /// does; returns the modes before and after, and whether the last line
-    /// ended the program.
-    fn run(s: &Settings, lines: &[&str], see: impl FnOnce(&Interp<'_>)) -> (Modes, Modes, bool) {
-        let src = SourceFile::new("<t>".into(), "<t>".into(), Vec::new());
-        let main = Rc::new(FileIndex::build(Arc::new(src)));
-        let sink = Sink::new(Destination::Memory(MemoryOut::default())).expect("sink");
-        let loader = Loader::new(SearchPath::default(), None);
-        let mut it = Interp::new(s, loader, main.clone(), sink);
-        let before = it.mach.modal.clone();
-        let mut ends = false;
-        for line in lines {
-            let w = words(line);
-            let m = &it.mach;
-            let checked = check_block(&w, &m.modal, &m.nurbs, &m.cycle, s.user_m)
-                .unwrap_or_else(|e| panic!("{line}: {e:?}"));
-            ends = it
-                .apply_words(&main, 0, &w, &checked, false)
-                .unwrap_or_else(|e| panic!("{line}: {e:?}"));
-        }
-        see(&it);
-        (before, it.mach.modal.clone(), ends)
-    }
-
-    /// The state after lines whose G and M codes the checks decode (G80
-    /// beside another motion code, several codes of a line, M codes in
-    /// order, the fast acceptance's G0/G1 applied on the general path)
-    /// is the one their codes give: the update acts on the checks' codes.
-    #[test]
-    fn the_update_acts_on_the_codes_the_checks_decoded() {
-        type Want = fn(&mut Modes);
-        let cases: &[(&[&str], bool, Want)] = &[
-            (&["G80 G1 X1 F10"], false, |m| {
-                m.motion = MotionMode::Linear;
-                m.feed = 10.0;
-            }),
-            (&["G1 G80 X1 F10"], false, |m| {
-                m.motion = MotionMode::Linear;
-                m.feed = 10.0;
-            }),
-            (&["G80 G0 X2"], false, |m| m.motion = MotionMode::Rapid),
-            (&["G1 F5", "G80"], false, |m| {
-                m.motion = MotionMode::CancelCycle;
-                m.feed = 5.0;
-            }),
-            (&["G0 G90.1 X1"], false, |m| {
-                m.motion = MotionMode::Rapid;
-                m.arc_distance = ArcDistance::Absolute;
-            }),
-            (&["G91 G0 Z1"], false, |m| {
-                m.motion = MotionMode::Rapid;
-                m.distance = Distance::Incremental;
-            }),
-            (&["G18 G20 G93 G1 X1 F2"], false, |m| {
-                m.motion = MotionMode::Linear;
-                m.plane = Plane::XZ;
-                m.units = Units::Inch;
-                m.feed_mode = FeedMode::InverseTime;
-                m.feed = 2.0;
-            }),
-            (&["M3 M8"], false, |m| {
-                m.spindle = SpindleDir::Cw;
-                m.flood = true;
-            }),
-            (&["M4 M7", "M9 M5"], false, |_| {}),
-            (&["M50 P0"], false, |m| m.feed_override = false),
-            (&["G91 M4 M7 S100", "M2"], true, |m| {
-                m.speed = 100.0;
-                m.end_of_program();
-            }),
-            // G0 taken by the fast acceptance and applied by the general
-            // update (compensation is on).
-            (&["G41.1 D1 G1 X1 F10", "G0 X5"], false, |m| {
-                m.motion = MotionMode::Rapid;
-                m.cutter_comp = CutterComp::DynamicLeft;
-                m.feed = 10.0;
-            }),
-        ];
-        let s = Settings::default();
-        for &(lines, want_end, want) in cases {
-            let (before, after, ends) = run(&s, lines, |_| {});
-            let mut expected = before;
-            want(&mut expected);
-            assert_eq!(after, expected, "{lines:?}");
-            assert_eq!(ends, want_end, "{lines:?}");
-        }
-    }
-
-    /// A T word selects the tool an M6 on its line loads, before or after
-    /// it; M61 sets the tool of its Q.
-    #[test]
-    fn tool_codes_act_in_line_order() {
-        let s = Settings::default();
-        let tool = |lines: &[&str]| {
-            let mut t = None;
-            run(&s, lines, |it| t = it.mach.tools.current);
-            t
-        };
-        assert_eq!(tool(&["T2 M6"]), Some(2.0));
-        assert_eq!(tool(&["M6 T2"]), Some(2.0));
-        assert_eq!(tool(&["T2", "M6"]), Some(2.0));
-        assert_eq!(tool(&["Q3 M61"]), Some(3.0));
-        assert_eq!(tool(&["M61 Q3"]), Some(3.0));
-        assert_eq!(tool(&["T4 M8"]), None);
     }
 }

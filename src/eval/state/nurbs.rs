@@ -3,10 +3,8 @@
 //! -1). The points survive a switch to another motion until the next G5.2,
 //! as in the reference, whose checks depend on how many are pending.
 
+use super::{Machine, Unknown};
 use crate::codes::{CutterComp, MotionMode};
-use crate::eval::Interp;
-use crate::eval::state::Machine;
-use crate::eval::state::Unknown;
 
 /// Motion mode of a NURBS block (G5.2).
 pub(crate) const NURBS: MotionMode = MotionMode::Nurbs;
@@ -44,26 +42,24 @@ impl Nurbs {
     }
 }
 
-impl Interp<'_> {
-    /// G5.3 (checked by `check_block`): the move to the last control
-    /// point.
-    pub(in crate::eval) fn nurbs_end(&mut self) {
+impl Machine {
+    /// G5.3 on `line` (checked by `check_block`): the move to the last
+    /// control point.
+    pub(in crate::eval) fn nurbs_end(&mut self, line: u32) {
         let [x, y] = std::mem::replace(
-            &mut self.mach.nurbs.last,
+            &mut self.nurbs.last,
             [Err(Unknown::Start), Err(Unknown::Start)],
         );
-        self.mach.nurbs.points = 0;
-        self.mach.modal.motion = NO_MOTION;
-        if self.mach.rotated || self.mach.modal.cutter_comp != CutterComp::Off {
-            self.forget(&[0, 1], "a NURBS block");
+        self.nurbs.points = 0;
+        self.modal.motion = NO_MOTION;
+        if self.rotated || self.modal.cutter_comp != CutterComp::Off {
+            self.forget(&[0, 1], "a NURBS block", line);
         } else {
-            self.mach.pos.axes[0] = x;
-            self.mach.pos.axes[1] = y;
+            self.pos.axes[0] = x;
+            self.pos.axes[1] = y;
         }
     }
-}
 
-impl Machine {
     /// A G5.2 block (on the line, or modal with axis words; checked by
     /// `check_block`): the control point. `motion_before` is the motion mode
     /// the line found.

@@ -7,6 +7,7 @@ use crate::diag::{Error, ErrorKind};
 use crate::parse::ast::Span;
 use crate::program::FileIndex;
 
+use super::Env;
 use crate::codes::{CutterComp, GCode, SpindleDir, SpindleMode};
 use crate::eval::Interp;
 use crate::modes::Modes;
@@ -143,15 +144,21 @@ impl Interp<'_> {
             self.emit_raw(if *g92_applied { b"G92.3" } else { b"G92.2" })?;
         }
         // The position model follows what those words do.
-        self.set_units(saved.units);
+        let line = self.reader.line_idx + 1;
+        let mut env = Env {
+            s: self.s,
+            params: &mut self.params,
+            line,
+        };
+        self.mach.set_units(line, saved.units);
         if cur.coord != saved.coord {
-            self.select_cs(saved.coord);
+            self.mach.select_cs(&mut env, saved.coord);
         }
         if cur.tool_length.in_effect() != tool_offset {
-            self.tool_offset_words(tool_offset);
+            self.mach.tool_offset_words(&env, tool_offset);
         }
         if *g92_applied != g92_now {
-            self.g92_switch(*g92_applied);
+            self.mach.g92_switch(&mut env, *g92_applied);
         }
         // Coolant: turn on what was on; M9 only when both were off.
         if saved.mist && !cur.mist {

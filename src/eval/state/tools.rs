@@ -3,10 +3,9 @@
 //! by the program itself (G10 L1/L10/L11). Tool data is kept in machine
 //! units, as LinuxCNC stores it.
 
+use super::{AXES, Env, Machine, Unknown};
 use crate::codes::{CoordSystem, SpindleDir};
-use crate::eval::state::Machine;
-use crate::eval::state::Unknown;
-use crate::eval::{Interp, Settings};
+use crate::eval::settings::Settings;
 use crate::fx_hasher::FxMap;
 use crate::modes::Modes;
 
@@ -136,7 +135,7 @@ pub fn parse_tool_table(text: &str) -> Result<Vec<(i64, ToolData)>, String> {
                 "i" => data.front = v,
                 "j" => data.back = v,
                 "q" => data.orientation = v,
-                l => match crate::eval::state::AXES
+                l => match AXES
                     .iter()
                     .position(|&c| c as char == l.chars().next().unwrap_or(' '))
                 {
@@ -153,19 +152,19 @@ pub fn parse_tool_table(text: &str) -> Result<Vec<(i64, ToolData)>, String> {
     Ok(out)
 }
 
-impl Interp<'_> {
+impl Machine {
     /// Data of a tool, if the program can know it.
     pub(in crate::eval) fn tool(&self, t: f64) -> Option<ToolData> {
         let t = t.round() as i64;
-        if self.diags.unknown_tools.contains(&t) {
+        if self.unknown_tools.contains(&t) {
             return None;
         }
-        self.mach.tools.data(t)
+        self.tools.data(t)
     }
 
     /// A tool-data parameter #5400..#5413.
     pub(in crate::eval) fn tool_param(&self, i: usize) -> Option<f64> {
-        let current = self.mach.tools.current?;
+        let current = self.tools.current?;
         if i == 5400 {
             return Some(current);
         }
@@ -180,26 +179,33 @@ impl Interp<'_> {
     }
 
     /// Applies a new tool length offset (machine units), moving the
-    /// program position the other way.
-    pub(in crate::eval) fn set_tlo(&mut self, new: Option<[f64; 9]>, what: &'static str) {
-        let line = self.reader.line_idx + 1;
+    /// program position the other way (`what` on `line`: why it becomes
+    /// unknown where it does).
+    pub(in crate::eval) fn set_tlo(
+        &mut self,
+        s: &Settings,
+        line: u32,
+        new: Option<[f64; 9]>,
+        what: &'static str,
+    ) {
         for a in 0..9 {
-            let f = self.to_prog(a);
-            let ok = match (&self.mach.pos.axes[a], self.mach.tlo, new) {
+            let f = self.to_prog(s, a);
+            let ok = match (&self.pos.axes[a], self.tlo, new) {
                 (Ok(p), Some(old), Some(n)) => Some(p + (old[a] - n[a]) * f),
                 _ => None,
             };
-            self.mach.pos.axes[a] = ok.ok_or(Unknown::After(what, line));
+            self.pos.axes[a] = ok.ok_or(Unknown::After(what, line));
         }
-        if new != self.mach.tlo {
-            self.mach.tlo_moved = true;
+        if new != self.tlo {
+            self.tlo_moved = true;
         }
-        self.mach.tlo = new;
+        self.tlo = new;
     }
 
     /// G10 L1/L10/L11: the program writes the tool table.
     pub(in crate::eval) fn g10_tool(
         &mut self,
+        env: &Env<'_>,
         l: i32,
         p: Option<f64>,
         r: Option<f64>,
@@ -211,31 +217,32 @@ impl Interp<'_> {
         };
         let mut d = self.tool(t as f64);
         for &(a, v) in axis_words {
-            let f = self.to_prog(a);
+            let f = self.to_prog(env.s, a);
             let value = match l {
                 1 => Some(v),
-                10 => self.mach.pos.axes[a]
+                10 => self.pos.axes[a]
                     .as_ref()
                     .ok()
-                    .zip(self.mach.tlo)
+                    .zip(self.tlo)
                     .map(|(pos, tlo)| pos + tlo[a] * f - v),
                 _ => {
                     // L11: relative to G59.3 instead of the current system.
-                    let cur = self.mach.modal.coord;
-                    let g5x = |cs: CoordSystem, this: &Self| {
-                        this.params.known[cs.parameters() + a]
-                            .then(|| this.params.values[cs.parameters() + a] * f)
+                    let cur = self.modal.coord;
+                    let params = &*env.params;
+                    let g5x = |cs: CoordSystem| {
+                        params.known[cs.parameters() + a]
+                            .then(|| params.values[cs.parameters() + a] * f)
                     };
-                    let g92 = if self.params.values[5210] == 0.0 {
+                    let g92 = if params.values[5210] == 0.0 {
                         Some(0.0)
                     } else {
-                        self.params.known[5211 + a].then(|| self.params.values[5211 + a] * f)
+                        params.known[5211 + a].then(|| params.values[5211 + a] * f)
                     };
                     match (
-                        self.mach.pos.axes[a].as_ref().ok(),
-                        self.mach.tlo,
-                        g5x(cur, self),
-                        g5x(CoordSystem(9), self),
+                        self.pos.axes[a].as_ref().ok(),
+                        self.tlo,
+                        g5x(cur),
+                        g5x(CoordSystem(9)),
                         g92,
                     ) {
                         (Some(pos), Some(tlo), Some(oc), Some(o9), Some(g)) => {
@@ -261,15 +268,15 @@ impl Interp<'_> {
             }
         }
         if let (Some(r), Some(data)) = (r, d.as_mut()) {
-            data.diameter = 2.0 * r / self.to_prog(0);
+            data.diameter = 2.0 * r / self.to_prog(env.s, 0);
         }
         match d {
             Some(data) => {
-                self.mach.tools.table.insert(t, data);
+                self.tools.table.insert(t, data);
             }
             None => {
-                self.mach.tools.table.remove(&t);
-                self.diags.unknown_tools.insert(t);
+                self.tools.table.remove(&t);
+                self.unknown_tools.insert(t);
             }
         }
     }
