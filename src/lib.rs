@@ -20,7 +20,7 @@ mod flatten;
 mod fx_hasher;
 pub mod geom;
 mod library;
-pub mod machine;
+mod machine;
 mod modes;
 mod number;
 pub mod parse;

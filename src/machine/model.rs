@@ -32,7 +32,7 @@ const ZERO: MaybeAxes = [Some(0.0); 9];
 
 /// The machine state a flat program runs on.
 #[derive(Debug, Clone)]
-pub struct Machine {
+pub(crate) struct Machine {
     pub modes: Modes,
     /// Tool-tip position in the active work coordinates, mm.
     pub pos: MaybeAxes,
@@ -80,7 +80,7 @@ fn numbered(settings: &Settings) -> FxMap<usize, f64> {
 
 impl Machine {
     /// The machine at the start of a program run with `settings`.
-    pub fn new(settings: &Settings) -> Machine {
+    pub(crate) fn new(settings: &Settings) -> Machine {
         let zs = settings.zero_start;
         let base = if zs { ZERO } else { UNKNOWN };
         let mu = if settings.machine_metric {
@@ -134,7 +134,7 @@ impl Machine {
 
     /// A copy of the state without the tool table and the pending events
     /// (cheap: no allocation), for comparing before and after a block.
-    pub fn snapshot(&self) -> Machine {
+    pub(crate) fn snapshot(&self) -> Machine {
         Machine {
             modes: self.modes.clone(),
             pos: self.pos,
@@ -160,7 +160,7 @@ impl Machine {
     }
 
     /// Millimetres per program unit.
-    pub fn scale(&self) -> f64 {
+    pub(crate) fn scale(&self) -> f64 {
         match self.modes.units {
             Units::Mm => 1.0,
             Units::Inch => MM_PER_INCH,
@@ -168,7 +168,7 @@ impl Machine {
     }
 
     /// Millimetres per machine unit (offsets and tool data).
-    pub fn machine_scale(&self) -> f64 {
+    pub(crate) fn machine_scale(&self) -> f64 {
         if self.machine_metric {
             1.0
         } else {
@@ -178,7 +178,7 @@ impl Machine {
 
     /// The offset from work to machine coordinates (G5x, G92/G52 if applied,
     /// tool length), per axis.
-    pub fn offset(&self) -> MaybeAxes {
+    pub(crate) fn offset(&self) -> MaybeAxes {
         let cs = &self.g5x[self.modes.coord.index()];
         std::array::from_fn(|a| {
             let g92 = match self.g92_applied {
@@ -191,23 +191,23 @@ impl Machine {
     }
 
     /// The position in machine coordinates (controlled point), per axis.
-    pub fn machine_pos(&self) -> MaybeAxes {
+    pub(crate) fn machine_pos(&self) -> MaybeAxes {
         let off = self.offset();
         std::array::from_fn(|a| Some(self.pos[a]? + off[a]?))
     }
 
     /// The tool in the spindle, if known, as a whole number.
-    pub fn current_tool(&self) -> Option<i64> {
+    pub(crate) fn current_tool(&self) -> Option<i64> {
         self.tools.current.map(|t| t.round() as i64)
     }
 
     /// The tool the last T word selected, as a whole number.
-    pub fn selected_tool(&self) -> Option<i64> {
+    pub(crate) fn selected_tool(&self) -> Option<i64> {
         self.tools.selected.map(|t| t.round() as i64)
     }
 
     /// Tool data of tool `t` in mm, if known.
-    pub fn tool(&self, t: i64) -> Option<ToolData> {
+    pub(crate) fn tool(&self, t: i64) -> Option<ToolData> {
         let s = self.machine_scale();
         let d = match self.tools.data(t) {
             Some(d) => d,
@@ -225,7 +225,7 @@ impl Machine {
 
     /// Stops recording motion events ([`Machine::take_events`] then gives
     /// none); the state is followed as before.
-    pub fn without_events(mut self) -> Machine {
+    pub(crate) fn without_events(mut self) -> Machine {
         self.record = false;
         self
     }
@@ -237,7 +237,7 @@ impl Machine {
     }
 
     /// Takes the motion events made since the last call.
-    pub fn take_events(&mut self) -> std::vec::Drain<'_, Motion> {
+    pub(crate) fn take_events(&mut self) -> std::vec::Drain<'_, Motion> {
         self.events.drain(..)
     }
 
@@ -277,7 +277,7 @@ impl Machine {
     }
 
     /// Applies one decoded block in LinuxCNC's order of execution.
-    pub fn apply(&mut self, b: &Block) {
+    pub(crate) fn apply(&mut self, b: &Block) {
         if !self.record && b.is_plain_move() && self.plain_motion(b.motion()) {
             self.apply_plain_move(b);
             return;
@@ -307,7 +307,7 @@ impl Machine {
     /// changes nothing the model keeps when it records no motion): false
     /// (nothing done) when the model records motion or the motion is
     /// another.
-    pub fn apply_plain_motion(
+    pub(crate) fn apply_plain_motion(
         &mut self,
         motion: Option<MotionMode>,
         f: Option<f64>,

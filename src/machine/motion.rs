@@ -16,21 +16,22 @@ pub(crate) type Axes = [f64; 9];
 /// controlled point (work + offset = machine coordinates, tool length offset
 /// included) when every offset is known.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Point {
+pub(crate) struct Point {
     pub work: Axes,
     pub offset: Option<Axes>,
 }
 
 impl Point {
     /// Machine coordinates of the controlled point, when known.
-    pub fn machine(&self) -> Option<Axes> {
+    #[cfg(test)]
+    pub(crate) fn machine(&self) -> Option<Axes> {
         self.offset
             .map(|o| std::array::from_fn(|i| self.work[i] + o[i]))
     }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum MoveKind {
+pub(crate) enum MoveKind {
     Rapid,
     Feed,
     /// G38.x: the end point is where the probe would stop at the latest.
@@ -40,14 +41,14 @@ pub enum MoveKind {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Feed {
+pub(crate) struct Feed {
     /// mm/min, mm/rev, or 1/min in inverse time.
     pub rate: f64,
     pub mode: FeedMode,
 }
 
 #[derive(Debug, Clone, PartialEq)]
-pub enum Motion {
+pub(crate) enum Motion {
     /// A straight move (all axes together).
     Line {
         kind: MoveKind,
