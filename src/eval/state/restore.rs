@@ -1,15 +1,9 @@
 //! M70–M73: saving modal state and bringing it back with explicit words,
 //! since the controllers ngcflat writes for do not know these codes.
 
-use std::rc::Rc;
-
-use crate::diag::{Error, ErrorKind};
-use crate::parse::ast::Span;
-use crate::program::FileIndex;
-
-use super::Env;
+use super::{Env, Machine};
 use crate::codes::{CutterComp, GCode, SpindleDir, SpindleMode};
-use crate::eval::Interp;
+use crate::eval::expr::params::Params;
 use crate::modes::Modes;
 
 /// The state M70 or M73 saves: the modal state, and whether G92 offsets
@@ -20,65 +14,40 @@ pub(crate) struct Saved {
     pub g92_applied: bool,
 }
 
-impl Interp<'_> {
-    /// M70 save, M71 invalidate, M72 restore, M73 save and restore on return.
-    pub(in crate::eval) fn context_op(
-        &mut self,
-        op: u8,
-        file: &Rc<FileIndex>,
-        start: u32,
-        span: Span,
-    ) -> Result<(), Error> {
-        match op {
-            70 | 73 => {
-                let m = Saved {
-                    modal: self.mach.modal.clone(),
-                    g92_applied: self.params.g92_applied(),
-                };
-                let nested = self.flow.frames.len() > 1;
-                let f = self.flow.frames.last_mut().expect("frame");
-                f.saved_modal = Some(Box::new(m));
-                f.auto_restore = op == 73 && nested;
-            }
-            71 => {
-                let f = self.flow.frames.last_mut().expect("frame");
-                f.saved_modal = None;
-                f.auto_restore = false;
-            }
-            _ => {
-                let saved = self
-                    .flow
-                    .frames
-                    .last()
-                    .and_then(|f| f.saved_modal.as_deref().cloned());
-                match saved {
-                    Some(m) => self.restore_modal(&m)?,
-                    None => {
-                        return Err(self.error_in_line(
-                            ErrorKind::NoSavedContext,
-                            file,
-                            start,
-                            span,
-                        ));
-                    }
-                }
-            }
+/// The lines that bring the machine back to a saved state: those written
+/// before the position model follows them, then the coolant's.
+pub(in crate::eval) struct RestoreLines {
+    pub(in crate::eval) before: Vec<String>,
+    pub(in crate::eval) coolant: Vec<&'static [u8]>,
+}
+
+impl Machine {
+    /// What M70 or M73 saves (`params`: whether the G92 offsets apply).
+    pub(in crate::eval) fn save(&self, params: &Params) -> Saved {
+        Saved {
+            modal: self.modal.clone(),
+            g92_applied: params.g92_applied(),
         }
-        Ok(())
     }
 
-    /// Writes the words that bring the machine from the current state to
-    /// `saved`, and adopts it, moving the position model as those words do.
-    /// Writes nothing if nothing changed.
-    pub(in crate::eval) fn restore_modal(&mut self, saved: &Saved) -> Result<(), Error> {
+    /// The lines that bring the machine from the current state to `saved`
+    /// (`g92_now`: whether the G92 offsets apply now; `precision`: of the
+    /// numbers written); none where nothing changed.
+    pub(in crate::eval) fn restore_lines(
+        &self,
+        saved: &Saved,
+        g92_now: bool,
+        precision: Option<u8>,
+    ) -> RestoreLines {
         let Saved {
             modal: saved,
             g92_applied,
         } = saved;
-        let cur = self.mach.modal.clone();
+        let cur = &self.modal;
+        let mut before = Vec::new();
         // Units come first, on their own line, as in the reference.
         if cur.units != saved.units {
-            self.emit_raw(GCode::Units(saved.units).name().as_bytes())?;
+            before.push(GCode::Units(saved.units).name());
         }
         let mut words: Vec<String> = Vec::new();
         if cur.plane != saved.plane {
@@ -120,10 +89,10 @@ impl Interp<'_> {
             String::from_utf8_lossy(&b).into_owned()
         };
         if cur.feed != saved.feed {
-            words.push(format!("F{}", number(saved.feed, self.s.precision)));
+            words.push(format!("F{}", number(saved.feed, precision)));
         }
         if cur.speed != saved.speed {
-            words.push(format!("S{}", number(saved.speed, self.s.precision)));
+            words.push(format!("S{}", number(saved.speed, precision)));
         }
         if cur.spindle != saved.spindle {
             words.push(
@@ -136,52 +105,67 @@ impl Interp<'_> {
             );
         }
         if !words.is_empty() {
-            let line = words.join(" ");
-            self.emit_raw(line.as_bytes())?;
-        }
-        let g92_now = self.params.g92_applied();
-        if *g92_applied != g92_now {
-            self.emit_raw(if *g92_applied { b"G92.3" } else { b"G92.2" })?;
-        }
-        // The position model follows what those words do.
-        let line = self.reader.line_idx + 1;
-        let mut env = Env {
-            s: self.s,
-            params: &mut self.params,
-            line,
-        };
-        self.mach.set_units(line, saved.units);
-        if cur.coord != saved.coord {
-            self.mach.select_cs(&mut env, saved.coord);
-        }
-        if cur.tool_length.in_effect() != tool_offset {
-            self.mach.tool_offset_words(&env, tool_offset);
+            before.push(words.join(" "));
         }
         if *g92_applied != g92_now {
-            self.mach.g92_switch(&mut env, *g92_applied);
+            before.push(if *g92_applied { "G92.3" } else { "G92.2" }.into());
         }
         // Coolant: turn on what was on; M9 only when both were off.
+        let mut coolant: Vec<&'static [u8]> = Vec::new();
         if saved.mist && !cur.mist {
-            self.emit_raw(b"M7")?;
+            coolant.push(b"M7");
         }
         if saved.flood && !cur.flood {
-            self.emit_raw(b"M8")?;
+            coolant.push(b"M8");
         }
         if !saved.mist && !saved.flood && (cur.mist || cur.flood) {
-            self.emit_raw(b"M9")?;
+            coolant.push(b"M9");
         }
-        let motion = self.mach.modal.motion;
+        RestoreLines { before, coolant }
+    }
+
+    /// The position model follows what the lines of
+    /// [`Machine::restore_lines`] do to the units, the coordinate system,
+    /// the tool length offset and the G92 offsets (`g92_now`: whether
+    /// those apply now).
+    pub(in crate::eval) fn restore_offsets(
+        &mut self,
+        env: &mut Env<'_>,
+        saved: &Saved,
+        g92_now: bool,
+    ) {
+        let Saved {
+            modal: saved,
+            g92_applied,
+        } = saved;
+        let (coord, tool_offset) = (self.modal.coord, self.modal.tool_length.in_effect());
+        self.set_units(env.line, saved.units);
+        if coord != saved.coord {
+            self.select_cs(env, saved.coord);
+        }
+        if tool_offset != saved.tool_length.in_effect() {
+            self.tool_offset_words(env, saved.tool_length.in_effect());
+        }
+        if *g92_applied != g92_now {
+            self.g92_switch(env, *g92_applied);
+        }
+    }
+
+    /// Adopts the saved modes (but the motion mode; a coolant the saved
+    /// state had off stays on, unless both were off).
+    pub(in crate::eval) fn restore_modes(&mut self, saved: &Saved) {
+        let saved = &saved.modal;
+        let motion = self.modal.motion;
         let (mist, flood) = (
-            self.mach.modal.mist || saved.mist,
-            self.mach.modal.flood || saved.flood,
+            self.modal.mist || saved.mist,
+            self.modal.flood || saved.flood,
         );
         let both_off = !saved.mist && !saved.flood;
-        self.mach.modal = saved.clone();
-        self.mach.modal.motion = motion;
+        self.modal = saved.clone();
+        self.modal.motion = motion;
         if !both_off {
-            self.mach.modal.mist = mist;
-            self.mach.modal.flood = flood;
+            self.modal.mist = mist;
+            self.modal.flood = flood;
         }
-        Ok(())
     }
 }
