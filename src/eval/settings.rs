@@ -167,9 +167,9 @@ pub fn parse_define(text: &str) -> Result<Define, ErrorKind> {
 pub fn parse_axis_word(word: &str) -> Option<(usize, f64)> {
     let mut chars = word.chars();
     let letter = chars.next()?.to_ascii_lowercase();
-    let axis = super::state::AXES
+    let axis = crate::block::AXIS_LETTERS
         .iter()
-        .position(|&c| c as char == letter)?;
+        .position(|&c| c.to_ascii_lowercase() as char == letter)?;
     let rest = chars.as_str();
     let lower = rest.to_ascii_lowercase();
     let linear = !matches!(letter, 'a' | 'b' | 'c');

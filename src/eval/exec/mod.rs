@@ -11,6 +11,7 @@ mod restore;
 mod words;
 
 // Expression, reading and output steps.
+mod expr;
 
 // Control-flow steps (O-words, calls, returns).
 mod control;

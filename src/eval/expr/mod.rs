@@ -8,12 +8,15 @@ pub(super) mod message;
 pub(super) mod named;
 pub mod params;
 
-use crate::diag::ErrorKind;
+use crate::diag::{ErrorKind, WarningKind};
+use crate::fx_hasher::FxMap;
+use crate::modes::Modes;
+use crate::parse::Name;
 use crate::parse::ast::{BinOp, Expr, ExprKind, Func, ParamRef, Span};
 use crate::parse::integer_value;
 
-use crate::eval::Interp;
-use crate::eval::expr::params::{MAX_PARAM, ParamClass, classify};
+use crate::eval::expr::params::{MAX_PARAM, ParamClass, Params, classify};
+use crate::eval::settings::Settings;
 
 /// EQ/NE tolerance of LinuxCNC 2.9.
 pub(super) const TOLERANCE_EQUAL: f64 = 0.0001;
@@ -180,217 +183,260 @@ pub(super) fn round_half_even_int(x: f64) -> i64 {
     }
 }
 
-impl Interp<'_> {
-    /// Evaluates a value (checked for NaN and infinity).
-    pub(crate) fn eval(&mut self, e: &Expr) -> EvalResult {
-        match &e.kind {
-            ExprKind::Num(v) => check(*v, e.span),
-            ExprKind::Slot(i) => {
-                let i = *i as usize;
-                if self.params.set[i] {
-                    return check(self.params.values[i], e.span);
-                }
-                self.eval_rare(e)
+/// What evaluating an expression reads besides the expression itself, and
+/// the one thing it may change: the warnings. The evaluator implements it
+/// over its parts (`eval/exec/expr.rs`); the evaluation here sees nothing
+/// else.
+pub(in crate::eval) trait Scope {
+    /// The settings (compiled expressions, `--zero-start`, the INI).
+    fn settings(&self) -> &Settings;
+    /// The numbered parameters and the global named ones.
+    fn params(&self) -> &Params;
+    /// The named parameters local to the call being run; `None` in the
+    /// main program, whose locals are the globals.
+    fn locals(&self) -> Option<&FxMap<Name, f64>>;
+    /// The call level (0 in the main program).
+    fn call_level(&self) -> usize;
+    /// Whether a subroutine definition is being read (an unset named
+    /// parameter then reads 0).
+    fn defining(&self) -> bool;
+    /// The value the last call returned (`#<_value>`), and whether it
+    /// returned one (`#<_value_returned>`).
+    fn returned(&self) -> (f64, bool);
+    /// The 0-based index of the line being run.
+    fn line_idx(&self) -> u32;
+    /// The machine model's modal state.
+    fn modes(&self) -> &Modes;
+    /// The tool in the spindle and the selected one, if known.
+    fn tools(&self) -> (Option<f64>, Option<f64>);
+    /// The pockets of those tools, if known.
+    fn pockets(&self) -> Option<(f64, f64)>;
+    /// The current position on an axis, or why it is unknown.
+    fn position(&self, axis: usize, span: Span) -> EvalResult;
+    /// The absolute machine position on an axis with the tool length
+    /// offset, if known.
+    fn abs_position(&self, axis: usize) -> Option<f64>;
+    /// A tool-data parameter #5400..#5413, if known.
+    fn tool_param(&self, i: usize) -> Option<f64>;
+    /// The line of the last G38 probe that left its results unknown.
+    fn probed_at(&self) -> Option<u32>;
+    /// How to make the tool data of the tool in the spindle known.
+    fn tool_data_hint(&self) -> String;
+    /// A read of the position at `span` of the line (a warning if the
+    /// standalone reference's position departed from the machine's).
+    fn note_position_read(&mut self, span: Span);
+    /// A read of the current tool (`data`: of its data) at `span` of the
+    /// line (a warning after an M61 the standalone reference ignores).
+    fn note_tool_read(&mut self, span: Span, data: bool);
+    /// Warning `kind` at `span` of the line being run.
+    fn warn_in_line(&mut self, kind: WarningKind, span: Span);
+}
+
+/// Evaluates a value (checked for NaN and infinity).
+pub(in crate::eval) fn eval(scope: &mut impl Scope, e: &Expr) -> EvalResult {
+    match &e.kind {
+        ExprKind::Num(v) => check(*v, e.span),
+        ExprKind::Slot(i) => {
+            let i = *i as usize;
+            let params = scope.params();
+            if params.set[i] {
+                return check(params.values[i], e.span);
             }
-            ExprKind::Param(p) if let ParamRef::Named(name) = &**p => {
-                let v = self.read_named(name, e.span)?;
-                check(v, e.span)
-            }
-            ExprKind::Code(c) => self.eval_code(c),
-            ExprKind::Neg(inner) => Ok(-self.eval(inner)?),
-            ExprKind::Bin(op, operands, checked) => {
-                let a = self.eval_operand(&operands.0)?;
-                let c = self.eval_operand(&operands.1)?;
-                let v = binary_fast(*op, a, c, e.span)?;
-                if *checked { check(v, e.span) } else { Ok(v) }
-            }
-            _ => self.eval_rare(e),
+            eval_rare(scope, e)
+        }
+        ExprKind::Param(p) if let ParamRef::Named(name) = &**p => {
+            let v = named::read_named(scope, name, e.span)?;
+            check(v, e.span)
+        }
+        ExprKind::Code(c) => eval_code(scope, c),
+        ExprKind::Neg(inner) => Ok(-eval(scope, inner)?),
+        ExprKind::Bin(op, operands, checked) => {
+            let a = eval_operand(scope, &operands.0)?;
+            let c = eval_operand(scope, &operands.1)?;
+            let v = binary_fast(*op, a, c, e.span)?;
+            if *checked { check(v, e.span) } else { Ok(v) }
+        }
+        _ => eval_rare(scope, e),
+    }
+}
+
+/// `eval` with its most common cases, a literal, a set parameter and a
+/// compiled expression, done in the caller.
+#[inline(always)]
+pub(in crate::eval) fn eval_value(scope: &mut impl Scope, e: &Expr) -> EvalResult {
+    match &e.kind {
+        ExprKind::Num(v) => check(*v, e.span),
+        ExprKind::Slot(i) if scope.params().set[*i as usize] => {
+            check(scope.params().values[*i as usize], e.span)
+        }
+        ExprKind::Code(c) => eval_code(scope, c),
+        _ => eval(scope, e),
+    }
+}
+
+/// A compiled expression: the stack machine, or the tree where it gives
+/// up (or is switched off).
+#[inline(always)]
+fn eval_code(scope: &mut impl Scope, c: &crate::parse::code::Code) -> EvalResult {
+    match scope.settings().compiled_exprs {
+        true => match code::run_code(scope, &c.ops) {
+            Some(v) => Ok(v),
+            None => eval(scope, &c.tree),
+        },
+        false => eval(scope, &c.tree),
+    }
+}
+
+/// The less common expression kinds, kept out of `eval` so that its
+/// frame stays small (`eval` does the others itself).
+#[inline(never)]
+fn eval_rare(scope: &mut impl Scope, e: &Expr) -> EvalResult {
+    match &e.kind {
+        ExprKind::Num(_) | ExprKind::Neg(_) | ExprKind::Bin(..) | ExprKind::Code(_) => {
+            eval(scope, e)
+        }
+        ExprKind::Slot(i) => {
+            let v = read_numbered(scope, *i as usize, e.span)?;
+            check(v, e.span)
+        }
+        ExprKind::Param(p) => {
+            let v = read_param(scope, p, e.span)?;
+            check(v, e.span)
+        }
+        ExprKind::Func(f, arg) => {
+            let x = eval(scope, arg)?;
+            check(unary(*f, x, e.span)?, e.span)
+        }
+        ExprKind::Atan(args) => {
+            let y = eval(scope, &args.0)?;
+            let x = eval(scope, &args.1)?;
+            check(crate::eval::expr::degrees::to_degrees(y.atan2(x)), e.span)
+        }
+        ExprKind::Exists(p) => Ok(b(param_exists(scope, p, e.span)?)),
+    }
+}
+
+/// Operand of a binary operation: intermediate results pass unchecked.
+fn eval_operand(scope: &mut impl Scope, e: &Expr) -> EvalResult {
+    match &e.kind {
+        ExprKind::Bin(op, operands, false) => {
+            let a = eval_operand(scope, &operands.0)?;
+            let c = eval_operand(scope, &operands.1)?;
+            binary_fast(*op, a, c, e.span)
+        }
+        _ => eval(scope, e),
+    }
+}
+
+/// Index of a numbered parameter reference.
+pub(in crate::eval) fn param_index(scope: &mut impl Scope, index: &Expr) -> Result<usize, Fault> {
+    // A literal in range (`#2 = ...`), the common case.
+    if let ExprKind::Num(v) = index.kind {
+        let i = v as usize;
+        if i as f64 == v && (1..MAX_PARAM).contains(&i) {
+            return Ok(i);
         }
     }
-
-    /// `eval` with its most common cases, a literal, a set parameter and a
-    /// compiled expression, done in the caller.
-    #[inline(always)]
-    pub(crate) fn eval_value(&mut self, e: &Expr) -> EvalResult {
-        match &e.kind {
-            ExprKind::Num(v) => check(*v, e.span),
-            ExprKind::Slot(i) if self.params.set[*i as usize] => {
-                check(self.params.values[*i as usize], e.span)
-            }
-            ExprKind::Code(c) => self.eval_code(c),
-            _ => self.eval(e),
-        }
+    let v = eval(scope, index)?;
+    let i = integer_value(v).map_err(|k| fault(k, index.span))?;
+    if i < 1 || i >= MAX_PARAM as i64 {
+        return Err(fault(ErrorKind::ParamOutOfRange { index: i }, index.span));
     }
+    Ok(i as usize)
+}
 
-    /// A compiled expression: the stack machine, or the tree where it gives
-    /// up (or is switched off).
-    #[inline(always)]
-    fn eval_code(&mut self, c: &crate::parse::code::Code) -> EvalResult {
-        match self.s.compiled_exprs {
-            true => match self.run_code(&c.ops) {
-                Some(v) => Ok(v),
-                None => self.eval(&c.tree),
+fn read_param(scope: &mut impl Scope, p: &ParamRef, span: Span) -> EvalResult {
+    match p {
+        ParamRef::Numbered(index) => {
+            let i = param_index(scope, index)?;
+            read_numbered(scope, i, span)
+        }
+        ParamRef::Named(name) => named::read_named(scope, name, span),
+    }
+}
+
+pub(in crate::eval) fn read_numbered(scope: &mut impl Scope, i: usize, span: Span) -> EvalResult {
+    // Plain parameters the program has assigned: the common case.
+    if i < 5000 && scope.params().set[i] {
+        return Ok(scope.params().values[i]);
+    }
+    if let ParamClass::Position(axis) = classify(i)
+        && !scope.params().set[i]
+    {
+        scope.note_position_read(span);
+        return scope.position(axis, span);
+    }
+    if let ParamClass::Refreshed(what, why) = classify(i) {
+        if scope.settings().zero_start {
+            return Ok(0.0);
+        }
+        return Err(fault(
+            ErrorKind::RuntimeParam {
+                what: format!("#{i} ({what})"),
+                why: why.to_string(),
+                hint: "--zero-start (reads 0)".to_string(),
             },
-            false => self.eval(&c.tree),
-        }
+            span,
+        ));
     }
-
-    /// The less common expression kinds, kept out of `eval` so that its
-    /// frame stays small (`eval` does the others itself).
-    #[inline(never)]
-    fn eval_rare(&mut self, e: &Expr) -> EvalResult {
-        match &e.kind {
-            ExprKind::Num(_) | ExprKind::Neg(_) | ExprKind::Bin(..) | ExprKind::Code(_) => {
-                self.eval(e)
-            }
-            ExprKind::Slot(i) => {
-                let v = self.read_numbered(*i as usize, e.span)?;
-                check(v, e.span)
-            }
-            ExprKind::Param(p) => {
-                let v = self.read_param(p, e.span)?;
-                check(v, e.span)
-            }
-            ExprKind::Func(f, arg) => {
-                let x = self.eval(arg)?;
-                check(unary(*f, x, e.span)?, e.span)
-            }
-            ExprKind::Atan(args) => {
-                let y = self.eval(&args.0)?;
-                let x = self.eval(&args.1)?;
-                check(crate::eval::expr::degrees::to_degrees(y.atan2(x)), e.span)
-            }
-            ExprKind::Exists(p) => Ok(b(self.param_exists(p, e.span)?)),
-        }
+    if (5400..=5413).contains(&i) {
+        scope.note_tool_read(span, i != 5400);
     }
-
-    /// Operand of a binary operation: intermediate results pass unchecked.
-    fn eval_operand(&mut self, e: &Expr) -> EvalResult {
-        match &e.kind {
-            ExprKind::Bin(op, operands, false) => {
-                let a = self.eval_operand(&operands.0)?;
-                let c = self.eval_operand(&operands.1)?;
-                binary_fast(*op, a, c, e.span)
-            }
-            _ => self.eval(e),
-        }
+    if (5400..=5413).contains(&i)
+        && let Some(v) = scope.tool_param(i)
+    {
+        return Ok(v);
     }
-
-    /// Index of a numbered parameter reference.
-    pub(crate) fn param_index(&mut self, index: &Expr) -> Result<usize, Fault> {
-        // A literal in range (`#2 = ...`), the common case.
-        if let ExprKind::Num(v) = index.kind {
-            let i = v as usize;
-            if i as f64 == v && (1..MAX_PARAM).contains(&i) {
-                return Ok(i);
-            }
-        }
-        let v = self.eval(index)?;
-        let i = integer_value(v).map_err(|k| fault(k, index.span))?;
-        if i < 1 || i >= MAX_PARAM as i64 {
-            return Err(fault(ErrorKind::ParamOutOfRange { index: i }, index.span));
-        }
-        Ok(i as usize)
+    if !scope.params().known[i] {
+        return Err(unknown_param(scope, i, span));
     }
-
-    pub(crate) fn read_param(&mut self, p: &ParamRef, span: Span) -> EvalResult {
-        match p {
-            ParamRef::Numbered(index) => {
-                let i = self.param_index(index)?;
-                self.read_numbered(i, span)
-            }
-            ParamRef::Named(name) => self.read_named(name, span),
-        }
+    if !scope.params().set[i]
+        && scope.settings().warnings
+        && scope.call_level() == 0
+        && (1..5000).contains(&i)
+    {
+        scope.warn_in_line(WarningKind::ReadBeforeSet { index: i as i64 }, span);
     }
+    Ok(scope.params().values[i])
+}
 
-    pub(crate) fn read_numbered(&mut self, i: usize, span: Span) -> EvalResult {
-        // Plain parameters the program has assigned: the common case.
-        if i < 5000 && self.params.set[i] {
-            return Ok(self.params.values[i]);
-        }
-        if let ParamClass::Position(axis) = classify(i)
-            && !self.params.set[i]
-        {
-            self.note_standalone_drift(span);
-            return self.position(axis, span);
-        }
-        if let ParamClass::Refreshed(what, why) = classify(i) {
-            if self.s.zero_start {
-                return Ok(0.0);
-            }
-            return Err(fault(
-                ErrorKind::RuntimeParam {
-                    what: format!("#{i} ({what})"),
-                    why: why.to_string(),
-                    hint: "--zero-start (reads 0)".to_string(),
-                },
-                span,
-            ));
-        }
-        if (5400..=5413).contains(&i) {
-            self.note_m61(span, i != 5400);
-        }
-        if (5400..=5413).contains(&i)
-            && let Some(v) = self.mach.tool_param(i)
-        {
-            return Ok(v);
-        }
-        if !self.params.known[i] {
-            if let (Some(line), 5061..=5070) = (self.mach.probed_at, i) {
-                return Err(fault(
-                    ErrorKind::ProbeResultUnknown { index: i, line },
-                    span,
-                ));
-            }
-            if (5400..=5413).contains(&i) {
-                return Err(fault(
-                    ErrorKind::RuntimeParam {
-                        what: format!("#{i} (tool data)"),
-                        why: "it comes from the tool table".to_string(),
-                        hint: self.mach.tool_data_hint(),
-                    },
-                    span,
-                ));
-            }
-            let (what, why) = match classify(i) {
-                ParamClass::Runtime(w, y) | ParamClass::ReadOnlyRuntime(w, y) => (w, y),
-                _ => ("value", "it depends on the machine"),
-            };
-            return Err(fault(
-                ErrorKind::RuntimeParam {
-                    what: format!("#{i} ({what})"),
-                    why: why.to_string(),
-                    hint: format!("-D {i}=VALUE, a --var-file, or --zero-start"),
-                },
-                span,
-            ));
-        }
-        if !self.params.set[i]
-            && self.s.warnings
-            && self.flow.level() == 0
-            && (1..5000).contains(&i)
-        {
-            let file = self.flow.cur.file.clone();
-            let at = self.reader.line_start;
-            self.warn(
-                crate::diag::WarningKind::ReadBeforeSet { index: i as i64 },
-                &file,
-                at + span.start,
-                at + span.end,
-            );
-        }
-        Ok(self.params.values[i])
+/// The fault of reading parameter `i`, whose value is not known.
+fn unknown_param(scope: &impl Scope, i: usize, span: Span) -> Fault {
+    if let (Some(line), 5061..=5070) = (scope.probed_at(), i) {
+        return fault(ErrorKind::ProbeResultUnknown { index: i, line }, span);
     }
+    if (5400..=5413).contains(&i) {
+        return fault(
+            ErrorKind::RuntimeParam {
+                what: format!("#{i} (tool data)"),
+                why: "it comes from the tool table".to_string(),
+                hint: scope.tool_data_hint(),
+            },
+            span,
+        );
+    }
+    let (what, why) = match classify(i) {
+        ParamClass::Runtime(w, y) | ParamClass::ReadOnlyRuntime(w, y) => (w, y),
+        _ => ("value", "it depends on the machine"),
+    };
+    fault(
+        ErrorKind::RuntimeParam {
+            what: format!("#{i} ({what})"),
+            why: why.to_string(),
+            hint: format!("-D {i}=VALUE, a --var-file, or --zero-start"),
+        },
+        span,
+    )
+}
 
-    fn param_exists(&mut self, p: &ParamRef, span: Span) -> Result<bool, Fault> {
-        match p {
-            ParamRef::Numbered(index) => {
-                let v = self.eval(index)?;
-                let i = integer_value(v).map_err(|k| fault(k, index.span))?;
-                Ok((1..MAX_PARAM as i64).contains(&i))
-            }
-            ParamRef::Named(name) => self.named_exists(name, span),
+fn param_exists(scope: &mut impl Scope, p: &ParamRef, span: Span) -> Result<bool, Fault> {
+    match p {
+        ParamRef::Numbered(index) => {
+            let v = eval(scope, index)?;
+            let i = integer_value(v).map_err(|k| fault(k, index.span))?;
+            Ok((1..MAX_PARAM as i64).contains(&i))
         }
+        ParamRef::Named(name) => named::named_exists(scope, name, span),
     }
 }
 

@@ -4,6 +4,10 @@
 use crate::fx_hasher::FxMap;
 use crate::parse::Name;
 
+/// Axis letters in parameter order (X Y Z A B C U V W): the parameters of
+/// an axis are at its index from the first of their group (#5221, #5420…).
+pub(crate) const AXES: [u8; 9] = *b"xyzabcuvw";
+
 /// One past the highest numbered parameter.
 pub const MAX_PARAM: usize = 5602;
 

@@ -140,9 +140,11 @@ impl Interp<'_> {
         // cycle's start from the tool's (with compensation: its offset
         // position).
         let cx = self
+            .mach
             .programmed_position(0, span)
             .map_err(|f| self.fault_in_line(*f, file, start))?;
         let cz = self
+            .mach
             .programmed_position(2, span)
             .map_err(|f| self.fault_in_line(*f, file, start))?;
         let (mut x, mut z) = match self.mach.comp_current().filter(|_| comp) {

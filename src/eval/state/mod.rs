@@ -13,12 +13,15 @@ pub mod tools;
 use std::collections::HashSet;
 
 use crate::codes::CoordSystem;
-use crate::eval::expr::params::Params;
-use crate::eval::settings::{Define, Settings};
+use crate::diag::ErrorKind;
 use crate::modes::Modes;
+use crate::parse::ast::Span;
 
-/// Axis letters in parameter order (X Y Z A B C U V W).
-pub(crate) const AXES: [u8; 9] = *b"xyzabcuvw";
+use crate::eval::expr::params::Params;
+use crate::eval::expr::{EvalResult, fault};
+use crate::eval::settings::{Define, Settings};
+
+pub(crate) use crate::eval::expr::params::AXES;
 
 /// Why a position became unknown.
 #[derive(Debug, Clone, PartialEq)]
@@ -150,6 +153,44 @@ impl Machine {
             comp_written: ccomp::Written::No,
             lathe: None,
             unknown_tools: HashSet::new(),
+        }
+    }
+
+    /// Current position on an axis, or why it is unknown.
+    pub(in crate::eval) fn position(&self, axis: usize, span: Span) -> EvalResult {
+        if self.modal.cutter_comp != crate::codes::CutterComp::Off {
+            let why = "cutter radius compensation is on".to_string();
+            return Err(fault(
+                ErrorKind::UnknownPosition {
+                    axis: AXES[axis] as char,
+                    why,
+                },
+                span,
+            ));
+        }
+        self.programmed_position(axis, span)
+    }
+
+    /// The position model's value on an axis (with compensation on, the
+    /// programmed position), or why it is unknown.
+    pub(in crate::eval) fn programmed_position(&self, axis: usize, span: Span) -> EvalResult {
+        match &self.pos.axes[axis] {
+            Ok(v) => Ok(*v),
+            Err(why) => {
+                let why = match why {
+                    Unknown::Start => {
+                        "the program has not moved it to an absolute position yet".to_string()
+                    }
+                    Unknown::After(what, line) => format!("{what} at line {line} made it unknown"),
+                };
+                Err(fault(
+                    ErrorKind::UnknownPosition {
+                        axis: AXES[axis] as char,
+                        why,
+                    },
+                    span,
+                ))
+            }
         }
     }
 }
