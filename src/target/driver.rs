@@ -59,7 +59,8 @@ struct Problem {
 pub struct Lowering {
     p: &'static Profile,
     opts: TargetOptions,
-    /// The machine as LinuxCNC runs the program.
+    /// The machine as LinuxCNC runs the program (its state alone: it
+    /// records no motion events, nor do its snapshots).
     m: Machine,
     /// Scratch for decoding (boxed: taken out and put back each line).
     block: Option<Box<Block>>,

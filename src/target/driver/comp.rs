@@ -79,11 +79,11 @@ impl Lowering {
         }
     }
 
-    /// The first word of `b` that would act while compensation holds a
-    /// move back (spindle, coolant, dwell, tools, units, offsets, ...):
-    /// the reference runs it only after the held move.
-    fn held_action(b: &Block) -> Option<&Word> {
-        b.words.iter().find(|w| Self::is_action(w))
+    /// Whether a word of `b` would act while compensation holds a move
+    /// back (spindle, coolant, dwell, tools, units, offsets, ...): the
+    /// reference runs it only after the held move.
+    fn holds_action(b: &Block) -> bool {
+        b.words.iter().any(Self::is_action)
     }
 
     /// Whether `w` acts (or changes how later moves are read) rather than
@@ -150,9 +150,7 @@ impl Lowering {
         if !moves && self.tool_change_after_off(b) {
             return Ok(None);
         }
-        if self.comp.as_ref().is_some_and(|c| c.comp.holding())
-            && let Some(w) = Self::held_action(b)
-        {
+        if self.comp.as_ref().is_some_and(|c| c.comp.holding()) && Self::holds_action(b) {
             // LinuxCNC runs the block's actions after the held moves: the
             // line waits for them. What would change how later moves are
             // read (units, offsets, tools) is not lowered.
@@ -167,7 +165,6 @@ impl Lowering {
                     "while cutter compensation holds a move back (until the next move is known), LinuxCNC runs this only after that move; only spindle, coolant, dwell and tool selection are lowered there: put it before G41/G42 or after G40",
                 ));
             }
-            let _ = w;
             self.defer_block = Some(self.comp_seq);
         }
         for (i, w) in b.words.iter().enumerate() {

@@ -8,7 +8,7 @@ use crate::block::{
     Block, CutterComp, FeedMode, GCode, LatheMode, MCode, MotionMode, NonModal, PathMode,
     SpindleDir, SpindleMode, ToolLength, Word, WordKind,
 };
-use crate::diag::{ErrorKind, Site, WarningKind};
+use crate::diag::{ErrorKind, WarningKind};
 use crate::target::profile::ToolChange;
 
 use super::{Lowering, Problem};
@@ -38,7 +38,6 @@ impl Lowering {
         b: &Block,
         w: &Word,
         g: GCode,
-        site: &Option<Site>,
         problems: &mut Vec<Problem>,
     ) -> Fate {
         let c = code10(w);
@@ -89,7 +88,6 @@ impl Lowering {
             | GCode::Coord(_) => Fate::Drop,
             GCode::Path(PathMode::Blend) | GCode::Path(PathMode::ExactStop) => {
                 self.dropped(
-                    site,
                     &g_name(w),
                     "the target has no such path mode; the path may blend differently at corners",
                 );
@@ -97,7 +95,6 @@ impl Lowering {
             }
             GCode::Path(PathMode::Exact) => {
                 self.dropped(
-                    site,
                     "G61",
                     "the target has no exact-path mode; corners may blend",
                 );
@@ -126,7 +123,7 @@ impl Lowering {
                         what: "G95 (feed per revolution)".into(),
                         how: "feed per minute at the programmed spindle speed; exact only if the spindle holds that speed".into(),
                     };
-                    self.warn(site.clone(), k);
+                    self.warn(k);
                 } else {
                     problems.push(Problem {
                         span: Some(w.span),
@@ -215,13 +212,11 @@ impl Lowering {
         }
     }
 
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn m_fate(
         &mut self,
         b: &Block,
         w: &Word,
         m: MCode,
-        site: &Option<Site>,
         problems: &mut Vec<Problem>,
         pre_lines: &mut Vec<Vec<(u8, f64)>>,
         extra_lines: &mut Vec<Vec<(u8, f64)>>,
@@ -254,7 +249,7 @@ impl Lowering {
                         what,
                         how: "M0: the program pauses for a manual tool change (--tool-change keep|drop to change that)".into(),
                     };
-                    self.warn(site.clone(), k);
+                    self.warn(k);
                     // The change comes before the block's spindle words,
                     // tool length offset and motion.
                     pre_lines.push(vec![(b'M', 0.0)]);
@@ -268,7 +263,7 @@ impl Lowering {
                 what: "M1 (optional stop)".into(),
                 why: "the program does not pause there, where LinuxCNC stops if its optional-stop switch is on".into(),
             };
-            self.warn(site.clone(), k);
+            self.warn(k);
             return Fate::Keep;
         }
         if p.has_m(n) && w.value.fract() == 0.0 {
@@ -278,7 +273,6 @@ impl Lowering {
             MCode::SetTool | MCode::State(_) => Fate::Drop,
             MCode::Override(_) => {
                 self.dropped(
-                    site,
                     &format!("M{n}"),
                     "the target has no such override switch; overrides stay as the operator sets them",
                 );
@@ -318,7 +312,7 @@ impl Lowering {
         }
     }
 
-    pub(super) fn value_fate(&mut self, b: &Block, w: &Word, problems: &mut Vec<Problem>) -> Fate {
+    pub(super) fn value_fate(&mut self, w: &Word, problems: &mut Vec<Problem>) -> Fate {
         let l = w.letter;
         let axis = crate::block::AXIS_LETTERS.contains(&l);
         if axis && !self.p.has_axis(l) {
@@ -352,7 +346,6 @@ impl Lowering {
                 ),
             });
         }
-        let _ = b;
         Fate::Drop
     }
 
@@ -398,9 +391,6 @@ impl Lowering {
                 && b.has_axis();
         if arc && b.value(b'P') == Some(1.0) {
             drop(b'P');
-        }
-        if b.retract().is_some() && !self.p.has_g(980) {
-            // Nothing else belongs to G98/G99.
         }
     }
 }

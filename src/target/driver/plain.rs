@@ -310,7 +310,6 @@ impl Lowering {
         if !self.m.apply_plain_motion(v.motion, v.f(), v.xyz()) {
             return false;
         }
-        let _ = self.m.take_events();
         if arc || axis {
             self.cycles.end();
         }
@@ -424,7 +423,6 @@ impl Lowering {
         if n == 0 || !self.m.apply_plain_motion(Some(motion), f, xyz) {
             return 0;
         }
-        let _ = self.m.take_events();
         if ends_cycle {
             self.cycles.end();
         }
@@ -444,7 +442,6 @@ impl Lowering {
         let motion = b.motion().unwrap_or(self.m.modes.motion);
         // G7 is not in effect (or the target has it): values as written.
         self.m.apply(b);
-        let _ = self.m.take_events();
         // The canned cycle's run ends with other motion.
         if matches!(motion, MotionMode::ArcCw | MotionMode::ArcCcw) || b.has_axis() {
             self.cycles.end();

@@ -35,20 +35,20 @@ impl Lowering {
     /// A warning about the current line; it gets the line's site when the
     /// line is done (worked out only then, and only for a warning not given
     /// before).
-    pub(super) fn warn(&mut self, _site: Option<Site>, kind: WarningKind) {
+    pub(super) fn warn(&mut self, kind: WarningKind) {
         let key = (kind.code(), kind.to_string());
         if self.warned.insert(key) {
             self.pending.push(kind);
         }
     }
 
-    pub(super) fn dropped(&mut self, site: &Option<Site>, what: &str, why: &str) {
+    pub(super) fn dropped(&mut self, what: &str, why: &str) {
         let k = WarningKind::TargetDropped {
             target: self.name(),
             what: what.into(),
             why: why.into(),
         };
-        self.warn(site.clone(), k);
+        self.warn(k);
     }
 
     /// Stops the run at the first problem, or in check mode keeps them all.
@@ -91,7 +91,6 @@ impl Lowering {
         let mut m = before.clone();
         m.zero_start = true;
         m.apply(b);
-        let _ = m.take_events();
         // The target's own axes must be known and unmoved; the others
         // cannot be written for it anyway.
         let same = crate::block::AXIS_LETTERS

@@ -9,7 +9,7 @@ use crate::block::{
     Block, Distance, FeedMode, GCode, LatheMode, MCode, MotionMode, NonModal, ToolLength, Word,
     WordKind,
 };
-use crate::diag::{Diagnostic, Error, ErrorKind, Site};
+use crate::diag::{Diagnostic, Error, ErrorKind};
 use crate::emit::Output;
 use crate::eval::Origin;
 use crate::machine::Machine;
@@ -93,8 +93,6 @@ impl Lowering {
         text: &[u8],
         origin: &Origin<'_>,
     ) -> Result<Decided, Vec<Problem>> {
-        // The line's site is worked out only for a warning (see `warn`).
-        let site: Option<Site> = None;
         let mut problems = Vec::new();
         let mut d = Decided {
             fates: vec![Fate::Keep; b.words.len()],
@@ -104,17 +102,11 @@ impl Lowering {
         };
         for (i, w) in b.words.iter().enumerate() {
             let fate = match w.kind {
-                WordKind::G(g) => self.g_fate(b, w, g, &site, &mut problems),
-                WordKind::M(m) => self.m_fate(
-                    b,
-                    w,
-                    m,
-                    &site,
-                    &mut problems,
-                    &mut d.pre_lines,
-                    &mut d.extra_lines,
-                ),
-                WordKind::Value => self.value_fate(b, w, &mut problems),
+                WordKind::G(g) => self.g_fate(b, w, g, &mut problems),
+                WordKind::M(m) => {
+                    self.m_fate(b, w, m, &mut problems, &mut d.pre_lines, &mut d.extra_lines)
+                }
+                WordKind::Value => self.value_fate(w, &mut problems),
             };
             d.fates[i] = fate;
         }
@@ -128,7 +120,6 @@ impl Lowering {
         // Words that belong to a dropped code go with it.
         self.drop_owned(b, &mut d.fates);
         self.m.apply(b);
-        let _ = self.m.take_events();
         if problems.is_empty() {
             Ok(d)
         } else {
@@ -160,7 +151,7 @@ impl Lowering {
                 kind,
             })?,
         };
-        self.feed_words(b, before, &mut d.fates, &mut d.extra);
+        self.feed_words(b, &mut d.fates, &mut d.extra);
         // The line itself.
         let incremental_lowered = self.incremental_lowered(lowered.as_deref());
         let shift = self.target_shift(b, &d.fates, lowered.as_deref())?;
@@ -456,13 +447,7 @@ impl Lowering {
 
     /// With G95 lowered, feed words become per-minute feeds at the spindle
     /// speed, written whenever they change.
-    fn feed_words(
-        &mut self,
-        b: &Block,
-        _before: &Machine,
-        fates: &mut [Fate],
-        extra: &mut Vec<(u8, f64)>,
-    ) {
+    fn feed_words(&mut self, b: &Block, fates: &mut [Fate], extra: &mut Vec<(u8, f64)>) {
         if let Some(m) = b.feed_mode() {
             self.target_inverse = m == FeedMode::InverseTime;
         }

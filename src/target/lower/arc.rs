@@ -88,9 +88,9 @@ const LEAST_SWEEP: f64 = 5e-6;
 
 /// Whether an arc turning `sweep` radians with chord `chord` is to be
 /// written as a line: it turns so little that a controller may take it for
-/// a full circle ([`LEAST_SWEEP`]), or its end is within `least_chord` of
-/// its start on less than half a turn, where the line is off the arc by
-/// at most half the chord.
+/// a full circle (less than GRBL's smallest angle, `LEAST_SWEEP`), or its
+/// end is within `least_chord` of its start on less than half a turn,
+/// where the line is off the arc by at most half the chord.
 pub fn barely_turns(sweep: f64, chord: f64, least_chord: f64) -> bool {
     sweep < LEAST_SWEEP || sweep < PI && chord < least_chord
 }

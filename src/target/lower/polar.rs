@@ -33,9 +33,8 @@ pub struct PolarInput {
     pub angle: Option<f64>,
 }
 
-/// The X Y end point of a block with polar words (absolute):
-/// [`polar_end`], the rule the evaluator and the machine model follow
-/// too.
+/// The X Y end point of a block with polar words (absolute), by the
+/// rule the evaluator and the machine model follow too (`polar_end`).
 pub fn polar_target(p: &PolarInput) -> Result<[f64; 2], LowerError> {
     polar_end(p.distance, p.current, p.radius, p.angle).ok_or(LowerError::PolarAtOrigin)
 }
