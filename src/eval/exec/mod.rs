@@ -7,6 +7,7 @@
 //! method the other parts it reads or changes as arguments.
 
 // Machine model steps (codes, motion, tools, cycles).
+mod lathe;
 mod restore;
 mod words;
 
