@@ -6,8 +6,6 @@ use std::path::Path;
 use crate::diag::ErrorKind;
 use crate::program::ini::Ini;
 
-use super::tools::{ToolData, parse_tool_table};
-
 /// A parameter given before the run (`-D`, var file).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Define {
@@ -62,7 +60,7 @@ pub struct Settings {
     /// inches, as in LinuxCNC's standalone interpreter.
     pub machine_metric: bool,
     /// Tools from a LinuxCNC tool table file.
-    pub tool_table: Vec<(i64, super::tools::ToolData)>,
+    pub tool_table: Vec<(i64, ToolData)>,
     /// Collect warnings (check mode and stderr notes).
     pub warnings: bool,
     /// Runs of plain lines take the batched straight-line loop, and plain
@@ -142,7 +140,7 @@ pub fn parse_define(text: &str) -> Result<Define, ErrorKind> {
     }
     if !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()) {
         let i: usize = k.parse().map_err(|_| bad())?;
-        if !(1..super::params::MAX_PARAM).contains(&i) {
+        if !(1..MAX_PARAM).contains(&i) {
             return Err(ErrorKind::ParamOutOfRange { index: i as i64 });
         }
         return Ok(Define::Numbered(i, v));
@@ -209,7 +207,7 @@ pub fn read_var_file(path: &Path) -> Result<Vec<Define>, ErrorKind> {
                 text: t.to_string(),
             });
         };
-        if !(1..super::params::MAX_PARAM as i64).contains(&i) {
+        if !(1..MAX_PARAM as i64).contains(&i) {
             return Err(ErrorKind::ParamOutOfRange { index: i });
         }
         if i <= last {
@@ -229,6 +227,61 @@ pub fn read_tool_table(path: &Path) -> Result<Vec<(i64, ToolData)>, ErrorKind> {
     };
     let text = std::fs::read_to_string(path).map_err(|e| io(e.to_string()))?;
     parse_tool_table(&text).map_err(io)
+}
+
+/// One past the highest numbered parameter.
+pub const MAX_PARAM: usize = 5602;
+
+/// One tool: offsets X..W, diameter, front and back angle, orientation.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ToolData {
+    pub offsets: [f64; 9],
+    pub diameter: f64,
+    pub front: f64,
+    pub back: f64,
+    pub orientation: f64,
+}
+
+/// Reads a LinuxCNC tool table (`T1 P1 Z0.5 D0.125 ;comment` per line).
+fn parse_tool_table(text: &str) -> Result<Vec<(i64, ToolData)>, String> {
+    let mut out = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let line = line.split(';').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let mut tool = None;
+        let mut data = ToolData::default();
+        for word in line.split_whitespace() {
+            let (letter, value) = word.split_at(1);
+            let letter = letter.to_ascii_lowercase();
+            let v: f64 = value.parse().map_err(|_| {
+                format!(
+                    "tool table line {}: '{word}' is not a letter and a number",
+                    n + 1
+                )
+            })?;
+            match letter.as_str() {
+                "t" => tool = Some(v as i64),
+                "p" => {}
+                "d" => data.diameter = v,
+                "i" => data.front = v,
+                "j" => data.back = v,
+                "q" => data.orientation = v,
+                l => match crate::block::AXIS_LETTERS.iter().position(|&c| {
+                    c.to_ascii_lowercase() as char == l.chars().next().unwrap_or(' ')
+                }) {
+                    Some(a) => data.offsets[a] = v,
+                    None => {
+                        return Err(format!("tool table line {}: unknown word '{word}'", n + 1));
+                    }
+                },
+            }
+        }
+        let t = tool.ok_or_else(|| format!("tool table line {}: no T word", n + 1))?;
+        out.push((t, data));
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -3,21 +3,13 @@
 //! by the program itself (G10 L1/L10/L11). Tool data is kept in machine
 //! units, as LinuxCNC stores it.
 
-use super::{AXES, Env, Machine, Unknown};
+use super::{Env, Machine, Unknown};
 use crate::codes::{CoordSystem, SpindleDir};
 use crate::eval::settings::Settings;
 use crate::fx_hasher::FxMap;
 use crate::modes::Modes;
 
-/// One tool: offsets X..W, diameter, front and back angle, orientation.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct ToolData {
-    pub offsets: [f64; 9],
-    pub diameter: f64,
-    pub front: f64,
-    pub back: f64,
-    pub orientation: f64,
-}
+pub use crate::eval::settings::ToolData;
 
 /// The tools as a run of the program knows them: the table, whether it is
 /// complete, the tool in the spindle and the one selected. The evaluator
@@ -107,49 +99,6 @@ pub fn standalone_diameter(t: i64) -> f64 {
         3 => 0.201,
         _ => 0.0,
     }
-}
-
-/// Reads a LinuxCNC tool table (`T1 P1 Z0.5 D0.125 ;comment` per line).
-pub fn parse_tool_table(text: &str) -> Result<Vec<(i64, ToolData)>, String> {
-    let mut out = Vec::new();
-    for (n, line) in text.lines().enumerate() {
-        let line = line.split(';').next().unwrap_or("").trim();
-        if line.is_empty() {
-            continue;
-        }
-        let mut tool = None;
-        let mut data = ToolData::default();
-        for word in line.split_whitespace() {
-            let (letter, value) = word.split_at(1);
-            let letter = letter.to_ascii_lowercase();
-            let v: f64 = value.parse().map_err(|_| {
-                format!(
-                    "tool table line {}: '{word}' is not a letter and a number",
-                    n + 1
-                )
-            })?;
-            match letter.as_str() {
-                "t" => tool = Some(v as i64),
-                "p" => {}
-                "d" => data.diameter = v,
-                "i" => data.front = v,
-                "j" => data.back = v,
-                "q" => data.orientation = v,
-                l => match AXES
-                    .iter()
-                    .position(|&c| c as char == l.chars().next().unwrap_or(' '))
-                {
-                    Some(a) => data.offsets[a] = v,
-                    None => {
-                        return Err(format!("tool table line {}: unknown word '{word}'", n + 1));
-                    }
-                },
-            }
-        }
-        let t = tool.ok_or_else(|| format!("tool table line {}: no T word", n + 1))?;
-        out.push((t, data));
-    }
-    Ok(out)
 }
 
 impl Machine {
