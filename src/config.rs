@@ -20,9 +20,9 @@ use crate::program::ini::Ini;
 /// error.
 ///
 /// Subroutine files (`o<name> call` → name.ngc, lower-cased) are searched in:
-/// --program-prefix (or the INI's [DISPLAY]PROGRAM_PREFIX), each -I folder,
+/// --program-prefix (or the INI's `[DISPLAY]PROGRAM_PREFIX`), each -I folder,
 /// each folder of $NGCFLAT_SUBROUTINE_PATH (colon-separated), the INI's
-/// [RS274NGC]SUBROUTINE_PATH, the INI's [WIZARD]WIZARD_ROOT (recursively),
+/// `[RS274NGC]SUBROUTINE_PATH`, the INI's `[WIZARD]WIZARD_ROOT` (recursively),
 /// and last the folder of the program being flattened (unlike LinuxCNC;
 /// --no-program-dir turns that off).
 ///
@@ -147,7 +147,7 @@ pub struct MachineArgs {
     /// Do not check travel limits (the INI's, GRBL's or --limits).
     #[arg(long)]
     pub no_limits: bool,
-    /// Also stop at moves outside the INI's [AXIS_*] MIN_LIMIT/MAX_LIMIT
+    /// Also stop at moves outside the INI's `[AXIS_*]` MIN_LIMIT/MAX_LIMIT
     /// when flattening and checking (with --ini; off by default, so that
     /// giving a machine's INI for its subroutine path and switches does not
     /// also need its offsets; `stats` always reports them).
@@ -279,7 +279,7 @@ pub struct CommonArgs {
     /// User M-codes the machine has (M100-M199, external programs on
     /// LinuxCNC), written to the output as they are: `--user-m 100,101-105`.
     /// With --ini, the executable files M100..M199 in the INI's
-    /// [DISPLAY]PROGRAM_PREFIX and [RS274NGC]USER_M_PATH folders count too.
+    /// `[DISPLAY]PROGRAM_PREFIX` and `[RS274NGC]USER_M_PATH` folders count too.
     #[arg(long, value_name = "M", value_delimiter = ',')]
     pub user_m: Vec<String>,
     /// Do not search the program's own folder for subroutine files.
@@ -288,7 +288,7 @@ pub struct CommonArgs {
     /// LinuxCNC's O-word errors (a `return` outside a subroutine, an
     /// `endif` without its `if`, a `break` outside a loop...) become
     /// warnings and the line is skipped, like the INI's
-    /// [RS274NGC]OWORD_WARNONLY = 1.
+    /// `[RS274NGC]OWORD_WARNONLY` = 1.
     #[arg(long)]
     pub oword_warn_only: bool,
     /// Read the named-parameter syntax of the 2007 proposal on the LinuxCNC

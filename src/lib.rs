@@ -1,9 +1,9 @@
 //! ngcflat: LinuxCNC-dialect G-code in, straight-line G-code out.
 //!
-//! Pipeline: [`source`] (program text) → [`parse`] (typed line AST) →
+//! Pipeline: `source` (program text) → [`parse`] (typed line AST) →
 //! [`program`] (file index, subroutine loader) → [`eval`] (machine state,
 //! control flow, parameters and expressions) → [`emit`] (numbers, output
-//! sink), or a consumer: [`target`] lowering, [`view`]. The `flatten` module ties
+//! sink), or a consumer: [`target`] lowering, `view`. The `flatten` module ties
 //! them together; [`diag`] holds every error and warning. The modules form
 //! layers without cycles, listed in the README's Design section.
 

@@ -109,7 +109,7 @@ pub enum Destination {
     Stdout,
     /// `-o`: a regular file is replaced atomically (a temporary file in its
     /// folder renamed onto it; through a symbolic link, the link's target);
-    /// a FIFO or a device is opened and written (see [`resolve_output`]).
+    /// a FIFO or a device is opened and written (see `resolve_output`).
     File(PathBuf),
     /// Thrown away (check mode).
     Discard,

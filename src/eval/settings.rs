@@ -52,10 +52,10 @@ pub struct Settings {
     pub ini: Option<Ini>,
     /// Var-file parameters first, then `-D` values (later wins).
     pub defines: Vec<Define>,
-    /// U, V and W are axes of this machine (from the INI's [TRAJ]COORDINATES);
+    /// U, V and W are axes of this machine (from the INI's `[TRAJ]COORDINATES`);
     /// otherwise they are bad characters, as in LinuxCNC's XYZABC default.
     pub uvw_axes: bool,
-    /// Machine units are millimetres (INI [TRAJ]LINEAR_UNITS); offset and
+    /// Machine units are millimetres (INI `[TRAJ]LINEAR_UNITS`); offset and
     /// home parameters are stored in machine units. Without an INI they are
     /// inches, as in LinuxCNC's standalone interpreter.
     pub machine_metric: bool,

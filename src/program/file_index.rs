@@ -101,7 +101,7 @@ pub struct SubDefInfo {
 }
 
 /// A sub definition as stored: O-line indices (`NONE`: absent) and a run
-/// of [`FileIndex::valued`].
+/// of `FileIndex::valued`.
 #[derive(Debug, Clone, Copy)]
 pub struct SubDef {
     /// O-line index of the `sub` line.
@@ -621,7 +621,7 @@ impl FileIndex {
     }
 
     /// O-line `oidx` parsed (again: the index keeps its kind and key, not
-    /// the line; up to [`PARSED_KEPT`] parsed lines are kept). An error
+    /// the line; up to `PARSED_KEPT` parsed lines are kept). An error
     /// when the line cannot be read again or is no longer the O-line the
     /// index found (the file changed during the run).
     pub fn oline(&self, oidx: u32) -> Result<ParsedO, ErrorKind> {

@@ -462,7 +462,7 @@ impl SourceFile {
         self.path.parent()
     }
 
-    /// Calls `f(line, raw)` for the lines [`MarkedLines`] hands on (lines
+    /// Calls `f(line, raw)` for the lines `MarkedLines` hands on (lines
     /// with `o`, `m` or `%`, lines longer than `long`, leading blank lines),
     /// in order; `raw` is cut at 4096 bytes however the file is held or
     /// read (the line's true length is `line.end - line.start`). Returns the
