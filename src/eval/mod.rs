@@ -13,7 +13,7 @@ pub(crate) mod state;
 pub use expr::params;
 pub use state::tools;
 
-pub(crate) use read::validate::arc_refusal;
+pub(crate) use state::arc::arc_refusal;
 
 use flow::{Flow, Frame, FrameKind, label_of_key};
 use out::Writer;

@@ -10,8 +10,8 @@ use crate::parse::ast::Span;
 use crate::program::FileIndex;
 
 use crate::eval::Interp;
-use crate::eval::read::validate::Checked;
 use crate::eval::state::Env;
+use crate::eval::state::codes::Checked;
 
 impl Interp<'_> {
     /// Applies the line's words to the model, with its G and M codes as

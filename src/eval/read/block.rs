@@ -15,7 +15,8 @@ use crate::eval::Interp;
 use crate::eval::expr::message::{is_stable, stabilize};
 use crate::eval::expr::params::is_read_only;
 use crate::eval::flow::FrameKind;
-use crate::eval::read::validate::{Checked, check_block};
+use crate::eval::read::validate::check_block;
+use crate::eval::state::codes::Checked;
 
 /// Evaluated words of the line: (letter, value).
 pub(crate) type Words = Vec<(u8, f64)>;

@@ -7,10 +7,11 @@ use crate::diag::ErrorKind;
 
 use crate::codes::g_tenths;
 use crate::codes::{
-    ArcDistance, CutterComp, Distance, FeedMode, GCode, MCode, MotionMode, NonModal, PathMode,
-    Plane, SpindleDir, SpindleMode, ToolLength, Units,
+    CutterComp, Distance, FeedMode, GCode, MCode, MotionMode, NonModal, PathMode, Plane,
+    SpindleDir, SpindleMode, ToolLength,
 };
 use crate::diag::BlockError;
+use crate::eval::state::codes::{Checked, G80, LineCodes};
 use crate::eval::state::cycle::{Cycle, depth_axis};
 use crate::eval::state::nurbs::{NO_MOTION, NURBS, Nurbs};
 use crate::modes::Modes;
@@ -76,121 +77,6 @@ pub(in crate::eval) fn check_block(
     }
     full_check(words, modal, points, cycle, user_m)
 }
-
-/// What the checks hand on with a block they accept: its G and M codes,
-/// decoded once, for the state update to act on.
-#[derive(Clone, Copy)]
-pub(in crate::eval) enum Checked {
-    /// The fast acceptance took it: G0/G1 moves with axis, F and S words,
-    /// whose one code is in its G word (read only when the state update
-    /// needs it, off the common path).
-    Simple,
-    /// The block's codes.
-    Line(LineCodes),
-    /// A lathe cycle block: its codes, and the index of the cycle's G word.
-    Lathe(LineCodes, usize),
-}
-
-impl Checked {
-    /// The block's M codes, in line order: one for each of its M words
-    /// (the k-th code is the k-th M word's), none for a simple block.
-    #[inline]
-    pub(in crate::eval) fn ms(&self) -> &[MCode] {
-        match self {
-            Checked::Simple => &[],
-            Checked::Line(c) | Checked::Lathe(c, _) => c.ms(),
-        }
-    }
-}
-
-/// A block's G and M codes in line order, as the checks decoded and
-/// accepted them. A G80 that gave way to another motion code on its line
-/// is left out: it changes nothing there.
-#[derive(Clone, Copy)]
-pub(in crate::eval) struct LineCodes {
-    g: [GCode; 16],
-    gn: u8,
-    m: [MCode; 16],
-    mn: u8,
-    /// A G80 of the line was left out beside another motion code (the
-    /// one that wins, or another G80).
-    g80_gave_way: bool,
-}
-
-impl LineCodes {
-    fn empty() -> LineCodes {
-        LineCodes {
-            g: [G80; 16],
-            gn: 0,
-            m: [MCode::Other(0); 16],
-            mn: 0,
-            g80_gave_way: false,
-        }
-    }
-
-    /// The codes the full check accepted (at most 16 of each, as its
-    /// lists), without their word indices.
-    fn of(gs: &[(GCode, usize)], ms: &[(MCode, usize)], g80_gave_way: bool) -> LineCodes {
-        let mut c = LineCodes::empty();
-        for (k, &(g, _)) in gs.iter().enumerate() {
-            c.g[k] = g;
-        }
-        for (k, &(m, _)) in ms.iter().enumerate() {
-            c.m[k] = m;
-        }
-        c.gn = gs.len() as u8;
-        c.mn = ms.len() as u8;
-        c.g80_gave_way = g80_gave_way;
-        c
-    }
-
-    /// The codes of a block the fast acceptance took: G0 or G1 from its G
-    /// word (the only values it takes), no M code.
-    pub(in crate::eval) fn simple(words: &[(u8, f64)]) -> LineCodes {
-        let mut c = LineCodes::empty();
-        for &(l, v) in words {
-            if l == b'g' {
-                let m = if v == 0.0 { M::Rapid } else { M::Linear };
-                c.g[0] = GCode::Motion(m);
-                c.gn = 1;
-            }
-        }
-        c
-    }
-
-    /// The G codes, in line order.
-    #[inline]
-    pub(in crate::eval) fn gs(&self) -> &[GCode] {
-        &self.g[..self.gn as usize]
-    }
-
-    /// The M codes, in line order (one for each M word).
-    #[inline]
-    pub(in crate::eval) fn ms(&self) -> &[MCode] {
-        &self.m[..self.mn as usize]
-    }
-
-    /// The codes of a lathe cycle block's other words, which act before
-    /// the cycle: without the cycle's code, with a G80 that gave way to it
-    /// in its place.
-    pub(in crate::eval) fn without_lathe_cycle(&self) -> LineCodes {
-        let mut c = *self;
-        let cycle = |g: &GCode| matches!(g, GCode::Motion(M::LatheCycle { .. }));
-        if let Some(k) = c.gs().iter().position(cycle) {
-            if c.g80_gave_way {
-                c.g[k] = G80;
-                c.g80_gave_way = false;
-            } else {
-                c.g.copy_within(k + 1..c.gn as usize, k);
-                c.gn -= 1;
-            }
-        }
-        c
-    }
-}
-
-/// G80: it may share a line with another motion code (which wins).
-const G80: GCode = GCode::Motion(M::CancelCycle);
 
 /// Modal group of the user M-codes M100-M199 (one group: two on a line are
 /// refused, as by the reference).
@@ -263,54 +149,6 @@ fn g_word(v: f64) -> Result<GCode, BlockError> {
     GCode::from_code10(g10 as u16).ok_or_else(|| BlockError::UnknownGCode {
         code: crate::emit::number_string(v, None),
     })
-}
-
-/// The reference's refusal of an arc (its `arc_data_r` and `arc_data_ijk`
-/// checks, with its tolerances for `units`), if it refuses it: from
-/// `start` to `end` (the plane's first two axes, program units), with
-/// radius `r`, or else the centre words `ij` of those axes (an absent one
-/// is 0) read by `distance`. The evaluator's checks of a line and a
-/// target's lowering (where it knows the positions the evaluator does
-/// not) both ask it.
-pub(crate) fn arc_refusal(
-    ccw: bool,
-    r: Option<f64>,
-    ij: [Option<f64>; 2],
-    distance: ArcDistance,
-    units: Units,
-    start: [f64; 2],
-    end: [f64; 2],
-) -> Option<BlockError> {
-    use crate::geom::comp::{Arc, ArcCenter, CompError, Tolerances, arc_center};
-    let (i, j) = (ij[0].unwrap_or(0.0), ij[1].unwrap_or(0.0));
-    let center = match r {
-        Some(r) => ArcCenter::Radius(r),
-        None => ArcCenter::Offsets { i, j, distance },
-    };
-    let arc = Arc {
-        ccw,
-        center,
-        turns: 1,
-    };
-    Some(
-        match arc_center(&Tolerances::default_for(units), arc, start, end).err()? {
-            CompError::ArcSamePoint => BlockError::ArcSamePoint,
-            CompError::RadiusTooSmall => BlockError::ArcRadiusTooSmall,
-            CompError::ZeroRadiusArc => BlockError::ZeroRadiusArc,
-            // (An R arc fails only as above.)
-            _ => {
-                let c = match distance {
-                    ArcDistance::Absolute => [i, j],
-                    ArcDistance::Incremental => [start[0] + i, start[1] + j],
-                };
-                let r = |p: [f64; 2]| (p[0] - c[0]).hypot(p[1] - c[1]);
-                BlockError::ArcRadiiDiffer {
-                    r1: r(start),
-                    r2: r(end),
-                }
-            }
-        },
-    )
 }
 
 fn bad<T>(e: BlockError, at: Option<usize>) -> Result<T, (ErrorKind, Option<usize>)> {

@@ -2,7 +2,9 @@
 //! starting from LinuxCNC's power-on state; it answers the predefined named
 //! parameters and the position parameters.
 
+pub(super) mod arc;
 pub(super) mod ccomp;
+pub(super) mod codes;
 pub(super) mod cycle;
 pub(super) mod lathe;
 pub(super) mod modal;

@@ -2,13 +2,14 @@
 
 use crate::diag::{BlockError, ErrorKind, WarningKind};
 
+use super::arc::arc_refusal;
+use super::codes::{Checked, LineCodes};
 use super::nurbs::{NO_MOTION, NURBS};
 use super::{AXES, Env, Machine, Unknown};
 use crate::codes::{
     CoordSystem, CutterComp, Distance, GCode, MCode, MotionMode, NonModal, Plane, ToolLength, Units,
 };
 use crate::eval::expr::params::Params;
-use crate::eval::read::validate::{Checked, LineCodes, arc_refusal};
 use crate::eval::settings::Settings;
 use crate::modes::{MachineCode, polar_end, probe_end};
 
