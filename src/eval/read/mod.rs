@@ -3,7 +3,7 @@
 
 pub(super) mod block;
 pub(super) mod plain;
-mod scan_ahead;
+pub(super) mod scan_ahead;
 pub(super) mod straight;
 pub(super) mod validate;
 

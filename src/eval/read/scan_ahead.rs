@@ -27,7 +27,7 @@ const AHEAD: usize = 4;
 
 /// What the loop finds at a line start.
 #[derive(Clone, Copy)]
-pub(super) enum Read<'p> {
+pub(in crate::eval) enum Read<'p> {
     /// An empty line (a newline only).
     Blank,
     /// A plain line, and its text decoded when the source decodes lines
@@ -41,14 +41,14 @@ pub(super) enum Read<'p> {
 
 /// A source of lines for the straight-line loop, read at line starts in
 /// order.
-pub(super) trait Lines {
+pub(in crate::eval) trait Lines {
     fn read(&mut self, i: usize) -> Read<'_>;
 }
 
 /// Reads each line when the loop asks for it, up to a byte offset; for a
 /// consumer that reads blocks (`decode`), decodes it as a chunk read ahead
 /// does (see [`decode_line`]), into room of its own.
-pub(super) struct InPlace<'b> {
+pub(in crate::eval) struct InPlace<'b> {
     pub buf: &'b [u8],
     pub comments: bool,
     /// Lines starting here or later are left to another source.
@@ -63,7 +63,7 @@ pub(super) struct InPlace<'b> {
 /// Room to decode one line at a time in: its words, its block, and its
 /// output where a rule writes it otherwise than as its text.
 #[derive(Default)]
-pub(super) struct LineRoom {
+pub(in crate::eval) struct LineRoom {
     raw: RawLine,
     block: Block,
     out: Vec<u8>,
@@ -178,7 +178,7 @@ fn block_of(raw: &RawLine, text: &[u8], kept: bool, block: &mut Block) -> bool {
 
 /// A line read ahead, decoded.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum Decoded<'p> {
+pub(in crate::eval) enum Decoded<'p> {
     Block(&'p Block),
     /// A move and nothing else (see [`RawLine::moves_only`]): its words,
     /// for a consumer that takes such a line without a block.
@@ -251,7 +251,7 @@ pub(in crate::eval) struct ChunkPool(Vec<Chunk>);
 
 /// Chunk boundaries: line starts about `size` bytes apart, from the line
 /// start `from` to the buffer's end.
-pub(super) fn cut(buf: &[u8], from: usize, size: usize) -> Vec<usize> {
+pub(in crate::eval) fn cut(buf: &[u8], from: usize, size: usize) -> Vec<usize> {
     let size = size.max(1);
     let mut cuts = vec![from];
     let mut at = from + size;
@@ -283,7 +283,7 @@ fn written(out: &mut Vec<u8>, text: &[u8], cuts: &Cuts) -> Kind {
 }
 
 /// State both threads share.
-pub(super) struct Shared<'b> {
+pub(in crate::eval) struct Shared<'b> {
     buf: &'b [u8],
     comments: bool,
     /// Decode each plain line into a block too.
@@ -312,7 +312,7 @@ pub(super) struct Shared<'b> {
 impl<'b> Shared<'b> {
     /// Chunks of `buf` from the line start `from` on; `decode`: plain lines
     /// are decoded into blocks as well.
-    pub(super) fn new(
+    pub(in crate::eval) fn new(
         buf: &'b [u8],
         from: usize,
         comments: bool,
@@ -341,7 +341,7 @@ impl<'b> Shared<'b> {
     }
 
     /// The spent chunks, for the next run.
-    pub(super) fn into_pool(self) -> ChunkPool {
+    pub(in crate::eval) fn into_pool(self) -> ChunkPool {
         ChunkPool(self.pool.into_inner().unwrap_or_default())
     }
 
@@ -479,7 +479,7 @@ impl<'b> Shared<'b> {
 
     /// The second thread: reads chunks until all are read or the loop is
     /// done.
-    pub(super) fn help(&self) {
+    pub(in crate::eval) fn help(&self) {
         /// Marks the thread gone however it ends.
         struct Gone<'a, 'b>(&'a Shared<'b>);
         impl Drop for Gone<'_, '_> {
@@ -515,7 +515,7 @@ impl<'b> Shared<'b> {
 }
 
 /// Lines from chunks read by either thread, in order.
-pub(super) struct Ahead<'s, 'b> {
+pub(in crate::eval) struct Ahead<'s, 'b> {
     shared: &'s Shared<'b>,
     /// Chunk being applied (`usize::MAX` before the first).
     chunk: usize,
@@ -524,7 +524,7 @@ pub(super) struct Ahead<'s, 'b> {
 }
 
 impl<'s, 'b> Ahead<'s, 'b> {
-    pub(super) fn new(shared: &'s Shared<'b>) -> Ahead<'s, 'b> {
+    pub(in crate::eval) fn new(shared: &'s Shared<'b>) -> Ahead<'s, 'b> {
         Ahead {
             shared,
             chunk: usize::MAX,
