@@ -16,7 +16,8 @@ pub use state::tools;
 pub(crate) use state::arc::arc_refusal;
 
 use flow::{Flow, Frame, FrameKind, label_of_key};
-use out::Writer;
+pub(crate) use out::output_error;
+use out::{Writer, place_limit, too_large};
 use read::Reader;
 use read::plain;
 use state::Machine;
@@ -96,48 +97,6 @@ impl Unused {
             warnings.push(w);
         }
     }
-}
-
-/// The output grew past `--max-output-bytes`: the sink's account of it.
-fn too_large(e: &std::io::Error) -> Option<&crate::emit::OutputTooLarge> {
-    e.get_ref()
-        .and_then(|i| i.downcast_ref::<crate::emit::OutputTooLarge>())
-}
-
-/// An error writing the output (without a place: see
-/// [`Interp::output_error_at`]; a consumer's output error is placed at the
-/// line it was given).
-pub(crate) fn output_error(e: std::io::Error) -> Error {
-    if let Some(t) = too_large(&e) {
-        return Diagnostic::error(ErrorKind::OutputBytesLimit { limit: t.limit }, None);
-    }
-    Diagnostic::error(
-        ErrorKind::Io {
-            path: "<output>".into(),
-            message: e.to_string(),
-        },
-        None,
-    )
-}
-
-/// `e` placed at the line starting at `at` in `file` with the calls
-/// `stack`, if it is the output byte limit without a place.
-pub(in crate::eval) fn place_limit(
-    mut e: Error,
-    file: &Arc<SourceFile>,
-    at: u32,
-    stack: impl FnOnce() -> Vec<Site>,
-) -> Error {
-    if e.site.is_none()
-        && matches!(
-            e.kind,
-            crate::diag::Kind::Error(ErrorKind::OutputBytesLimit { .. })
-        )
-    {
-        e.site = Some(Site::new(file, at, at));
-        e.stack = stack();
-    }
-    e
 }
 
 /// An error reading a streamed program file.

@@ -13,6 +13,7 @@ mod words;
 
 // Expression, reading and output steps.
 mod expr;
+mod out;
 mod straight;
 
 // Control-flow steps (O-words, calls, returns).

@@ -19,7 +19,8 @@ use crate::diag::{Diagnostic, Error, Site};
 use crate::emit::Output;
 use crate::program::SourceFile;
 
-use crate::eval::Interp;
+use crate::eval::flow::{Frame, stack_of};
+use crate::eval::out::{Writer, place_limit};
 
 /// Where an output line came from.
 #[derive(Clone, Copy)]
@@ -201,11 +202,31 @@ impl FormBatch {
     }
 }
 
-impl Interp<'_> {
+/// What a line handed to the consumer takes from the rest of the run: the
+/// calls that led to it (its origin's call stack, made on demand) and the
+/// number of warnings given before it (a consumer on its own thread that
+/// fails at the line drops those given after).
+#[derive(Clone, Copy)]
+pub(in crate::eval) struct RunAt<'a> {
+    pub(in crate::eval) frames: &'a [Box<Frame>],
+    pub(in crate::eval) warnings: usize,
+}
+
+impl RunAt<'_> {
+    /// `e` placed at the line starting at `line_start` in `file` with the
+    /// calls, if it is the output byte limit without a place.
+    #[cold]
+    fn placed(&self, e: Error, file: &Arc<SourceFile>, line_start: u32) -> Error {
+        place_limit(e, file, line_start, || stack_of(self.frames))
+    }
+}
+
+impl Writer<'_> {
     /// Hands the lines of `batch`, read from `input` (`file`'s text), to
     /// the consumer, and empties it.
     pub(in crate::eval) fn flush_forms(
         &mut self,
+        at: RunAt<'_>,
         batch: &mut FormBatch,
         file: &Arc<SourceFile>,
         input: &[u8],
@@ -219,28 +240,28 @@ impl Interp<'_> {
             lines: &batch.lines,
             written: &batch.written,
         };
-        let r = match self.out.consumer.take() {
-            Some(mut c) if self.out.apart.is_none() => {
-                self.out.handed += batch.lines.len();
-                let frames = &self.flow.frames;
-                let stack = || crate::eval::flow::stack_of(frames);
+        let r = match self.consumer.take() {
+            Some(mut c) if self.apart.is_none() => {
+                self.handed += batch.lines.len();
+                let stack = || stack_of(at.frames);
                 let origin = Origin {
                     file,
                     line_start: 0,
                     verbatim: true,
                     stack: &stack,
                 };
-                let r = c.form_lines(&lines, &origin, &mut self.out.output);
-                self.out.consumer = Some(c);
+                let r = c.form_lines(&lines, &origin, &mut self.output);
+                self.consumer = Some(c);
                 r
             }
             c => {
                 // No consumer on this thread: each line as any other.
-                self.out.consumer = c;
+                self.consumer = c;
                 let mut r = Ok(());
                 for (k, l) in batch.lines.iter().enumerate() {
                     let text = lines.text(l);
-                    if let Err(e) = self.hand_over(file, l.line_start, text, true, Payload::Text) {
+                    let line = (file, l.line_start, text);
+                    if let Err(e) = self.hand_over(at, line, true, Payload::Text) {
                         r = Err((k, e));
                         break;
                     }
@@ -248,111 +269,104 @@ impl Interp<'_> {
                 r
             }
         };
-        let placed = r.map_err(|(k, e)| self.placed(e, file, batch.lines[k].line_start));
+        let placed = r.map_err(|(k, e)| at.placed(e, file, batch.lines[k].line_start));
         batch.lines.clear();
         batch.written.clear();
         placed
     }
 
-    /// Hands a line to the consumer (there is one).
+    /// Hands a line (`text`, made from the line at `line_start` in `file`;
+    /// `verbatim`: its text as written) to the consumer (there is one).
     #[cold]
     pub(in crate::eval) fn consume(
         &mut self,
+        at: RunAt<'_>,
         file: &Arc<SourceFile>,
         line_start: u32,
         text: &[u8],
         verbatim: bool,
     ) -> Result<(), Error> {
-        self.hand_over(file, line_start, text, verbatim, Payload::Text)
+        self.hand_over(at, (file, line_start, text), verbatim, Payload::Text)
     }
 
     /// Hands a line and its decoded block to the consumer (there is one).
     #[cold]
     pub(in crate::eval) fn consume_decoded(
         &mut self,
+        at: RunAt<'_>,
         file: &Arc<SourceFile>,
         line_start: u32,
         text: &[u8],
         block: &Block,
     ) -> Result<(), Error> {
-        self.hand_over(file, line_start, text, true, Payload::Block(block))
+        let line = (file, line_start, text);
+        self.hand_over(at, line, true, Payload::Block(block))
     }
 
     /// Hands a line that is a move alone, and its words, to the consumer.
     pub(in crate::eval) fn consume_moves(
         &mut self,
+        at: RunAt<'_>,
         file: &Arc<SourceFile>,
         line_start: u32,
         text: &[u8],
         words: &[RawWord],
     ) -> Result<(), Error> {
-        self.hand_over(file, line_start, text, true, Payload::Moves(words))
+        let line = (file, line_start, text);
+        self.hand_over(at, line, true, Payload::Moves(words))
     }
 
     /// [`LineConsumer::line`], or with `block` [`LineConsumer::decoded_line`],
     /// with the line's origin; an error is placed at the line.
     fn hand_over(
         &mut self,
-        file: &Arc<SourceFile>,
-        line_start: u32,
-        text: &[u8],
+        at: RunAt<'_>,
+        (file, line_start, text): (&Arc<SourceFile>, u32, &[u8]),
         verbatim: bool,
         payload: Payload<'_>,
     ) -> Result<(), Error> {
-        if let Some(a) = self.out.apart.as_mut() {
+        if let Some(a) = self.apart.as_mut() {
             // A block decoded ahead is the same line: the text carries it.
-            let frames = &self.flow.frames;
-            let stack = (frames.len() > 1).then(|| crate::eval::flow::stack_of(frames));
-            return a.line(
-                file,
-                line_start,
-                text,
-                verbatim,
-                stack,
-                self.diags.warnings.len(),
-            );
+            let frames = at.frames;
+            let stack = (frames.len() > 1).then(|| stack_of(frames));
+            return a.line(file, line_start, text, verbatim, stack, at.warnings);
         }
-        let Some(mut c) = self.out.consumer.take() else {
+        let Some(mut c) = self.consumer.take() else {
             return Ok(());
         };
-        self.out.handed += 1;
-        let frames = &self.flow.frames;
-        let stack = || crate::eval::flow::stack_of(frames);
+        self.handed += 1;
+        let stack = || stack_of(at.frames);
         let origin = Origin {
             file,
             line_start,
             verbatim,
             stack: &stack,
         };
-        let out = &mut self.out.output;
+        let out = &mut self.output;
         let r = match payload {
             Payload::Text => c.line(text, &origin, out),
             Payload::Block(b) => c.decoded_line(text, b, &origin, out),
             Payload::Moves(w) => c.moves_line(text, w, &origin, out),
         };
-        self.out.consumer = Some(c);
-        r.map_err(|e| self.placed(e, file, line_start))
+        self.consumer = Some(c);
+        r.map_err(|e| at.placed(e, file, line_start))
     }
 
     /// Whether the consumer computes cutter radius compensation into the
     /// path.
     pub(in crate::eval) fn consumer_computes_comp(&self) -> bool {
-        match &self.out.apart {
+        match &self.apart {
             Some(a) => a.computes_comp,
-            None => self
-                .out
-                .consumer
-                .as_ref()
-                .is_some_and(|c| c.computes_comp()),
+            None => self.consumer.as_ref().is_some_and(|c| c.computes_comp()),
         }
     }
 
     /// Tells the consumer where LinuxCNC's compensation now reads the
     /// tool's position (see [`LineConsumer::comp_position`]).
     pub(in crate::eval) fn consumer_comp_position(&mut self, p: [f64; 2]) {
-        if let Some(a) = self.out.apart.as_mut() {
+        if let Some(a) = self.apart.as_mut() {
             a.comp_position(p);
-        } else if let Some(c) = self.out.consumer.as_mut() {
+        } else if let Some(c) = self.consumer.as_mut() {
             c.comp_position(p);
         }
     }
@@ -362,26 +376,27 @@ impl Interp<'_> {
     #[cold]
     pub(in crate::eval) fn consume_input(
         &mut self,
+        at: RunAt<'_>,
         file: &Arc<SourceFile>,
         start: u64,
         bytes: &[u8],
     ) -> Result<(), Error> {
-        let mut at = 0;
+        let mut i = 0;
         // One search over the whole range (not one call per line).
         let ends = memchr::memchr_iter(b'\n', bytes).chain(std::iter::once(bytes.len()));
         for end in ends {
-            if at >= bytes.len() {
+            if i >= bytes.len() {
                 break;
             }
-            let line = &bytes[at..end];
+            let line = &bytes[i..end];
             let trimmed = line
                 .iter()
                 .rposition(|b| !b.is_ascii_whitespace())
                 .map_or(0, |p| p + 1);
             if trimmed > 0 {
-                self.consume(file, (start + at as u64) as u32, &line[..trimmed], true)?;
+                self.consume(at, file, (start + i as u64) as u32, &line[..trimmed], true)?;
             }
-            at = end + 1;
+            i = end + 1;
         }
         Ok(())
     }

@@ -5,8 +5,13 @@ pub(super) mod apart;
 pub(super) mod hook;
 pub(super) mod progress;
 
+use std::sync::Arc;
+
+use crate::diag::{Diagnostic, Error, ErrorKind, Kind, Site};
 use crate::emit::{Output, Sink};
-use crate::eval::Settings;
+use crate::program::SourceFile;
+
+use crate::eval::settings::Settings;
 
 /// Where the executed lines go, and how many went.
 pub(super) struct Writer<'s> {
@@ -102,4 +107,41 @@ impl<'s> Writer<'s> {
         }
         true
     }
+}
+
+/// The output grew past `--max-output-bytes`: the sink's account of it.
+pub(super) fn too_large(e: &std::io::Error) -> Option<&crate::emit::OutputTooLarge> {
+    e.get_ref()
+        .and_then(|i| i.downcast_ref::<crate::emit::OutputTooLarge>())
+}
+
+/// An error writing the output (without a place: see
+/// `Interp::output_error_at`; a consumer's output error is placed at the
+/// line it was given).
+pub(crate) fn output_error(e: std::io::Error) -> Error {
+    if let Some(t) = too_large(&e) {
+        return Diagnostic::error(ErrorKind::OutputBytesLimit { limit: t.limit }, None);
+    }
+    Diagnostic::error(
+        ErrorKind::Io {
+            path: "<output>".into(),
+            message: e.to_string(),
+        },
+        None,
+    )
+}
+
+/// `e` placed at the line starting at `at` in `file` with the calls
+/// `stack`, if it is the output byte limit without a place.
+pub(in crate::eval) fn place_limit(
+    mut e: Error,
+    file: &Arc<SourceFile>,
+    at: u32,
+    stack: impl FnOnce() -> Vec<Site>,
+) -> Error {
+    if e.site.is_none() && matches!(e.kind, Kind::Error(ErrorKind::OutputBytesLimit { .. })) {
+        e.site = Some(Site::new(file, at, at));
+        e.stack = stack();
+    }
+    e
 }
