@@ -13,6 +13,7 @@ mod words;
 
 // Expression, reading and output steps.
 mod expr;
+mod line;
 mod out;
 mod straight;
 

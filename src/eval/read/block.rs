@@ -1,21 +1,15 @@
-//! One ordinary line: evaluate every value with pre-line parameters, apply
-//! the assignments, act on the active comment, write the line with values in
-//! place of expressions, and update the state model.
+//! One ordinary line as the reader sees it: the buffers a line's words,
+//! assignments and edits are gathered in, the checks on its words' letters
+//! made while reading it, and where its program-flow M words are. Running
+//! it (evaluating, assigning, writing, updating the machine model) is a
+//! step of `eval/exec/line.rs`.
 
-use std::rc::Rc;
-
+use crate::block::RawWord;
 use crate::codes::MCode;
-use crate::diag::{ErrorKind, WarningKind};
-use crate::emit::{Edit, max_edited_len, write_edited};
-use crate::parse::MAX_LINE;
-use crate::parse::ast::{Assign, Comment, CommentKind, ExprKind, Item, ParamRef, Span, Word};
-use crate::program::FileIndex;
+use crate::diag::ErrorKind;
+use crate::emit::Edit;
+use crate::parse::ast::{ExprKind, Item, Span, Word};
 
-use crate::eval::Interp;
-use crate::eval::expr::message::{is_stable, stabilize};
-use crate::eval::expr::params::is_read_only;
-use crate::eval::flow::FrameKind;
-use crate::eval::read::validate::check_block;
 use crate::eval::state::codes::Checked;
 
 /// Evaluated words of the line: (letter, value).
@@ -24,16 +18,16 @@ pub(crate) type Words = Vec<(u8, f64)>;
 /// Per-line buffers kept between lines.
 #[derive(Default)]
 pub(crate) struct Scratch {
-    words: Words,
-    repl: Vec<(Span, Edit)>,
-    num_set: Vec<(usize, f64)>,
-    named_set: Vec<(crate::parse::Name, f64)>,
-    context_ops: Vec<(u8, Span)>,
-    word_spans: Vec<Span>,
+    pub(in crate::eval) words: Words,
+    pub(in crate::eval) repl: Vec<(Span, Edit)>,
+    pub(in crate::eval) num_set: Vec<(usize, f64)>,
+    pub(in crate::eval) named_set: Vec<(crate::parse::Name, f64)>,
+    pub(in crate::eval) context_ops: Vec<(u8, Span)>,
+    pub(in crate::eval) word_spans: Vec<Span>,
 }
 
 impl Scratch {
-    fn clear(&mut self) {
+    pub(in crate::eval) fn clear(&mut self) {
         self.words.clear();
         self.repl.clear();
         self.num_set.clear();
@@ -45,15 +39,112 @@ impl Scratch {
 
 /// What the words read so far on a line count against the per-line limits.
 #[derive(Default)]
-struct WordCounts {
+pub(in crate::eval) struct WordCounts {
     /// Letters seen (bit per letter), G and M words aside.
     seen: u32,
     m_words: u32,
 }
 
+impl WordCounts {
+    /// Counts the word `w` (read after its value); false if it is a fifth
+    /// M word or a letter given twice (see [`WordCounts::refusal`]).
+    #[inline(always)]
+    pub(in crate::eval) fn count(&mut self, w: &Word) -> bool {
+        if w.letter == b'm' {
+            self.m_words += 1;
+            if self.m_words > 4 {
+                return false;
+            }
+        } else if w.letter != b'g' && w.letter.is_ascii_lowercase() {
+            let bit = 1u32 << (w.letter.wrapping_sub(b'a') as u32 & 31);
+            if self.seen & bit != 0 {
+                return false;
+            }
+            self.seen |= bit;
+        }
+        true
+    }
+
+    /// The error of a word [`WordCounts::count`] refused, at the word.
+    #[cold]
+    pub(in crate::eval) fn refusal(w: &Word) -> ErrorKind {
+        if w.letter == b'm' {
+            ErrorKind::TooManyMWords
+        } else {
+            ErrorKind::DuplicateWord {
+                letter: w.letter as char,
+            }
+        }
+    }
+}
+
+/// Whether the word `w` is refused before its value is read: a U, V or W
+/// word without those axes (`uvw_axes` off; see [`letter_refusal`]).
+#[inline(always)]
+pub(in crate::eval) fn letter_refused(w: &Word, uvw_axes: bool) -> bool {
+    matches!(w.letter, b'u' | b'v' | b'w') && !uvw_axes
+}
+
+/// The error of a word [`letter_refused`] refused, and where: its letter.
+#[cold]
+pub(in crate::eval) fn letter_refusal(w: &Word) -> (ErrorKind, Span) {
+    let k = ErrorKind::BadCharacter {
+        ch: w.letter as char,
+        byte: w.letter,
+    };
+    (k, Span::new(w.span.start, w.span.start + 1))
+}
+
+/// The words of a plain line (`read`, literal words only) as the general
+/// path evaluates them, into `words`; false if the line needs the grammar
+/// (a U, V or W word without `uvw_axes`, an M code that acts on the flow or
+/// the context, a fifth M word, a letter given twice: the grammar's path
+/// reports them).
+#[inline(always)]
+pub(in crate::eval) fn plain_words(
+    read: &[RawWord],
+    uvw_axes: bool,
+    words: &mut Vec<(u8, f64)>,
+) -> bool {
+    let mut seen = 0u32;
+    let mut m_count = 0;
+    for w in read {
+        let letter = w.letter.to_ascii_lowercase();
+        match letter {
+            b'u' | b'v' | b'w' if !uvw_axes => return false,
+            b'm' => {
+                if matches!(w.value, 70.0 | 71.0 | 72.0 | 73.0 | 98.0 | 99.0) {
+                    return false;
+                }
+                m_count += 1;
+                if m_count > 4 {
+                    return false;
+                }
+            }
+            b'g' => {}
+            l => {
+                let bit = 1u32 << ((l - b'a') as u32 & 31);
+                if seen & bit != 0 {
+                    return false;
+                }
+                seen |= bit;
+            }
+        }
+        words.push((letter, w.value));
+    }
+    true
+}
+
+/// The length of `raw` without its trailing blanks.
+pub(in crate::eval) fn trimmed_len(raw: &[u8]) -> usize {
+    raw.iter()
+        .rposition(|b| !b.is_ascii_whitespace())
+        .map_or(0, |p| p + 1)
+}
+
 /// A word that `exec_words` can run: not an M-code it would have to act on
 /// (M70 to M73, M98, M99, or an M-code computed by an expression).
-fn plain_word(item: &Item) -> bool {
+pub(in crate::eval) fn plain_word(item: &Item) -> bool {
     match item {
         Item::Word(w) => {
             w.letter != b'm'
@@ -65,555 +156,16 @@ fn plain_word(item: &Item) -> bool {
     }
 }
 
-impl Interp<'_> {
-    pub(in crate::eval) fn exec_items(
-        &mut self,
-        file: &Rc<FileIndex>,
-        start: u32,
-        raw: &[u8],
-        items: &[Item],
-    ) -> Result<(), crate::diag::Error> {
-        // Scratch buffers are reused from line to line.
-        // Boxed: taking it out and putting it back moves a pointer.
-        let mut scratch = self.reader.scratch.take().unwrap_or_default();
-        let r = self.exec_items_with(file, start, raw, items, &mut scratch);
-        self.reader.scratch = Some(scratch);
-        r
-    }
-
-    fn exec_items_with(
-        &mut self,
-        file: &Rc<FileIndex>,
-        start: u32,
-        raw: &[u8],
-        items: &[Item],
-        scratch: &mut Scratch,
-    ) -> Result<(), crate::diag::Error> {
-        scratch.clear();
-        if items.iter().all(plain_word) {
-            return self.exec_words(file, start, raw, items, scratch);
-        }
-        if items.iter().all(|i| matches!(i, Item::Assign(_))) {
-            return self.exec_assigns(file, start, items, scratch);
-        }
-        let Scratch {
-            words,
-            repl,
-            num_set,
-            named_set,
-            context_ops,
-            word_spans,
-        } = scratch;
-        let mut active = None;
-        let mut counts = WordCounts::default();
-        // 1. Read the line: every value sees the parameters as they were.
-        for item in items {
-            match item {
-                Item::Word(w) => {
-                    let v = self.read_word(file, start, w, &mut counts)?;
-                    words.push((w.letter, v));
-                    word_spans.push(w.span);
-                    if !w.literal {
-                        repl.push((w.value.span, Edit::Number(v)));
-                    }
-                }
-                Item::Assign(a) => {
-                    self.read_assign(file, start, a, num_set, named_set)?;
-                    repl.push((a.span, Edit::Remove));
-                }
-                Item::Comment(c) => {
-                    if c.kind != CommentKind::Semicolon {
-                        active = Some(c);
-                    }
-                    if self.s.strip_comments {
-                        repl.push((c.span, Edit::Remove));
-                    }
-                }
-            }
-        }
-        // The reference checks the block before acting on it (a line
-        // without words has no codes).
-        let result = if words.is_empty() {
-            Ok(Checked::Simple)
-        } else {
-            check_block(
-                words,
-                &self.mach.modal,
-                &self.mach.nurbs,
-                &self.mach.cycle,
-                self.s.user_m,
-            )
-        };
-        // An M98 here is not a call (that is an O-line): refused.
-        if let Ok(c) = &result
-            && let Some(span) = m98_word(c, items, raw.len() as u32)
-        {
-            return Err(self.error_in_line(ErrorKind::M98AmongWords, file, start, span));
-        }
-        // Borrowed where it is: the codes are not copied.
-        let checked = match result {
-            Ok(Checked::Simple) => &Checked::Simple,
-            Err((k, at)) => {
-                let span = at
-                    .and_then(|i| word_spans.get(i).copied())
-                    .unwrap_or(Span::new(0, raw.len() as u32));
-                return Err(self.error_in_line(k, file, start, span));
-            }
-            Ok(Checked::Lathe(ref codes, at)) => {
-                self.apply_assigns(num_set, named_set);
-                return self.lathe_block(file, start, raw.len() as u32, words, codes, at);
-            }
-            Ok(ref c) => c,
-        };
-        // Context save/restore (M70-M73), from the checked codes: each
-        // word is replaced by explicit words.
-        let ms = checked.ms();
-        if ms.iter().any(|m| matches!(m, MCode::State(_))) {
-            for (k, &m) in ms.iter().enumerate() {
-                if let (MCode::State(op), Some(w)) = (m, m_word(items, k)) {
-                    repl.retain(|(s, _)| *s != w.value.span);
-                    repl.push((w.span, Edit::Remove));
-                    context_ops.push((op, w.span));
-                }
-            }
-        }
-        // 2. Assignments: numbered in order, then named in order.
-        self.apply_assigns(num_set, named_set);
-        // 3. The active comment, after the assignments.
-        if let Some(c) = active {
-            self.active_comment(file, start, raw, c, repl)?;
-        }
-        // 4. Program flow words: M99, from the checked codes.
-        let m99_at = ms.iter().position(|&m| m == MCode::Other(99));
-        if let Some(k) = m99_at.filter(|_| self.flow.level() > 0) {
-            return self.m99_line(file, start, raw.len() as u32, items, k);
-        }
-        if let Some(w) = m99_at.and_then(|k| m_word(items, k)) {
-            // M99 in the main program ends it like M2 in the reference.
-            repl.retain(|(s, _)| *s != w.value.span);
-            repl.push((w.span, Edit::Text("M2".into())));
-        }
-        let m99 = m99_at.is_some();
-        // 5. Write the line.
-        repl.sort_by_key(|(s, _)| s.start);
-        let kept = items
-            .iter()
-            .filter(|i| match i {
-                Item::Word(w) => !context_ops.iter().any(|(_, s)| *s == w.span),
-                Item::Assign(_) => false,
-                Item::Comment(c) => {
-                    !self.s.strip_comments
-                        && !repl
-                            .iter()
-                            .any(|(s, r)| matches!(r, Edit::Remove) && *s == c.span)
-                }
-            })
-            .count();
-        if kept > 0 {
-            self.write_line(file, start, raw, repl)?;
-        }
-        // 6. State.
-        let ends = self.apply_words(file, start, words, checked, m99)?;
-        for &(op, span) in context_ops.iter() {
-            self.context_op(op, file, start, span)?;
-        }
-        if ends {
-            self.end_program()?;
-        }
-        Ok(())
-    }
-
-    /// A line whose `k`-th M code is an M99 in a subprogram: the return,
-    /// which is the whole line (the reference refuses a word or assignment
-    /// beside it, after acting on them).
-    fn m99_line(
-        &mut self,
-        file: &Rc<FileIndex>,
-        start: u32,
-        len: u32,
-        items: &[Item],
-        k: usize,
-    ) -> Result<(), crate::diag::Error> {
-        let own = m_word(items, k).map(|w| w.span);
-        let other = items.iter().find_map(|i| match i {
-            Item::Word(w) if Some(w.span) != own => Some(w.span),
-            Item::Assign(a) => Some(a.span),
-            _ => None,
-        });
-        // (In an O-word subroutine the M99 is refused on its own.)
-        if let Some(span) = other
-            && self.flow.frame().kind == FrameKind::M98
-        {
-            return Err(self.error_in_line(ErrorKind::M99AmongWords, file, start, span));
-        }
-        self.return_m99(file, start, len)
-    }
-
-    /// A `(debug,…)`, `(print,…)`, `(log,…)` or `(abort,…)` comment, after
-    /// the line's assignments: its text with the parameters substituted.
-    fn active_comment(
-        &mut self,
-        file: &Rc<FileIndex>,
-        start: u32,
-        raw: &[u8],
-        c: &Comment,
-        repl: &mut Vec<(Span, Edit)>,
-    ) -> Result<(), crate::diag::Error> {
-        match c.kind {
-            CommentKind::Debug | CommentKind::Print | CommentKind::Log | CommentKind::Abort => {
-                let body =
-                    String::from_utf8_lossy(&raw[c.body.start as usize..c.body.end as usize])
-                        .into_owned();
-                let text = self
-                    .substitute(&body, c.body.start)
-                    .map_err(|f| self.fault_in_line(*f, file, start))?;
-                if c.kind == CommentKind::Abort {
-                    return Err(self.error_in_line(
-                        ErrorKind::Abort { message: text },
-                        file,
-                        start,
-                        c.span,
-                    ));
-                }
-                if !self.s.strip_comments {
-                    if c.kind == CommentKind::Debug && self.params.values[5599] <= 0.0 {
-                        repl.push((c.span, Edit::Remove));
-                    } else if c.kind == CommentKind::Debug {
-                        // As (msg,...) the text is shown exactly as
-                        // substituted and never read for parameters again.
-                        repl.push((c.span, Edit::Text(format!("(MSG,{text})"))));
-                    } else {
-                        let text = stabilize(&text);
-                        if !is_stable(&text) {
-                            self.warn(
-                                WarningKind::MessageNotStable,
-                                file,
-                                start + c.span.start,
-                                start + c.span.end,
-                            );
-                        }
-                        repl.push((c.body, Edit::Text(text)));
-                    }
-                }
-            }
-            _ => {}
-        }
-        Ok(())
-    }
-
-    /// The value of a word, after the checks on its letter that the
-    /// reference makes while reading the line (U/V/W without those axes, a
-    /// fifth M word, a letter given twice).
-    #[inline(always)]
-    fn read_word(
-        &mut self,
-        file: &Rc<FileIndex>,
-        start: u32,
-        w: &Word,
-        counts: &mut WordCounts,
-    ) -> Result<f64, crate::diag::Error> {
-        if matches!(w.letter, b'u' | b'v' | b'w') && !self.s.uvw_axes {
-            let k = ErrorKind::BadCharacter {
-                ch: w.letter as char,
-                byte: w.letter,
-            };
-            let at = Span::new(w.span.start, w.span.start + 1);
-            return Err(self.error_in_line(k, file, start, at));
-        }
-        let v = self
-            .eval_value(&w.value)
-            .map_err(|f| self.fault_in_line(*f, file, start))?;
-        if w.letter == b'm' {
-            counts.m_words += 1;
-            if counts.m_words > 4 {
-                let k = ErrorKind::TooManyMWords;
-                return Err(self.error_in_line(k, file, start, w.span));
-            }
-        } else if w.letter != b'g' && w.letter.is_ascii_lowercase() {
-            let bit = 1u32 << (w.letter.wrapping_sub(b'a') as u32 & 31);
-            if counts.seen & bit != 0 {
-                let k = ErrorKind::DuplicateWord {
-                    letter: w.letter as char,
-                };
-                return Err(self.error_in_line(k, file, start, w.span));
-            }
-            counts.seen |= bit;
-        }
-        Ok(v)
-    }
-
-    /// Reads an assignment (target checks, then the value) into the sets
-    /// applied after the line is read.
-    #[inline(always)]
-    pub(in crate::eval) fn read_assign(
-        &mut self,
-        file: &Rc<FileIndex>,
-        start: u32,
-        a: &Assign,
-        num_set: &mut Vec<(usize, f64)>,
-        named_set: &mut Vec<(crate::parse::Name, f64)>,
-    ) -> Result<(), crate::diag::Error> {
-        match &a.target {
-            ParamRef::Numbered(index) => {
-                let i = self
-                    .param_index(index)
-                    .map_err(|f| self.fault_in_line(*f, file, start))?;
-                if is_read_only(i) {
-                    let k = ErrorKind::ParamReadOnly { index: i as i64 };
-                    return Err(self.error_in_line(k, file, start, a.target_span));
-                }
-                let v = self
-                    .eval_value(&a.value)
-                    .map_err(|f| self.fault_in_line(*f, file, start))?;
-                num_set.push((i, v));
-            }
-            ParamRef::Named(name) => {
-                self.create_named(name, a.target_span)
-                    .map_err(|f| self.fault_in_line(*f, file, start))?;
-                let v = self
-                    .eval_value(&a.value)
-                    .map_err(|f| self.fault_in_line(*f, file, start))?;
-                named_set.push((name.clone(), v));
-            }
-        }
-        Ok(())
-    }
-
-    /// The line's assignments, numbered in order, then named in order.
-    pub(in crate::eval) fn apply_assigns(
-        &mut self,
-        num_set: &[(usize, f64)],
-        named_set: &[(crate::parse::Name, f64)],
-    ) {
-        for &(i, v) in num_set {
-            self.params.assign(i, v);
-        }
-        for (n, v) in named_set {
-            self.set_named(n, *v);
-        }
-    }
-
-    /// A block ended the program (M2, M30, M99 at the top): the closing `%`
-    /// of a `%` program, then nothing more runs.
-    pub(in crate::eval) fn end_program(&mut self) -> Result<(), crate::diag::Error> {
-        if self.main.percent_start {
-            self.emit_raw(b"%")?;
-        }
-        self.out.ended = true;
-        Ok(())
-    }
-
-    /// A line of words only, none of them a program-flow or context M-code
-    /// (the common line of a loop body): `exec_items_with` without the
-    /// steps that have nothing to do.
-    fn exec_words(
-        &mut self,
-        file: &Rc<FileIndex>,
-        start: u32,
-        raw: &[u8],
-        items: &[Item],
-        scratch: &mut Scratch,
-    ) -> Result<(), crate::diag::Error> {
-        let Scratch { words, repl, .. } = scratch;
-        let mut counts = WordCounts::default();
-        for item in items {
-            let Item::Word(w) = item else {
-                unreachable!("checked by plain_word")
-            };
-            let v = self.read_word(file, start, w, &mut counts)?;
-            words.push((w.letter, v));
-            if !w.literal {
-                repl.push((w.value.span, Edit::Number(v)));
-            }
-        }
-        if self.fast_words(words) {
-            // Checked and applied: a plain move.
-            return self.write_line(file, start, raw, repl);
-        }
-        let checked = match check_block(
-            words,
-            &self.mach.modal,
-            &self.mach.nurbs,
-            &self.mach.cycle,
-            self.s.user_m,
-        ) {
-            Err((k, at)) => {
-                let span = match at.and_then(|i| items.get(i)) {
-                    Some(Item::Word(w)) => w.span,
-                    _ => Span::new(0, raw.len() as u32),
-                };
-                return Err(self.error_in_line(k, file, start, span));
-            }
-            Ok(Checked::Lathe(codes, at)) => {
-                return self.lathe_block(file, start, raw.len() as u32, words, &codes, at);
-            }
-            Ok(c) => c,
-        };
-        self.write_line(file, start, raw, repl)?;
-        if self.apply_words(file, start, words, &checked, false)? {
-            self.end_program()?;
-        }
-        Ok(())
-    }
-
-    /// A line of assignments only: `exec_items_with` without the steps that
-    /// have nothing to do (nothing is written).
-    fn exec_assigns(
-        &mut self,
-        file: &Rc<FileIndex>,
-        start: u32,
-        items: &[Item],
-        scratch: &mut Scratch,
-    ) -> Result<(), crate::diag::Error> {
-        let Scratch {
-            num_set, named_set, ..
-        } = scratch;
-        for item in items {
-            let Item::Assign(a) = item else {
-                unreachable!("only assignments")
-            };
-            self.read_assign(file, start, a, num_set, named_set)?;
-        }
-        // No words: an empty block changes nothing in the state model.
-        self.apply_assigns(num_set, named_set);
-        Ok(())
-    }
-
-    /// Writes the line with its replacements. A line that cannot be too
-    /// long whatever its numbers read goes to the output with them (to be
-    /// written maybe on the output thread); any other is written here to
-    /// check its length.
-    fn write_line(
-        &mut self,
-        file: &Rc<FileIndex>,
-        start: u32,
-        raw: &[u8],
-        repl: &[(Span, Edit)],
-    ) -> Result<(), crate::diag::Error> {
-        if !self.out.consuming()
-            && max_edited_len(raw.len(), repl, self.s.precision).is_some_and(|n| n <= MAX_LINE)
-        {
-            self.count_line()?;
-            return self
-                .out
-                .output
-                .edited_line(raw, repl)
-                .map_err(|e| self.output_error_at(e, &file.file, start));
-        }
-        let mut out = std::mem::take(&mut self.out.buf);
-        out.clear();
-        if let Err((value, span)) = write_edited(&mut out, raw, repl, self.s.precision) {
-            self.out.buf = out;
-            let k = ErrorKind::Unprintable { value };
-            return Err(self.error_in_line(k, file, start, span));
-        }
-        if out.len() > MAX_LINE {
-            let len = out.len();
-            self.out.buf = out;
-            let trimmed_len = raw
-                .iter()
-                .rposition(|b| !b.is_ascii_whitespace())
-                .map_or(0, |p| p + 1);
-            let end = start + trimmed_len as u32;
-            return Err(self.error(ErrorKind::OutputLineTooLong { len }, file, start, end));
-        }
-        let r = if self.out.consuming() {
-            let f = file.file.clone();
-            self.count_line()
-                .and_then(|_| self.consume(&f, start, &out, repl.is_empty()))
-        } else {
-            self.emit_raw(&out)
-        };
-        self.out.buf = out;
-        r
-    }
-}
-
-impl Interp<'_> {
-    /// Runs a plain line (literal words only, see
-    /// [`crate::eval::read::plain`]) of the words `read` (their spans in the
-    /// line). `None` sends the line to the grammar instead.
-    pub(in crate::eval) fn exec_plain(
-        &mut self,
-        file: &Rc<FileIndex>,
-        start: u32,
-        raw: &[u8],
-        read: &[crate::block::RawWord],
-    ) -> Option<Result<(), crate::diag::Error>> {
-        let mut words = std::mem::take(&mut self.reader.words_buf);
-        words.clear();
-        let mut seen = 0u32;
-        let mut m_count = 0;
-        for w in read {
-            let letter = w.letter.to_ascii_lowercase();
-            match letter {
-                b'u' | b'v' | b'w' if !self.s.uvw_axes => return None,
-                b'm' => {
-                    if matches!(w.value, 70.0 | 71.0 | 72.0 | 73.0 | 98.0 | 99.0) {
-                        return None;
-                    }
-                    m_count += 1;
-                    if m_count > 4 {
-                        return None;
-                    }
-                }
-                b'g' => {}
-                l => {
-                    let bit = 1u32 << ((l - b'a') as u32 & 31);
-                    if seen & bit != 0 {
-                        return None;
-                    }
-                    seen |= bit;
-                }
-            }
-            words.push((letter, w.value));
-        }
-        let r = (|| {
-            let checked = match check_block(
-                &words,
-                &self.mach.modal,
-                &self.mach.nurbs,
-                &self.mach.cycle,
-                self.s.user_m,
-            ) {
-                Err((k, at)) => {
-                    let span = at
-                        .and_then(|i| read.get(i))
-                        .map(|w| Span::new(w.span.start.into(), w.span.end.into()))
-                        .unwrap_or(Span::new(0, raw.len() as u32));
-                    return Err(self.error_in_line(k, file, start, span));
-                }
-                Ok(Checked::Lathe(codes, at)) => {
-                    let len = raw.len() as u32;
-                    return self.lathe_block(file, start, len, &words, &codes, at);
-                }
-                Ok(c) => c,
-            };
-            let trimmed = raw
-                .iter()
-                .rposition(|b| !b.is_ascii_whitespace())
-                .map_or(0, |p| p + 1);
-            self.emit_source(file, start, &raw[..trimmed])?;
-            if self.apply_words(file, start, &words, &checked, false)? {
-                self.end_program()?;
-            }
-            Ok(())
-        })();
-        self.reader.words_buf = words;
-        Some(r)
-    }
-}
-
 /// Where the line's M98 is, if its checked codes hold one (the whole
 /// line, of length `len`, if its word is not found).
-fn m98_word(c: &Checked, items: &[Item], len: u32) -> Option<Span> {
+pub(in crate::eval) fn m98_word(c: &Checked, items: &[Item], len: u32) -> Option<Span> {
     let k = c.ms().iter().position(|&m| m == MCode::Other(98))?;
     Some(m_word(items, k).map_or(Span::new(0, len), |w| w.span))
 }
 
 /// The line's `k`-th M word (the one of its `k`-th M code: the checks
 /// decode every M word they accept, in line order).
-fn m_word(items: &[Item], k: usize) -> Option<&Word> {
+pub(in crate::eval) fn m_word(items: &[Item], k: usize) -> Option<&Word> {
     items
         .iter()
         .filter_map(|i| match i {
