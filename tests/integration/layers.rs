@@ -123,3 +123,65 @@ fn readme_states_the_layer_order() {
         last = at;
     }
 }
+
+/// The evaluator's parts (`src/eval`), lowest first: each uses only those
+/// before it. `eval/mod.rs`, which holds them all, is above them.
+const EVAL_ORDER: &[&str] = &["settings", "expr", "state", "flow", "read", "out", "exec"];
+
+/// The parts of the evaluator `text` names: `eval::part::`, and from its
+/// own files `super::part::` (`super::super::part::` one folder down).
+fn eval_uses(text: &str) -> BTreeSet<String> {
+    let code = text.split("#[cfg(test)]\nmod tests").next().unwrap_or("");
+    let mut found = BTreeSet::new();
+    for line in code.lines().filter(|l| !l.trim_start().starts_with("//")) {
+        for part in EVAL_ORDER {
+            let named = |prefix: &str| {
+                let path = format!("{prefix}{part}::");
+                line.match_indices(&path)
+                    .any(|(i, _)| !line[..i].ends_with(|c: char| c.is_alphanumeric() || c == '_'))
+            };
+            if named("eval::") || named("super::") {
+                found.insert((*part).to_string());
+            }
+        }
+        // `eval::tools` is the machine model's tools.
+        if line.contains("eval::tools::") || line.contains("super::tools::") {
+            found.insert("state".to_string());
+        }
+    }
+    found
+}
+
+#[test]
+fn evaluator_parts_use_only_lower_parts() {
+    let eval = crate::root().join("src").join("eval");
+    let mut wrong = Vec::new();
+    let mut files = 0;
+    for e in walkdir::WalkDir::new(&eval).into_iter().flatten() {
+        let p = e.path();
+        if p.extension().is_none_or(|x| x != "rs") || p.file_name().is_some_and(|n| n == "tests.rs")
+        {
+            continue;
+        }
+        let rel = p.strip_prefix(&eval).expect("under src/eval");
+        let name = rel.to_string_lossy().replace('\\', "/");
+        let part = module_of(rel);
+        if part == "mod" {
+            continue;
+        }
+        let Some(level) = EVAL_ORDER.iter().position(|m| *m == part) else {
+            wrong.push(format!("eval/{name}: part {part} is not in the order"));
+            continue;
+        };
+        files += 1;
+        let text = std::fs::read_to_string(p).expect("source file");
+        for used in eval_uses(&text) {
+            let at = EVAL_ORDER.iter().position(|m| *m == used).unwrap_or(0);
+            if at > level {
+                wrong.push(format!("eval/{name}: {part} uses {used}, a higher part"));
+            }
+        }
+    }
+    assert!(files > 30, "files found: {files}");
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
