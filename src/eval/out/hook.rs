@@ -123,7 +123,8 @@ pub trait LineConsumer: Send {
     fn comp_position(&mut self, _p: [f64; 2]) {}
 }
 
-/// A line of moves alone waiting in a [`FormBatch`].
+/// A line of moves alone a straight run holds back (in a `FormBatch`)
+/// to hand over with others.
 #[derive(Clone, Copy)]
 pub struct FormLine {
     /// Offset of its start in its file.

@@ -141,9 +141,9 @@ impl WordSink for () {
 
 /// Keeps the words read (with their spans and shapes) in a [`RawLine`],
 /// so that each number is read once for the record and for the line's
-/// block, which [`Block::replay`] makes from it where one is needed. A
+/// block, which [`crate::block::Block::replay`] makes from it where one is needed. A
 /// number the byte-at-a-time reader took leaves the line to
-/// [`Block::decode_into`] (see [`ToRaw::finish`]).
+/// [`crate::block::Block::decode_into`] (see [`ToRaw::finish`]).
 pub(in crate::eval) struct ToRaw<'a> {
     raw: &'a mut RawLine,
     /// Offset of the line's start.
