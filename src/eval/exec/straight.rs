@@ -9,7 +9,6 @@ use crate::diag::Error;
 use crate::program::FileIndex;
 
 use crate::block::MovesRule;
-use crate::codes::CutterComp;
 use crate::eval::Interp;
 use crate::eval::out::hook::FormBatch;
 use crate::eval::read::scan_ahead::{Ahead, Decoded, InPlace, LineRoom, Lines, Read, Shared};
@@ -53,11 +52,7 @@ impl Interp<'_> {
         first_line: u32,
         stop_line: u32,
     ) -> Result<u32, Error> {
-        if !self.s.plain_runs
-            || self.mach.rotated
-            || (self.mach.modal.cutter_comp != CutterComp::Off || self.mach.comp_pending)
-            || self.out.ended
-        {
+        if !self.s.plain_runs || !self.mach.is_plain() || self.out.ended {
             return Ok(0);
         }
         let max_lines = stop_line.saturating_sub(first_line);
@@ -212,10 +207,7 @@ impl Interp<'_> {
                     Some(r) => r?,
                 }
                 *batch_start = p.next;
-                if self.out.ended
-                    || self.mach.rotated
-                    || (self.mach.modal.cutter_comp != CutterComp::Off || self.mach.comp_pending)
-                {
+                if self.out.ended || !self.mach.is_plain() {
                     *last_start = *i;
                     *i = p.next;
                     *lines += 1;

@@ -18,7 +18,7 @@ use crate::block::{
 };
 use crate::number::{Digits, POW10, digits_in};
 
-use crate::codes::{CutterComp, FeedMode, MotionMode, Plane};
+use crate::codes::{FeedMode, MotionMode, Plane};
 use crate::eval::read::plain::{PlainRoom, read_plain_in};
 use crate::eval::settings::Settings;
 use crate::eval::state::Machine;
@@ -585,11 +585,8 @@ pub(in crate::eval) fn fast_line(mach: &mut Machine, p: &Plain) -> bool {
     if !accepted || feed < 0.0 || (p.mask & (1 << S) != 0 && p.vals[S] < 0.0) {
         return false;
     }
-    mach.modal.motion = motion;
-    mach.modal.feed = feed;
-    if p.mask & (1 << S) != 0 {
-        mach.modal.speed = p.vals[S];
-    }
+    let speed = (p.mask & (1 << S) != 0).then_some(p.vals[S]);
+    mach.set_plain_modes(motion, feed, speed);
     let mut axes = p.mask & AXIS_MASK;
     while axes != 0 {
         let slot = axes.trailing_zeros() as usize;
@@ -603,10 +600,7 @@ pub(in crate::eval) fn fast_line(mach: &mut Machine, p: &Plain) -> bool {
 /// (the block checks accept them and the state model is updated), false
 /// to leave them to the general checks.
 pub(in crate::eval) fn fast_words(mach: &mut Machine, s: &Settings, words: &[(u8, f64)]) -> bool {
-    if mach.rotated
-        || (mach.modal.cutter_comp != CutterComp::Off || mach.comp_pending)
-        || !s.plain_runs
-    {
+    if !mach.is_plain() || !s.plain_runs {
         return false;
     }
     let mut p = Plain::default();
@@ -647,10 +641,8 @@ fn arc_ok(mach: &mut Machine, p: &Plain, motion: MotionMode) -> bool {
         n += 1;
     }
     // The checks read the motion mode the line sets.
-    let old = std::mem::replace(&mut mach.modal.motion, motion);
-    let ok = mach.check_motion(&words[..count], &axes[..n]).is_ok();
-    mach.modal.motion = old;
-    ok
+    mach.check_motion_as(motion, &words[..count], &axes[..n])
+        .is_ok()
 }
 
 #[cfg(test)]

@@ -824,11 +824,51 @@ impl Machine {
         polar_end(self.modal.distance, [at(0)?, at(1)?], radius, angle)
     }
 
+    /// Whether the machine is in a plain state, where the fast paths may
+    /// run a line: no XY rotation, and cutter compensation neither on nor
+    /// just turned off (the next move is then checked).
+    #[inline(always)]
+    pub(in crate::eval) fn is_plain(&self) -> bool {
+        !(self.rotated || self.modal.cutter_comp != CutterComp::Off || self.comp_pending)
+    }
+
+    /// A line the straight-line loop accepted (G0–G3 with axis, F and S
+    /// words): its motion mode, feed and speed (`speed`: its S word, if it
+    /// has one) are set; its moves follow ([`Machine::move_axis`]).
+    #[inline(always)]
+    pub(in crate::eval) fn set_plain_modes(
+        &mut self,
+        motion: MotionMode,
+        feed: f64,
+        speed: Option<f64>,
+    ) {
+        self.modal.motion = motion;
+        self.modal.feed = feed;
+        if let Some(v) = speed {
+            self.modal.speed = v;
+        }
+    }
+
+    /// [`Machine::check_motion`] with the motion mode `motion` (the one
+    /// the line sets) in place of the current one.
+    #[inline(always)]
+    pub(in crate::eval) fn check_motion_as(
+        &mut self,
+        motion: MotionMode,
+        words: &[(u8, f64)],
+        axis_words: &[(usize, f64)],
+    ) -> Result<(), ErrorKind> {
+        let old = std::mem::replace(&mut self.modal.motion, motion);
+        let r = self.check_motion(words, axis_words);
+        self.modal.motion = old;
+        r
+    }
+
     /// The common line (G0/G1, axis, F and S words, each at most once) in
     /// a plain state: as the general update below, in a few steps. False
     /// leaves the state untouched.
     pub(in crate::eval) fn apply_simple(&mut self, words: &[(u8, f64)]) -> bool {
-        if self.rotated || self.modal.cutter_comp != CutterComp::Off || self.comp_pending {
+        if !self.is_plain() {
             return false;
         }
         let mut motion = self.modal.motion;
@@ -973,5 +1013,65 @@ impl Machine {
             _ => {}
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Applies one line of `words` with its G `codes` to the machine, as
+    /// line `line`; the update needs nothing but its arguments.
+    fn apply(m: &mut Machine, env: &mut Env<'_>, words: &[(u8, f64)], codes: &[GCode]) {
+        let gs: Vec<(GCode, usize)> = codes.iter().map(|&g| (g, 0)).collect();
+        let checked = Checked::Line(LineCodes::of(&gs, &[], false));
+        let mut warnings = Vec::new();
+        let end = m
+            .apply_codes(env, words, &checked, false, &mut warnings)
+            .expect("applied");
+        m.end_line(end).expect("ended");
+        assert!(warnings.is_empty());
+    }
+
+    /// A probe without `--zero-start` leaves the position and its results
+    /// unknown, naming the line the update was given.
+    #[test]
+    fn a_probe_forgets_the_position_at_its_line() {
+        let s = Settings::default();
+        let mut params = Params::new(s.zero_start);
+        let mut m = Machine::new(&s);
+        let mut env = Env {
+            s: &s,
+            params: &mut params,
+            line: 7,
+        };
+        let probe = GCode::Motion(MotionMode::Probe(2));
+        apply(&mut m, &mut env, &[(b'g', 38.2), (b'z', -1.0)], &[probe]);
+        assert_eq!(m.pos.axes[2], Err(Unknown::After("a probing move", 7)));
+        assert_eq!(m.probed_at, Some(7));
+        assert!(!params.known[5061]);
+    }
+
+    /// G92 writes its offset to the parameters it is handed: the position
+    /// becomes the word's value, the offset the difference, kept in the
+    /// machine's units the settings give (inches by default).
+    #[test]
+    fn g92_writes_the_offset_parameters() {
+        let s = Settings {
+            zero_start: true,
+            ..Settings::default()
+        };
+        let mut params = Params::new(s.zero_start);
+        let mut m = Machine::new(&s);
+        let mut env = Env {
+            s: &s,
+            params: &mut params,
+            line: 1,
+        };
+        let g92 = GCode::NonModal(NonModal::SetG92);
+        apply(&mut m, &mut env, &[(b'g', 92.0), (b'x', 2.0)], &[g92]);
+        assert_eq!(m.pos.axes[0], Ok(2.0));
+        assert_eq!(params.values[5211], -2.0 / 25.4);
+        assert!(params.g92_applied());
     }
 }
