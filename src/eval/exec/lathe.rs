@@ -75,7 +75,7 @@ impl Interp<'_> {
             ends = self.apply_words(file, start, &others, &checked, false)?;
         }
         let q = words.iter().rev().find(|w| w.0 == b'q').map(|w| w.1);
-        let computes_comp = self.consumer_computes_comp();
+        let computes_comp = self.out.consumer_computes_comp();
         let (q, write) = self
             .mach
             .lathe_checks(name, number, q, computes_comp)
@@ -365,7 +365,7 @@ impl Interp<'_> {
             Some(Err(k)) => return Err(self.lathe_err(k, file, start, len)),
         };
         if let Some(p) = f.comp_point {
-            self.consumer_comp_position(p);
+            self.out.consumer_comp_position(p);
         }
         // The moves belong to the cycle line.
         let (cf, cs) = (f.file.clone(), f.start);

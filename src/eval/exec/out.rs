@@ -84,16 +84,4 @@ impl Interp<'_> {
     ) -> Result<(), Error> {
         self.out.consume_input(run_at!(self), file, start, bytes)
     }
-
-    /// Whether the consumer computes cutter radius compensation into the
-    /// path.
-    pub(in crate::eval) fn consumer_computes_comp(&self) -> bool {
-        self.out.consumer_computes_comp()
-    }
-
-    /// Tells the consumer where LinuxCNC's compensation now reads the
-    /// tool's position.
-    pub(in crate::eval) fn consumer_comp_position(&mut self, p: [f64; 2]) {
-        self.out.consumer_comp_position(p);
-    }
 }
