@@ -16,7 +16,7 @@ use crate::parse::ast::{Item, Line, LineKind};
 use crate::program::{FileIndex, Window, next_line};
 
 use crate::codes::{GCode, MotionMode};
-use crate::eval::flow::{FrameKind, SubRec};
+use crate::eval::flow::SubRec;
 use crate::eval::read::validate::{check_block, check_contour_line};
 use crate::eval::state::codes::{Checked, LineCodes};
 use crate::eval::{Interp, file_key, read_error};
@@ -122,28 +122,17 @@ impl Interp<'_> {
         label: Name,
         target: &SubRec,
     ) -> Result<usize, Error> {
-        let ret = self.flow.cur.clone();
         let level = self.flow.frames.len();
-        let mut f = self.flow.new_frame(FrameKind::Call, label.clone());
-        if self.flow.level() + 1 > crate::eval::flow::MAX_CALL_LEVEL {
-            return Err(self.error(
-                ErrorKind::TooDeep {
-                    limit: crate::eval::flow::MAX_CALL_LEVEL,
-                },
-                file,
-                start,
-                start + len,
-            ));
+        if !self
+            .flow
+            .enter_unsited(label.clone(), self.flow.cur.clone())
+        {
+            let limit = crate::eval::flow::MAX_CALL_LEVEL;
+            return Err(self.error(ErrorKind::TooDeep { limit }, file, start, start + len));
         }
-        f.ret = Some(ret);
-        self.flow.frames.push(f);
         // A call without arguments.
         self.bind_args(&[0.0; 30], 0.0);
-        self.flow
-            .subs
-            .entry(label.clone())
-            .or_insert_with(|| target.clone());
-        self.flow.called.insert(label.clone());
+        self.flow.note_called(&label, target);
         self.flow.last_called = Some(label);
         self.flow.goto(&target.file, target.oidx, true);
         Ok(level)

@@ -382,6 +382,19 @@ impl Flow {
         true
     }
 
+    /// Enters a call to `name` that no O-line makes (a lathe cycle's call
+    /// of its contour subroutine), returning to `ret`; false (nothing
+    /// entered) past [`MAX_CALL_LEVEL`].
+    pub(in crate::eval) fn enter_unsited(&mut self, name: Name, ret: Cursor) -> bool {
+        let mut f = self.new_frame(FrameKind::Call, name);
+        if self.level() + 1 > MAX_CALL_LEVEL {
+            return false;
+        }
+        f.ret = Some(ret);
+        self.frames.push(f);
+        true
+    }
+
     /// Gives the frame just entered its arguments: #1-#30 of `params`
     /// saved in it (the caller gets them back on return) and set to
     /// `argv`, and `n_args` when `oword_nargs`.
