@@ -18,4 +18,5 @@ mod out;
 mod straight;
 
 // Control-flow steps (O-words, calls, returns).
+mod call;
 mod control;
