@@ -4,19 +4,15 @@
 //! the reader in `read`, the output in `out`) changes only through its own
 //! methods and knows nothing of `Interp`; only the steps here (and the
 //! entry points in `eval/mod.rs`) hold all of them, and each hands a part
-//! method the other parts it reads or changes as arguments.
+//! method the other parts it reads or changes as arguments. One file a
+//! kind of step; the README's Design section says what each holds.
 
-// Machine model steps (codes, motion, tools, cycles).
-mod lathe;
-mod restore;
-mod words;
-
-// Expression, reading and output steps.
-mod expr;
-mod line;
-mod out;
-mod straight;
-
-// Control-flow steps (O-words, calls, returns).
 mod call;
 mod control;
+mod expr;
+mod lathe;
+mod line;
+mod out;
+mod restore;
+mod straight;
+mod words;
