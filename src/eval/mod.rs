@@ -564,7 +564,7 @@ impl<'s> Interp<'s> {
     }
 
     fn step(&mut self) -> Result<(), Error> {
-        if self.mach.in_contour() {
+        if self.mach.lathe.is_some() {
             return self.step_contour();
         }
         let file = self.flow.cur.file.clone();

@@ -54,15 +54,15 @@ impl Scope for Interp<'_> {
     }
 
     fn modes(&self) -> &Modes {
-        self.mach.modes()
+        &self.mach.modal
     }
 
     fn tools(&self) -> (Option<f64>, Option<f64>) {
-        (self.mach.tools().current, self.mach.tools().selected)
+        (self.mach.tools.current, self.mach.tools.selected)
     }
 
     fn pockets(&self) -> Option<(f64, f64)> {
-        self.mach.pockets()
+        self.mach.pockets
     }
 
     fn position(&self, axis: usize, span: Span) -> EvalResult {
@@ -78,7 +78,7 @@ impl Scope for Interp<'_> {
     }
 
     fn probed_at(&self) -> Option<u32> {
-        self.mach.probed_at()
+        self.mach.probed_at
     }
 
     fn tool_data_hint(&self) -> String {

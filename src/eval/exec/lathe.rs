@@ -223,7 +223,12 @@ impl Interp<'_> {
         self.reader.at(start, line_idx);
         if let Some(oidx) = self.take_oline(&file, line_idx)? {
             self.exec_oline(&file, oidx)?;
-            if self.mach.contour_level() == Some(self.flow.frames.len()) {
+            if self
+                .mach
+                .lathe
+                .as_ref()
+                .is_some_and(|l| l.level == self.flow.frames.len())
+            {
                 let end = file.olines[oidx as usize].line_len();
                 return self.finish_lathe(&file, start, end);
             }
@@ -430,7 +435,13 @@ impl Interp<'_> {
         m: Move,
     ) -> Result<(), Error> {
         let words = self.mach.lathe_move_words(m);
-        let checked = match check_block(&words, self.mach.block_state(), self.s.user_m) {
+        let checked = match check_block(
+            &words,
+            &self.mach.modal,
+            &self.mach.nurbs,
+            &self.mach.cycle,
+            self.s.user_m,
+        ) {
             Ok(c) => c,
             Err((k, _)) => return Err(self.error(k, file, start, start + len)),
         };

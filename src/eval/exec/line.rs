@@ -96,7 +96,13 @@ impl Interp<'_> {
         let result = if words.is_empty() {
             Ok(Checked::Simple)
         } else {
-            check_block(words, self.mach.block_state(), self.s.user_m)
+            check_block(
+                words,
+                &self.mach.modal,
+                &self.mach.nurbs,
+                &self.mach.cycle,
+                self.s.user_m,
+            )
         };
         // An M98 here is not a call (that is an O-line): refused.
         if let Ok(c) = &result
@@ -368,7 +374,13 @@ impl Interp<'_> {
             // Checked and applied: a plain move.
             return self.write_line(file, start, raw, repl);
         }
-        let checked = match check_block(words, self.mach.block_state(), self.s.user_m) {
+        let checked = match check_block(
+            words,
+            &self.mach.modal,
+            &self.mach.nurbs,
+            &self.mach.cycle,
+            self.s.user_m,
+        ) {
             Err((k, at)) => {
                 let span = match at.and_then(|i| items.get(i)) {
                     Some(Item::Word(w)) => w.span,
@@ -475,7 +487,13 @@ impl Interp<'_> {
             return None;
         }
         let r = (|| {
-            let checked = match check_block(&words, self.mach.block_state(), self.s.user_m) {
+            let checked = match check_block(
+                &words,
+                &self.mach.modal,
+                &self.mach.nurbs,
+                &self.mach.cycle,
+                self.s.user_m,
+            ) {
                 Err((k, at)) => {
                     let span = at
                         .and_then(|i| read.get(i))

@@ -41,7 +41,7 @@ impl Interp<'_> {
             self.warn(w, file, start, start);
         }
         let end = r.map_err(|k| self.error(k, file, start, start))?;
-        if let Some(on) = self.mach.take_retain_line() {
+        if let Some(on) = self.mach.retain_line.take() {
             self.emit_raw(if on { b"G43" } else { b"G49" })?;
         }
         self.mach
@@ -53,7 +53,7 @@ impl Interp<'_> {
     /// A read of the position after the standalone reference's position
     /// departed from the machine's: warning W0110 at the read.
     pub(in crate::eval) fn note_standalone_drift(&mut self, span: Span) {
-        if let Some((why, line)) = self.mach.standalone_drift() {
+        if let Some((why, line)) = self.mach.standalone_drift {
             self.warn_standalone(why, line, span);
         }
     }
@@ -114,19 +114,19 @@ mod tests {
         let sink = Sink::new(Destination::Memory(MemoryOut::default())).expect("sink");
         let loader = Loader::new(SearchPath::default(), None);
         let mut it = Interp::new(s, loader, main.clone(), sink);
-        let before = it.mach.modes().clone();
+        let before = it.mach.modal.clone();
         let mut ends = false;
         for line in lines {
             let w = words(line);
             let m = &it.mach;
-            let checked = check_block(&w, m.block_state(), s.user_m)
+            let checked = check_block(&w, &m.modal, &m.nurbs, &m.cycle, s.user_m)
                 .unwrap_or_else(|e| panic!("{line}: {e:?}"));
             ends = it
                 .apply_words(&main, 0, &w, &checked, false)
                 .unwrap_or_else(|e| panic!("{line}: {e:?}"));
         }
         see(&it);
-        (before, it.mach.modes().clone(), ends)
+        (before, it.mach.modal.clone(), ends)
     }
 
     /// The state after lines whose G and M codes the checks decode (G80
@@ -200,7 +200,7 @@ mod tests {
         let s = Settings::default();
         let tool = |lines: &[&str]| {
             let mut t = None;
-            run(&s, lines, |it| t = it.mach.tools().current);
+            run(&s, lines, |it| t = it.mach.tools.current);
             t
         };
         assert_eq!(tool(&["T2 M6"]), Some(2.0));

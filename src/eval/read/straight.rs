@@ -553,7 +553,7 @@ pub(in crate::eval) fn fast_line(mach: &mut Machine, p: &Plain) -> bool {
     }
     let g = p.mask & 1 != 0;
     let motion = if !g {
-        mach.modes().motion
+        mach.modal.motion
     } else {
         match p.vals[G] {
             0.0 => MotionMode::Rapid,
@@ -566,16 +566,16 @@ pub(in crate::eval) fn fast_line(mach: &mut Machine, p: &Plain) -> bool {
     let feed = if p.mask & (1 << F) != 0 {
         p.vals[F]
     } else {
-        mach.modes().feed
+        mach.modal.feed
     };
     let moves = g || p.mask & AXIS_MASK != 0;
-    let feed_ok = mach.modes().feed_mode != FeedMode::InverseTime && feed != 0.0;
+    let feed_ok = mach.modal.feed_mode != FeedMode::InverseTime && feed != 0.0;
     let accepted = match motion {
         MotionMode::Rapid => p.mask & !FAST_MASK == 0,
         MotionMode::Linear => p.mask & !FAST_MASK == 0 && (!moves || feed_ok),
         MotionMode::ArcCw | MotionMode::ArcCcw => {
             p.mask & !ARC_MASK == 0
-                && mach.modes().plane == Plane::XY
+                && mach.modal.plane == Plane::XY
                 && p.mask & (1 << I | 1 << J | 1 << R) != 0
                 && feed_ok
                 && arc_ok(mach, p, motion)

@@ -67,7 +67,9 @@ fn rough(m: MotionMode) -> bool {
 /// the checks decoded them (and whether it runs a lathe cycle, G70–G72).
 pub(in crate::eval) fn check_block(
     words: &[(u8, f64)],
-    (modal, points, cycle): (&Modes, &Nurbs, &Cycle),
+    modal: &Modes,
+    points: &Nurbs,
+    cycle: &Cycle,
     user_m: u128,
 ) -> Result<Checked, (ErrorKind, Option<usize>)> {
     if simple_block_ok(words, modal) {
@@ -1074,7 +1076,7 @@ mod tests {
 
     fn checked(words: &[(u8, f64)]) -> Checked {
         let m = Modes::default();
-        check_block(words, (&m, &Nurbs::default(), &Cycle::default()), 0).expect("accepted")
+        check_block(words, &m, &Nurbs::default(), &Cycle::default(), 0).expect("accepted")
     }
 
     fn gs(c: &LineCodes) -> Vec<GCode> {

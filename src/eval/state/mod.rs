@@ -60,47 +60,47 @@ impl Position {
 // 0.5% more instructions on a loop-heavy program).
 #[repr(C)]
 pub(super) struct Machine {
-    modal: Modes,
-    pos: Position,
+    pub(super) modal: Modes,
+    pub(super) pos: Position,
     /// The tool table, the tool in the spindle and the selected one.
-    tools: tools::Tools,
+    pub(super) tools: tools::Tools,
     /// RETAIN_G43 changed the tool length offset on this line: the output
     /// line to add after it (G43 or G49).
-    retain_line: Option<bool>,
+    pub(super) retain_line: Option<bool>,
     /// Pockets of the current and the selected tool, known as the standalone
     /// reference numbers them (by tool number) under `--zero-start`.
-    pockets: Option<(f64, f64)>,
+    pub(super) pockets: Option<(f64, f64)>,
     /// Applied tool length offset, machine units.
-    tlo: Option<[f64; 9]>,
+    pub(super) tlo: Option<[f64; 9]>,
     /// An XY rotation was set (not modelled).
-    rotated: bool,
+    pub(super) rotated: bool,
     /// Control points of the NURBS block being read.
-    nurbs: nurbs::Nurbs,
+    pub(super) nurbs: nurbs::Nurbs,
     /// R plane and depth of the last canned cycle.
-    cycle: cycle::Cycle,
+    pub(super) cycle: cycle::Cycle,
     /// The tool length offset changed since the last move.
-    tlo_moved: bool,
+    pub(super) tlo_moved: bool,
     /// Line of the last G38 probe that left the results unknown.
-    probed_at: Option<u32>,
+    pub(super) probed_at: Option<u32>,
     /// Why and since which line the standalone reference's position
     /// differs from the machine's (see W0110).
-    standalone_drift: Option<(&'static str, u32)>,
+    pub(super) standalone_drift: Option<(&'static str, u32)>,
     /// The line of an M61 not followed by a tool change, and the tool the
     /// standalone reference still has as current (see W0110).
-    m61: Option<(u32, Option<f64>)>,
+    pub(super) m61: Option<(u32, Option<f64>)>,
     /// Cutter compensation, once a program turns it on.
-    comp: Option<Box<ccomp::CompRun>>,
+    pub(super) comp: Option<Box<ccomp::CompRun>>,
     /// G40 ended an offset path: the next move must be straight (the fast
     /// paths leave such lines to the general one).
-    comp_pending: bool,
+    pub(super) comp_pending: bool,
     /// A G70 whose compensated path the evaluator writes itself (see
     /// [`ccomp::Written`]).
-    comp_written: ccomp::Written,
+    pub(super) comp_written: ccomp::Written,
     /// A lathe cycle whose contour subroutine is running.
-    lathe: Option<Box<lathe::LatheRun>>,
+    pub(super) lathe: Option<Box<lathe::LatheRun>>,
     /// Tools whose data a G10 left unknown (a tool-data read of one is
     /// unknown, whatever the table held).
-    unknown_tools: HashSet<i64>,
+    pub(super) unknown_tools: HashSet<i64>,
 }
 
 /// What an update of the machine model reads and changes besides the
@@ -115,66 +115,6 @@ pub(in crate::eval) struct Env<'a> {
 }
 
 impl Machine {
-    /// The modal state.
-    #[inline(always)]
-    pub(in crate::eval) fn modes(&self) -> &Modes {
-        &self.modal
-    }
-
-    /// The tools: the table, the tool in the spindle, the one selected.
-    #[inline]
-    pub(in crate::eval) fn tools(&self) -> &tools::Tools {
-        &self.tools
-    }
-
-    /// What the block checks read of the machine besides a line's words:
-    /// the modal state, the NURBS control points gathered, the canned
-    /// cycle series in progress.
-    #[inline(always)]
-    pub(in crate::eval) fn block_state(&self) -> (&Modes, &nurbs::Nurbs, &cycle::Cycle) {
-        (&self.modal, &self.nurbs, &self.cycle)
-    }
-
-    /// The tool length offset line RETAIN_G43 asks to be written after the
-    /// line just applied (`true`: G43, `false`: G49), taken once.
-    #[inline]
-    pub(in crate::eval) fn take_retain_line(&mut self) -> Option<bool> {
-        self.retain_line.take()
-    }
-
-    /// Why, and from which line, the standalone reference's position
-    /// departs from the machine's, if it does.
-    #[inline]
-    pub(in crate::eval) fn standalone_drift(&self) -> Option<(&'static str, u32)> {
-        self.standalone_drift
-    }
-
-    /// Whether a lathe cycle's contour subroutine is running.
-    #[inline(always)]
-    pub(in crate::eval) fn in_contour(&self) -> bool {
-        self.lathe.is_some()
-    }
-
-    /// The number of call frames the running lathe cycle's contour
-    /// returns to, if one is running.
-    #[inline]
-    pub(in crate::eval) fn contour_level(&self) -> Option<usize> {
-        self.lathe.as_ref().map(|l| l.level)
-    }
-
-    /// The pockets of the tool in the spindle and the selected one, if
-    /// known.
-    #[inline]
-    pub(in crate::eval) fn pockets(&self) -> Option<(f64, f64)> {
-        self.pockets
-    }
-
-    /// The line of the last G38 probe that left its results unknown.
-    #[inline]
-    pub(in crate::eval) fn probed_at(&self) -> Option<u32> {
-        self.probed_at
-    }
-
     /// The machine at the start: LinuxCNC's power-on modal state, the
     /// position, tool and table the settings give.
     pub(super) fn new(s: &Settings) -> Machine {
