@@ -353,6 +353,12 @@ impl Interp<'_> {
             let (a, b) = self.osite(file, oidx);
             self.warn(WarningKind::QuirkRepeatCount, file, a, b);
         }
+        self.leave_call()
+    }
+
+    /// Leaves the innermost call: the caller's #1-#30 back, the modal state
+    /// M73 saved restored, reading resumed after the call.
+    fn leave_call(&mut self) -> Result<(), Error> {
         let mut f = self.flow.pop_call(&mut self.params);
         if f.auto_restore
             && let Some(m) = f.saved_modal.take()
@@ -375,14 +381,7 @@ impl Interp<'_> {
         }
         self.flow.set_value(None);
         // An M98 frame saved no arguments: `params` stays as it is.
-        let mut f = self.flow.pop_call(&mut self.params);
-        if f.auto_restore
-            && let Some(m) = f.saved_modal.take()
-        {
-            self.restore_modal(&m)?;
-        }
-        self.flow.resume(f);
-        Ok(())
+        self.leave_call()
     }
 
     pub(super) fn exec_m98(

@@ -17,7 +17,7 @@ use crate::program::{FileIndex, Window, next_line};
 
 use crate::codes::{GCode, MotionMode};
 use crate::eval::flow::SubRec;
-use crate::eval::read::validate::{check_block, check_contour_line};
+use crate::eval::read::validate::check_contour_line;
 use crate::eval::state::codes::{Checked, LineCodes};
 use crate::eval::{Interp, file_key, read_error};
 
@@ -247,11 +247,10 @@ impl Interp<'_> {
         line_idx: u32,
         window: &mut Window,
     ) -> Result<(), Error> {
-        if let Some(data) = file.file.memory()
+        if file.file.memory().is_some()
             && let Some((line, _, next)) = self.flow.cache.get(&(file_key(file), line_idx))
         {
             let (line, next) = (line.clone(), *next);
-            let _ = data;
             self.flow.cur.pos = next;
             self.flow.cur.line += 1;
             return self.contour_line(file, start, &line);
@@ -435,13 +434,7 @@ impl Interp<'_> {
         m: Move,
     ) -> Result<(), Error> {
         let words = self.mach.lathe_move_words(m);
-        let checked = match check_block(
-            &words,
-            &self.mach.modal,
-            &self.mach.nurbs,
-            &self.mach.cycle,
-            self.s.user_m,
-        ) {
+        let checked = match self.check_words(&words) {
             Ok(c) => c,
             Err((k, _)) => return Err(self.error(k, file, start, start + len)),
         };

@@ -26,6 +26,19 @@ use crate::eval::read::validate::check_block;
 use crate::eval::state::codes::Checked;
 
 impl Interp<'_> {
+    /// The block checks of a line's evaluated `words` in the machine's
+    /// present state (its modes, the NURBS points gathered, the canned
+    /// cycle series): the codes decoded, or the error and the index of the
+    /// word it is about.
+    #[inline]
+    pub(super) fn check_words(
+        &self,
+        words: &[(u8, f64)],
+    ) -> Result<Checked, (ErrorKind, Option<usize>)> {
+        let m = &self.mach;
+        check_block(words, &m.modal, &m.nurbs, &m.cycle, self.s.user_m)
+    }
+
     pub(in crate::eval) fn exec_items(
         &mut self,
         file: &Rc<FileIndex>,
@@ -96,13 +109,7 @@ impl Interp<'_> {
         let result = if words.is_empty() {
             Ok(Checked::Simple)
         } else {
-            check_block(
-                words,
-                &self.mach.modal,
-                &self.mach.nurbs,
-                &self.mach.cycle,
-                self.s.user_m,
-            )
+            self.check_words(words)
         };
         // An M98 here is not a call (that is an O-line): refused.
         if let Ok(c) = &result
@@ -374,13 +381,7 @@ impl Interp<'_> {
             // Checked and applied: a plain move.
             return self.write_line(file, start, raw, repl);
         }
-        let checked = match check_block(
-            words,
-            &self.mach.modal,
-            &self.mach.nurbs,
-            &self.mach.cycle,
-            self.s.user_m,
-        ) {
+        let checked = match self.check_words(words) {
             Err((k, at)) => {
                 let span = match at.and_then(|i| items.get(i)) {
                     Some(Item::Word(w)) => w.span,
@@ -487,13 +488,7 @@ impl Interp<'_> {
             return None;
         }
         let r = (|| {
-            let checked = match check_block(
-                &words,
-                &self.mach.modal,
-                &self.mach.nurbs,
-                &self.mach.cycle,
-                self.s.user_m,
-            ) {
+            let checked = match self.check_words(&words) {
                 Err((k, at)) => {
                     let span = at
                         .and_then(|i| read.get(i))

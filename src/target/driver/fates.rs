@@ -161,7 +161,7 @@ impl Lowering {
         let p = self.p;
         let native = p.has_g(100) && p.g10_l.contains(&l);
         match l {
-            1 | 10 | 11 if !native => Fate::Drop,
+            1 | 10 | 11 if !native => return Fate::Drop,
             2 | 20 => {
                 if b.value(b'R').is_some_and(|r| r != 0.0) {
                     problems.push(Problem {
@@ -184,32 +184,22 @@ impl Lowering {
                     _ => self.m.modes.coord.0,
                 };
                 if k > p.coord_systems {
-                    Fate::Drop
-                } else if native {
-                    Fate::Keep
-                } else {
-                    problems.push(Problem {
-                        span: Some(w.span),
-                        kind: self.refuse(
-                            format!("G10 L{l}"),
-                            "the target does not have this form of G10",
-                        ),
-                    });
-                    Fate::Drop
+                    return Fate::Drop;
                 }
             }
-            _ if native => Fate::Keep,
-            _ => {
-                problems.push(Problem {
-                    span: Some(w.span),
-                    kind: self.refuse(
-                        format!("G10 L{l}"),
-                        "the target does not have this form of G10",
-                    ),
-                });
-                Fate::Drop
-            }
+            _ => {}
         }
+        if native {
+            return Fate::Keep;
+        }
+        problems.push(Problem {
+            span: Some(w.span),
+            kind: self.refuse(
+                format!("G10 L{l}"),
+                "the target does not have this form of G10",
+            ),
+        });
+        Fate::Drop
     }
 
     pub(super) fn m_fate(
