@@ -5,10 +5,10 @@
 
 use std::collections::HashMap;
 
+use ngcflat::controller::{PROFILES, TargetOptions, ToolChange};
 use ngcflat::diag::{MessageFormat, render};
 use ngcflat::eval::Settings;
 use ngcflat::parse::LineParser;
-use ngcflat::target::{PROFILES, TargetOptions, ToolChange};
 
 const FORMATS: [MessageFormat; 4] = [
     MessageFormat::Human,

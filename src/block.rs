@@ -85,7 +85,7 @@ impl Shape {
 /// Whether a number written with `shape` is exactly what the target's
 /// rules write for its value (`code`: a G or M number, whole or with one
 /// decimal; otherwise a target's number format with `decimals` and
-/// `max_digits`, `crate::target::format::format_number`).
+/// `max_digits`, `crate::controller::format::format_number`).
 ///
 /// So it is when it is written plainly (see [`Shape::plain`]: the form
 /// those rules write, at most 15 significant digits) with no more decimals

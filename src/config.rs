@@ -336,7 +336,7 @@ pub struct Config {
     /// Whether travel limits are checked (limits given and not --no-limits).
     pub check_limits: bool,
     /// A target other than linuxcnc (none: the flattened program as it is).
-    pub target: Option<crate::target::TargetOptions>,
+    pub target: Option<crate::controller::TargetOptions>,
 }
 
 /// Folders of `[RS274NGC]SUBROUTINE_PATH` LinuxCNC uses.
@@ -499,12 +499,12 @@ impl CommonArgs {
             .filter(|t| !t.is_empty())
     }
 
-    fn target_options(&self) -> Result<Option<crate::target::TargetOptions>, ErrorKind> {
-        use crate::target::{TargetOptions, ToolChange};
+    fn target_options(&self) -> Result<Option<crate::controller::TargetOptions>, ErrorKind> {
+        use crate::controller::{TargetOptions, ToolChange};
         let Some(name) = self.target_name() else {
             return Ok(None);
         };
-        let profile = crate::target::find(&name).ok_or(ErrorKind::UnknownTarget { name })?;
+        let profile = crate::controller::find(&name).ok_or(ErrorKind::UnknownTarget { name })?;
         if !(self.tolerance > 0.0 && self.tolerance.is_finite()) {
             return Err(ErrorKind::BadDefine {
                 text: format!("--tolerance {}", self.tolerance),

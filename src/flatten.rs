@@ -7,11 +7,11 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::sync::Arc;
 
+use crate::controller;
 use crate::diag::{Diagnostic, Error, ErrorKind};
 use crate::emit::{self, Destination, Sink};
 use crate::eval::{self, Interp, Settings};
 use crate::program::{self, FileIndex, Loader, SearchPath, SourceFile};
-use crate::target;
 
 /// Reads a program from a path (`-` is stdin).
 pub fn read_source(path: Option<&Path>) -> Result<SourceFile, Error> {
@@ -155,11 +155,11 @@ pub fn flatten_str(text: &str, settings: &Settings) -> Result<String, Error> {
 /// The consumer that writes for a target, if one is chosen.
 pub fn lowering<'s>(
     settings: &'s Settings,
-    target: Option<target::TargetOptions>,
+    target: Option<controller::TargetOptions>,
 ) -> Option<Box<dyn eval::LineConsumer + 's>> {
     target
-        .filter(target::TargetOptions::active)
-        .map(|t| Box::new(target::Lowering::new(settings, t)) as Box<dyn eval::LineConsumer>)
+        .filter(controller::TargetOptions::active)
+        .map(|t| Box::new(controller::Lowering::new(settings, t)) as Box<dyn eval::LineConsumer>)
 }
 
 /// Refuses a file that is not text (four or more NUL bytes in its first

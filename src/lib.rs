@@ -3,7 +3,7 @@
 //! Pipeline: `source` (program text) → [`parse`] (typed line AST) →
 //! [`program`] (file index, subroutine loader) → [`eval`] (machine state,
 //! control flow, parameters and expressions) → [`emit`] (numbers, output
-//! sink), or a consumer: [`target`] lowering, `view`. The `flatten` module ties
+//! sink), or a consumer: [`controller`] lowering, `view`. The `flatten` module ties
 //! them together; [`diag`] holds every error and warning. The modules form
 //! layers without cycles, listed in the README's Design section.
 
@@ -13,6 +13,7 @@ pub mod block;
 mod check;
 mod codes;
 pub mod config;
+pub mod controller;
 pub mod diag;
 pub mod emit;
 pub mod eval;
@@ -26,7 +27,6 @@ mod number;
 pub mod parse;
 pub mod program;
 mod source;
-pub mod target;
 mod view;
 
 use std::io::IsTerminal;
@@ -44,7 +44,7 @@ use emit::Destination;
 /// `ngcflat targets`: the profiles with their limits.
 fn print_targets() -> ExitCode {
     let mut s = String::new();
-    for p in target::PROFILES {
+    for p in controller::PROFILES {
         s.push_str(&p.describe());
         s.push('\n');
     }

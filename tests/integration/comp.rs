@@ -717,15 +717,15 @@ fn check(case: &Case) -> Verdict {
 /// the original's, arcs possibly in several parts around the same centre.
 fn lowered_matches(case: &Case, original: &[String]) -> Result<bool, String> {
     use ngcflat::block::Plane;
-    use ngcflat::target::lower::comp::lower_comp_moves;
+    use ngcflat::controller::lower::comp::lower_comp_moves;
     let (_, out) = model_moves(case);
     let plane = if case.xz { Plane::XZ } else { Plane::XY };
-    let tolerance = ngcflat::target::lower::comp::arc_radius_tolerance(case.units());
+    let tolerance = ngcflat::controller::lower::comp::arc_radius_tolerance(case.units());
     let lines = match lower_comp_moves(plane, [0.0; 3], &out, tolerance) {
         Ok((lines, _)) => lines,
         // An arc released off its circle (a stop in a concave corner):
         // refused for controllers without compensation.
-        Err(ngcflat::target::lower::LowerError::BadArc) => return Ok(false),
+        Err(ngcflat::controller::lower::LowerError::BadArc) => return Ok(false),
         Err(e) => return Err(e.to_string()),
     };
     let header = case.lines[0].split_once(' ').map_or("", |x| x.1);

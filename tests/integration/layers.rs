@@ -19,7 +19,7 @@ const ORDER: &[&str] = &[
     "eval",
     "library",
     "machine",
-    "target",
+    "controller",
     "config",
     "flatten",
     "view",

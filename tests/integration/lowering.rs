@@ -1,4 +1,4 @@
-//! The exact lowerings of `ngcflat::target::lower` against rs274: seeded
+//! The exact lowerings of `ngcflat::controller::lower` against rs274: seeded
 //! random programs using a construct are run through rs274 as written and
 //! as lowered (the lowering functions' blocks formatted as G-code here),
 //! and the machine motion of the two runs must agree: every traverse, feed,
@@ -9,7 +9,7 @@
 //! `NGCFLAT_LOWER_SEED=S` the first seed.
 
 use ngcflat::block::{Distance, Plane, Retract, SpindleDir, Units};
-use ngcflat::target::lower::{CycleBlock, CycleKind, CycleModal, CycleState, PlainLine};
+use ngcflat::controller::lower::{CycleBlock, CycleKind, CycleModal, CycleState, PlainLine};
 
 use crate::oracle;
 use crate::rng::Rng;
@@ -610,7 +610,7 @@ fn plane_code(plane: Plane) -> &'static str {
 /// Full circles without end point, P-turn arcs and spiral arcs, written
 /// both ways.
 fn arc_program(seed: u64) -> (String, String, Plane) {
-    use ngcflat::target::lower::arc::{ArcInput, lower_arc};
+    use ngcflat::controller::lower::arc::{ArcInput, lower_arc};
     let mut rng = Rng::new(seed);
     let plane = *rng.pick(&[Plane::XY, Plane::XZ, Plane::YZ]);
     let [p, q, n] = arc_axes(plane);
@@ -747,7 +747,7 @@ fn full_circles_and_turns_move_as_rs274() {
 /// G0/G1 moves with `@`/`^` in G90 and G91, written both ways (the lowered
 /// program in absolute X Y).
 fn polar_program(seed: u64) -> Result<(String, String), String> {
-    use ngcflat::target::lower::polar::{PolarInput, polar_target};
+    use ngcflat::controller::lower::polar::{PolarInput, polar_target};
     let mut rng = Rng::new(seed);
     let header = "G21 G17 G90 G94 F150\n".to_string();
     let (mut orig, mut low) = (header.clone(), header);
@@ -866,8 +866,8 @@ fn polar_moves_as_rs274() {
 /// arcs in G90 and G91, against the same program in G8 with its X words
 /// rewritten by `radius_words`.
 fn diameter_program(seed: u64) -> (String, String) {
-    use ngcflat::target::lower::Word;
-    use ngcflat::target::lower::diameter::radius_words;
+    use ngcflat::controller::lower::Word;
+    use ngcflat::controller::lower::diameter::radius_words;
     let mut rng = Rng::new(seed);
     let ijk = if rng.chance(0.3) { "G90.1" } else { "G91.1" };
     let mut orig = format!("G21 G18 G7 G90 {ijk} G94 F90\n");
@@ -1095,7 +1095,7 @@ fn check_curve(
 
 #[test]
 fn splines_stay_within_tolerance() {
-    use ngcflat::target::lower::spline::{NurbsPoint, lower_g5, lower_g5_1, lower_nurbs};
+    use ngcflat::controller::lower::spline::{NurbsPoint, lower_g5, lower_g5_1, lower_nurbs};
     let seed0 = first_seed();
     for seed in seed0..seed0 + cases() {
         let mut rng = Rng::new(seed);
@@ -1163,7 +1163,7 @@ fn splines_stay_within_tolerance() {
 /// point in both programs.
 #[test]
 fn splines_end_where_rs274_ends_them() {
-    use ngcflat::target::lower::spline::{NurbsPoint, lower_g5, lower_g5_1, lower_nurbs};
+    use ngcflat::controller::lower::spline::{NurbsPoint, lower_g5, lower_g5_1, lower_nurbs};
     if !oracle::available("splines_end_where_rs274_ends_them") {
         return;
     }

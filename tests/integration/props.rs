@@ -1115,7 +1115,7 @@ fn target_line() -> impl Strategy<Value = String> {
 /// firmware counts it, no byte it acts on in real time, no exponent.
 fn target_output_fits(name: &str, lines: &[String]) -> Result<(), TestCaseError> {
     use ngcflat::block::{Block, WordKind};
-    use ngcflat::target::{LineCount, TargetOptions, find, significant_len};
+    use ngcflat::controller::{LineCount, TargetOptions, find, significant_len};
     let program = format!("{}\nM2\n", lines.join("\n"));
     let profile = find(name).expect("profile");
     let settings = Settings {
@@ -1234,7 +1234,7 @@ fn flatten_for_target(
     target: &str,
     check: bool,
 ) -> (Vec<String>, String) {
-    use ngcflat::target::{TargetOptions, find};
+    use ngcflat::controller::{TargetOptions, find};
     let mut opts = TargetOptions::new(find(target).expect("profile"));
     opts.check = check;
     let consumer = ngcflat::lowering(settings, Some(opts));

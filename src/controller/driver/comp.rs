@@ -9,10 +9,10 @@ use crate::block::{
     Block, CutterComp, FeedMode, GCode, MCode, MotionMode, NonModal, Plane, ToolLength, Units,
     Word, WordKind,
 };
+use crate::controller::lower::{self, PlainLine};
 use crate::diag::ErrorKind;
 use crate::geom::comp::{Arc as CompArc, ArcCenter, Comp, Out, Side, Tolerances};
 use crate::machine::Machine;
-use crate::target::lower::{self, PlainLine};
 
 use super::fates::Fate;
 use super::run::words_line;

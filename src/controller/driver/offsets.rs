@@ -5,9 +5,9 @@
 //! target's `G43.1 Z`.
 
 use crate::block::{Block, CoordSystem, Distance, NonModal, ToolLength, WordKind};
+use crate::controller::lower::PlainLine;
 use crate::diag::ErrorKind;
 use crate::machine::Machine;
-use crate::target::lower::PlainLine;
 
 use super::fates::{Fate, g_span};
 use super::{Lowering, Problem};

@@ -25,7 +25,7 @@
 //!   (`LINE_BUFFER_SIZE` in `protocol.h`: 256 characters); `config.h`
 //!   (`N_AXIS` 3); the real-time command bytes of `grbl.h`.
 
-use crate::target::profile::{Comments, LineCount, Profile, ToolChange};
+use crate::controller::profile::{Comments, LineCount, Profile, ToolChange};
 
 pub(crate) const PROFILE: Profile = Profile {
     name: "grblhal",

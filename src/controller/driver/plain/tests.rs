@@ -7,10 +7,10 @@ use std::sync::Arc;
 
 use proptest::prelude::*;
 
+use crate::controller::{PROFILES, TargetOptions};
 use crate::emit::{Destination, Output, Sink};
 use crate::eval::{LineConsumer, Origin, Settings};
 use crate::program::SourceFile;
-use crate::target::{PROFILES, TargetOptions};
 
 use super::Lowering;
 

@@ -8,8 +8,8 @@ use crate::block::{
     Block, CutterComp, FeedMode, GCode, LatheMode, MCode, MotionMode, NonModal, PathMode,
     SpindleDir, SpindleMode, ToolLength, Word, WordKind,
 };
+use crate::controller::profile::ToolChange;
 use crate::diag::{ErrorKind, WarningKind};
-use crate::target::profile::ToolChange;
 
 use super::{Lowering, Problem};
 

@@ -4,10 +4,10 @@
 //! canned cycles, with the positions each lowering needs.
 
 use crate::block::{ArcDistance, Block, MotionMode, NonModal, Plane, ToolLength};
+use crate::controller::lower::{self, PlainLine};
 use crate::diag::ErrorKind;
 use crate::geom::comp::{Arc as CompArc, ArcCenter, Tolerances};
 use crate::machine::Machine;
-use crate::target::lower::{self, PlainLine};
 
 use super::fates::g_span;
 use super::run::words_line;

@@ -28,7 +28,7 @@ pub fn radius_words(line: &mut PlainLine) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::target::lower::Word;
+    use crate::controller::lower::Word;
 
     #[test]
     fn only_x_is_halved() {

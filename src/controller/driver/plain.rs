@@ -20,8 +20,8 @@ use crate::emit::Output;
 use crate::eval::{FormLine, FormLines, Origin};
 
 use super::{Lowering, Problem, Profile, io_error};
-use crate::target::format::AxisWords;
-use crate::target::profile::Comments;
+use crate::controller::format::AxisWords;
+use crate::controller::profile::Comments;
 
 /// The whole G and M codes below 128 the profile has, and its word and
 /// axis letters, as bits (G17 is bit 17, X bit 88): looked up once per word

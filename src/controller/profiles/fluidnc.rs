@@ -13,7 +13,7 @@
 //! and bytes past 254 are dropped without an error, so longer lines are
 //! refused here) and the real-time characters of `FluidNC/src/RealtimeCmd.h`.
 
-use crate::target::profile::{Comments, LineCount, Profile, ToolChange};
+use crate::controller::profile::{Comments, LineCount, Profile, ToolChange};
 
 pub(crate) const PROFILE: Profile = Profile {
     name: "fluidnc",

@@ -9,7 +9,7 @@
 //! `grbl/nuts_bolts.c` (`read_float`: at most 8 significant digits, no
 //! exponent).
 
-use crate::target::profile::{Comments, LineCount, Profile, ToolChange};
+use crate::controller::profile::{Comments, LineCount, Profile, ToolChange};
 
 pub(crate) const PROFILE: Profile = Profile {
     name: "grbl",

@@ -7,8 +7,8 @@
 //! that every line moves at the block's speed.
 
 use crate::block::{Block, FeedMode, Units};
+use crate::controller::format::format_number;
 use crate::machine::Machine;
-use crate::target::format::format_number;
 
 use super::Lowering;
 use super::lower::{PlainLine, Word};

@@ -19,11 +19,11 @@
 
 use crate::block::{Block, MotionMode, NonModal, ToolLength};
 use crate::codes::{ArcDistance, Units};
+use crate::controller::format::format_number;
+use crate::controller::lower;
 use crate::diag::ErrorKind;
 use crate::geom::comp::{Arc as CompArc, ArcCenter, Tolerances, arc_center};
 use crate::machine::{Machine, radius_center};
-use crate::target::format::format_number;
-use crate::target::lower;
 
 use super::Lowering;
 use crate::eval::arc_refusal;

@@ -3,9 +3,9 @@
 //! every G5 the target runs itself.
 
 use crate::block::{Block, Distance, FeedMode, LatheMode, MotionMode, Plane};
+use crate::controller::lower::{self, PlainLine};
 use crate::diag::ErrorKind;
 use crate::machine::Machine;
-use crate::target::lower::{self, PlainLine};
 
 use super::Lowering;
 

@@ -9,12 +9,12 @@ use crate::block::{
     Block, Distance, FeedMode, GCode, LatheMode, MCode, MotionMode, NonModal, ToolLength, Word,
     WordKind,
 };
+use crate::controller::format::AxisWords;
+use crate::controller::lower::{self, PlainLine};
 use crate::diag::{Diagnostic, Error, ErrorKind};
 use crate::emit::Output;
 use crate::eval::Origin;
 use crate::machine::Machine;
-use crate::target::format::AxisWords;
-use crate::target::lower::{self, PlainLine};
 
 use super::fates::{Decided, Fate, code10, g_span};
 use super::offsets::{shift_line, xyz_index};

@@ -1,6 +1,6 @@
 //! LinuxCNC 2.9: the flattened program as it is (the default).
 
-use crate::target::profile::{Comments, Profile, ToolChange};
+use crate::controller::profile::{Comments, Profile, ToolChange};
 
 pub(crate) const PROFILE: Profile = Profile {
     name: "linuxcnc",

@@ -8,11 +8,11 @@
 use std::sync::Arc;
 
 use crate::block::{Block, DecodeError, MotionMode, NonModal, ToolLength};
+use crate::controller::lower;
 use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};
 use crate::eval::Origin;
 use crate::machine::Machine;
 use crate::program::SourceFile;
-use crate::target::lower;
 
 use super::{Lowering, Problem};
 
