@@ -169,6 +169,3 @@ impl LineParser {
         }
     }
 }
-
-#[cfg(test)]
-mod tests;
