@@ -94,6 +94,7 @@ impl LineConsumer for ViewConsumer<'_> {
                 d.stack = (origin.stack)();
                 return Err(d);
             } else {
+                self.observer.line(text, origin);
                 m.apply(&self.block);
                 for ev in m.take_events() {
                     if let Err(kind) = self.observer.motion(&ev) {

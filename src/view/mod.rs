@@ -9,5 +9,6 @@ pub(crate) mod html;
 pub(crate) mod limits;
 pub(crate) mod plot;
 pub(crate) mod run;
+pub(crate) mod scene;
 pub(crate) mod source_map;
 pub(crate) mod stats;

@@ -3,6 +3,7 @@
 
 use super::limits::LimitCheck;
 use super::plot::{Plot, View};
+use super::scene::Scene;
 use super::stats::Stats;
 use crate::diag::ErrorKind;
 use crate::machine::axes::MachineAxes;
@@ -15,6 +16,10 @@ pub(crate) struct Observer {
     pub stats: Option<Stats>,
     pub plot: Option<Plot>,
     pub limits: Option<LimitCheck>,
+    /// The interactive page's scene, timed by `stats`.
+    pub scene: Option<Scene>,
+    /// Travel limits the scene marks moves against (the run goes on).
+    pub scene_limits: Option<LimitCheck>,
 }
 
 impl Observer {
@@ -31,13 +36,31 @@ impl Observer {
         Observer {
             stats: Some(Stats::new(axes.clone())),
             plot: view.map(Plot::new),
-            limits: None,
+            ..Observer::default()
+        }
+    }
+
+    /// For the interactive page: statistics and the scene, with moves
+    /// outside the travel limits marked.
+    pub(crate) fn scene(axes: &MachineAxes) -> Observer {
+        Observer {
+            stats: Some(Stats::new(axes.clone())),
+            scene: Some(Scene::default()),
+            scene_limits: LimitCheck::new(axes),
+            ..Observer::default()
         }
     }
 
     /// Whether anything needs the motion at all.
     pub(crate) fn is_active(&self) -> bool {
-        self.stats.is_some() || self.plot.is_some() || self.limits.is_some()
+        self.stats.is_some() || self.plot.is_some() || self.limits.is_some() || self.scene.is_some()
+    }
+
+    /// The output line whose motion comes next (for the scene).
+    pub(crate) fn line(&mut self, text: &[u8], origin: &crate::eval::Origin<'_>) {
+        if let Some(s) = &mut self.scene {
+            s.line(text, origin);
+        }
     }
 
     /// Feeds one motion event; an error stops the run at the line that
@@ -46,8 +69,30 @@ impl Observer {
         if let Some(l) = &self.limits {
             l.check(m)?;
         }
+        let before = self
+            .stats
+            .as_ref()
+            .map(|s| (s.total_time(), s.untimed_feeds + s.untimed_rapids));
         if let Some(s) = &mut self.stats {
             s.add(m);
+        }
+        if let Some(scene) = &mut self.scene {
+            // The time of this event is what it added to the estimate.
+            let (dur, timed) = match (before, &self.stats) {
+                (Some((t, u)), Some(s)) => {
+                    (s.total_time() - t, s.untimed_feeds + s.untimed_rapids == u)
+                }
+                _ => (0.0, false),
+            };
+            let violation = match self.scene_limits.as_ref().map(|l| l.check(m)) {
+                Some(Err(ErrorKind::LimitNeedsOffsets)) => {
+                    scene.detail.limits_unchecked += 1;
+                    None
+                }
+                Some(Err(e)) => Some(e.to_string()),
+                _ => None,
+            };
+            scene.add(m, dur, timed, violation);
         }
         if let Some(p) = &mut self.plot {
             p.add(m);
@@ -107,7 +152,7 @@ fn run_for_view(
     file: Option<&std::path::Path>,
     cfg: &crate::config::Config,
     mut observer: Observer,
-) -> Result<Observer, std::process::ExitCode> {
+) -> Result<(Observer, Vec<crate::diag::Diagnostic>), std::process::ExitCode> {
     let source = match crate::flatten::read_source(file) {
         Ok(s) => s,
         Err(e) => {
@@ -118,7 +163,7 @@ fn run_for_view(
     match observe(source, cfg, &mut observer) {
         Ok(warnings) => {
             crate::diag::report(&warnings, cfg.format);
-            Ok(observer)
+            Ok((observer, warnings))
         }
         Err(e) => {
             let code = match e.error_kind() {
@@ -138,7 +183,7 @@ pub(crate) fn stats_command(
     cfg: &crate::config::Config,
 ) -> std::process::ExitCode {
     let obs = match run_for_view(file, cfg, Observer::stats(&cfg.machine, None)) {
-        Ok(o) => o,
+        Ok((o, _)) => o,
         Err(code) => return code,
     };
     let Some(stats) = obs.stats else {
@@ -177,22 +222,25 @@ pub(crate) fn plot_command(
         );
         return std::process::ExitCode::from(2);
     }
-    let obs = match run_for_view(file, cfg, Observer::stats(&cfg.machine, Some(view))) {
-        Ok(o) => o,
-        Err(code) => return code,
-    };
-    let (Some(stats), Some(plot)) = (obs.stats, obs.plot) else {
-        return std::process::ExitCode::from(2);
-    };
-    let name = program_name(file);
-    let svg = plot.svg(&name);
     let html = output
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("html") || e.eq_ignore_ascii_case("htm"));
-    let data = if html {
-        super::html::page(&svg, &stats.report(&name))
+    let observer = if html {
+        Observer::scene(&cfg.machine)
     } else {
-        svg
+        Observer::stats(&cfg.machine, Some(view))
+    };
+    let (obs, warnings) = match run_for_view(file, cfg, observer) {
+        Ok(o) => o,
+        Err(code) => return code,
+    };
+    let name = program_name(file);
+    let data = match (obs.stats, obs.plot, obs.scene) {
+        (Some(stats), _, Some(scene)) if html => {
+            super::html::page(&stats.report(&name), &scene, &warnings)
+        }
+        (Some(_), Some(plot), _) => plot.svg(&name),
+        _ => return std::process::ExitCode::from(2),
     };
     if let Err(e) = write_atomic(output, data.as_bytes()) {
         crate::diag::report(

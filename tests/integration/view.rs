@@ -643,15 +643,33 @@ fn html_page_is_self_contained() {
     assert_eq!(code, 0, "{err}");
     let html = std::fs::read_to_string(dir.path().join("p.html")).expect("page written");
     assert!(html.starts_with("<!DOCTYPE html>"));
-    assert!(html.contains("<svg xmlns=\"http://www.w3.org/2000/svg\""));
+    assert!(html.contains("<canvas id=\"view\""));
     assert!(html.contains("<td>arcs</td><td>1</td>"), "{html}");
     assert!(html.contains("<td>tools</td><td>T3</td>"), "{html}");
     assert!(html.contains("How the estimate is made"));
-    // No external resources.
-    for bad in ["<script", "<link", "src=", "url(", "@import"] {
+    // The program's name is escaped wherever it appears.
+    assert!(!html.contains("<test>"), "unescaped program text");
+    // No external resources: no element loads anything, no script fetches.
+    for bad in [
+        "<link",
+        "src=",
+        "href=",
+        "url(",
+        "@import",
+        "fetch(",
+        "XMLHttpRequest",
+        "import(",
+        "http:",
+        "https:",
+    ] {
         assert!(!html.contains(bad), "{bad} in the page");
     }
-    assert_eq!(html.matches("http").count(), 1, "only the SVG namespace");
+    // Untimed parts are said in words, never a bare zero.
+    assert!(
+        html.contains("<tr><td>rapid</td><td>not timed (1 move)"),
+        "{html}"
+    );
+    assert!(!html.contains("0:00:00.0</td>"), "{html}");
     // The picture never replaces the program.
     let (code, _, err) = crate::run(
         dir.path(),
