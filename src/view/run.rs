@@ -236,7 +236,8 @@ pub(crate) fn plot_command(
     };
     let name = program_name(file);
     let data = match (obs.stats, obs.plot, obs.scene) {
-        (Some(stats), _, Some(scene)) if html => {
+        (Some(stats), _, Some(mut scene)) if html => {
+            scene.finish();
             super::html::page(&stats.report(&name), &scene, &warnings)
         }
         (Some(_), Some(plot), _) => plot.svg(&name),

@@ -4,14 +4,15 @@
 //! and call chain that made it).
 //!
 //! The scene has a budget of moves and vertices. A program that goes over
-//! it is made coarser in passes, each roughly halving what is kept:
-//! neighbouring moves of the same kind and tool are drawn as one (their
-//! shared point and every other point inside an arc left out), and if that
-//! is not enough, every other move is left out. Never left out: a vertex
-//! where the toolpath reaches its lowest or highest X, Y or Z (so the
-//! drawn envelope is the program's), and a move that leaves the machine's
-//! travel limits (the first [`MAX_VIOLATIONS`]). The scene counts what it
-//! merged and left out; the page says so.
+//! it is made coarser by levels, each applied to the whole program so the
+//! density stays even: neighbouring moves of the same kind and tool merge
+//! into one of up to `2^merge_level` program moves (all points kept);
+//! `vertex_level` halvings of the points inside moves are made; and when
+//! moves cannot merge, only every `2^drop_level`-th program move is kept.
+//! Never left out: a vertex where the toolpath reaches its lowest or
+//! highest X, Y or Z (so the drawn envelope is the program's), and a move
+//! that leaves the machine's travel limits (the first [`MAX_VIOLATIONS`]).
+//! The scene counts what it merged and left out; the page says so.
 
 use std::collections::HashMap;
 use std::f64::consts::TAU;
@@ -70,6 +71,8 @@ struct Mv {
     chain: u32,
     /// Index + 1 of the travel-limit violation, 0 if none.
     viol: u32,
+    /// The vertex level its inner points were thinned to.
+    thin: u8,
     /// The output line's text, on the first move of a line.
     text: Option<Box<str>>,
 }
@@ -136,6 +139,9 @@ pub(crate) struct Scene {
     pub offset_varies: bool,
     max_moves: usize,
     max_vertices: usize,
+    merge_level: u8,
+    drop_level: u8,
+    vertex_level: u8,
 }
 
 impl std::fmt::Debug for Scene {
@@ -179,6 +185,9 @@ impl Scene {
             offset_varies: false,
             max_moves: max_moves.max(16),
             max_vertices: max_vertices.max(64),
+            merge_level: 0,
+            drop_level: 0,
+            vertex_level: 0,
         }
     }
 
@@ -355,6 +364,7 @@ impl Scene {
             src_line: self.line_src,
             chain: self.line_chain,
             viol,
+            thin: 0,
             text: if first_of_line {
                 self.line_text.clone()
             } else {
@@ -425,95 +435,142 @@ impl Scene {
         i
     }
 
-    /// Coarsens until the scene is within three quarters of its budget
-    /// (or nothing more can go).
+    /// Coarsens until the scene is within three quarters of its budget.
+    /// Each step raises a level only when the one before could do little,
+    /// so the whole program ends up at the same density: moves merge up to
+    /// `2^merge_level` program moves, every `2^drop_level`-th move is kept,
+    /// and `vertex_level` halvings of the points inside moves are made.
     fn coarsen(&mut self) {
         let goal_m = self.max_moves * 3 / 4;
         let goal_v = self.max_vertices * 3 / 4;
-        let mut drop = false;
-        loop {
-            let before = (self.moves.len(), self.verts.len());
-            self.pass(drop);
-            self.detail.passes += 1;
-            if self.moves.len() <= goal_m && self.verts.len() <= goal_v {
+        for _ in 0..200 {
+            let (m0, v0) = (self.moves.len(), self.verts.len());
+            if m0 <= goal_m && v0 <= goal_v {
                 return;
             }
-            let after = (self.moves.len(), self.verts.len());
-            // Merging alone did not get there: leave moves out too.
-            if after.0 * 10 > before.0 * 8 || after.1 * 10 > before.1 * 8 {
-                if drop && after == before {
-                    return;
+            if m0 > goal_m {
+                self.pass();
+                if self.moves.len() * 10 > m0 * 9 {
+                    if self.merge_level < 31 {
+                        self.merge_level += 1;
+                    }
+                    self.pass();
+                    if self.moves.len() * 10 > m0 * 9 && self.drop_level < 31 {
+                        self.drop_level += 1;
+                        self.pass();
+                    }
                 }
-                drop = true;
+            }
+            let v1 = self.verts.len();
+            if v1 > goal_v {
+                self.pass();
+                if self.verts.len() * 10 > v1 * 9 && self.vertex_level < 31 {
+                    self.vertex_level += 1;
+                    self.pass();
+                }
+            }
+            self.detail.passes += 1;
+        }
+    }
+
+    /// Brings the moves added since the last coarsening to the level of the
+    /// rest, so the density is even over the whole program.
+    pub(crate) fn finish(&mut self) {
+        if self.merge_level + self.drop_level + self.vertex_level == 0 {
+            return;
+        }
+        for _ in 0..40 {
+            let before = (self.moves.len(), self.verts.len());
+            self.pass();
+            if (self.moves.len(), self.verts.len()) == before {
+                break;
             }
         }
     }
 
-    /// One pass: merges pairs of neighbouring moves, thins the points inside
-    /// moves and, with `drop`, leaves out every other move that holds no
-    /// extreme or violation.
-    fn pass(&mut self, drop: bool) {
+    /// Whether a move must stay: it leaves the limits or holds an extreme.
+    fn keeps(&self, m: &Mv) -> bool {
+        m.viol != 0 || (m.start..=m.end).any(|v| self.vprot[v as usize] > 0)
+    }
+
+    /// One pass at the current levels: merges neighbouring moves, leaves
+    /// out moves off the sampling stride and thins points inside moves.
+    fn pass(&mut self) {
         let old_moves = std::mem::take(&mut self.moves);
-        let old_verts = std::mem::take(&mut self.verts);
-        let old_prot = std::mem::take(&mut self.vprot);
-        let mut remap: HashMap<u32, u32> = HashMap::new();
-        let mut moves: Vec<Mv> = Vec::with_capacity(old_moves.len() / 2 + 1);
-        let mut verts: Vec<[f32; 3]> = Vec::with_capacity(old_verts.len() / 2 + 1);
-        let mut prot: Vec<u8> = Vec::with_capacity(old_verts.len() / 2 + 1);
-        // The old index of the last vertex written, and its new index.
-        let mut last: Option<(u32, u32)> = None;
+        let cap = 1u64 << self.merge_level;
+        let stride = 1u64 << self.drop_level;
+        // Moves as groups of one or two (merged), the sampled-out left out.
+        let mut groups: Vec<(Mv, Option<Mv>)> = Vec::with_capacity(old_moves.len());
         let mut it = old_moves.into_iter().peekable();
-        let mut toggle = false;
-        let keeps =
-            |m: &Mv, prot: &[u8]| m.viol != 0 || (m.start..=m.end).any(|v| prot[v as usize] > 0);
-        while let Some(mut a) = it.next() {
+        while let Some(a) = it.next() {
             let merge = it.peek().is_some_and(|b| {
                 a.end == b.start
                     && a.kind & K_MASK == b.kind & K_MASK
                     && a.tool == b.tool
                     && a.viol == 0
                     && b.viol == 0
-                    && old_prot[a.end as usize] == 0
+                    && self.vprot[a.end as usize] == 0
+                    && u64::from(a.count) + u64::from(b.count) <= cap
             });
-            if merge && let Some(b) = it.next() {
-                a.end = b.end;
-                a.kind |= b.kind & (F_ARC | F_UNTIMED);
-                a.dur = b.t0 + b.dur - a.t0;
-                a.lines = (b.line + b.lines).saturating_sub(a.line);
-                a.count += b.count;
+            let b = if merge { it.next() } else { None };
+            if stride > 1
+                && u64::from(a.seq) % stride != 0
+                && !self.keeps(&a)
+                && b.as_ref().is_none_or(|b| !self.keeps(b))
+            {
+                self.detail.left_out_moves +=
+                    u64::from(a.count) + b.as_ref().map_or(0, |b| u64::from(b.count));
+                continue;
             }
-            if drop {
-                toggle = !toggle;
-                if toggle && !keeps(&a, &old_prot) {
-                    self.detail.left_out_moves += u64::from(a.count);
-                    continue;
-                }
+            groups.push((a, b));
+        }
+        let old_verts = std::mem::take(&mut self.verts);
+        let old_prot = std::mem::take(&mut self.vprot);
+        let mut remap: HashMap<u32, u32> = HashMap::new();
+        let mut verts: Vec<[f32; 3]> = Vec::with_capacity(old_verts.len());
+        let mut prot: Vec<u8> = Vec::with_capacity(old_verts.len());
+        let mut put = |old: u32, verts: &mut Vec<[f32; 3]>, prot: &mut Vec<u8>| {
+            let n = verts.len() as u32;
+            verts.push(old_verts[old as usize]);
+            prot.push(old_prot[old as usize]);
+            if old_prot[old as usize] > 0 {
+                remap.insert(old, n);
             }
-            let mut put = |old: u32, verts: &mut Vec<[f32; 3]>, prot: &mut Vec<u8>| {
-                let n = verts.len() as u32;
-                verts.push(old_verts[old as usize]);
-                prot.push(old_prot[old as usize]);
-                if old_prot[old as usize] > 0 {
-                    remap.insert(old, n);
-                }
-                n
-            };
+            n
+        };
+        // The old index of the last vertex written, and its new index.
+        let mut last: Option<(u32, u32)> = None;
+        let mut moves: Vec<Mv> = Vec::with_capacity(groups.len());
+        for (mut a, b) in groups {
+            let end = b.as_ref().map_or(a.end, |b| b.end);
+            let thin = b.as_ref().map_or(a.thin, |b| a.thin.max(b.thin));
+            let halvings = self.vertex_level.saturating_sub(thin).min(16);
+            let step = 1u32 << halvings;
             let start = match last {
                 Some((o, n)) if o == a.start => n,
                 _ => put(a.start, &mut verts, &mut prot),
             };
-            let keep_all = a.viol != 0;
-            for (k, v) in (a.start + 1..a.end).enumerate() {
-                if keep_all || k % 2 == 1 || old_prot[v as usize] > 0 {
+            // The points inside: a's, the shared one, b's.
+            let inner = a.start + 1..end;
+            let keep_all = a.viol != 0 || b.as_ref().is_some_and(|b| b.viol != 0);
+            for (j, v) in inner.enumerate() {
+                if keep_all || (j as u32 + 1).is_multiple_of(step) || old_prot[v as usize] > 0 {
                     put(v, &mut verts, &mut prot);
                 } else {
                     self.detail.left_out_points += 1;
                 }
             }
-            let end = put(a.end, &mut verts, &mut prot);
-            last = Some((a.end, end));
+            let new_end = put(end, &mut verts, &mut prot);
+            last = Some((end, new_end));
+            if let Some(b) = b {
+                a.kind |= b.kind & (F_ARC | F_UNTIMED);
+                a.dur = b.t0 + b.dur - a.t0;
+                a.lines = (b.line + b.lines).saturating_sub(a.line);
+                a.count += b.count;
+            }
             a.start = start;
-            a.end = end;
+            a.end = new_end;
+            a.thin = self.vertex_level.max(thin);
             moves.push(a);
         }
         for (_, i) in self.ext.iter_mut().flatten() {
@@ -611,4 +668,146 @@ pub(crate) struct SceneData {
     pub total_time: f64,
     pub detail: Detail,
     pub violations: Vec<Violation>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::codes::FeedMode;
+    use crate::machine::motion::{Feed, Point};
+
+    fn pt(x: f64, y: f64, z: f64) -> Point {
+        let mut w = [0.0; 9];
+        w[0] = x;
+        w[1] = y;
+        w[2] = z;
+        Point {
+            work: w,
+            offset: Some([0.0; 9]),
+        }
+    }
+
+    fn line(kind: MoveKind, a: [f64; 3], b: [f64; 3]) -> Motion {
+        Motion::Line {
+            kind,
+            from: pt(a[0], a[1], a[2]),
+            to: pt(b[0], b[1], b[2]),
+            feed: Feed {
+                rate: 100.0,
+                mode: FeedMode::PerMinute,
+            },
+        }
+    }
+
+    fn decode<const N: usize, T>(b64: &str, f: fn([u8; N]) -> T) -> Vec<T> {
+        use base64::Engine;
+        let b = base64::engine::general_purpose::STANDARD
+            .decode(b64)
+            .expect("base64");
+        b.chunks(N)
+            .map(|c| f(c.try_into().expect("chunk")))
+            .collect()
+    }
+
+    /// A zig-zag raster of `n` feed moves with rapids between rows every
+    /// `row` moves; the deepest point in the middle, one move outside the
+    /// limits near the end.
+    fn raster(s: &mut Scene, n: usize, row: usize, kinds_alternate: bool) -> (usize, usize) {
+        let mut p = [0.0, 0.0, 0.0];
+        let (deep, bad) = (n / 2 + 3, n - 7);
+        for i in 0..n {
+            let mut q = p;
+            q[0] = if (i / row).is_multiple_of(2) {
+                p[0] + 1.0
+            } else {
+                p[0] - 1.0
+            };
+            q[2] = if i == deep {
+                -9.5
+            } else {
+                -1.0 - (i % 3) as f64 * 0.1
+            };
+            let kind = if kinds_alternate && i % 2 == 1 || i % row == 0 {
+                MoveKind::Rapid
+            } else {
+                MoveKind::Feed
+            };
+            if i % row == 0 {
+                q[1] += 2.0;
+            }
+            let viol = (i == bad).then(|| "X leaves its limit".to_string());
+            s.add(&line(kind, p, q), 0.5, true, viol);
+            p = q;
+        }
+        (deep, bad)
+    }
+
+    fn check_budget(kinds_alternate: bool) {
+        let mut s = Scene::with_budget(500, 1200);
+        let n = 20_000;
+        let (_, bad) = raster(&mut s, n, 40, kinds_alternate);
+        s.finish();
+        let d = s.data();
+        let verts = decode(&d.vertices, f32::from_le_bytes);
+        let count = decode(&d.count, u32::from_le_bytes);
+        let viol = decode(&d.viol, u32::from_le_bytes);
+        let seq = decode(&d.seq, u32::from_le_bytes);
+        let t0 = decode(&d.t0, f64::from_le_bytes);
+        let dur = decode(&d.dur, f32::from_le_bytes);
+        assert!(
+            count.len() <= 500 && verts.len() / 3 <= 1200,
+            "{}",
+            count.len()
+        );
+        assert!(
+            count.len() > 100,
+            "not coarser than needed: {}",
+            count.len()
+        );
+        // Every program move is drawn, merged into another, or counted
+        // as left out.
+        let drawn: u64 = count.iter().map(|&c| u64::from(c)).sum();
+        assert_eq!(drawn + d.detail.left_out_moves, n as u64);
+        assert_eq!(d.detail.program_moves, n as u64);
+        assert!(d.detail.merged_moves + d.detail.left_out_moves > 0);
+        // The deepest point and the violation are kept.
+        let zmin = verts.chunks(3).map(|v| v[2]).fold(f32::INFINITY, f32::min);
+        assert_eq!(zmin, -9.5);
+        let k = viol.iter().position(|&v| v == 1).expect("violation kept");
+        assert_eq!(seq[k] as usize, bad);
+        assert_eq!(d.violations.len(), 1);
+        // Times stay in order and the last move ends at the total.
+        assert!(t0.windows(2).all(|w| w[0] <= w[1]));
+        let last = count.len() - 1;
+        assert!(t0[last] + f64::from(dur[last]) <= d.total_time + 1e-6);
+        assert_eq!(d.total_time, n as f64 * 0.5);
+        // The density is even: the first and the last quarter of the
+        // program keep about as many moves.
+        let q = |lo: usize, hi: usize| {
+            seq.iter()
+                .filter(|&&s| (lo..hi).contains(&(s as usize)))
+                .count() as f64
+        };
+        let (a, b) = (q(0, n / 4), q(3 * n / 4, n));
+        assert!(a / b < 3.0 && b / a < 3.0, "{a} against {b}");
+    }
+
+    #[test]
+    fn budget_merges_and_keeps_extremes_and_violations() {
+        check_budget(false);
+    }
+
+    #[test]
+    fn budget_samples_when_moves_cannot_merge() {
+        check_budget(true);
+    }
+
+    #[test]
+    fn small_program_is_drawn_whole() {
+        let mut s = Scene::default();
+        raster(&mut s, 300, 10, false);
+        let d = s.data();
+        assert_eq!(d.detail.drawn_moves, 300);
+        assert_eq!(d.detail.merged_moves + d.detail.left_out_moves, 0);
+    }
 }

@@ -16,9 +16,11 @@ mod motion;
 mod named2007;
 mod oracle;
 mod props;
+mod report_page;
 mod rng;
 mod view;
 mod warn_only;
+mod webdriver;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};

@@ -363,6 +363,10 @@ fn non_background(png_path: &Path) -> (usize, usize) {
 #[test]
 fn plots_render_in_a_browser() {
     let Some(browser) = chromium() else {
+        assert!(
+            !crate::webdriver::required(),
+            "view::plots_render_in_a_browser: chromium is required but not installed"
+        );
         eprintln!(
             "SKIPPED view::plots_render_in_a_browser: no chromium (apt-get install -y chromium)"
         );

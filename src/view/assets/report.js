@@ -696,6 +696,7 @@
     totalTime: S.total_time,
     shown: () => { draw(); return st.shown; },
     visibleMoves: () => { const out = []; const d = doneCount(); for (let k = 0; k < d; k++) if (visible(k)) out.push(k); return out; },
+    lineOf: (k) => mLine[k],
     moveOfLine: (line) => { for (let k = 0; k < N; k++) if (mLine[k] === line) return k; return -1; },
     screenPoint: (k) => {
       draw();
