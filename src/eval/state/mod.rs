@@ -78,13 +78,18 @@ pub(super) struct Machine {
     pub(super) nurbs: nurbs::Nurbs,
     /// R plane and depth of the last canned cycle.
     pub(super) cycle: cycle::Cycle,
-    /// The tool length offset changed since the last move.
-    pub(super) tlo_moved: bool,
+    /// The axes whose tool length offset changed since the last move (a
+    /// bit each).
+    pub(super) tlo_moved: u16,
     /// Line of the last G38 probe that left the results unknown.
     pub(super) probed_at: Option<u32>,
     /// Why and since which line the standalone reference's position
     /// differs from the machine's (see W0110).
     pub(super) standalone_drift: Option<(&'static str, u32)>,
+    /// The axes (a bit each) on which the standalone reference's position
+    /// is off after a tool change: an absolute move on each puts it right
+    /// again. 0 with a drift: one no move ends (a change of units).
+    pub(super) drift_axes: u16,
     /// The line of an M61 not followed by a tool change, and the tool the
     /// standalone reference still has as current (see W0110).
     pub(super) m61: Option<(u32, Option<f64>)>,
@@ -146,9 +151,10 @@ impl Machine {
             rotated: false,
             nurbs: nurbs::Nurbs::default(),
             cycle: cycle::Cycle::default(),
-            tlo_moved: false,
+            tlo_moved: 0,
             probed_at: None,
             standalone_drift: None,
+            drift_axes: 0,
             m61: None,
             comp: None,
             comp_pending: false,

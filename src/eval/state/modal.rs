@@ -261,6 +261,11 @@ impl Machine {
         if !special.is_some_and(NonModal::takes_axis_words) {
             self.apply_motion(env, words, &w, motion_before, dynamic_tlo)?;
         }
+        if w.tool_changed {
+            // The reference takes the position after the whole line, so
+            // a G43 beside the M6 counts and a move beside it does not.
+            self.tool_change_sync(env.line);
+        }
         let stops = self.comp.is_some()
             && (w.ends
                 || w.codes
@@ -349,7 +354,6 @@ impl Machine {
                     p.0 = p.1;
                 }
                 self.m61 = None;
-                self.tool_change_sync(line);
                 w.tool_changed = true;
             }
             MCode::SetTool => {
@@ -360,7 +364,6 @@ impl Machine {
                 if let (Some(p), Some(q)) = (&mut self.pockets, w.q) {
                     p.0 = q;
                 }
-                self.tool_change_sync(line);
                 w.tool_changed = true;
             }
             _ => {}
@@ -550,15 +553,27 @@ impl Machine {
         Ok(())
     }
 
-    /// M6 or M61 on `line`: the standalone reference takes the position
-    /// from its last move, which misses a tool length offset changed since
-    /// (the machine does not move).
+    /// M6 or M61 on `line`, after the line's other codes: the standalone
+    /// reference then takes the position from its last move, which misses
+    /// a tool length offset changed since (the machine does not move).
     fn tool_change_sync(&mut self, line: u32) {
-        if self.tlo_moved {
+        let lasting = self.standalone_drift.is_some() && self.drift_axes == 0;
+        if self.tlo_moved != 0 && !lasting {
             self.standalone_drift = Some((
                 "a tool change after the tool length offset changed without a move",
                 line,
             ));
+            self.drift_axes |= self.tlo_moved;
+        }
+    }
+
+    /// An absolute move on `axis` after a tool change's drift: the
+    /// standalone reference's position there is the machine's again.
+    #[cold]
+    fn end_drift(&mut self, axis: usize) {
+        self.drift_axes &= !(1 << axis);
+        if self.drift_axes == 0 {
+            self.standalone_drift = None;
         }
     }
 
@@ -583,6 +598,7 @@ impl Machine {
                 "a change of units with a tool length offset in effect",
                 line,
             ));
+            self.drift_axes = 0;
         }
         let f = match units {
             Units::Mm => 25.4,
@@ -703,7 +719,7 @@ impl Machine {
         series: bool,
     ) {
         let line = env.line;
-        self.tlo_moved = false;
+        self.tlo_moved = 0;
         if self.rotated {
             self.forget(&[0, 1, 2, 3, 4, 5, 6, 7, 8], "an XY rotation (G10 R)", line);
             return;
@@ -919,10 +935,13 @@ impl Machine {
     /// position plus it (G91); an unknown position stays unknown.
     #[inline]
     pub(in crate::eval) fn move_axis(&mut self, axis: usize, v: f64) {
-        self.tlo_moved = false;
+        self.tlo_moved = 0;
         let v = self.modal.radius_word(axis, v);
         if self.modal.distance == Distance::Absolute {
             self.pos.axes[axis] = Ok(v);
+            if self.drift_axes != 0 {
+                self.end_drift(axis);
+            }
         } else if let Ok(p) = &mut self.pos.axes[axis] {
             *p += v;
         }

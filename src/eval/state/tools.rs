@@ -145,8 +145,10 @@ impl Machine {
             };
             self.pos.axes[a] = ok.ok_or(Unknown::After(what, line));
         }
-        if new != self.tlo {
-            self.tlo_moved = true;
+        for a in 0..9 {
+            if new.map(|n| n[a]) != self.tlo.map(|t| t[a]) {
+                self.tlo_moved |= 1 << a;
+            }
         }
         self.tlo = new;
     }
