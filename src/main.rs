@@ -1,3 +1,3 @@
 fn main() -> std::process::ExitCode {
-    ngcflat::run(ngcflat::config::Cli::from_env())
+    ngcflat::cli::main()
 }

@@ -1,5 +1,5 @@
-//! The `stats` and `plot` commands and the per-move consumer that flattening
-//! and `check` use for travel limits.
+//! Running a program for what the `stats` and `plot` commands show, and the
+//! per-move consumer that flattening and `check` use for travel limits.
 
 use super::limits::LimitCheck;
 use super::plot::{Plot, View};
@@ -139,7 +139,7 @@ pub(crate) fn observe(
     }
 }
 
-fn program_name(file: Option<&std::path::Path>) -> String {
+pub(crate) fn program_name(file: Option<&std::path::Path>) -> String {
     match file {
         Some(p) if p.as_os_str() != "-" => p.display().to_string(),
         _ => "<stdin>".into(),
@@ -148,7 +148,7 @@ fn program_name(file: Option<&std::path::Path>) -> String {
 
 /// Runs a program for its statistics (and picture). Err is the exit code
 /// after the diagnostics were reported.
-fn run_for_view(
+pub(crate) fn run_for_view(
     file: Option<&std::path::Path>,
     cfg: &crate::config::Config,
     mut observer: Observer,
@@ -174,89 +174,6 @@ fn run_for_view(
             Err(std::process::ExitCode::from(code))
         }
     }
-}
-
-/// `ngcflat stats`.
-pub(crate) fn stats_command(
-    file: Option<&std::path::Path>,
-    json: bool,
-    cfg: &crate::config::Config,
-) -> std::process::ExitCode {
-    let obs = match run_for_view(file, cfg, Observer::stats(&cfg.machine, None)) {
-        Ok((o, _)) => o,
-        Err(code) => return code,
-    };
-    let Some(stats) = obs.stats else {
-        return std::process::ExitCode::from(2);
-    };
-    let report = stats.report(&program_name(file));
-    let text = if json { report.json() } else { report.text() };
-    use std::io::Write;
-    let mut out = std::io::stdout().lock();
-    if out
-        .write_all(text.as_bytes())
-        .and_then(|_| out.flush())
-        .is_err()
-    {
-        return std::process::ExitCode::from(2);
-    }
-    std::process::ExitCode::SUCCESS
-}
-
-/// `ngcflat plot`.
-pub(crate) fn plot_command(
-    file: Option<&std::path::Path>,
-    output: &std::path::Path,
-    view: View,
-    cfg: &crate::config::Config,
-) -> std::process::ExitCode {
-    if crate::flatten::same_file(output, file) {
-        crate::diag::report(
-            &[*crate::diag::Diagnostic::error(
-                ErrorKind::OutputIsInput {
-                    output: output.to_path_buf(),
-                },
-                None,
-            )],
-            cfg.format,
-        );
-        return std::process::ExitCode::from(2);
-    }
-    let html = output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("html") || e.eq_ignore_ascii_case("htm"));
-    let observer = if html {
-        Observer::scene(&cfg.machine)
-    } else {
-        Observer::stats(&cfg.machine, Some(view))
-    };
-    let (obs, warnings) = match run_for_view(file, cfg, observer) {
-        Ok(o) => o,
-        Err(code) => return code,
-    };
-    let name = program_name(file);
-    let data = match (obs.stats, obs.plot, obs.scene) {
-        (Some(stats), _, Some(mut scene)) if html => {
-            scene.finish();
-            super::html::page(&stats.report(&name), &scene, &warnings)
-        }
-        (Some(_), Some(plot), _) => plot.svg(&name),
-        _ => return std::process::ExitCode::from(2),
-    };
-    if let Err(e) = write_atomic(output, data.as_bytes()) {
-        crate::diag::report(
-            &[*crate::diag::Diagnostic::error(
-                ErrorKind::Io {
-                    path: output.to_path_buf(),
-                    message: e.to_string(),
-                },
-                None,
-            )],
-            cfg.format,
-        );
-        return std::process::ExitCode::from(2);
-    }
-    std::process::ExitCode::SUCCESS
 }
 
 /// What flattening may be asked for besides the output.

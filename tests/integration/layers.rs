@@ -23,7 +23,7 @@ const ORDER: &[&str] = &[
     "config",
     "flatten",
     "view",
-    "check",
+    "cli",
     "crate",
 ];
 

@@ -243,12 +243,28 @@ fn with_quiet_panics<T>(f: impl FnOnce() -> T) -> T {
     r
 }
 
-pub(crate) fn run(
-    paths: &[PathBuf],
-    exts: &[String],
+/// What `check` was asked for.
+pub(super) struct Job {
+    /// Programs or folders (walked recursively).
+    paths: Vec<PathBuf>,
+    /// File extensions checked in folders.
+    exts: Vec<String>,
+    /// Whether a warning fails the check too.
     deny_warnings: bool,
-    cfg: &Config,
-) -> ExitCode {
+}
+
+impl From<super::args::CheckArgs> for Job {
+    fn from(a: super::args::CheckArgs) -> Job {
+        Job {
+            paths: a.paths,
+            exts: a.ext,
+            deny_warnings: a.deny_warnings,
+        }
+    }
+}
+
+pub(super) fn run(job: &Job, cfg: &Config) -> ExitCode {
+    let (paths, exts, deny_warnings) = (&job.paths, &job.exts, job.deny_warnings);
     let (files, mut problems) = collect(paths, exts);
     let results: Mutex<Vec<(usize, Vec<Diagnostic>)>> = Mutex::new(Vec::new());
     let next = AtomicUsize::new(0);

@@ -1,0 +1,87 @@
+//! `ngcflat plot`: the toolpath as SVG, or an HTML page with the statistics.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use super::args::ViewArg;
+use crate::config::Config;
+use crate::diag::{Diagnostic, ErrorKind, report};
+use crate::view::plot::View;
+use crate::view::run::{Observer, program_name, run_for_view, write_atomic};
+
+/// What `plot` was asked for.
+pub(super) struct Job {
+    /// The program; stdin when absent or `-`.
+    file: Option<PathBuf>,
+    /// The picture: FILE.svg, or FILE.html.
+    output: PathBuf,
+    /// Which way to look at the toolpath.
+    view: View,
+}
+
+impl From<super::args::PlotArgs> for Job {
+    fn from(a: super::args::PlotArgs) -> Job {
+        let view = match a.view {
+            ViewArg::Xy => View::Xy,
+            ViewArg::Xz => View::Xz,
+            ViewArg::Yz => View::Yz,
+            ViewArg::Iso => View::Iso,
+        };
+        Job {
+            file: a.file,
+            output: a.output,
+            view,
+        }
+    }
+}
+
+pub(super) fn run(job: &Job, cfg: &Config) -> ExitCode {
+    let (file, output) = (job.file.as_deref(), job.output.as_path());
+    if crate::flatten::same_file(output, file) {
+        report(
+            &[*Diagnostic::error(
+                ErrorKind::OutputIsInput {
+                    output: output.to_path_buf(),
+                },
+                None,
+            )],
+            cfg.format,
+        );
+        return ExitCode::from(2);
+    }
+    let html = output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("html") || e.eq_ignore_ascii_case("htm"));
+    let observer = if html {
+        Observer::scene(&cfg.machine)
+    } else {
+        Observer::stats(&cfg.machine, Some(job.view))
+    };
+    let (obs, warnings) = match run_for_view(file, cfg, observer) {
+        Ok(o) => o,
+        Err(code) => return code,
+    };
+    let name = program_name(file);
+    let data = match (obs.stats, obs.plot, obs.scene) {
+        (Some(stats), _, Some(mut scene)) if html => {
+            scene.finish();
+            crate::view::html::page(&stats.report(&name), &scene, &warnings)
+        }
+        (Some(_), Some(plot), _) => plot.svg(&name),
+        _ => return ExitCode::from(2),
+    };
+    if let Err(e) = write_atomic(output, data.as_bytes()) {
+        report(
+            &[*Diagnostic::error(
+                ErrorKind::Io {
+                    path: output.to_path_buf(),
+                    message: e.to_string(),
+                },
+                None,
+            )],
+            cfg.format,
+        );
+        return ExitCode::from(2);
+    }
+    ExitCode::SUCCESS
+}

@@ -1,0 +1,51 @@
+//! `ngcflat stats`: the statistics of a program's motion.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use crate::config::Config;
+use crate::view::run::{Observer, program_name, run_for_view};
+
+/// What `stats` was asked for.
+pub(super) struct Job {
+    /// The program; stdin when absent or `-`.
+    file: Option<PathBuf>,
+    /// JSON instead of text.
+    json: bool,
+}
+
+impl From<super::args::StatsArgs> for Job {
+    fn from(a: super::args::StatsArgs) -> Job {
+        Job {
+            file: a.file,
+            json: a.json,
+        }
+    }
+}
+
+pub(super) fn run(job: &Job, cfg: &Config) -> ExitCode {
+    let file = job.file.as_deref();
+    let obs = match run_for_view(file, cfg, Observer::stats(&cfg.machine, None)) {
+        Ok((o, _)) => o,
+        Err(code) => return code,
+    };
+    let Some(stats) = obs.stats else {
+        return ExitCode::from(2);
+    };
+    let report = stats.report(&program_name(file));
+    let text = if job.json {
+        report.json()
+    } else {
+        report.text()
+    };
+    let mut out = std::io::stdout().lock();
+    if out
+        .write_all(text.as_bytes())
+        .and_then(|_| out.flush())
+        .is_err()
+    {
+        return ExitCode::from(2);
+    }
+    ExitCode::SUCCESS
+}
