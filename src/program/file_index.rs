@@ -7,7 +7,9 @@
 //! record of a few integers; its label key is an index into the file's
 //! table of distinct keys; the occurrences of all keys are one array cut
 //! into runs; the parsed line itself is not kept but parsed again when it
-//! is run (a bounded number of parsed O-lines are kept for loops).
+//! is run (a bounded number of parsed O-lines are kept for loops, and of
+//! a file in memory the first O-lines with values or arguments are kept
+//! from the scan, so that a short program parses each line once).
 
 use std::cell::{Cell, RefCell};
 use std::rc::Rc;
@@ -25,9 +27,15 @@ use crate::source::{Marked, is_mark};
 /// definition).
 const NONE: u32 = u32::MAX;
 
-/// Parsed O-lines kept per file before the kept ones are dropped and
-/// parsing starts to fill again (loops run from what is kept).
+/// Parsed O-lines kept per file: slots indexed by the O-line index
+/// modulo their number (a power of two, at most this many), so that a
+/// lookup is one index and the memory is bounded (loops run from what is
+/// kept; a line whose slot another took is parsed again).
 const PARSED_KEPT: usize = 1 << 14;
+
+/// O-lines of a file in memory whose parse at index time is kept for
+/// their run (those made from the index without parsing are not counted).
+const PARSED_AT_SCAN: usize = 1 << 12;
 
 /// Bytes of a streamed file read at a time for parsing O-lines again.
 const AHEAD: usize = 1 << 13;
@@ -162,8 +170,11 @@ pub struct FileIndex {
     pub line_count: u32,
     /// The empty scope.
     no_scope: Name,
-    /// Parsed O-lines kept (at most [`PARSED_KEPT`]), by O-line index.
-    parsed: RefCell<FxMap<u32, Rc<Line>>>,
+    /// Parsed O-lines kept (at most [`PARSED_KEPT`]), each in the slot of
+    /// its O-line index (see [`FileIndex::slot`]), with that index.
+    parsed: RefCell<Vec<Option<(u32, Rc<Line>)>>>,
+    /// The number of those slots (a power of two) less one.
+    parsed_mask: usize,
     parser: RefCell<LineParser>,
     /// Bytes of a streamed file read ahead for parsing O-lines again:
     /// (offset, bytes).
@@ -205,6 +216,11 @@ struct Scan {
     first_nonblank: Option<u32>,
     first_nonblank_next: u32,
     percent_start: bool,
+    /// Keep the lines parsed (the file is in memory, so they are the
+    /// lines a later read gives).
+    keep_parsed: bool,
+    /// Parsed O-lines kept for their run: (O-line index, line).
+    parsed: Vec<(u32, Rc<Line>)>,
 }
 
 impl Scan {
@@ -220,39 +236,22 @@ impl Scan {
             self.oline(idx, pos, (next, terminated, true), kind, Some(&label));
         } else if quick_is_candidate(raw) {
             match parse_marked(parser, m, raw) {
-                Ok(line) => match &line.kind {
-                    LineKind::Blank | LineKind::Items(_) => {}
-                    LineKind::Percent => {
-                        if self.first_nonblank.is_none() {
-                            self.percent_start = true;
-                        }
-                        self.percent_lines.push(idx);
+                Ok(line) => {
+                    let at = self.olines.len();
+                    self.parsed_line(&line, idx, pos, next, terminated);
+                    // The line a later read gives (the whole line, from
+                    // memory): kept for its run.
+                    if self.keep_parsed
+                        && self.parsed.len() < PARSED_AT_SCAN
+                        && raw.len() as u64 == m.end - m.start
+                        && self
+                            .olines
+                            .get(at)
+                            .is_some_and(|o| !o.plain && o.kind.is_some())
+                    {
+                        self.parsed.push((at as u32, Rc::new(line)));
                     }
-                    LineKind::O(o) => {
-                        let label = match &o.label {
-                            Label::Static(s) => Some(s),
-                            Label::Dynamic(_) => None,
-                        };
-                        let plain = label.is_some()
-                            && o.expr.is_none()
-                            && o.args.is_empty()
-                            && !o.active_comment
-                            && o.exec_error.is_none()
-                            && !line.block_delete
-                            && line.line_number.is_none();
-                        self.oline(idx, pos, (next, terminated, plain), o.kind, label);
-                    }
-                    LineKind::M98(_) => self.olines.push(OInfo {
-                        line_idx: idx,
-                        start: pos,
-                        next,
-                        key: NONE,
-                        scope: NONE,
-                        kind: None,
-                        terminated,
-                        plain: false,
-                    }),
-                },
+                }
                 Err(e) => {
                     if e.when_skipped {
                         self.skip_errors.push((idx, pos, e));
@@ -267,6 +266,44 @@ impl Scan {
         if self.first_nonblank.is_none() && m.first_nonblank {
             self.first_nonblank = Some(idx);
             self.first_nonblank_next = next;
+        }
+    }
+
+    /// Records a line the scan parsed (`idx`, `pos`, `next`, `terminated`
+    /// as in [`Scan::line`]).
+    fn parsed_line(&mut self, line: &Line, idx: u32, pos: u32, next: u32, terminated: bool) {
+        match &line.kind {
+            LineKind::Blank | LineKind::Items(_) => {}
+            LineKind::Percent => {
+                if self.first_nonblank.is_none() {
+                    self.percent_start = true;
+                }
+                self.percent_lines.push(idx);
+            }
+            LineKind::O(o) => {
+                let label = match &o.label {
+                    Label::Static(s) => Some(s),
+                    Label::Dynamic(_) => None,
+                };
+                let plain = label.is_some()
+                    && o.expr.is_none()
+                    && o.args.is_empty()
+                    && !o.active_comment
+                    && o.exec_error.is_none()
+                    && !line.block_delete
+                    && line.line_number.is_none();
+                self.oline(idx, pos, (next, terminated, plain), o.kind, label);
+            }
+            LineKind::M98(_) => self.olines.push(OInfo {
+                line_idx: idx,
+                start: pos,
+                next,
+                key: NONE,
+                scope: NONE,
+                kind: None,
+                terminated,
+                plain: false,
+            }),
         }
     }
 
@@ -461,7 +498,10 @@ fn addr(n: &Name) -> usize {
 impl FileIndex {
     pub fn build(file: Arc<SourceFile>) -> FileIndex {
         let mut parser = LineParser::default();
-        let mut scan = Scan::default();
+        let mut scan = Scan {
+            keep_parsed: file.memory().is_some(),
+            ..Scan::default()
+        };
         let scanned = file.scan_marked_lines(crate::parse::MAX_LINE + 1, &matters, |m, raw| {
             scan.line(&mut parser, m, raw)
         });
@@ -480,6 +520,7 @@ impl FileIndex {
             first_nonblank,
             first_nonblank_next,
             percent_start,
+            parsed,
             ..
         } = scan;
         drop(key_ids);
@@ -497,6 +538,7 @@ impl FileIndex {
             read_error,
             first_nonblank_next,
             seek_memo: vec![Cell::new(u32::MAX); olines.len()],
+            parsed_mask: olines.len().next_power_of_two().min(PARSED_KEPT) - 1,
             olines,
             keys,
             keys_by_addr,
@@ -513,7 +555,7 @@ impl FileIndex {
             first_nonblank,
             line_count,
             no_scope: Name::new(""),
-            parsed: RefCell::new(FxMap::default()),
+            parsed: RefCell::new(Vec::new()),
             parser: RefCell::new(parser),
             ahead: RefCell::default(),
         };
@@ -524,6 +566,9 @@ impl FileIndex {
         (index.defs, index.valued) = (defs, valued);
         loop_bodies(&index, &mut keep);
         index.keep = merge_ranges(keep);
+        for (oidx, line) in parsed {
+            index.keep_parsed(oidx, line);
+        }
         // The labels of the lines parsed (a control label's key is kept,
         // its bare label not).
         Name::forget_unused();
@@ -625,7 +670,9 @@ impl FileIndex {
     /// when the line cannot be read again or is no longer the O-line the
     /// index found (the file changed during the run).
     pub fn oline(&self, oidx: u32) -> Result<ParsedO, ErrorKind> {
-        if let Some(l) = self.parsed.borrow().get(&oidx) {
+        if let Some(Some((i, l))) = self.parsed.borrow().get(self.slot(oidx))
+            && *i == oidx
+        {
             return Ok(ParsedO(l.clone()));
         }
         let info = self
@@ -638,12 +685,26 @@ impl FileIndex {
         } else {
             self.parse_again(&info)?
         });
-        let mut kept = self.parsed.borrow_mut();
-        if kept.len() >= PARSED_KEPT {
-            kept.clear();
-        }
-        kept.insert(oidx, line.clone());
+        self.keep_parsed(oidx, line.clone());
         Ok(ParsedO(line))
+    }
+
+    /// The slot of O-line `oidx` among the parsed lines kept.
+    #[inline]
+    fn slot(&self, oidx: u32) -> usize {
+        oidx as usize & self.parsed_mask
+    }
+
+    /// Keeps O-line `oidx` parsed, in its slot (made when first used).
+    fn keep_parsed(&self, oidx: u32, line: Rc<Line>) {
+        let mut kept = self.parsed.borrow_mut();
+        if kept.is_empty() {
+            kept.resize(self.parsed_mask + 1, None);
+        }
+        let at = self.slot(oidx);
+        if let Some(s) = kept.get_mut(at) {
+            *s = Some((oidx, line));
+        }
     }
 
     /// O-line `oidx` as a whole line (O or M98), parsed again.
@@ -1045,6 +1106,35 @@ mod tests {
         assert!(!plain[1] && !plain[5] && !plain[6] && !plain[10] && !plain[19]);
     }
 
+    /// Of a file in memory, the O-lines with values or arguments are kept
+    /// as the scan parsed them (a short program parses each once); of a
+    /// streamed file none are (it is read again, to see it unchanged).
+    #[test]
+    fn the_scan_keeps_the_olines_it_parsed_of_a_file_in_memory() {
+        let text = "o<a> sub\n  G1 X#1\no<a> endsub\no1 while [#2 LT 3]\r\n\
+                    o<a> call [#2]\n  #2 = [#2 + 1]\no1 endwhile\nM98 P5\nM2\n";
+        let index = index_of(text);
+        let kept: Vec<u32> = index
+            .parsed
+            .borrow()
+            .iter()
+            .flatten()
+            .map(|(i, _)| *i)
+            .collect();
+        // `while` and `call` (not the plain lines, not M98).
+        assert_eq!(kept, vec![2, 3]);
+        let d = tempfile::tempdir().expect("tmp");
+        let p = d.path().join("p.ngc");
+        std::fs::write(&p, text).expect("write");
+        let file = SourceFile::open_streamed(&p).expect("open");
+        let streamed = FileIndex::build(Arc::new(file));
+        assert!(streamed.parsed.borrow().iter().all(Option::is_none));
+        assert_eq!(
+            *streamed.oline(3).expect("read").line(),
+            *index.oline(3).expect("kept").line()
+        );
+    }
+
     /// The lines read without the parser are read as the parser reads them;
     /// others are left to it.
     #[test]
@@ -1196,7 +1286,7 @@ mod tests {
         let index = FileIndex::build(Arc::new(file));
         assert_eq!(index.oline(0).expect("unchanged").kind, OKind::If);
         let forget = || {
-            index.parsed.borrow_mut().clear();
+            index.parsed.borrow_mut().fill(None);
             index.ahead.borrow_mut().1.clear();
         };
         // The same length, another label: a plain line is made from the
