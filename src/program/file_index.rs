@@ -1135,6 +1135,57 @@ mod tests {
         );
     }
 
+    /// Lines of O-words and others, for programs made at random.
+    const PIECES: &[&str] = &[
+        "o1 while [#1 LT 3]",
+        "O1 ENDWHILE",
+        "o<s> call [#2 + 1] [2]",
+        "o<s> sub",
+        "o<s> endsub [#3]",
+        "o<s> return",
+        "/o2 if [#1 EQ 2]",
+        "N5 o2 elseif [1]",
+        "o2 else (x)",
+        "o2 endif",
+        "o3 repeat [2.5]",
+        "o3 endrepeat",
+        "o[1 + 2] if [0]",
+        "o<bad> call [",
+        "o4 do",
+        "o4 while [#5 GT 0] (debug, #5)",
+        "M98 P7 L2",
+        "  G1 X[#1 * 2] ; c",
+        "#1 = [#1 + 1]",
+        "%",
+        "",
+    ];
+
+    proptest::proptest! {
+        /// An O-line kept from the scan of a file in memory is the line
+        /// the run parses again from the same text read from disk.
+        #[test]
+        fn olines_kept_from_the_scan_are_the_lines_read_again(
+            picks in proptest::collection::vec((0..PIECES.len(), 0..3u8), 1..40),
+        ) {
+            let mut text = String::new();
+            for (k, end) in picks {
+                text.push_str(PIECES[k]);
+                text.push_str(["\n", "\r\n", "\t\n"][end as usize]);
+            }
+            let kept = index_of(&text);
+            let d = tempfile::tempdir().expect("tmp");
+            let p = d.path().join("p.ngc");
+            std::fs::write(&p, &text).expect("write");
+            let read = FileIndex::build(Arc::new(SourceFile::open_streamed(&p).expect("open")));
+            proptest::prop_assert_eq!(kept.olines.len(), read.olines.len());
+            for i in 0..kept.olines.len() as u32 {
+                let a = kept.line(i).map(|l| (*l).clone());
+                let b = read.line(i).map(|l| (*l).clone());
+                proptest::prop_assert_eq!(a, b, "O-line {} of {:?}", i, text);
+            }
+        }
+    }
+
     /// The lines read without the parser are read as the parser reads them;
     /// others are left to it.
     #[test]
