@@ -40,6 +40,9 @@ const PARSED_AT_SCAN: usize = 1 << 12;
 /// Bytes of a streamed file read at a time for parsing O-lines again.
 const AHEAD: usize = 1 << 13;
 
+/// A slot of the parsed O-lines kept: the O-line index and its line.
+type KeptLine = Option<(u32, Rc<Line>)>;
+
 /// One O-line (or M98 line) of a file.
 #[derive(Debug, Clone, Copy)]
 pub struct OInfo {
@@ -172,7 +175,7 @@ pub struct FileIndex {
     no_scope: Name,
     /// Parsed O-lines kept (at most [`PARSED_KEPT`]), each in the slot of
     /// its O-line index (see [`FileIndex::slot`]), with that index.
-    parsed: RefCell<Vec<Option<(u32, Rc<Line>)>>>,
+    parsed: RefCell<Vec<KeptLine>>,
     /// The number of those slots (a power of two) less one.
     parsed_mask: usize,
     parser: RefCell<LineParser>,
