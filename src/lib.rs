@@ -5,8 +5,8 @@
 //! control flow, parameters and expressions) → [`emit`] (numbers, output
 //! sink), or a consumer: [`controller`] lowering, `view`. The `flatten` module ties
 //! them together; [`diag`] holds every error and warning; [`cli`] is the
-//! command line. The modules form layers without cycles, listed in the
-//! README's Design section.
+//! command line. The modules form layers without cycles, listed in
+//! ARCHITECTURE.md.
 
 #![deny(unreachable_pub)]
 

@@ -103,8 +103,7 @@ struct JsonFrame {
     column: u32,
 }
 
-/// One diagnostic in the JSON format (README: "Machine-readable
-/// diagnostics").
+/// One diagnostic in the JSON format (docs/usage.md: "Diagnostics").
 #[derive(serde::Serialize)]
 struct JsonDiagnostic {
     #[serde(rename = "type")]

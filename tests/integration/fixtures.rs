@@ -7,7 +7,7 @@
 //! * `refuse/**/*.ngc` are refused by ngcflat by design (runtime-only values,
 //!   limits, unsafe names...); diagnostics snapshotted, no rs274 comparison.
 //! * `deviation/**/*.ngc` depend on a documented rs274 bug ngcflat does not
-//!   copy (README "Deviations"): they flatten with a warning; no comparison.
+//!   copy (docs/deviations.md): they flatten with a warning; no comparison.
 //!
 //! * `target/NAME/ok|refuse/**/*.ngc` run with `--target NAME`: lowered
 //!   output snapshotted and compared with the original by machine motion
@@ -320,7 +320,7 @@ fn same_error_line(path: &Path, program: &[u8], rs: &str, ours: &str) -> Result<
 
 /// rs274 refusing the subroutine call it builds for a lathe cycle prints
 /// that call as `O<q> CALL` (`%f`), a text in no file: the lines of the
-/// cycles with that Q (README, deviations: ngcflat names the cycle line).
+/// cycles with that Q (docs/deviations.md: ngcflat names the cycle line).
 fn cycle_call_lines(lines: &[&str], rs: &str) -> Vec<usize> {
     let Some(q) = rs.lines().find_map(|l| {
         let n = l.trim().strip_prefix('O')?.strip_suffix(" CALL")?;

@@ -14,7 +14,7 @@
 //!
 //! `NGCFLAT_DIFF_CASES=N` sets the number of programs (default 300),
 //! `NGCFLAT_DIFF_SEED=S` the first seed. The generator avoids the rs274
-//! quirks ngcflat deliberately does not reproduce (README "Deviations"):
+//! quirks ngcflat deliberately does not reproduce (docs/deviations.md):
 //! stale break/continue flags are cleared by empty loops that behave the
 //! same under both semantics, `return` and recursion never happen inside a
 //! `repeat` body, `elseif`/do-loop conditions never fail, `M98 … L0` is

@@ -226,7 +226,7 @@ fn rs274_within(program: &str, limit: Duration) -> Option<(bool, Vec<String>, St
 /// Whether ngcflat's error (its first ` --> file:line:col`) is at a line
 /// rs274's refusal names: rs274 prints the line's text last; a subroutine
 /// call it built for the cycle it prints as `O<q> CALL`, which stands for
-/// the cycle line (README, deviations).
+/// the cycle line (docs/deviations.md).
 fn same_error_line(program: &str, rs: &str, ours: &str) -> Result<(), String> {
     if !rs
         .lines()

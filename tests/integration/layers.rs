@@ -1,5 +1,5 @@
 //! The top-level modules of `src` form layers: each uses only modules
-//! listed before it, in the order the README's Design section gives.
+//! listed before it, in the order ARCHITECTURE.md's "The parts" gives.
 
 use std::collections::BTreeSet;
 
@@ -107,19 +107,20 @@ fn modules_use_only_lower_layers() {
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
 }
 
-/// The README's Design section names the modules in the same order.
+/// ARCHITECTURE.md's "The parts" names the modules in the same order.
 #[test]
-fn readme_states_the_layer_order() {
-    let readme = std::fs::read_to_string(crate::root().join("README.md")).expect("README.md");
-    let design = readme
-        .split_once("## Design\n")
+fn architecture_states_the_layer_order() {
+    let text =
+        std::fs::read_to_string(crate::root().join("ARCHITECTURE.md")).expect("ARCHITECTURE.md");
+    let design = text
+        .split_once("## The parts\n")
         .map(|(_, rest)| rest.split("\n## ").next().unwrap_or(rest))
-        .expect("a Design section");
+        .expect("a section 'The parts'");
     let first = |m: &str| design.find(&format!("`{m}`"));
     let mut last = 0;
     for m in ORDER.iter().filter(|m| **m != "crate") {
-        let at = first(m).unwrap_or_else(|| panic!("the Design section does not name `{m}`"));
-        assert!(at >= last, "the Design section names `{m}` out of order");
+        let at = first(m).unwrap_or_else(|| panic!("ARCHITECTURE.md does not name `{m}`"));
+        assert!(at >= last, "ARCHITECTURE.md names `{m}` out of order");
         last = at;
     }
 }

@@ -7,7 +7,7 @@
 //! other parts it reads or changes as arguments. The steps also read the
 //! parts' fields and set single ones (the cursor, a flag, a buffer taken
 //! and put back); a change of more than one field is the part's method. One file a
-//! kind of step; the README's Design section says what each holds.
+//! kind of step; ARCHITECTURE.md says what each holds.
 
 mod call;
 mod control;
