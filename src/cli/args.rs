@@ -9,8 +9,8 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use crate::eval::parse_axis_word;
 
 /// Flatten LinuxCNC-dialect G-code (O-word subroutines, loops, conditionals,
-/// parameters and expressions) into plain straight-line G-code for
-/// controllers such as GRBL, grblHAL, FluidNC, Marlin and Smoothieware.
+/// parameters and expressions) into plain straight-line G-code: for
+/// LinuxCNC, or with --target for GRBL, grblHAL or FluidNC.
 ///
 /// Every expression and parameter is evaluated and every O-word expanded
 /// exactly as LinuxCNC 2.9's interpreter would run the program; the result
