@@ -2,6 +2,7 @@
 //! says about programs, parameters and the machine. The command line's
 //! `cli` part builds it.
 
+use crate::diag::SetupError;
 use std::path::{Path, PathBuf};
 
 use crate::diag::{Diagnostic, ErrorKind, MessageFormat, WarningKind};
@@ -50,8 +51,10 @@ pub(crate) fn resolve_in(base: &Path, p: &str) -> PathBuf {
 /// Parses a `--user-m` value: `100`, `M100` or a range `101-105`, within
 /// M100-M199. Returns the bits (bit n: M(100+n)).
 pub(crate) fn parse_user_m(text: &str) -> Result<u128, ErrorKind> {
-    let bad = || ErrorKind::BadUserM {
-        text: text.to_string(),
+    let bad = || {
+        ErrorKind::Setup(SetupError::BadUserM {
+            text: text.to_string(),
+        })
     };
     let num = |s: &str| -> Result<u32, ErrorKind> {
         let s = s.trim();
@@ -108,9 +111,11 @@ pub(crate) fn user_m_files(ini: &Ini, base: &Path) -> u128 {
 /// Reads an INI file; returns it with the folder its relative paths are
 /// resolved in.
 pub(crate) fn read_ini(ini_path: &Path) -> Result<(Ini, PathBuf), ErrorKind> {
-    let text = std::fs::read_to_string(ini_path).map_err(|e| ErrorKind::Io {
-        path: ini_path.to_path_buf(),
-        message: e.to_string(),
+    let text = std::fs::read_to_string(ini_path).map_err(|e| {
+        ErrorKind::Setup(SetupError::Io {
+            path: ini_path.to_path_buf(),
+            message: e.to_string(),
+        })
     })?;
     let base = ini_path.parent().map(Path::to_path_buf).unwrap_or_default();
     let base = if base.as_os_str().is_empty() {

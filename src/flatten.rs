@@ -3,6 +3,7 @@
 //! library's entry points; the commands (flatten, check, stats, plot) are
 //! built on them.
 
+use crate::diag::SetupError;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::sync::Arc;
@@ -25,10 +26,10 @@ pub fn read_source_limited(
 ) -> Result<SourceFile, Error> {
     let io_err = |path: PathBuf, e: std::io::Error| {
         Diagnostic::error(
-            ErrorKind::Io {
+            ErrorKind::Setup(SetupError::Io {
                 path,
                 message: e.to_string(),
-            },
+            }),
             None,
         )
     };
@@ -97,10 +98,10 @@ fn run_with<'s>(
             _ => PathBuf::from("<output>"),
         };
         Diagnostic::error(
-            ErrorKind::Io {
+            ErrorKind::Setup(SetupError::Io {
                 path,
                 message: e.to_string(),
-            },
+            }),
             None,
         )
     });
@@ -169,9 +170,9 @@ pub fn lowering<'s>(
 pub fn refuse_binary(source: &SourceFile) -> Result<(), Error> {
     if source.head(8192).iter().filter(|&&b| b == 0).count() >= 4 {
         return Err(Diagnostic::error(
-            ErrorKind::NotText {
+            ErrorKind::Setup(SetupError::NotText {
                 path: source.path.clone(),
-            },
+            }),
             None,
         ));
     }

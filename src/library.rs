@@ -7,6 +7,7 @@
 //! carry nothing after their command, and expressions that read no
 //! parameter evaluate without error.
 
+use crate::diag::{OWordError, SetupError};
 use std::rc::Rc;
 use std::sync::Arc;
 
@@ -75,10 +76,10 @@ impl Structure {
         let in_sub = self.stack.iter().any(|o| o.kind == OKind::Sub);
         if kind == OKind::Sub {
             if let Some(outer) = self.stack.iter().find(|o| o.kind == OKind::Sub) {
-                let e = ErrorKind::NestedSubDefinition {
+                let e = ErrorKind::OWord(OWordError::NestedSubDefinition {
                     inner: label.unwrap_or_default(),
                     outer: outer.label.clone(),
-                };
+                });
                 self.skip = true;
                 return Some(e);
             }
@@ -107,20 +108,20 @@ impl Structure {
             let top = top?;
             if top.kind != OKind::Sub {
                 self.err_at = Some(top.at);
-                return Some(ErrorKind::UnclosedBlock {
+                return Some(ErrorKind::OWord(OWordError::UnclosedBlock {
                     label: top.label.clone(),
                     opened: top.kind.name(),
                     line: top.line,
                     closer: closer_of(top.kind),
-                });
+                }));
             }
             if top.label != label {
-                return Some(ErrorKind::LabelMismatch {
+                return Some(ErrorKind::OWord(OWordError::LabelMismatch {
                     label,
                     here: "endsub",
                     opened: "sub",
                     line: top.line,
-                });
+                }));
             }
             return None;
         }
@@ -153,15 +154,15 @@ impl Structure {
         };
         let mismatch =
             |s: &Structure, here: OKind| match s.stack.iter().rev().find(|o| o.label == label) {
-                Some(o) => ErrorKind::LabelMismatch {
+                Some(o) => ErrorKind::OWord(OWordError::LabelMismatch {
                     label: label.to_string(),
                     here: here.name(),
                     opened: o.kind.name(),
                     line: o.line,
-                },
-                None => ErrorKind::UndefinedLabel {
+                }),
+                None => ErrorKind::OWord(OWordError::UndefinedLabel {
                     label: label.to_string(),
-                },
+                }),
             };
         match kind {
             // The `while` of a do-while closes its `do`.
@@ -300,18 +301,18 @@ pub(crate) fn check_library(
     });
     if let Err(e) = scanned {
         out.push(*Diagnostic::error(
-            ErrorKind::Io {
+            ErrorKind::Setup(SetupError::Io {
                 path: file.path.clone(),
                 message: e.to_string(),
-            },
+            }),
             None,
         ));
     }
     if let Some(sub) = st.stack.first().filter(|o| o.kind == OKind::Sub) {
         out.push(*Diagnostic::error(
-            ErrorKind::UnterminatedSub {
+            ErrorKind::OWord(OWordError::UnterminatedSub {
                 name: sub.label.trim_matches(['<', '>']).to_string(),
-            },
+            }),
             site(sub.at.0, sub.at.1),
         ));
     }

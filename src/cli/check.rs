@@ -1,5 +1,6 @@
 //! `ngcflat check`: evaluate many programs in parallel and report.
 
+use crate::diag::SetupError;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Mutex;
@@ -49,10 +50,10 @@ pub(crate) fn collect(paths: &[PathBuf], exts: &[String]) -> (Vec<PathBuf>, Vec<
                             .map(Path::to_path_buf)
                             .unwrap_or_else(|| p.clone());
                         problems.push(*Diagnostic::error(
-                            ErrorKind::Io {
+                            ErrorKind::Setup(SetupError::Io {
                                 path,
                                 message: err.to_string(),
-                            },
+                            }),
                             None,
                         ));
                     }
@@ -128,10 +129,10 @@ pub(crate) fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
     } else {
         crate::program::SourceFile::open_regular(path, cfg.settings.input).map_err(|e| {
             Diagnostic::error(
-                ErrorKind::Io {
+                ErrorKind::Setup(SetupError::Io {
                     path: path.to_path_buf(),
                     message: e.to_string(),
-                },
+                }),
                 None,
             )
         })
@@ -208,9 +209,9 @@ fn check_file_guarded(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
             .with(|p| p.borrow_mut().take())
             .unwrap_or_else(|| "a panic".into());
         vec![*Diagnostic::error(
-            ErrorKind::Internal {
+            ErrorKind::Setup(SetupError::Internal {
                 what: format!("{what} while checking {}", path.display()),
-            },
+            }),
             None,
         )]
     })
@@ -299,10 +300,10 @@ pub(super) fn run(job: &Job, cfg: &Config) -> ExitCode {
     }
     if files.is_empty() && problems_empty {
         all.push(*Diagnostic::error(
-            ErrorKind::NoPrograms {
+            ErrorKind::Setup(SetupError::NoPrograms {
                 paths: paths.to_vec(),
                 exts: exts.join(","),
-            },
+            }),
             None,
         ));
     }
@@ -312,7 +313,11 @@ pub(super) fn run(job: &Job, cfg: &Config) -> ExitCode {
     let io_error = all.iter().any(|d| {
         matches!(
             d.error_kind(),
-            Some(ErrorKind::Io { .. } | ErrorKind::NoPrograms { .. } | ErrorKind::NotText { .. })
+            Some(
+                ErrorKind::Setup(SetupError::Io { .. })
+                    | ErrorKind::Setup(SetupError::NoPrograms { .. })
+                    | ErrorKind::Setup(SetupError::NotText { .. })
+            )
         )
     });
     let errors = all.iter().filter(|d| d.level() == Level::Error).count();

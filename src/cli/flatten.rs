@@ -1,5 +1,6 @@
 //! Flattening one program: the command without a subcommand.
 
+use crate::diag::SetupError;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -48,7 +49,9 @@ fn progress_delay() -> Option<std::time::Duration> {
 
 fn exit_for(e: &Diagnostic) -> u8 {
     match e.error_kind() {
-        Some(ErrorKind::Io { .. } | ErrorKind::NotText { .. }) => 2,
+        Some(
+            ErrorKind::Setup(SetupError::Io { .. }) | ErrorKind::Setup(SetupError::NotText { .. }),
+        ) => 2,
         _ => 1,
     }
 }
@@ -81,7 +84,7 @@ pub(super) fn run(job: Job, mut cfg: Config) -> ExitCode {
     let dest = match job.output {
         Some(p) => {
             if crate::flatten::same_file(&p, job.file.as_deref()) {
-                let k = ErrorKind::OutputIsInput { output: p };
+                let k = ErrorKind::Setup(SetupError::OutputIsInput { output: p });
                 return super::setup_error(k, cfg.format, false);
             }
             Destination::File(p)
@@ -90,7 +93,7 @@ pub(super) fn run(job: Job, mut cfg: Config) -> ExitCode {
     };
     let consumer = lowering(&cfg.settings, cfg.target.clone());
     if consumer.is_some() && (job.source_map.is_some() || job.annotate) {
-        let k = ErrorKind::SourceMapNeedsLinuxcnc;
+        let k = ErrorKind::Setup(SetupError::SourceMapNeedsLinuxcnc);
         return super::setup_error(k, cfg.format, false);
     }
     let extras = crate::view::run::Extras {

@@ -1,6 +1,7 @@
 //! The arguments shared by every command, resolved into a
 //! [`Config`]: files read, values parsed and checked.
 
+use crate::diag::{SetupError, TargetError};
 use std::path::{Path, PathBuf};
 
 use super::args::{CommonArgs, FormatArg, GrblEnvelopeArg, OnOff, ToolChangeArg};
@@ -35,11 +36,12 @@ impl CommonArgs {
         let Some(name) = self.target_name() else {
             return Ok(None);
         };
-        let profile = crate::controller::find(&name).ok_or(ErrorKind::UnknownTarget { name })?;
+        let profile = crate::controller::find(&name)
+            .ok_or(ErrorKind::Target(TargetError::UnknownTarget { name }))?;
         if !(self.tolerance > 0.0 && self.tolerance.is_finite()) {
-            return Err(ErrorKind::BadDefine {
+            return Err(ErrorKind::Setup(SetupError::BadDefine {
                 text: format!("--tolerance {}", self.tolerance),
-            });
+            }));
         }
         let mut t = TargetOptions::new(profile);
         t.tool_change = self.tool_change.map(|c| match c {
@@ -143,8 +145,10 @@ impl CommonArgs {
             .iter()
             .flat_map(|s| s.split_whitespace())
         {
-            let axis = parse_axis_word(word).ok_or_else(|| ErrorKind::BadStartPosition {
-                text: word.to_string(),
+            let axis = parse_axis_word(word).ok_or_else(|| {
+                ErrorKind::Setup(SetupError::BadStartPosition {
+                    text: word.to_string(),
+                })
             })?;
             settings.start_position.push(axis);
         }
@@ -158,9 +162,11 @@ impl CommonArgs {
         machine: &mut crate::machine::axes::MachineAxes,
     ) -> Result<bool, ErrorKind> {
         if let Some(g) = &self.machine.grbl_settings {
-            let text = std::fs::read_to_string(g).map_err(|e| ErrorKind::Io {
-                path: g.clone(),
-                message: e.to_string(),
+            let text = std::fs::read_to_string(g).map_err(|e| {
+                ErrorKind::Setup(SetupError::Io {
+                    path: g.clone(),
+                    message: e.to_string(),
+                })
             })?;
             let env = match self.machine.grbl_envelope {
                 GrblEnvelopeArg::Negative => crate::machine::axes::GrblEnvelope::Negative,

@@ -1,5 +1,6 @@
 //! `ngcflat plot`: the toolpath as SVG, or an HTML page with the statistics.
 
+use crate::diag::SetupError;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -40,9 +41,9 @@ pub(super) fn run(job: &Job, cfg: &Config) -> ExitCode {
     if crate::flatten::same_file(output, file) {
         report(
             &[*Diagnostic::error(
-                ErrorKind::OutputIsInput {
+                ErrorKind::Setup(SetupError::OutputIsInput {
                     output: output.to_path_buf(),
-                },
+                }),
                 None,
             )],
             cfg.format,
@@ -73,10 +74,10 @@ pub(super) fn run(job: &Job, cfg: &Config) -> ExitCode {
     if let Err(e) = write_atomic(output, data.as_bytes()) {
         report(
             &[*Diagnostic::error(
-                ErrorKind::Io {
+                ErrorKind::Setup(SetupError::Io {
                     path: output.to_path_buf(),
                     message: e.to_string(),
-                },
+                }),
                 None,
             )],
             cfg.format,

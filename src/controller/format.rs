@@ -15,6 +15,7 @@ use crate::block::{
     written_as_is,
 };
 use crate::diag::ErrorKind;
+use crate::diag::TargetError;
 
 use super::lower::PlainLine;
 use super::profile::{Comments, LineCount, Profile};
@@ -309,10 +310,12 @@ impl LineWriter {
             LineCount::AllBytes => self.buf.len() + 1,
             LineCount::Significant => significant_len(&self.buf) + 1,
         };
-        (len > limit).then(|| ErrorKind::TargetLineTooLong {
-            target: self.p.name,
-            len: len - 1,
-            limit: limit - 1,
+        (len > limit).then(|| {
+            ErrorKind::Target(TargetError::TargetLineTooLong {
+                target: self.p.name,
+                len: len - 1,
+                limit: limit - 1,
+            })
         })
     }
 

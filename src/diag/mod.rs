@@ -1,14 +1,17 @@
 //! Diagnostics: errors and warnings as data, and their rendering.
 
 mod block_error;
-mod error_kind;
+mod error;
 mod lathe_error;
 mod render;
 mod report;
 mod warning_kind;
 
 pub use block_error::BlockError;
-pub use error_kind::ErrorKind;
+pub use error::{
+    ErrorKind, ExprError, LimitError, MachineError, OWordError, SetupError, SyntaxError,
+    TargetError,
+};
 pub use lathe_error::LatheError;
 pub use render::{MessageFormat, render, render_summary, use_color};
 pub use report::{report, report_summary, write_stderr};

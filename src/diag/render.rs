@@ -1,6 +1,7 @@
 //! Rendering of diagnostics: the one place where byte offsets become lines
 //! and columns.
 
+use super::SetupError;
 use std::fmt::Write as _;
 
 use super::{Diagnostic, Level, Located};
@@ -133,7 +134,9 @@ struct JsonSummary {
 
 fn json_line(d: &Diagnostic, here: Option<&Located>, stack: &[&Located]) -> String {
     let io_path = match d.error_kind() {
-        Some(super::ErrorKind::Io { path, .. }) => Some(path.display().to_string()),
+        Some(super::ErrorKind::Setup(SetupError::Io { path, .. })) => {
+            Some(path.display().to_string())
+        }
         _ => None,
     };
     let v = JsonDiagnostic {

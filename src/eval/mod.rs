@@ -15,6 +15,7 @@ pub use state::tools;
 
 pub(crate) use state::arc::arc_refusal;
 
+use crate::diag::{LimitError, OWordError, SetupError, SyntaxError};
 use flow::{Flow, Frame, FrameKind, label_of_key};
 pub(crate) use out::output_error;
 use out::{Writer, place_limit, too_large};
@@ -102,10 +103,10 @@ impl Unused {
 /// An error reading a streamed program file.
 fn read_error(file: &FileIndex, e: std::io::Error) -> Error {
     Diagnostic::error(
-        ErrorKind::Io {
+        ErrorKind::Setup(SetupError::Io {
             path: file.file.path.clone(),
             message: e.to_string(),
-        },
+        }),
         None,
     )
 }
@@ -317,14 +318,16 @@ impl<'s> Interp<'s> {
     fn run_steps(&mut self) -> Result<(), Error> {
         let main = self.main.clone();
         if let Some(e) = &main.read_error {
-            let k = ErrorKind::Io {
+            let k = ErrorKind::Setup(SetupError::Io {
                 path: main.file.path.clone(),
                 message: e.clone(),
-            };
+            });
             return Err(Diagnostic::error(k, None));
         }
         match main.first_nonblank {
-            None => return Err(self.error(ErrorKind::EmptyProgram, &main, 0, 0)),
+            None => {
+                return Err(self.error(ErrorKind::OWord(OWordError::EmptyProgram), &main, 0, 0));
+            }
             Some(first) => {
                 if main.percent_start {
                     self.emit_raw(b"%")?;
@@ -523,11 +526,11 @@ impl<'s> Interp<'s> {
                 Some((k, n, f)) => (Some(label_of_key(k)), Some(*n), f.clone()),
                 None => (None, None, self.flow.cur.file.clone()),
             };
-            let kind = ErrorKind::StepLimit {
+            let kind = ErrorKind::Limit(LimitError::StepLimit {
                 limit: self.s.max_steps,
                 label,
                 line: line.map(|n| n + 1),
-            };
+            });
             let site = match (&self.flow.last_loop, line) {
                 (Some(_), Some(n)) => file
                     .olines
@@ -707,7 +710,12 @@ impl<'s> Interp<'s> {
                     self.out.ended = true;
                     Ok(())
                 } else {
-                    Err(self.error(ErrorKind::StrayPercent, file, start, start + 1))
+                    Err(self.error(
+                        ErrorKind::Syntax(SyntaxError::StrayPercent),
+                        file,
+                        start,
+                        start + 1,
+                    ))
                 }
             }
             LineKind::Items(items) => self.exec_items(file, start, raw, items),
@@ -726,12 +734,17 @@ impl<'s> Interp<'s> {
                 .last()
                 .map(|f| f.name.to_string())
                 .unwrap_or_default();
-            return Err(self.error(ErrorKind::UnterminatedSub { name }, file, end, end));
+            return Err(self.error(
+                ErrorKind::OWord(OWordError::UnterminatedSub { name }),
+                file,
+                end,
+                end,
+            ));
         }
         Err(self.error(
-            ErrorKind::MissingProgramEnd {
+            ErrorKind::OWord(OWordError::MissingProgramEnd {
                 percent: self.main.percent_start,
-            },
+            }),
             file,
             end,
             end,
@@ -794,11 +807,11 @@ impl<'s> Interp<'s> {
         };
         let at = self.reader.line_start;
         self.error(
-            ErrorKind::OutputLimit {
+            ErrorKind::Limit(LimitError::OutputLimit {
                 limit: self.s.max_output_lines,
                 label,
                 line,
-            },
+            }),
             &file,
             at,
             at,

@@ -1,6 +1,7 @@
 //! Everything the evaluator needs to know from the command line and the INI,
 //! as plain data.
 
+use crate::diag::{ExprError, SetupError};
 use std::path::Path;
 
 use crate::diag::ErrorKind;
@@ -128,8 +129,10 @@ impl Default for Settings {
 
 /// Parses a `-D` argument.
 pub fn parse_define(text: &str) -> Result<Define, ErrorKind> {
-    let bad = || ErrorKind::BadDefine {
-        text: text.to_string(),
+    let bad = || {
+        ErrorKind::Setup(SetupError::BadDefine {
+            text: text.to_string(),
+        })
     };
     let (k, v) = text.split_once('=').ok_or_else(bad)?;
     let k = k.trim().trim_start_matches('#');
@@ -141,7 +144,9 @@ pub fn parse_define(text: &str) -> Result<Define, ErrorKind> {
     if !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()) {
         let i: usize = k.parse().map_err(|_| bad())?;
         if !(1..MAX_PARAM).contains(&i) {
-            return Err(ErrorKind::ParamOutOfRange { index: i as i64 });
+            return Err(ErrorKind::Expr(ExprError::ParamOutOfRange {
+                index: i as i64,
+            }));
         }
         return Ok(Define::Numbered(i, v));
     }
@@ -185,9 +190,11 @@ pub fn parse_axis_word(word: &str) -> Option<(usize, f64)> {
 
 /// Reads a LinuxCNC .var file: `number value` lines in ascending order.
 pub fn read_var_file(path: &Path) -> Result<Vec<Define>, ErrorKind> {
-    let text = std::fs::read_to_string(path).map_err(|e| ErrorKind::Io {
-        path: path.to_path_buf(),
-        message: e.to_string(),
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        ErrorKind::Setup(SetupError::Io {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })
     })?;
     let mut out = Vec::new();
     let mut last = 0i64;
@@ -198,20 +205,20 @@ pub fn read_var_file(path: &Path) -> Result<Vec<Define>, ErrorKind> {
         }
         let mut it = t.split_whitespace();
         let (Some(a), Some(b)) = (it.next(), it.next()) else {
-            return Err(ErrorKind::VarFileSyntax {
+            return Err(ErrorKind::Setup(SetupError::VarFileSyntax {
                 text: t.to_string(),
-            });
+            }));
         };
         let (Ok(i), Ok(v)) = (a.parse::<i64>(), b.parse::<f64>()) else {
-            return Err(ErrorKind::VarFileSyntax {
+            return Err(ErrorKind::Setup(SetupError::VarFileSyntax {
                 text: t.to_string(),
-            });
+            }));
         };
         if !(1..MAX_PARAM as i64).contains(&i) {
-            return Err(ErrorKind::ParamOutOfRange { index: i });
+            return Err(ErrorKind::Expr(ExprError::ParamOutOfRange { index: i }));
         }
         if i <= last {
-            return Err(ErrorKind::VarFileOrder { index: i });
+            return Err(ErrorKind::Setup(SetupError::VarFileOrder { index: i }));
         }
         last = i;
         out.push(Define::Numbered(i as usize, v));
@@ -221,9 +228,11 @@ pub fn read_var_file(path: &Path) -> Result<Vec<Define>, ErrorKind> {
 
 /// Reads a LinuxCNC tool table file.
 pub fn read_tool_table(path: &Path) -> Result<Vec<(i64, ToolData)>, ErrorKind> {
-    let io = |message: String| ErrorKind::Io {
-        path: path.to_path_buf(),
-        message,
+    let io = |message: String| {
+        ErrorKind::Setup(SetupError::Io {
+            path: path.to_path_buf(),
+            message,
+        })
     };
     let text = std::fs::read_to_string(path).map_err(|e| io(e.to_string()))?;
     parse_tool_table(&text).map_err(io)

@@ -7,6 +7,7 @@
 //! `[TRAJ]COORDINATES`), or a saved GRBL `$$` listing.
 
 use crate::diag::ErrorKind;
+use crate::diag::SetupError;
 use crate::program::ini::Ini;
 
 /// Axis letters in parameter order.
@@ -95,9 +96,11 @@ impl MachineAxes {
                             .next()
                             .and_then(|w| w.parse().ok())
                             .filter(|x: &f64| x.is_finite())
-                            .ok_or_else(|| ErrorKind::BadMachineValue {
-                                source: format!("INI [{sec}]{key}"),
-                                text: v.to_string(),
+                            .ok_or_else(|| {
+                                ErrorKind::Setup(SetupError::BadMachineValue {
+                                    source: format!("INI [{sec}]{key}"),
+                                    text: v.to_string(),
+                                })
                             })?;
                         Ok(Some((x * k, sec)))
                     }
@@ -148,9 +151,11 @@ impl MachineAxes {
                 .parse()
                 .ok()
                 .filter(|x: &f64| x.is_finite())
-                .ok_or_else(|| ErrorKind::BadMachineValue {
-                    source: format!("GRBL ${n}"),
-                    text: val.to_string(),
+                .ok_or_else(|| {
+                    ErrorKind::Setup(SetupError::BadMachineValue {
+                        source: format!("GRBL ${n}"),
+                        text: val.to_string(),
+                    })
                 })?;
             let a = &mut self.axes[axis];
             match group {
@@ -172,8 +177,10 @@ impl MachineAxes {
     /// Reads `--limits X0:300,Y0:200,Z-60:0` (millimetres, degrees for A-C;
     /// either bound may be left empty: `Z:0`).
     pub fn add_limits(&mut self, text: &str) -> Result<(), ErrorKind> {
-        let bad = || ErrorKind::BadLimits {
-            text: text.to_string(),
+        let bad = || {
+            ErrorKind::Setup(SetupError::BadLimits {
+                text: text.to_string(),
+            })
         };
         for part in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
             let mut chars = part.chars();

@@ -1,5 +1,6 @@
 //! pest pairs → typed AST. One `lower_<rule>` function per grammar rule.
 
+use crate::diag::{OWordError, SyntaxError};
 use pest::iterators::Pair;
 
 use super::Name;
@@ -305,9 +306,9 @@ impl Lowerer<'_> {
         let rule = cp.as_rule();
         let Some(kind) = o_kind(rule) else {
             return Err((
-                ErrorKind::UnknownOCommand {
+                ErrorKind::OWord(OWordError::UnknownOCommand {
                     word: cp.as_str().to_string(),
-                },
+                }),
                 cmd_span,
             ));
         };
@@ -333,7 +334,7 @@ impl Lowerer<'_> {
             }
         }
         if args.len() > 30 {
-            exec_error = Some((ErrorKind::TooManyArgs, args[30].span));
+            exec_error = Some((ErrorKind::OWord(OWordError::TooManyArgs), args[30].span));
         }
         let needs_bracket = match kind {
             OKind::While => Some("while"),
@@ -351,11 +352,11 @@ impl Lowerer<'_> {
                 .filter(|g| g.as_str().starts_with('['));
             exec_error = Some(match bracket {
                 Some(g) => (
-                    ErrorKind::BadCondition { keyword },
+                    ErrorKind::OWord(OWordError::BadCondition { keyword }),
                     Span::new(self.norm.raw_offset(g.as_span().start()), self.raw_end(&g)),
                 ),
                 None => (
-                    ErrorKind::MissingBracket { keyword },
+                    ErrorKind::OWord(OWordError::MissingBracket { keyword }),
                     Span::new(cmd_end, cmd_end + 1),
                 ),
             });
@@ -371,9 +372,9 @@ impl Lowerer<'_> {
                     if !q.as_str().is_empty() && exec_error.is_none() {
                         let kind =
                             if kind == OKind::Call && q.as_str().starts_with(|c: char| c != '[') {
-                                ErrorKind::CallArgNotBracketed
+                                ErrorKind::OWord(OWordError::CallArgNotBracketed)
                             } else {
-                                ErrorKind::UnexpectedAfterOWord
+                                ErrorKind::OWord(OWordError::UnexpectedAfterOWord)
                             };
                         exec_error = Some((kind, self.tight_span(&q)));
                     }
@@ -403,9 +404,9 @@ impl Lowerer<'_> {
                     b'l' if lw.is_none() => lw = Some(w.value.clone()),
                     b'p' | b'l' => {
                         return Err((
-                            ErrorKind::DuplicateWord {
+                            ErrorKind::Syntax(SyntaxError::DuplicateWord {
                                 letter: w.letter as char,
-                            },
+                            }),
                             w.value.span,
                         ));
                     }
@@ -436,17 +437,19 @@ fn reduce(operands: &mut Vec<Expr>, ops: &mut Vec<BinOp>) {
 pub fn parse_number(text: &str) -> Result<f64, ErrorKind> {
     let digits = text.trim_start_matches(['+', '-']);
     if digits.bytes().filter(|&b| b == b'.').count() > 1 {
-        return Err(ErrorKind::TrailingNumber {
+        return Err(ErrorKind::Syntax(SyntaxError::TrailingNumber {
             text: text.to_string(),
-        });
+        }));
     }
     if !digits.bytes().any(|b| b.is_ascii_digit()) {
-        return Err(ErrorKind::BadNumber {
+        return Err(ErrorKind::Syntax(SyntaxError::BadNumber {
             text: text.to_string(),
-        });
+        }));
     }
-    text.parse::<f64>().map_err(|_| ErrorKind::BadNumber {
-        text: text.to_string(),
+    text.parse::<f64>().map_err(|_| {
+        ErrorKind::Syntax(SyntaxError::BadNumber {
+            text: text.to_string(),
+        })
     })
 }
 
@@ -462,7 +465,7 @@ pub fn integer_value(v: f64) -> Result<i64, ErrorKind> {
     if frac > 0.9999 {
         Ok(f as i64 + 1)
     } else if frac > 0.0001 || !v.is_finite() {
-        Err(ErrorKind::NonInteger { value: v })
+        Err(ErrorKind::Syntax(SyntaxError::NonInteger { value: v }))
     } else {
         Ok(f as i64)
     }

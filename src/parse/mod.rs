@@ -8,6 +8,7 @@ mod name;
 pub(crate) mod named2007;
 pub(crate) mod normalize;
 
+use crate::diag::SyntaxError;
 use pest::Parser as _;
 
 pub use lower::{integer_value, parse_number};
@@ -93,7 +94,7 @@ impl LineParser {
         let len = raw.len() + terminated as usize;
         if len > MAX_LINE + 1 {
             return Err(LineError::new(
-                ErrorKind::CommandTooLong,
+                ErrorKind::Syntax(SyntaxError::CommandTooLong),
                 Span::new(MAX_LINE as u32, raw.len() as u32),
                 true,
             ));
@@ -152,7 +153,7 @@ impl LineParser {
                     if !is_gcode_char(c) || c == b'%' || c == b'o' || c == b'n' {
                         let ch = text[pos..].chars().next().unwrap_or('?');
                         return Err(LineError::new(
-                            ErrorKind::BadCharacter { ch, byte: c },
+                            ErrorKind::Syntax(SyntaxError::BadCharacter { ch, byte: c }),
                             span,
                             is_o,
                         ));
@@ -164,7 +165,11 @@ impl LineParser {
                     }
                     pest::error::ErrorVariant::CustomError { message } => message.clone(),
                 };
-                Err(LineError::new(ErrorKind::Syntax { expected }, span, is_o))
+                Err(LineError::new(
+                    ErrorKind::Syntax(SyntaxError::Syntax { expected }),
+                    span,
+                    is_o,
+                ))
             }
         }
     }

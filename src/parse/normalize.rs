@@ -2,6 +2,7 @@
 //! outside comments, comments kept verbatim, comment nesting checked.
 
 use crate::diag::ErrorKind;
+use crate::diag::SyntaxError;
 
 /// A processed line and, for each of its bytes, the byte offset of that byte in
 /// the raw line (plus one final entry for the end of the line).
@@ -32,7 +33,7 @@ pub(crate) fn normalize(raw: &[u8], out: &mut Normalized) -> Result<(), LexError
         let c = raw[i];
         if let Some(start) = paren_start {
             if c == b'(' {
-                return Err((ErrorKind::NestedComment, i as u32));
+                return Err((ErrorKind::Syntax(SyntaxError::NestedComment), i as u32));
             }
             bytes.push(c);
             out.map.push(i as u32);
@@ -67,7 +68,10 @@ pub(crate) fn normalize(raw: &[u8], out: &mut Normalized) -> Result<(), LexError
         i += 1;
     }
     if let Some(start) = paren_start {
-        return Err((ErrorKind::UnclosedComment, start as u32));
+        return Err((
+            ErrorKind::Syntax(SyntaxError::UnclosedComment),
+            start as u32,
+        ));
     }
     out.map.push(raw.len() as u32);
     // Bytes that are not UTF-8 are kept (as '?') inside comments, whose raw
@@ -86,10 +90,10 @@ pub(crate) fn normalize(raw: &[u8], out: &mut Normalized) -> Result<(), LexError
                 } else {
                     let byte = raw[raw_pos];
                     return Err((
-                        ErrorKind::BadCharacter {
+                        ErrorKind::Syntax(SyntaxError::BadCharacter {
                             ch: byte as char,
                             byte,
-                        },
+                        }),
                         raw_pos as u32,
                     ));
                 }
@@ -149,18 +153,18 @@ mod tests {
         let mut n = Normalized::default();
         assert!(matches!(
             normalize(b"(a (b))", &mut n),
-            Err((ErrorKind::NestedComment, 3))
+            Err((ErrorKind::Syntax(SyntaxError::NestedComment), 3))
         ));
         assert!(matches!(
             normalize(b"G0 (open", &mut n),
-            Err((ErrorKind::UnclosedComment, 3))
+            Err((ErrorKind::Syntax(SyntaxError::UnclosedComment), 3))
         ));
         assert!(normalize(b"; ( unbalanced", &mut n).is_ok());
         assert!(normalize(b"G0 (\xff\xfe) X1", &mut n).is_ok());
         assert!(normalize(b"G0 ;\xc3", &mut n).is_ok());
         assert!(matches!(
             normalize(b"G0 X1 \xc3", &mut n),
-            Err((ErrorKind::BadCharacter { .. }, 6))
+            Err((ErrorKind::Syntax(SyntaxError::BadCharacter { .. }), 6))
         ));
     }
 }

@@ -11,6 +11,7 @@
 //! a file in memory the first O-lines with values or arguments are kept
 //! from the scan, so that a short program parses each line once).
 
+use crate::diag::{LimitError, OWordError, SyntaxError};
 use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 use std::sync::Arc;
@@ -859,7 +860,7 @@ impl FileIndex {
 
 /// The error for an O-line that is not what the index found.
 fn changed(line_idx: u32) -> ErrorKind {
-    ErrorKind::ProgramChanged { line: line_idx + 1 }
+    ErrorKind::Limit(LimitError::ProgramChanged { line: line_idx + 1 })
 }
 
 /// The kind and label of a plain O-line in its simplest spelling, read
@@ -939,7 +940,9 @@ fn matters(raw: &[u8], terminated: bool) -> bool {
 fn parse_marked(parser: &mut LineParser, m: Marked, raw: &[u8]) -> Result<Line, LineError> {
     let len = m.end - m.start;
     parser.parse(raw, m.terminated).map_err(|mut e| {
-        if (raw.len() as u64) < len && matches!(e.kind, ErrorKind::CommandTooLong) {
+        if (raw.len() as u64) < len
+            && matches!(e.kind, ErrorKind::Syntax(SyntaxError::CommandTooLong))
+        {
             e.span.end = len as u32;
         }
         e
@@ -1051,10 +1054,10 @@ impl FileIndex {
 
 /// Error for a sub file that lacks its sub.
 pub fn not_in_file(name: &str, file: &SourceFile) -> ErrorKind {
-    ErrorKind::SubNotInFile {
+    ErrorKind::OWord(OWordError::SubNotInFile {
         name: name.to_string(),
         file: file.path.clone(),
-    }
+    })
 }
 
 #[cfg(test)]
@@ -1352,13 +1355,13 @@ mod tests {
         forget();
         assert!(matches!(
             index.oline(0),
-            Err(ErrorKind::ProgramChanged { line: 2 })
+            Err(ErrorKind::Limit(LimitError::ProgramChanged { line: 2 }))
         ));
         std::fs::write(&p, "G0 X1\n").expect("truncate");
         forget();
         assert!(matches!(
             index.oline(0),
-            Err(ErrorKind::ProgramChanged { line: 2 })
+            Err(ErrorKind::Limit(LimitError::ProgramChanged { line: 2 }))
         ));
     }
 }

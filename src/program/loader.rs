@@ -1,6 +1,7 @@
 //! Finds and loads subroutine files on the search path; each file is read and
 //! indexed once however often it is called.
 
+use crate::diag::{OWordError, SetupError};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
@@ -43,9 +44,9 @@ pub fn check_name(name: &str) -> Result<(), ErrorKind> {
             .bytes()
             .all(|b| b.is_ascii_alphanumeric() || b"_-".contains(&b));
     if bad {
-        Err(ErrorKind::UnsafeSubName {
+        Err(ErrorKind::OWord(OWordError::UnsafeSubName {
             name: name.to_string(),
-        })
+        }))
     } else {
         Ok(())
     }
@@ -153,9 +154,11 @@ impl Loader {
         if let Some(f) = self.by_path.get(&canon) {
             return Ok(f.clone());
         }
-        let data = std::fs::read(p).map_err(|e| ErrorKind::Io {
-            path: p.to_path_buf(),
-            message: e.to_string(),
+        let data = std::fs::read(p).map_err(|e| {
+            ErrorKind::Setup(SetupError::Io {
+                path: p.to_path_buf(),
+                message: e.to_string(),
+            })
         })?;
         let file = Arc::new(SourceFile::new(
             p.to_path_buf(),

@@ -2,6 +2,7 @@
 //! model and to what looks at the motion: the travel-limit check, the
 //! statistics and picture, the source map and `--annotate`.
 
+use crate::diag::SetupError;
 use std::io::Write;
 
 use super::run::Observer;
@@ -82,13 +83,13 @@ impl LineConsumer for ViewConsumer<'_> {
             // not of the program, and the motion must not be skipped.
             if let Err(e) = self.block.decode_into(text) {
                 let mut d = Diagnostic::error(
-                    ErrorKind::Internal {
+                    ErrorKind::Setup(SetupError::Internal {
                         what: format!(
                             "the machine model cannot read the output line '{}' ({})",
                             String::from_utf8_lossy(text),
                             e.what
                         ),
-                    },
+                    }),
                     Some(line_site(origin)),
                 );
                 d.stack = (origin.stack)();
@@ -178,10 +179,10 @@ fn line_site(origin: &Origin<'_>) -> Site {
 
 fn io_error(what: &str, e: std::io::Error) -> Error {
     Diagnostic::error(
-        ErrorKind::Io {
+        ErrorKind::Setup(SetupError::Io {
             path: what.into(),
             message: e.to_string(),
-        },
+        }),
         None,
     )
 }

@@ -4,6 +4,7 @@
 
 use super::geom::{ArcGeom, arc_point};
 use crate::diag::ErrorKind;
+use crate::diag::LimitError;
 use crate::machine::axes::{LETTERS, MachineAxes};
 use crate::machine::motion::{Axes, Motion};
 
@@ -26,7 +27,7 @@ impl LimitCheck {
             _ => return Ok(()),
         };
         let Some(off) = to.offset else {
-            return Err(ErrorKind::LimitNeedsOffsets);
+            return Err(ErrorKind::Limit(LimitError::LimitNeedsOffsets));
         };
         // Work positions along the move where an axis is extreme, in the
         // order the tool reaches them (so the first violation is the first
@@ -50,31 +51,31 @@ impl LimitCheck {
             for (i, a) in self.axes.axes.iter().enumerate() {
                 let v = p[i] + off[i];
                 if (a.min.is_some() || a.max.is_some()) && !v.is_finite() {
-                    return Err(ErrorKind::LimitNeedsOffsets);
+                    return Err(ErrorKind::Limit(LimitError::LimitNeedsOffsets));
                 }
                 let tol = |b: f64| 1e-9 * b.abs().max(1.0);
                 let source = || a.limit_source.clone().unwrap_or_default();
                 if let Some(lo) = a.min
                     && v < lo - tol(lo)
                 {
-                    return Err(ErrorKind::TravelLimit {
+                    return Err(ErrorKind::Limit(LimitError::TravelLimit {
                         axis: LETTERS[i],
                         value: v,
                         bound: lo,
                         above: false,
                         source: source(),
-                    });
+                    }));
                 }
                 if let Some(hi) = a.max
                     && v > hi + tol(hi)
                 {
-                    return Err(ErrorKind::TravelLimit {
+                    return Err(ErrorKind::Limit(LimitError::TravelLimit {
                         axis: LETTERS[i],
                         value: v,
                         bound: hi,
                         above: true,
                         source: source(),
-                    });
+                    }));
                 }
             }
         }
@@ -120,13 +121,13 @@ mod tests {
         assert!(c.check(&line(100.0, 0.0)).is_ok());
         // Work 95 + offset 10 is machine 105.
         match c.check(&line(95.0, 10.0)) {
-            Err(ErrorKind::TravelLimit {
+            Err(ErrorKind::Limit(LimitError::TravelLimit {
                 axis: 'X',
                 value,
                 bound,
                 above: true,
                 ..
-            }) => assert_eq!((value, bound), (105.0, 100.0)),
+            })) => assert_eq!((value, bound), (105.0, 100.0)),
             other => panic!("{other:?}"),
         }
         let unknown = Motion::Line {
@@ -135,7 +136,10 @@ mod tests {
             to: pt(1.0, 0.0, None),
             feed: F,
         };
-        assert_eq!(c.check(&unknown), Err(ErrorKind::LimitNeedsOffsets));
+        assert_eq!(
+            c.check(&unknown),
+            Err(ErrorKind::Limit(LimitError::LimitNeedsOffsets))
+        );
     }
 
     #[test]
@@ -152,9 +156,9 @@ mod tests {
             feed: F,
         };
         match c.check(&arc(false)) {
-            Err(ErrorKind::TravelLimit {
+            Err(ErrorKind::Limit(LimitError::TravelLimit {
                 axis: 'Y', value, ..
-            }) => {
+            })) => {
                 assert!((value - 55.0).abs() < 1e-9)
             }
             other => panic!("{other:?}"),

@@ -6,6 +6,7 @@ use super::plot::{Plot, View};
 use super::scene::Scene;
 use super::stats::Stats;
 use crate::diag::ErrorKind;
+use crate::diag::{LimitError, SetupError};
 use crate::machine::axes::MachineAxes;
 use crate::machine::motion::Motion;
 
@@ -85,7 +86,7 @@ impl Observer {
                 _ => (0.0, false),
             };
             let violation = match self.scene_limits.as_ref().map(|l| l.check(m)) {
-                Some(Err(ErrorKind::LimitNeedsOffsets)) => {
+                Some(Err(ErrorKind::Limit(LimitError::LimitNeedsOffsets))) => {
                     scene.detail.limits_unchecked += 1;
                     None
                 }
@@ -167,7 +168,7 @@ pub(crate) fn run_for_view(
         }
         Err(e) => {
             let code = match e.error_kind() {
-                Some(ErrorKind::Io { .. }) => 2,
+                Some(ErrorKind::Setup(SetupError::Io { .. })) => 2,
                 _ => 1,
             };
             crate::diag::report(&[*e], cfg.format);
@@ -231,10 +232,10 @@ pub(crate) fn flatten_chained<'s>(
     };
     let io_err = |path: &std::path::Path, e: std::io::Error| {
         crate::diag::Diagnostic::error(
-            ErrorKind::Io {
+            ErrorKind::Setup(SetupError::Io {
                 path: path.to_path_buf(),
                 message: e.to_string(),
-            },
+            }),
             None,
         )
     };

@@ -421,3 +421,62 @@ fn every_block_error_has_a_fixture() {
         "block errors without an err/ fixture: {missing:?}"
     );
 }
+
+/// Codes that no fixture or CLI test shows yet. A code leaves this list
+/// when a fixture (or a test naming it) is added; a new code may not join it.
+const CODES_WITHOUT_A_CASE: &[&str] = &[
+    "E0011", "E0012", "E0206", "E0317", "E0328", "E0404", "E0405", "E0503", "E0504", "E0507",
+];
+
+/// Every code of the error phases is shown by a fixture's snapshot or named
+/// by an integration test, apart from the listed ones.
+#[test]
+fn every_error_code_has_a_case() {
+    use ngcflat::diag::{
+        ExprError, LimitError, MachineError, OWordError, SetupError, SyntaxError, TargetError,
+    };
+    let codes = [
+        SyntaxError::CODES,
+        ExprError::CODES,
+        OWordError::CODES,
+        MachineError::CODES,
+        LimitError::CODES,
+        SetupError::CODES,
+        TargetError::CODES,
+    ]
+    .concat();
+    assert!(codes.len() > 90, "codes found: {}", codes.len());
+    let mut shown = String::new();
+    for dir in ["tests/integration/snapshots", "tests/integration"] {
+        for e in std::fs::read_dir(crate::root().join(dir))
+            .expect("folder")
+            .flatten()
+        {
+            shown.push_str(&std::fs::read_to_string(e.path()).unwrap_or_default());
+        }
+    }
+    // The list below names codes too.
+    let list = shown
+        .split_once("const CODES_WITHOUT_A_CASE")
+        .and_then(|(_, rest)| rest.split_once("];"))
+        .map(|(list, _)| list.to_string())
+        .expect("the list");
+    let shown = shown.replace(&list, "");
+    let mut missing = Vec::new();
+    let mut listed_but_shown = Vec::new();
+    for c in &codes {
+        match (shown.contains(c), CODES_WITHOUT_A_CASE.contains(c)) {
+            (false, false) => missing.push(*c),
+            (true, true) => listed_but_shown.push(*c),
+            _ => {}
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "codes without a fixture or test: {missing:?}"
+    );
+    assert!(
+        listed_but_shown.is_empty(),
+        "codes that have a case now: take them off CODES_WITHOUT_A_CASE: {listed_but_shown:?}"
+    );
+}

@@ -15,6 +15,7 @@
 use crate::block::{Block, MotionMode, NonModal, ToolLength};
 use crate::codes::ArcDistance;
 use crate::diag::ErrorKind;
+use crate::diag::TargetError;
 use crate::machine::Machine;
 
 use super::Lowering;
@@ -64,11 +65,13 @@ impl Lowering {
             } else {
                 from_machine[a].zip(after[a]).map(|(m, o)| m - o)
             };
-            let start = start.ok_or_else(|| ErrorKind::TargetNeedsValue {
-                target: self.name(),
-                what: "an arc's absolute centre (G90.1) as offsets from its start".into(),
-                value: format!("the current {} position", ['X', 'Y', 'Z'][a]),
-                option: "--start-position (or --zero-start), or an absolute move first".into(),
+            let start = start.ok_or_else(|| {
+                ErrorKind::Target(TargetError::TargetNeedsValue {
+                    target: self.name(),
+                    what: "an arc's absolute centre (G90.1) as offsets from its start".into(),
+                    value: format!("the current {} position", ['X', 'Y', 'Z'][a]),
+                    option: "--start-position (or --zero-start), or an absolute move first".into(),
+                })
             })?;
             out[a] = Some(v - start / self.m.scale());
         }

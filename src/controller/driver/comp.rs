@@ -11,6 +11,7 @@ use crate::block::{
 };
 use crate::controller::lower::{self, PlainLine};
 use crate::diag::ErrorKind;
+use crate::diag::{SetupError, TargetError};
 use crate::geom::comp::{Arc as CompArc, ArcCenter, Comp, Out, Side, Tolerances};
 use crate::machine::Machine;
 
@@ -389,12 +390,12 @@ impl Lowering {
     ) -> Result<(), Problem> {
         let need = |s: &Self, value: &str, option: &str| Problem {
             span,
-            kind: ErrorKind::TargetNeedsValue {
+            kind: ErrorKind::Target(TargetError::TargetNeedsValue {
                 target: s.name(),
                 what: "cutter radius compensation (computed into the path)".into(),
                 value: value.into(),
                 option: option.into(),
-            },
+            }),
         };
         let xz = match self.m.modes.plane {
             Plane::XY => false,
@@ -402,10 +403,10 @@ impl Lowering {
             _ => {
                 return Err(Problem {
                     span,
-                    kind: ErrorKind::Unsupported {
+                    kind: ErrorKind::Setup(SetupError::Unsupported {
                         what: "cutter radius compensation outside G17 and G18 is not lowered"
                             .into(),
-                    },
+                    }),
                 });
             }
         };

@@ -9,6 +9,7 @@ use crate::block::{
     SpindleDir, SpindleMode, ToolLength, Word, WordKind,
 };
 use crate::controller::profile::ToolChange;
+use crate::diag::TargetError;
 use crate::diag::{ErrorKind, WarningKind};
 
 use super::{Lowering, Problem};
@@ -127,12 +128,12 @@ impl Lowering {
                 } else {
                     problems.push(Problem {
                         span: Some(w.span),
-                        kind: ErrorKind::TargetNeedsValue {
+                        kind: ErrorKind::Target(TargetError::TargetNeedsValue {
                             target: self.name(),
                             what: "G95 (feed per revolution)".into(),
                             value: "a constant spindle speed".into(),
                             option: "an S word before G95 (and G97)".into(),
-                        },
+                        }),
                     });
                 }
                 Fate::Drop

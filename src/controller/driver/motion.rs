@@ -6,6 +6,7 @@
 use crate::block::{ArcDistance, Block, MotionMode, NonModal, Plane, ToolLength};
 use crate::controller::lower::{self, PlainLine};
 use crate::diag::ErrorKind;
+use crate::diag::{SetupError, TargetError};
 use crate::geom::comp::{Arc as CompArc, ArcCenter, Tolerances};
 use crate::machine::Machine;
 
@@ -112,9 +113,9 @@ impl Lowering {
     pub(super) fn plane(m: &Machine) -> Result<Plane, ErrorKind> {
         match m.modes.plane {
             p @ (Plane::XY | Plane::XZ | Plane::YZ) => Ok(p),
-            Plane::UV | Plane::WU | Plane::VW => Err(ErrorKind::Unsupported {
+            Plane::UV | Plane::WU | Plane::VW => Err(ErrorKind::Setup(SetupError::Unsupported {
                 what: "arcs and cycles in the UVW planes are not lowered".into(),
-            }),
+            })),
         }
     }
 
@@ -130,11 +131,14 @@ impl Lowering {
         let known = |v: [Option<f64>; 3], what: &str| -> Result<[f64; 3], ErrorKind> {
             let mut o = [0.0; 3];
             for i in 0..3 {
-                o[i] = v[i].ok_or_else(|| ErrorKind::TargetNeedsValue {
-                    target: self.name(),
-                    what: format!("this arc's lowering ({what})"),
-                    value: format!("the current {} position", ['X', 'Y', 'Z'][i]),
-                    option: "--start-position (or --zero-start), or an absolute move first".into(),
+                o[i] = v[i].ok_or_else(|| {
+                    ErrorKind::Target(TargetError::TargetNeedsValue {
+                        target: self.name(),
+                        what: format!("this arc's lowering ({what})"),
+                        value: format!("the current {} position", ['X', 'Y', 'Z'][i]),
+                        option: "--start-position (or --zero-start), or an absolute move first"
+                            .into(),
+                    })
                 })?;
             }
             Ok(o)
@@ -182,11 +186,13 @@ impl Lowering {
     /// The current X Y (program units), which a lowering needs.
     pub(super) fn xy_known(&self, m: &Machine, what: &str) -> Result<[f64; 2], ErrorKind> {
         let p = self.prog_pos(m);
-        let need = |axis: char| ErrorKind::TargetNeedsValue {
-            target: self.name(),
-            what: what.into(),
-            value: format!("the current {axis} position"),
-            option: "--start-position (or --zero-start), or an absolute move first".into(),
+        let need = |axis: char| {
+            ErrorKind::Target(TargetError::TargetNeedsValue {
+                target: self.name(),
+                what: what.into(),
+                value: format!("the current {axis} position"),
+                option: "--start-position (or --zero-start), or an absolute move first".into(),
+            })
         };
         Ok([
             p[0].ok_or_else(|| need('X'))?,

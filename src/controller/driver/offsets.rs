@@ -7,6 +7,7 @@
 use crate::block::{Block, CoordSystem, Distance, NonModal, ToolLength, WordKind};
 use crate::controller::lower::PlainLine;
 use crate::diag::ErrorKind;
+use crate::diag::TargetError;
 use crate::machine::Machine;
 
 use super::fates::{Fate, g_span};
@@ -67,7 +68,7 @@ impl Lowering {
                 (Some(a), Some(t)) => out[i] = a - t,
                 _ => {
                     let param = |c: CoordSystem| c.parameters() + i;
-                    return Err(ErrorKind::TargetNeedsValue {
+                    return Err(ErrorKind::Target(TargetError::TargetNeedsValue {
                         target: self.name(),
                         what: format!(
                             "{} (a coordinate system the target lacks, written as coordinates in {})",
@@ -82,7 +83,7 @@ impl Lowering {
                         ),
                         option: "--var-file (the machine's parameter file), -D, or --zero-start"
                             .into(),
-                    });
+                    }));
                 }
             }
         }
@@ -114,11 +115,13 @@ impl Lowering {
             Some(false) => Some(0.0),
             None => None,
         };
-        let need = |value: String, option: &str| ErrorKind::TargetNeedsValue {
-            target: self.name(),
-            what: format!("{what}, written as the target's G92"),
-            value,
-            option: option.into(),
+        let need = |value: String, option: &str| {
+            ErrorKind::Target(TargetError::TargetNeedsValue {
+                target: self.name(),
+                what: format!("{what}, written as the target's G92"),
+                value,
+                option: option.into(),
+            })
         };
         let offsets_option =
             "--var-file (parameters 5210-5213 of the machine), -D, or --zero-start";
@@ -178,11 +181,13 @@ impl Lowering {
         // comes after it).
         let s = before.scale();
         let tlo = self.m.tlo;
-        let need = |axis: &str| ErrorKind::TargetNeedsValue {
-            target: self.name(),
-            what: "G43 (tool length offset)".into(),
-            value: format!("the tool's {axis} length"),
-            option: "--tool-table (the tool table of the machine)".into(),
+        let need = |axis: &str| {
+            ErrorKind::Target(TargetError::TargetNeedsValue {
+                target: self.name(),
+                what: "G43 (tool length offset)".into(),
+                value: format!("the tool's {axis} length"),
+                option: "--tool-table (the tool table of the machine)".into(),
+            })
         };
         // The tool's data must really be known: from --tool-table or a G10
         // L1/L10/L11 of the program (--zero-start's zeros are not the
@@ -241,11 +246,13 @@ impl Lowering {
         }
         // In the units before the block, like the G43 line (see
         // `tool_length_words`).
-        let z = tlo[2].ok_or_else(|| ErrorKind::TargetNeedsValue {
-            target: self.name(),
-            what: "G43.1 without a Z word".into(),
-            value: "the tool length offset in effect".into(),
-            option: "--tool-table (the tool table of the machine)".into(),
+        let z = tlo[2].ok_or_else(|| {
+            ErrorKind::Target(TargetError::TargetNeedsValue {
+                target: self.name(),
+                what: "G43.1 without a Z word".into(),
+                value: "the tool length offset in effect".into(),
+                option: "--tool-table (the tool table of the machine)".into(),
+            })
         })?;
         Ok(Some(vec![(b'G', 43.1), (b'Z', z / before.scale())]))
     }

@@ -5,6 +5,7 @@
 //! source line each problem is reported at (stopping at the first, or all
 //! of them kept in check mode).
 
+use crate::diag::{SetupError, TargetError};
 use std::sync::Arc;
 
 use crate::block::{Block, DecodeError, MotionMode, NonModal, ToolLength};
@@ -25,11 +26,11 @@ pub(super) const LINE_START: crate::block::Span = crate::block::Span {
 
 impl Lowering {
     pub(super) fn refuse(&self, what: impl Into<String>, why: impl Into<String>) -> ErrorKind {
-        ErrorKind::TargetRefused {
+        ErrorKind::Target(TargetError::TargetRefused {
             target: self.name(),
             what: what.into(),
             why: why.into(),
-        }
+        })
     }
 
     /// A warning about the current line; it gets the line's site when the
@@ -98,21 +99,23 @@ impl Lowering {
             .zip(before.pos.iter().zip(m.pos.iter()))
             .filter(|(l, _)| self.p.has_axis(**l))
             .all(|(_, (a, z))| matches!((a, z), (Some(a), Some(z)) if (a - z).abs() < 1e-9));
-        same.then_some(ErrorKind::TargetProbeInPlace {
+        same.then_some(ErrorKind::Target(TargetError::TargetProbeInPlace {
             target: self.name(),
-        })
+        }))
     }
 
     pub(super) fn lower_error(&self, e: lower::LowerError) -> ErrorKind {
         match e {
-            lower::LowerError::PositionUnknown { axis } => ErrorKind::TargetNeedsValue {
-                target: self.name(),
-                what: "this block's lowering".into(),
-                value: format!("the current {axis} position"),
-                option: format!(
-                    "--start-position {axis}… (or --zero-start), or an absolute move first"
-                ),
-            },
+            lower::LowerError::PositionUnknown { axis } => {
+                ErrorKind::Target(TargetError::TargetNeedsValue {
+                    target: self.name(),
+                    what: "this block's lowering".into(),
+                    value: format!("the current {axis} position"),
+                    option: format!(
+                        "--start-position {axis}… (or --zero-start), or an absolute move first"
+                    ),
+                })
+            }
             e => ErrorKind::TargetLowering {
                 target: self.name(),
                 code: e.code(),
@@ -184,8 +187,8 @@ fn words_with(text: &[u8], letter: u8) -> Vec<usize> {
 pub(super) fn decode_problem(e: DecodeError) -> Problem {
     Problem {
         span: Some(e.span),
-        kind: ErrorKind::Unsupported {
+        kind: ErrorKind::Setup(SetupError::Unsupported {
             what: format!("cannot read this flattened line: {}", e.what),
-        },
+        }),
     }
 }

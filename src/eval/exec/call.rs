@@ -3,6 +3,7 @@
 //! down), its arguments, `endsub`/`return`, and the Fanuc-style M98/M99
 //! subprograms.
 
+use crate::diag::OWordError;
 use std::rc::Rc;
 
 use crate::diag::{Error, ErrorKind, WarningKind};
@@ -24,11 +25,11 @@ impl Interp<'_> {
         o: &OLine,
     ) -> Result<(), Error> {
         if self.flow.level() == 0 {
-            let e = self.oerr(ErrorKind::NotInSub, file, oidx);
+            let e = self.oerr(ErrorKind::OWord(OWordError::NotInSub), file, oidx);
             return self.soft(e, file);
         }
         if self.flow.frame().kind == FrameKind::M98 {
-            return Err(self.oerr(ErrorKind::EndsubInFanuc, file, oidx));
+            return Err(self.oerr(ErrorKind::OWord(OWordError::EndsubInFanuc), file, oidx));
         }
         let v = match &o.expr {
             Some(e) => Some(self.o_eval(file, oidx, e)?),
@@ -46,18 +47,18 @@ impl Interp<'_> {
     ) -> Result<(), Error> {
         if self.s.fanuc_disabled {
             return Err(self.oerr(
-                ErrorKind::FanucDisabled {
+                ErrorKind::OWord(OWordError::FanucDisabled {
                     what: "a bare O-word",
-                },
+                }),
                 file,
                 oidx,
             ));
         }
         if self.flow.level() > 0 {
             return Err(self.oerr(
-                ErrorKind::FanucNeedsM98 {
+                ErrorKind::OWord(OWordError::FanucNeedsM98 {
                     name: key.to_string(),
-                },
+                }),
                 file,
                 oidx,
             ));
@@ -81,10 +82,10 @@ impl Interp<'_> {
                 .map(|f| f.name.to_string())
                 .unwrap_or_default();
             return Err(self.oerr(
-                ErrorKind::NestedSubDefinition {
+                ErrorKind::OWord(OWordError::NestedSubDefinition {
                     inner: key.to_string(),
                     outer,
-                },
+                }),
                 file,
                 oidx,
             ));
@@ -92,9 +93,9 @@ impl Interp<'_> {
         if let Some(rec) = self.flow.subs.get(key) {
             if Rc::ptr_eq(&rec.file, file) && rec.oidx == oidx {
                 return Err(self.oerr(
-                    ErrorKind::IllegalSubLocation {
+                    ErrorKind::OWord(OWordError::IllegalSubLocation {
                         name: key.to_string(),
-                    },
+                    }),
                     file,
                     oidx,
                 ));
@@ -102,11 +103,11 @@ impl Interp<'_> {
             let first = rec.file.file.path.clone();
             let first_line = rec.file.olines[rec.oidx as usize].line_idx + 1;
             return Err(self.oerr(
-                ErrorKind::RedefiningSub {
+                ErrorKind::OWord(OWordError::RedefiningSub {
                     name: key.to_string(),
                     first,
                     first_line,
-                },
+                }),
                 file,
                 oidx,
             ));
@@ -120,15 +121,15 @@ impl Interp<'_> {
         );
         let Some(def) = file.def(oidx) else {
             // Definitions are indexed by their fixed label only.
-            return Err(self.oerr(ErrorKind::ComputedSubLabel, file, oidx));
+            return Err(self.oerr(ErrorKind::OWord(OWordError::ComputedSubLabel), file, oidx));
         };
         if let Some((j, inner)) = &def.nested
             && def.end.is_none_or(|e| *j < e)
         {
-            let k = ErrorKind::NestedSubDefinition {
+            let k = ErrorKind::OWord(OWordError::NestedSubDefinition {
                 inner: inner.to_string(),
                 outer: key.to_string(),
-            };
+            });
             return Err(self.oerr(k, file, *j));
         }
         let end_line = def
@@ -177,9 +178,9 @@ impl Interp<'_> {
                 Ok(())
             }
             None => Err(self.oerr(
-                ErrorKind::UnterminatedSub {
+                ErrorKind::OWord(OWordError::UnterminatedSub {
                     name: key.to_string(),
-                },
+                }),
                 file,
                 oidx,
             )),
@@ -256,13 +257,18 @@ impl Interp<'_> {
                     oidx: t,
                 })
             }
-            Err(e) if matches!(e.error_kind(), Some(ErrorKind::EofSeeking { .. })) => {
+            Err(e)
+                if matches!(
+                    e.error_kind(),
+                    Some(ErrorKind::OWord(OWordError::EofSeeking { .. }))
+                ) =>
+            {
                 let searched = self.loader.searched();
                 Err(self.oerr(
-                    ErrorKind::SubNotFound {
+                    ErrorKind::OWord(OWordError::SubNotFound {
                         name: name.to_string(),
                         searched,
-                    },
+                    }),
                     file,
                     oidx,
                 ))
@@ -286,7 +292,7 @@ impl Interp<'_> {
             return Ok(());
         }
         let limit = MAX_CALL_LEVEL;
-        Err(self.oerr(ErrorKind::TooDeep { limit }, file, oidx))
+        Err(self.oerr(ErrorKind::OWord(OWordError::TooDeep { limit }), file, oidx))
     }
 
     pub(super) fn call(
@@ -305,9 +311,9 @@ impl Interp<'_> {
         let target = self.resolve(file, oidx, key, &base)?;
         if target.file.kind_of(target.oidx) == Some(OKind::Bare) {
             return Err(self.oerr(
-                ErrorKind::FanucNeedsM98 {
+                ErrorKind::OWord(OWordError::FanucNeedsM98 {
                     name: base.to_string(),
-                },
+                }),
                 file,
                 oidx,
             ));
@@ -377,7 +383,12 @@ impl Interp<'_> {
         len: u32,
     ) -> Result<(), Error> {
         if self.flow.frame().kind != FrameKind::M98 {
-            return Err(self.error(ErrorKind::M99InSub, file, start, start + len));
+            return Err(self.error(
+                ErrorKind::OWord(OWordError::M99InSub),
+                file,
+                start,
+                start + len,
+            ));
         }
         self.flow.set_value(None);
         // An M98 frame saved no arguments: `params` stays as it is.
@@ -391,10 +402,14 @@ impl Interp<'_> {
         m: &crate::parse::ast::M98Line,
     ) -> Result<(), Error> {
         if self.s.fanuc_disabled {
-            return Err(self.oerr(ErrorKind::FanucDisabled { what: "M98" }, file, oidx));
+            return Err(self.oerr(
+                ErrorKind::OWord(OWordError::FanucDisabled { what: "M98" }),
+                file,
+                oidx,
+            ));
         }
         let Some(p) = &m.p else {
-            return Err(self.oerr(ErrorKind::M98WithoutP, file, oidx));
+            return Err(self.oerr(ErrorKind::OWord(OWordError::M98WithoutP), file, oidx));
         };
         let line = file.olines[oidx as usize].line_idx;
         let pv = self.o_eval(file, oidx, p)?;
@@ -432,9 +447,9 @@ impl Interp<'_> {
         let target = self.resolve(file, oidx, &name, &base_key(&name))?;
         if target.file.kind_of(target.oidx) == Some(OKind::Sub) {
             return Err(self.oerr(
-                ErrorKind::SubNeedsCall {
+                ErrorKind::OWord(OWordError::SubNeedsCall {
                     name: name.to_string(),
-                },
+                }),
                 file,
                 oidx,
             ));

@@ -3,6 +3,7 @@
 //! targets come from the file index (occurrences of each label in order),
 //! so nothing is rescanned per iteration.
 
+use crate::diag::{OWordError, SetupError};
 use std::rc::Rc;
 
 use crate::diag::{Diagnostic, Error, ErrorKind, WarningKind};
@@ -143,7 +144,12 @@ impl Interp<'_> {
         {
             let label = key.to_string();
             let (a, b) = self.osite(file, from);
-            return Err(self.error(ErrorKind::LabelBeforePercent { label }, file, a, b));
+            return Err(self.error(
+                ErrorKind::OWord(OWordError::LabelBeforePercent { label }),
+                file,
+                a,
+                b,
+            ));
         }
         match best {
             Some(b) => {
@@ -155,13 +161,13 @@ impl Interp<'_> {
             None => {
                 let (a, b) = self.osite(file, from);
                 let kind = match what {
-                    Seek::Control => ErrorKind::MissingProgramEnd {
+                    Seek::Control => ErrorKind::OWord(OWordError::MissingProgramEnd {
                         percent: self.main.percent_start,
-                    },
-                    Seek::Sub { from_line } => ErrorKind::EofSeeking {
+                    }),
+                    Seek::Sub { from_line } => ErrorKind::OWord(OWordError::EofSeeking {
                         label: key.to_string(),
                         from_line,
-                    },
+                    }),
                 };
                 Err(self.error(kind, file, a, b))
             }
@@ -199,7 +205,11 @@ impl Interp<'_> {
             if rec.line != line && matches!(kind, OKind::If | OKind::While | OKind::Repeat) {
                 let first_line = rec.line + 1;
                 let label = self.label_text(file, oidx)?.to_string();
-                return Err(self.oerr(ErrorKind::DuplicateLabel { label, first_line }, file, oidx));
+                return Err(self.oerr(
+                    ErrorKind::OWord(OWordError::DuplicateLabel { label, first_line }),
+                    file,
+                    oidx,
+                ));
             }
             if rec.line == line && rec.kind == kind {
                 return Ok(());
@@ -225,15 +235,19 @@ impl Interp<'_> {
     ) -> Result<LabelRec, Error> {
         let label = || label_of_key(key);
         match self.flow.label(key) {
-            None => Err(self.oerr(ErrorKind::UndefinedLabel { label: label() }, file, oidx)),
+            None => Err(self.oerr(
+                ErrorKind::OWord(OWordError::UndefinedLabel { label: label() }),
+                file,
+                oidx,
+            )),
             Some(rec) if kinds.contains(&rec.kind) => Ok(rec),
             Some(rec) => Err(self.oerr(
-                ErrorKind::LabelMismatch {
+                ErrorKind::OWord(OWordError::LabelMismatch {
                     label: label(),
                     here: file.kind_of(oidx).map_or("M98", OKind::name),
                     opened: rec.kind.name(),
                     line: rec.line + 1,
-                },
+                }),
                 file,
                 oidx,
             )),
@@ -246,9 +260,9 @@ impl Interp<'_> {
     fn expr_of<'a>(o: &'a OLine, what: &str) -> Result<&'a crate::parse::ast::Expr, Error> {
         o.expr.as_ref().ok_or_else(|| {
             Diagnostic::error(
-                ErrorKind::Internal {
+                ErrorKind::Setup(SetupError::Internal {
                     what: format!("an O-line without its {what}"),
-                },
+                }),
                 None,
             )
         })
@@ -617,10 +631,10 @@ impl Interp<'_> {
             && matches!(
                 e.error_kind(),
                 Some(
-                    ErrorKind::NotInSub
-                        | ErrorKind::DuplicateLabel { .. }
-                        | ErrorKind::UndefinedLabel { .. }
-                        | ErrorKind::LabelMismatch { .. }
+                    ErrorKind::OWord(OWordError::NotInSub)
+                        | ErrorKind::OWord(OWordError::DuplicateLabel { .. })
+                        | ErrorKind::OWord(OWordError::UndefinedLabel { .. })
+                        | ErrorKind::OWord(OWordError::LabelMismatch { .. })
                 )
             );
         if !soft {
@@ -645,17 +659,21 @@ impl Interp<'_> {
             && matches!(r.kind, OKind::If | OKind::While | OKind::Repeat)
         {
             let first_line = r.line + 1;
-            let e = self.oerr(ErrorKind::DuplicateLabel { label, first_line }, file, t);
+            let e = self.oerr(
+                ErrorKind::OWord(OWordError::DuplicateLabel { label, first_line }),
+                file,
+                t,
+            );
             return self.soft(e, file);
         }
         let (opened, line) = rec.map(|r| (r.kind.name(), r.line + 1)).unwrap_or(("?", 0));
         let e = self.oerr(
-            ErrorKind::LabelMismatch {
+            ErrorKind::OWord(OWordError::LabelMismatch {
                 label,
                 here: found,
                 opened,
                 line,
-            },
+            }),
             file,
             t,
         );

@@ -6,6 +6,7 @@
 //! (`eval/state/lathe.rs`); reading the contour's lines, the call and the
 //! output are the steps here.
 
+use crate::diag::OWordError;
 use std::rc::Rc;
 
 use crate::diag::{Error, ErrorKind, LatheError, Site};
@@ -128,7 +129,12 @@ impl Interp<'_> {
             .enter_unsited(label.clone(), self.flow.cur.clone())
         {
             let limit = crate::eval::flow::MAX_CALL_LEVEL;
-            return Err(self.error(ErrorKind::TooDeep { limit }, file, start, start + len));
+            return Err(self.error(
+                ErrorKind::OWord(OWordError::TooDeep { limit }),
+                file,
+                start,
+                start + len,
+            ));
         }
         // A call without arguments.
         self.bind_args(&[0.0; 30], 0.0);
@@ -166,10 +172,10 @@ impl Interp<'_> {
                 oidx: t,
             }),
             None => {
-                let kind = ErrorKind::SubNotFound {
+                let kind = ErrorKind::OWord(OWordError::SubNotFound {
                     name: label.to_string(),
                     searched: self.loader.searched(),
-                };
+                });
                 if found.is_some() {
                     return Err(err(self, kind));
                 }

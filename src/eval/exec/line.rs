@@ -5,6 +5,7 @@
 //! expressions, the parameters, control flow (M99), the output and the
 //! machine model.
 
+use crate::diag::{ExprError, LimitError, OWordError};
 use std::rc::Rc;
 
 use crate::codes::MCode;
@@ -115,7 +116,12 @@ impl Interp<'_> {
         if let Ok(c) = &result
             && let Some(span) = m98_word(c, items, raw.len() as u32)
         {
-            return Err(self.error_in_line(ErrorKind::M98AmongWords, file, start, span));
+            return Err(self.error_in_line(
+                ErrorKind::OWord(OWordError::M98AmongWords),
+                file,
+                start,
+                span,
+            ));
         }
         // Borrowed where it is: the codes are not copied.
         let checked = match result {
@@ -211,7 +217,12 @@ impl Interp<'_> {
         if let Some(span) = other
             && self.flow.frame().kind == FrameKind::M98
         {
-            return Err(self.error_in_line(ErrorKind::M99AmongWords, file, start, span));
+            return Err(self.error_in_line(
+                ErrorKind::OWord(OWordError::M99AmongWords),
+                file,
+                start,
+                span,
+            ));
         }
         self.return_m99(file, start, len)
     }
@@ -236,7 +247,7 @@ impl Interp<'_> {
                     .map_err(|f| self.fault_in_line(*f, file, start))?;
                 if c.kind == CommentKind::Abort {
                     return Err(self.error_in_line(
-                        ErrorKind::Abort { message: text },
+                        ErrorKind::OWord(OWordError::Abort { message: text }),
                         file,
                         start,
                         c.span,
@@ -310,7 +321,7 @@ impl Interp<'_> {
                     .param_index(index)
                     .map_err(|f| self.fault_in_line(*f, file, start))?;
                 if is_read_only(i) {
-                    let k = ErrorKind::ParamReadOnly { index: i as i64 };
+                    let k = ErrorKind::Expr(ExprError::ParamReadOnly { index: i as i64 });
                     return Err(self.error_in_line(k, file, start, a.target_span));
                 }
                 let v = self
@@ -449,14 +460,19 @@ impl Interp<'_> {
         out.clear();
         if let Err((value, span)) = write_edited(&mut out, raw, repl, self.s.precision) {
             self.out.buf = out;
-            let k = ErrorKind::Unprintable { value };
+            let k = ErrorKind::Limit(LimitError::Unprintable { value });
             return Err(self.error_in_line(k, file, start, span));
         }
         if out.len() > MAX_LINE {
             let len = out.len();
             self.out.buf = out;
             let end = start + trimmed_len(raw) as u32;
-            return Err(self.error(ErrorKind::OutputLineTooLong { len }, file, start, end));
+            return Err(self.error(
+                ErrorKind::Limit(LimitError::OutputLineTooLong { len }),
+                file,
+                start,
+                end,
+            ));
         }
         let r = if self.out.consuming() {
             let f = file.file.clone();

@@ -7,6 +7,7 @@
 //! [`Machine::restore_offsets`]: crate::eval::state::Machine::restore_offsets
 //! [`Machine::restore_modes`]: crate::eval::state::Machine::restore_modes
 
+use crate::diag::MachineError;
 use std::rc::Rc;
 
 use crate::diag::{Error, ErrorKind};
@@ -49,7 +50,7 @@ impl Interp<'_> {
                     Some(m) => self.restore_modal(&m)?,
                     None => {
                         return Err(self.error_in_line(
-                            ErrorKind::NoSavedContext,
+                            ErrorKind::Machine(MachineError::NoSavedContext),
                             file,
                             start,
                             span,

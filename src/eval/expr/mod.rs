@@ -8,6 +8,7 @@ pub(super) mod message;
 pub(super) mod named;
 pub mod params;
 
+use crate::diag::ExprError;
 use crate::diag::{ErrorKind, WarningKind};
 use crate::fx_hasher::FxMap;
 use crate::modes::Modes;
@@ -35,9 +36,9 @@ pub(super) fn fault(kind: ErrorKind, span: Span) -> Fault {
 
 fn check(v: f64, span: Span) -> EvalResult {
     if v.is_nan() {
-        Err(fault(ErrorKind::NotANumber, span))
+        Err(fault(ErrorKind::Expr(ExprError::NotANumber), span))
     } else if v.is_infinite() {
-        Err(fault(ErrorKind::Infinity, span))
+        Err(fault(ErrorKind::Expr(ExprError::Infinity), span))
     } else {
         Ok(v)
     }
@@ -68,14 +69,14 @@ pub(super) fn binary(op: BinOp, a: f64, c: f64, span: Span) -> EvalResult {
     Ok(match op {
         BinOp::Pow => {
             if a < 0.0 && c.floor() != c {
-                return Err(fault(ErrorKind::NegativePower, span));
+                return Err(fault(ErrorKind::Expr(ExprError::NegativePower), span));
             }
             a.powf(c)
         }
         BinOp::Mul => a * c,
         BinOp::Div => {
             if c == 0.0 {
-                return Err(fault(ErrorKind::DivideByZero, span));
+                return Err(fault(ErrorKind::Expr(ExprError::DivideByZero), span));
             }
             a / c
         }
@@ -130,13 +131,13 @@ pub(super) fn unary(f: Func, x: f64, span: Span) -> EvalResult {
         }
         Func::Acos => {
             if !(-1.0..=1.0).contains(&x) {
-                return Err(fault(ErrorKind::AcosRange, span));
+                return Err(fault(ErrorKind::Expr(ExprError::AcosRange), span));
             }
             crate::eval::expr::degrees::to_degrees(x.acos())
         }
         Func::Asin => {
             if !(-1.0..=1.0).contains(&x) {
-                return Err(fault(ErrorKind::AsinRange, span));
+                return Err(fault(ErrorKind::Expr(ExprError::AsinRange), span));
             }
             crate::eval::expr::degrees::to_degrees(x.asin())
         }
@@ -148,14 +149,14 @@ pub(super) fn unary(f: Func, x: f64, span: Span) -> EvalResult {
         Func::Fup => x.ceil(),
         Func::Ln => {
             if x <= 0.0 {
-                return Err(fault(ErrorKind::LnDomain, span));
+                return Err(fault(ErrorKind::Expr(ExprError::LnDomain), span));
             }
             x.ln()
         }
         Func::Round => round_half_away(x),
         Func::Sqrt => {
             if x < 0.0 {
-                return Err(fault(ErrorKind::SqrtNegative, span));
+                return Err(fault(ErrorKind::Expr(ExprError::SqrtNegative), span));
             }
             x.sqrt()
         }
@@ -340,7 +341,10 @@ pub(in crate::eval) fn param_index(scope: &mut impl Scope, index: &Expr) -> Resu
     let v = eval(scope, index)?;
     let i = integer_value(v).map_err(|k| fault(k, index.span))?;
     if i < 1 || i >= MAX_PARAM as i64 {
-        return Err(fault(ErrorKind::ParamOutOfRange { index: i }, index.span));
+        return Err(fault(
+            ErrorKind::Expr(ExprError::ParamOutOfRange { index: i }),
+            index.span,
+        ));
     }
     Ok(i as usize)
 }
@@ -371,11 +375,11 @@ pub(in crate::eval) fn read_numbered(scope: &mut impl Scope, i: usize, span: Spa
             return Ok(0.0);
         }
         return Err(fault(
-            ErrorKind::RuntimeParam {
+            ErrorKind::Expr(ExprError::RuntimeParam {
                 what: format!("#{i} ({what})"),
                 why: why.to_string(),
                 hint: "--zero-start (reads 0)".to_string(),
-            },
+            }),
             span,
         ));
     }
@@ -403,15 +407,18 @@ pub(in crate::eval) fn read_numbered(scope: &mut impl Scope, i: usize, span: Spa
 /// The fault of reading parameter `i`, whose value is not known.
 fn unknown_param(scope: &impl Scope, i: usize, span: Span) -> Fault {
     if let (Some(line), 5061..=5070) = (scope.probed_at(), i) {
-        return fault(ErrorKind::ProbeResultUnknown { index: i, line }, span);
+        return fault(
+            ErrorKind::Expr(ExprError::ProbeResultUnknown { index: i, line }),
+            span,
+        );
     }
     if (5400..=5413).contains(&i) {
         return fault(
-            ErrorKind::RuntimeParam {
+            ErrorKind::Expr(ExprError::RuntimeParam {
                 what: format!("#{i} (tool data)"),
                 why: "it comes from the tool table".to_string(),
                 hint: scope.tool_data_hint(),
-            },
+            }),
             span,
         );
     }
@@ -420,11 +427,11 @@ fn unknown_param(scope: &impl Scope, i: usize, span: Span) -> Fault {
         _ => ("value", "it depends on the machine"),
     };
     fault(
-        ErrorKind::RuntimeParam {
+        ErrorKind::Expr(ExprError::RuntimeParam {
             what: format!("#{i} ({what})"),
             why: why.to_string(),
             hint: format!("-D {i}=VALUE, a --var-file, or --zero-start"),
-        },
+        }),
         span,
     )
 }
@@ -518,25 +525,28 @@ mod tests {
     fn domain_errors() {
         assert_eq!(
             binary(BinOp::Div, 1.0, 0.0, S).unwrap_err().0,
-            ErrorKind::DivideByZero
+            ErrorKind::Expr(ExprError::DivideByZero)
         );
         assert_eq!(
             binary(BinOp::Pow, -2.0, 0.5, S).unwrap_err().0,
-            ErrorKind::NegativePower
+            ErrorKind::Expr(ExprError::NegativePower)
         );
         assert!(binary(BinOp::Mod, 1.0, 0.0, S).unwrap().is_nan());
         assert_eq!(
             unary(Func::Acos, 1.5, S).unwrap_err().0,
-            ErrorKind::AcosRange
+            ErrorKind::Expr(ExprError::AcosRange)
         );
         assert_eq!(
             unary(Func::Asin, -1.5, S).unwrap_err().0,
-            ErrorKind::AsinRange
+            ErrorKind::Expr(ExprError::AsinRange)
         );
-        assert_eq!(unary(Func::Ln, 0.0, S).unwrap_err().0, ErrorKind::LnDomain);
+        assert_eq!(
+            unary(Func::Ln, 0.0, S).unwrap_err().0,
+            ErrorKind::Expr(ExprError::LnDomain)
+        );
         assert_eq!(
             unary(Func::Sqrt, -1.0, S).unwrap_err().0,
-            ErrorKind::SqrtNegative
+            ErrorKind::Expr(ExprError::SqrtNegative)
         );
     }
 

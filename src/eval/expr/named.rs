@@ -2,6 +2,7 @@
 //! read-only names answered from the state model, INI values.
 
 use crate::diag::ErrorKind;
+use crate::diag::ExprError;
 use crate::modes::Modes;
 use crate::parse::Name;
 use crate::parse::ast::Span;
@@ -212,11 +213,11 @@ fn tool_number(scope: &mut impl Scope, p: Predef, name: &str, span: Span) -> Eva
     };
     v.ok_or_else(|| {
         fault(
-            ErrorKind::RuntimeParam {
+            ErrorKind::Expr(ExprError::RuntimeParam {
                 what: format!("#<{name}>"),
                 why: "the tool in the spindle is known only on the machine".into(),
                 hint: "a T word and M6 in the program first, or --zero-start".into(),
-            },
+            }),
             span,
         )
     })
@@ -242,22 +243,22 @@ fn predefined_pattern(scope: &mut impl Scope, name: &str, span: Span) -> Option<
         && AXES.contains(&axis.as_bytes()[0])
     {
         return Some(Err(fault(
-            ErrorKind::RuntimeParam {
+            ErrorKind::Expr(ExprError::RuntimeParam {
                 what: format!("#<{name}> (machine position)"),
                 why: "machine coordinates depend on homing and offsets".into(),
                 hint: "--zero-start, or offsets and a position set by the program".into(),
-            },
+            }),
             span,
         )));
     }
     let s = scope.settings();
     if name.starts_with("_hal[") && s.hal_pin_vars {
         return Some(Err(fault(
-            ErrorKind::RuntimeParam {
+            ErrorKind::Expr(ExprError::RuntimeParam {
                 what: format!("#<{name}>"),
                 why: "HAL values exist only on the running machine".into(),
                 hint: format!("-D {name}=VALUE"),
-            },
+            }),
             span,
         )));
     }
@@ -266,9 +267,9 @@ fn predefined_pattern(scope: &mut impl Scope, name: &str, span: Span) -> Option<
         return Some(match found.and_then(|v| v.trim().parse::<f64>().ok()) {
             Some(v) => Ok(v),
             None => Err(fault(
-                ErrorKind::NamedUndefined {
+                ErrorKind::Expr(ExprError::NamedUndefined {
                     name: name.to_string(),
-                },
+                }),
                 span,
             )),
         });
@@ -316,9 +317,9 @@ pub(in crate::eval) fn read_named(scope: &mut impl Scope, name: &Name, span: Spa
         Some(v) => Ok(*v),
         None if defining => Ok(0.0),
         None => Err(fault(
-            ErrorKind::NamedUndefined {
+            ErrorKind::Expr(ExprError::NamedUndefined {
                 name: name.to_string(),
-            },
+            }),
             span,
         )),
     }
@@ -357,9 +358,9 @@ pub(in crate::eval) fn check_settable(
         || (name.as_str() == "n_args" && s.oword_nargs && scope.call_level() > 0)
     {
         return Err(fault(
-            ErrorKind::NamedReadOnly {
+            ErrorKind::Expr(ExprError::NamedReadOnly {
                 name: name.to_string(),
-            },
+            }),
             span,
         ));
     }

@@ -11,6 +11,7 @@
 //! the evaluator gave after the failed line are dropped, so the
 //! diagnostics are those of a run that stopped at that line.
 
+use crate::diag::SetupError;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender, SyncSender};
@@ -88,10 +89,10 @@ pub(in crate::eval) fn lost() -> Error {
 
 fn output_error(message: &str) -> Error {
     Diagnostic::error(
-        ErrorKind::Io {
+        ErrorKind::Setup(SetupError::Io {
             path: "<output>".into(),
             message: message.into(),
-        },
+        }),
         None,
     )
 }

@@ -5,6 +5,7 @@ pub(super) mod apart;
 pub(super) mod hook;
 pub(super) mod progress;
 
+use crate::diag::{LimitError, SetupError};
 use std::sync::Arc;
 
 use crate::diag::{Diagnostic, Error, ErrorKind, Kind, Site};
@@ -120,13 +121,16 @@ pub(super) fn too_large(e: &std::io::Error) -> Option<&crate::emit::OutputTooLar
 /// line it was given).
 pub(crate) fn output_error(e: std::io::Error) -> Error {
     if let Some(t) = too_large(&e) {
-        return Diagnostic::error(ErrorKind::OutputBytesLimit { limit: t.limit }, None);
+        return Diagnostic::error(
+            ErrorKind::Limit(LimitError::OutputBytesLimit { limit: t.limit }),
+            None,
+        );
     }
     Diagnostic::error(
-        ErrorKind::Io {
+        ErrorKind::Setup(SetupError::Io {
             path: "<output>".into(),
             message: e.to_string(),
-        },
+        }),
         None,
     )
 }
@@ -139,7 +143,12 @@ pub(in crate::eval) fn place_limit(
     at: u32,
     stack: impl FnOnce() -> Vec<Site>,
 ) -> Error {
-    if e.site.is_none() && matches!(e.kind, Kind::Error(ErrorKind::OutputBytesLimit { .. })) {
+    if e.site.is_none()
+        && matches!(
+            e.kind,
+            Kind::Error(ErrorKind::Limit(LimitError::OutputBytesLimit { .. }))
+        )
+    {
         e.site = Some(Site::new(file, at, at));
         e.stack = stack();
     }

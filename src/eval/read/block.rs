@@ -7,6 +7,7 @@
 use crate::block::RawWord;
 use crate::codes::MCode;
 use crate::diag::ErrorKind;
+use crate::diag::SyntaxError;
 use crate::emit::Edit;
 use crate::parse::ast::{ExprKind, Item, Span, Word};
 
@@ -69,11 +70,11 @@ impl WordCounts {
     #[cold]
     pub(in crate::eval) fn refusal(w: &Word) -> ErrorKind {
         if w.letter == b'm' {
-            ErrorKind::TooManyMWords
+            ErrorKind::Syntax(SyntaxError::TooManyMWords)
         } else {
-            ErrorKind::DuplicateWord {
+            ErrorKind::Syntax(SyntaxError::DuplicateWord {
                 letter: w.letter as char,
-            }
+            })
         }
     }
 }
@@ -88,10 +89,10 @@ pub(in crate::eval) fn letter_refused(w: &Word, uvw_axes: bool) -> bool {
 /// The error of a word [`letter_refused`] refused, and where: its letter.
 #[cold]
 pub(in crate::eval) fn letter_refusal(w: &Word) -> (ErrorKind, Span) {
-    let k = ErrorKind::BadCharacter {
+    let k = ErrorKind::Syntax(SyntaxError::BadCharacter {
         ch: w.letter as char,
         byte: w.letter,
-    };
+    });
     (k, Span::new(w.span.start, w.span.start + 1))
 }
 

@@ -4,6 +4,7 @@
 //! with the word that is wrong.
 
 use crate::diag::ErrorKind;
+use crate::diag::{MachineError, SyntaxError};
 
 use crate::codes::g_tenths;
 use crate::codes::{
@@ -384,7 +385,10 @@ fn read_codes(words: &[(u8, f64)], user_m: u128) -> Result<ReadCodes, (ErrorKind
                     Some(g) => g,
                     None if m >= 100 && user_m & (1u128 << (m - 100)) != 0 => USER_M_GROUP,
                     None if m >= 100 => {
-                        return Err((ErrorKind::UndeclaredUserM { m }, Some(i)));
+                        return Err((
+                            ErrorKind::Machine(MachineError::UndeclaredUserM { m }),
+                            Some(i),
+                        ));
                     }
                     None => return bad(BlockError::UnknownMCode { m }, Some(i)),
                 };
@@ -394,7 +398,7 @@ fn read_codes(words: &[(u8, f64)], user_m: u128) -> Result<ReadCodes, (ErrorKind
                 mseen[grp as usize] = Some(i);
                 if r.mn == r.mbuf.len() {
                     // (More than four M words are refused before this.)
-                    return Err((ErrorKind::TooManyMWords, Some(i)));
+                    return Err((ErrorKind::Syntax(SyntaxError::TooManyMWords), Some(i)));
                 }
                 r.mbuf[r.mn] = (code, i);
                 r.mn += 1;
@@ -463,8 +467,10 @@ pub(in crate::eval) fn check_contour_line(
 /// with the state before the block, the other G-codes after the block's
 /// G40/G41/G42 (the reference's order of execution).
 fn check_comp(d: &Decoded<'_>) -> Check {
-    let forbid =
-        |action: &'static str, at: Option<usize>| Err((ErrorKind::CompForbids { action }, at));
+    let refuse = |e: MachineError, at: usize| Err((ErrorKind::Machine(e), Some(at)));
+    let forbid = |action: &'static str, at: Option<usize>| {
+        Err((ErrorKind::Machine(MachineError::CompForbids { action }), at))
+    };
     let plane_here = d.gs.iter().find_map(|&(g, i)| match g {
         GCode::Plane(p) => Some((p, i)),
         _ => None,
@@ -494,22 +500,22 @@ fn check_comp(d: &Decoded<'_>) -> Check {
         if let Some((p, i)) = plane_here
             && p != d.modal.plane
         {
-            return Err((ErrorKind::CompPlaneChange, Some(i)));
+            return refuse(MachineError::CompPlaneChange, i);
         }
     }
     let plane = plane_here.map_or(d.modal.plane, |p| p.0);
     if let Some((c, i)) = turning_on {
         if plane != Plane::XY && plane != Plane::XZ {
-            return Err((ErrorKind::CompPlane, Some(i)));
+            return refuse(MachineError::CompPlane, i);
         }
         if before {
-            return Err((ErrorKind::CompAlreadyOn, Some(i)));
+            return refuse(MachineError::CompAlreadyOn, i);
         }
         if matches!(c, CutterComp::DynamicLeft | CutterComp::DynamicRight) {
             let left = c == CutterComp::DynamicLeft;
             let name = if left { "G41.1" } else { "G42.1" };
             if d.has_at(b'd').is_none() {
-                return Err((ErrorKind::CompNoDiameter { g: name }, Some(i)));
+                return refuse(MachineError::CompNoDiameter { g: name }, i);
             }
             if let Some(l) = d.has_at(b'l')
                 && plane != Plane::XZ
@@ -519,7 +525,7 @@ fn check_comp(d: &Decoded<'_>) -> Check {
                 } else {
                     "G42.1 with an L word (lathe tool orientation)"
                 };
-                return Err((ErrorKind::CompLatheTool { what }, Some(l)));
+                return refuse(MachineError::CompLatheTool { what }, l);
             }
         }
     }
@@ -943,7 +949,10 @@ fn check_whole_numbers(d: &Decoded<'_>, lines: Lines) -> Check {
     let g41_g42 = d.g_on(|g| matches!(g, GCode::CutterComp(CutterComp::Left | CutterComp::Right)));
     for (i, &(l, v)) in d.words.iter().enumerate() {
         if matches!(l, b't' | b'h') && crate::parse::integer_value(v).is_err() {
-            return Err((ErrorKind::NonInteger { value: v }, Some(i)));
+            return Err((
+                ErrorKind::Syntax(SyntaxError::NonInteger { value: v }),
+                Some(i),
+            ));
         }
         // The reference's test: the D value within 0.0001 of the integer
         // (int)(D + 0.5), which also refuses every negative D.

@@ -11,6 +11,7 @@
 //! which is what the reference reads missing axis words from.
 
 use crate::diag::{ErrorKind, WarningKind};
+use crate::diag::{ExprError, MachineError};
 use crate::geom::comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
 
 use super::Machine;
@@ -85,7 +86,9 @@ impl Machine {
                         && t != 0.0
                         && !self.tools.table.contains_key(&(t as i64))
                     {
-                        return Err(ErrorKind::ToolNotInTable { tool: t as i64 });
+                        return Err(ErrorKind::Expr(ExprError::ToolNotInTable {
+                            tool: t as i64,
+                        }));
                     }
                     Some(t)
                 }
@@ -100,7 +103,7 @@ impl Machine {
                         } else {
                             "G42 with a lathe tool (orientation 1-8)"
                         };
-                        return Err(ErrorKind::CompLatheTool { what });
+                        return Err(ErrorKind::Machine(MachineError::CompLatheTool { what }));
                     }
                     Some((self.user_to_program(s, data.diameter) / 2.0, o))
                 }
@@ -219,7 +222,9 @@ impl Machine {
             if self.comp_pending {
                 use MotionMode as M;
                 match motion {
-                    M::ArcCw | M::ArcCcw => return Err(ErrorKind::CompArcAfterOff),
+                    M::ArcCw | M::ArcCcw => {
+                        return Err(ErrorKind::Machine(MachineError::CompArcAfterOff));
+                    }
                     M::Rapid | M::Linear | M::Thread | M::RigidTap => self.comp_pending = false,
                     _ => {}
                 }

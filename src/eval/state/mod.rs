@@ -12,6 +12,7 @@ pub(super) mod nurbs;
 pub(super) mod restore;
 pub mod tools;
 
+use crate::diag::ExprError;
 use std::collections::HashSet;
 
 use crate::codes::CoordSystem;
@@ -169,10 +170,10 @@ impl Machine {
         if self.modal.cutter_comp != crate::codes::CutterComp::Off {
             let why = "cutter radius compensation is on".to_string();
             return Err(fault(
-                ErrorKind::UnknownPosition {
+                ErrorKind::Expr(ExprError::UnknownPosition {
                     axis: AXES[axis] as char,
                     why,
-                },
+                }),
                 span,
             ));
         }
@@ -192,10 +193,10 @@ impl Machine {
                     Unknown::After(what, line) => format!("{what} at line {line} made it unknown"),
                 };
                 Err(fault(
-                    ErrorKind::UnknownPosition {
+                    ErrorKind::Expr(ExprError::UnknownPosition {
                         axis: AXES[axis] as char,
                         why,
-                    },
+                    }),
                     span,
                 ))
             }

@@ -1,6 +1,7 @@
 //! Updates of the state model from the words of an executed line.
 
 use crate::diag::{BlockError, ErrorKind, WarningKind};
+use crate::diag::{ExprError, MachineError};
 
 use super::arc::arc_refusal;
 use super::codes::{Checked, LineCodes};
@@ -309,7 +310,7 @@ impl Machine {
                     // With a tool table, a tool must be in it (T0: none).
                     let t = v.round() as i64;
                     if !s.tool_table.is_empty() && t != 0 && !self.tools.table.contains_key(&t) {
-                        return Err(ErrorKind::ToolNotInTable { tool: t });
+                        return Err(ErrorKind::Expr(ExprError::ToolNotInTable { tool: t }));
                     }
                     self.tools.select(v);
                     if let Some(p) = &mut self.pockets {
@@ -484,7 +485,9 @@ impl Machine {
             }
             NonModal::MachineCoords => {
                 if self.comp_offsetting() {
-                    return Err(ErrorKind::CompForbids { action: "use G53" });
+                    return Err(ErrorKind::Machine(MachineError::CompForbids {
+                        action: "use G53",
+                    }));
                 }
                 if self.modal.cutter_comp != CutterComp::Off {
                     self.forget(&[0, 1, 2], "cutter radius compensation", env.line);
