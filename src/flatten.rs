@@ -78,7 +78,7 @@ pub fn flatten_with<'s>(
                 .unwrap_or_else(|| PathBuf::from(".")),
         )
     };
-    let loader = Loader::new(search.clone(), main_dir);
+    let loader = Loader::new(search.clone(), main_dir).named2007(settings.named_params_2007);
     run_with(source, settings, loader, dest, consumer)
 }
 
@@ -91,7 +91,10 @@ fn run_with<'s>(
     dest: Destination,
     consumer: Option<Box<dyn eval::LineConsumer + 's>>,
 ) -> (Vec<Diagnostic>, Option<Error>) {
-    let index = Rc::new(FileIndex::build(Arc::new(source)));
+    let index = Rc::new(FileIndex::build(
+        Arc::new(source),
+        settings.named_params_2007,
+    ));
     let sink = Sink::new(dest.clone()).map_err(|e| {
         let path = match &dest {
             Destination::File(p) => p.clone(),
@@ -131,7 +134,9 @@ pub fn flatten_memory<'s>(
     consumer: Option<Box<dyn eval::LineConsumer + 's>>,
 ) -> (Vec<Diagnostic>, Result<Vec<u8>, Error>) {
     let src = SourceFile::new(PathBuf::from("<string>"), "<string>".into(), text);
-    let loader = Loader::new(SearchPath::default(), None).with_files(files);
+    let loader = Loader::new(SearchPath::default(), None)
+        .with_files(files)
+        .named2007(settings.named_params_2007);
     let out = emit::MemoryOut::default();
     let (diags, err) = run_with(
         src,

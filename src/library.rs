@@ -227,13 +227,13 @@ pub(crate) fn check_library(
 ) -> Vec<Diagnostic> {
     let mut out = Vec::new();
     let file = source.clone();
-    let index = Rc::new(FileIndex::build(source));
+    let index = Rc::new(FileIndex::build(source, settings.named_params_2007));
     // An evaluator for the expressions that read no parameter.
     let mut interp = Sink::new(Destination::Discard).ok().map(|sink| {
-        let loader = Loader::new(search.clone(), None);
+        let loader = Loader::new(search.clone(), None).named2007(settings.named_params_2007);
         Interp::new(settings, loader, index.clone(), sink)
     });
-    let mut parser = crate::parse::LineParser::default();
+    let mut parser = index.parser();
     let mut st = Structure {
         stack: Vec::new(),
         skip: false,

@@ -75,7 +75,7 @@ fn sub_file_name(index: &FileIndex) -> Option<String> {
     }
     if index.first_nonblank.is_some_and(|n| n < first.line_idx) {
         // Only comment lines may come before it.
-        let mut parser = crate::parse::LineParser::default();
+        let mut parser = index.parser();
         let mut only_comments = true;
         let _ = index.file.scan_lines(|idx, _, raw, term| {
             if idx >= first.line_idx || !only_comments {
@@ -142,7 +142,7 @@ pub(crate) fn check_file(path: &Path, cfg: &Config) -> Vec<Diagnostic> {
         Err(e) => return vec![*e],
     };
     let source = std::sync::Arc::new(source);
-    let probe = FileIndex::build(source.clone());
+    let probe = FileIndex::build(source.clone(), cfg.settings.named_params_2007);
     let mut settings = cfg.settings.clone();
     settings.warnings = true;
     if sub_file_name(&probe).is_some() {

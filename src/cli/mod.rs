@@ -68,14 +68,6 @@ pub fn run(cli: Cli) -> ExitCode {
 fn resolve(cli: Cli) -> anyhow::Result<Action> {
     use args::Command;
     let env_path = std::env::var("NGCFLAT_SUBROUTINE_PATH").ok();
-    let common = match &cli.command {
-        Some(Command::Check(args)) => &args.common,
-        Some(Command::Stats(args)) => &args.common,
-        Some(Command::Plot(args)) => &args.common,
-        Some(Command::Targets) => return Ok(Action::Targets),
-        _ => &cli.flatten.common,
-    };
-    crate::parse::named2007::enable(common.named_params_2007);
     let list = |name: Option<String>| name.is_some_and(|n| n.eq_ignore_ascii_case("list"));
     match &cli.command {
         Some(Command::Check(a)) if list(a.common.target_name()) => return Ok(Action::Targets),

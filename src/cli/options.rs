@@ -67,6 +67,7 @@ impl CommonArgs {
             },
             max_output_bytes: self.max_output_bytes,
             zero_start: self.zero_start,
+            named_params_2007: self.named_params_2007,
             ..Settings::default()
         };
         let mut warnings = Vec::new();

@@ -139,11 +139,11 @@ impl<'s> Interp<'s> {
         let main_frame = Frame::new(FrameKind::Main, Name::new(""));
         Interp {
             s,
-            loader,
+            loader: loader.named2007(s.named_params_2007),
             mach: Machine::new(s),
             flow: Flow::new(main.clone(), main_frame),
             params,
-            reader: Reader::new(),
+            reader: Reader::new(s.named_params_2007),
             out: Writer::new(sink, s, main.line_count),
             diags: Diags::default(),
             main,
@@ -472,7 +472,7 @@ impl<'s> Interp<'s> {
         }
         let mut pos = self.flow.cur.pos as usize;
         let mut idx = self.flow.cur.line;
-        let mut parser = LineParser::default();
+        let mut parser = LineParser::new(self.s.named_params_2007);
         let mut in_fanuc = false;
         while pos < data.len() {
             let (end, next, term) = next_line(data, pos);

@@ -90,6 +90,9 @@ pub struct Settings {
     pub user_m: u128,
     /// Show progress on stderr (a terminal) after this delay.
     pub progress: Option<std::time::Duration>,
+    /// Read the named-parameter syntax of the 2007 proposal
+    /// (`--named-params-2007`), for this run's programs.
+    pub named_params_2007: bool,
 }
 
 impl Default for Settings {
@@ -101,6 +104,7 @@ impl Default for Settings {
             max_output_lines: 50_000_000,
             max_contour: crate::geom::lathe::MAX_MOVES,
             zero_start: false,
+            named_params_2007: false,
             start_position: Vec::new(),
             fanuc_disabled: false,
             oword_nargs: false,

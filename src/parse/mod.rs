@@ -42,10 +42,12 @@ impl LineError {
     }
 }
 
-/// Reusable scratch space for parsing.
+/// Reusable scratch space for parsing, and the syntax it reads.
 #[derive(Default)]
 pub struct LineParser {
     norm: Normalized,
+    /// Whether lines are read in the 2007 named-parameter syntax too.
+    named2007: bool,
 }
 
 fn describe(rules: &[Rule]) -> String {
@@ -88,6 +90,20 @@ fn is_gcode_char(c: u8) -> bool {
 }
 
 impl LineParser {
+    /// A parser of LinuxCNC's syntax, and with `named2007` of the 2007
+    /// named-parameter syntax too.
+    pub fn new(named2007: bool) -> LineParser {
+        LineParser {
+            named2007,
+            ..LineParser::default()
+        }
+    }
+
+    /// Whether it reads the 2007 named-parameter syntax.
+    pub fn named2007(&self) -> bool {
+        self.named2007
+    }
+
     /// Parses one raw line (without terminator). `terminated` tells whether a
     /// newline followed it, which matters for the length limit.
     pub fn parse(&mut self, raw: &[u8], terminated: bool) -> Result<Line, LineError> {
@@ -102,7 +118,7 @@ impl LineParser {
         if let Err((kind, at)) = normalize(raw, &mut self.norm) {
             return Err(LineError::new(kind, Span::new(at, at + 1), true));
         }
-        if named2007::enabled()
+        if self.named2007
             && let Some((text, map)) = named2007::rewrite(&self.norm.text, &self.norm.map)
         {
             self.norm.text = text;

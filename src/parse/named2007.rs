@@ -12,20 +12,6 @@
 //!
 //! Comments are left alone.
 
-use std::sync::atomic::{AtomicBool, Ordering};
-
-static ENABLED: AtomicBool = AtomicBool::new(false);
-
-/// Turns the syntax on for every line parsed from now on in this process
-/// (a command-line switch for the whole run).
-pub(crate) fn enable(on: bool) {
-    ENABLED.store(on, Ordering::Relaxed);
-}
-
-pub(crate) fn enabled() -> bool {
-    ENABLED.load(Ordering::Relaxed)
-}
-
 fn name_start(b: u8) -> bool {
     b.is_ascii_alphabetic() || b == b'_'
 }

@@ -235,7 +235,7 @@ impl Scan {
         if starts_with_m99(raw) {
             self.m99_lines.push(idx);
         }
-        if let Some((kind, label)) = plain_oline(raw) {
+        if let Some((kind, label)) = plain_oline(raw, parser.named2007()) {
             let label = Name::new(label);
             self.oline(idx, pos, (next, terminated, true), kind, Some(&label));
         } else if quick_is_candidate(raw) {
@@ -500,8 +500,10 @@ fn addr(n: &Name) -> usize {
 }
 
 impl FileIndex {
-    pub fn build(file: Arc<SourceFile>) -> FileIndex {
-        let mut parser = LineParser::default();
+    /// Indexes `file`; `named2007`: its lines are in the 2007
+    /// named-parameter syntax too.
+    pub fn build(file: Arc<SourceFile>, named2007: bool) -> FileIndex {
+        let mut parser = LineParser::new(named2007);
         let mut scan = Scan {
             keep_parsed: file.memory().is_some(),
             ..Scan::default()
@@ -853,6 +855,11 @@ impl FileIndex {
         (line_start + e.span.start, line_start + e.span.end)
     }
 
+    /// A parser of the syntax the file was indexed in.
+    pub fn parser(&self) -> LineParser {
+        LineParser::new(self.parser.borrow().named2007())
+    }
+
     pub fn kind_of(&self, oidx: u32) -> Option<OKind> {
         self.olines[oidx as usize].kind
     }
@@ -869,8 +876,8 @@ fn changed(line_idx: u32) -> ErrorKind {
 /// digits and `_` or a number without leading zero, blanks only around
 /// them, nothing else on the line. `None` for anything else (the parser
 /// reads it).
-fn plain_oline(raw: &[u8]) -> Option<(OKind, &str)> {
-    if raw.len() > crate::parse::MAX_LINE || crate::parse::named2007::enabled() {
+fn plain_oline(raw: &[u8], named2007: bool) -> Option<(OKind, &str)> {
+    if raw.len() > crate::parse::MAX_LINE || named2007 {
         return None;
     }
     let blank = |b: &u8| matches!(b, b' ' | b'\t');
@@ -1067,7 +1074,7 @@ mod tests {
 
     fn index_of(text: &str) -> FileIndex {
         let file = SourceFile::new(PathBuf::from("t.ngc"), "t.ngc".into(), text.into());
-        FileIndex::build(Arc::new(file))
+        FileIndex::build(Arc::new(file), false)
     }
 
     /// What a program of a million labels keeps per O-line and per sub
@@ -1133,7 +1140,7 @@ mod tests {
         let p = d.path().join("p.ngc");
         std::fs::write(&p, text).expect("write");
         let file = SourceFile::open_streamed(&p).expect("open");
-        let streamed = FileIndex::build(Arc::new(file));
+        let streamed = FileIndex::build(Arc::new(file), false);
         assert!(streamed.parsed.borrow().iter().all(Option::is_none));
         assert_eq!(
             *streamed.oline(3).expect("read").line(),
@@ -1182,7 +1189,7 @@ mod tests {
             let d = tempfile::tempdir().expect("tmp");
             let p = d.path().join("p.ngc");
             std::fs::write(&p, &text).expect("write");
-            let read = FileIndex::build(Arc::new(SourceFile::open_streamed(&p).expect("open")));
+            let read = FileIndex::build(Arc::new(SourceFile::open_streamed(&p).expect("open")), false);
             proptest::prop_assert_eq!(kept.olines.len(), read.olines.len());
             for i in 0..kept.olines.len() as u32 {
                 let a = kept.line(i).map(|l| (*l).clone());
@@ -1231,7 +1238,7 @@ mod tests {
             "o100 while [1]",
         ] {
             let parsed = parser.parse(line.as_bytes(), true);
-            match plain_oline(line.as_bytes()) {
+            match plain_oline(line.as_bytes(), false) {
                 Some((kind, label)) => {
                     plain += 1;
                     let Ok(Line {
@@ -1305,12 +1312,14 @@ mod tests {
         let d = tempfile::tempdir().expect("tmp");
         let p = d.path().join("p.ngc");
         std::fs::write(&p, &text).expect("write");
-        let memory = FileIndex::build(Arc::new(SourceFile::new(
-            p.clone(),
-            "p.ngc".into(),
-            text.clone(),
-        )));
-        let streamed = FileIndex::build(Arc::new(SourceFile::open_streamed(&p).expect("open")));
+        let memory = FileIndex::build(
+            Arc::new(SourceFile::new(p.clone(), "p.ngc".into(), text.clone())),
+            false,
+        );
+        let streamed = FileIndex::build(
+            Arc::new(SourceFile::open_streamed(&p).expect("open")),
+            false,
+        );
         for index in [&memory, &streamed] {
             assert_eq!(index.first_nonblank, Some(3));
             assert!(!index.percent_start);
@@ -1340,7 +1349,7 @@ mod tests {
         let p = d.path().join("p.ngc");
         std::fs::write(&p, "G0 X1\no100 if [1]\n  G1 X2\no100 endif\nM2\n").expect("write");
         let file = SourceFile::open_streamed(&p).expect("open");
-        let index = FileIndex::build(Arc::new(file));
+        let index = FileIndex::build(Arc::new(file), false);
         assert_eq!(index.oline(0).expect("unchanged").kind, OKind::If);
         let forget = || {
             index.parsed.borrow_mut().fill(None);

@@ -31,6 +31,8 @@ pub struct Loader {
     /// found before any folder is searched.
     memory: HashMap<String, Vec<u8>>,
     pub warnings: Vec<Diagnostic>,
+    /// Files are read in the 2007 named-parameter syntax too.
+    named2007: bool,
 }
 
 /// Whether a subroutine name is safe to turn into a file name.
@@ -61,7 +63,14 @@ impl Loader {
             by_name: HashMap::new(),
             memory: HashMap::new(),
             warnings: Vec::new(),
+            named2007: false,
         }
+    }
+
+    /// Subroutine files are read in the 2007 named-parameter syntax too.
+    pub fn named2007(mut self, on: bool) -> Loader {
+        self.named2007 = on;
+        self
     }
 
     /// Subroutine files held in memory (`name` → text), found by
@@ -124,7 +133,7 @@ impl Loader {
         let file_name = format!("{name}.ngc");
         if let Some(data) = self.memory.remove(name) {
             let file = Arc::new(SourceFile::new(PathBuf::from(&file_name), file_name, data));
-            let index = Some(Rc::new(FileIndex::build(file)));
+            let index = Some(Rc::new(FileIndex::build(file, self.named2007)));
             self.by_name.insert(name.to_string(), index.clone());
             return Ok(index);
         }
@@ -165,7 +174,7 @@ impl Loader {
             p.display().to_string(),
             data,
         ));
-        let index = Rc::new(FileIndex::build(file));
+        let index = Rc::new(FileIndex::build(file, self.named2007));
         self.by_path.insert(canon, index.clone());
         Ok(index)
     }

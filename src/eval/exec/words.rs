@@ -110,7 +110,7 @@ mod tests {
     /// ended the program.
     fn run(s: &Settings, lines: &[&str], see: impl FnOnce(&Interp<'_>)) -> (Modes, Modes, bool) {
         let src = SourceFile::new("<t>".into(), "<t>".into(), Vec::new());
-        let main = Rc::new(FileIndex::build(Arc::new(src)));
+        let main = Rc::new(FileIndex::build(Arc::new(src), false));
         let sink = Sink::new(Destination::Memory(MemoryOut::default())).expect("sink");
         let loader = Loader::new(SearchPath::default(), None);
         let mut it = Interp::new(s, loader, main.clone(), sink);

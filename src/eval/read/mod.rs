@@ -29,8 +29,10 @@ pub(super) struct Reader {
 }
 
 impl Reader {
-    pub(super) fn new() -> Reader {
+    /// `named2007`: lines are read in the 2007 named-parameter syntax too.
+    pub(super) fn new(named2007: bool) -> Reader {
         Reader {
+            parser: LineParser::new(named2007),
             plain: Some(Box::default()),
             words_buf: Vec::with_capacity(16),
             scratch: Some(Box::default()),
