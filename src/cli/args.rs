@@ -95,6 +95,10 @@ pub(crate) struct PlotArgs {
     /// Which way to look at the toolpath.
     #[arg(long, value_enum, default_value = "xy")]
     pub(super) view: ViewArg,
+    /// Open the written page or picture in the desktop's browser (or
+    /// viewer) for it.
+    #[arg(long)]
+    pub(super) open: bool,
     #[command(flatten)]
     pub(super) common: CommonArgs,
 }

@@ -18,6 +18,8 @@ pub(super) struct Job {
     output: PathBuf,
     /// Which way to look at the toolpath.
     view: View,
+    /// Open the written file in the desktop's browser or viewer.
+    open: bool,
 }
 
 impl From<super::args::PlotArgs> for Job {
@@ -32,6 +34,7 @@ impl From<super::args::PlotArgs> for Job {
             file: a.file,
             output: a.output,
             view,
+            open: a.open,
         }
     }
 }
@@ -71,18 +74,30 @@ pub(super) fn run(job: &Job, cfg: &Config) -> ExitCode {
         (Some(_), Some(plot), _) => plot.svg(&name),
         _ => return ExitCode::from(2),
     };
-    if let Err(e) = write_atomic(output, data.as_bytes()) {
+    let io_error = |message: String| {
         report(
             &[*Diagnostic::error(
                 ErrorKind::Setup(SetupError::Io {
                     path: output.to_path_buf(),
-                    message: e.to_string(),
+                    message,
                 }),
                 None,
             )],
             cfg.format,
         );
-        return ExitCode::from(2);
+        ExitCode::from(2)
+    };
+    if let Err(e) = write_atomic(output, data.as_bytes()) {
+        return io_error(e.to_string());
+    }
+    if job.open {
+        // An absolute path: the openers take a leading '-' for an option.
+        let opened = std::path::absolute(output).and_then(open::that_detached);
+        if let Err(e) = opened {
+            return io_error(format!(
+                "written, but no browser or viewer could be started for it ({e})"
+            ));
+        }
     }
     ExitCode::SUCCESS
 }

@@ -7,7 +7,8 @@
 //! it is made coarser by levels, each applied to the whole program so the
 //! density stays even: neighbouring moves of the same kind and tool merge
 //! into one of up to `2^merge_level` program moves (all points kept);
-//! `vertex_level` halvings of the points inside moves are made; and when
+//! inside a move only every `2^vertex_level`-th point the program made is
+//! kept; and when
 //! moves cannot merge, only every `2^drop_level`-th program move is kept.
 //! Never left out: a vertex where the toolpath reaches its lowest or
 //! highest X, Y or Z (so the drawn envelope is the program's), and a move
@@ -71,8 +72,6 @@ struct Mv {
     chain: u32,
     /// Index + 1 of the travel-limit violation, 0 if none.
     viol: u32,
-    /// The vertex level its inner points were thinned to.
-    thin: u8,
     /// The output line's text, on the first move of a line.
     text: Option<Box<str>>,
 }
@@ -115,6 +114,11 @@ pub(crate) struct Scene {
     verts: Vec<[f32; 3]>,
     /// How many envelope extremes a vertex holds.
     vprot: Vec<u8>,
+    /// The number of each vertex in the order the program made them: the
+    /// points inside moves kept at vertex level L are those whose number is
+    /// a multiple of 2^L, whatever pass looks at them.
+    vseq: Vec<u32>,
+    vcount: u32,
     moves: Vec<Mv>,
     /// Per axis X, Y, Z: (lowest value, its vertex), (highest, its vertex).
     ext: [Option<(f64, u32)>; 6],
@@ -164,6 +168,8 @@ impl Scene {
         Scene {
             verts: Vec::new(),
             vprot: Vec::new(),
+            vseq: Vec::new(),
+            vcount: 0,
             moves: Vec::new(),
             ext: [None; 6],
             tools: vec![0],
@@ -364,7 +370,6 @@ impl Scene {
             src_line: self.line_src,
             chain: self.line_chain,
             viol,
-            thin: 0,
             text: if first_of_line {
                 self.line_text.clone()
             } else {
@@ -411,6 +416,8 @@ impl Scene {
         let i = self.verts.len() as u32;
         self.verts.push(p.map(|v| v as f32));
         self.vprot.push(0);
+        self.vseq.push(self.vcount);
+        self.vcount = self.vcount.wrapping_add(1);
         for (axis, &v) in p.iter().enumerate() {
             for (slot, lower) in [(2 * axis, true), (2 * axis + 1, false)] {
                 let better = match self.ext[slot] {
@@ -448,29 +455,32 @@ impl Scene {
             if m0 <= goal_m && v0 <= goal_v {
                 return;
             }
-            if m0 > goal_m {
-                self.pass();
-                if self.moves.len() * 10 > m0 * 9 {
-                    if self.merge_level < 31 {
-                        self.merge_level += 1;
-                    }
-                    self.pass();
-                    if self.moves.len() * 10 > m0 * 9 && self.drop_level < 31 {
-                        self.drop_level += 1;
-                        self.pass();
-                    }
-                }
-            }
-            let v1 = self.verts.len();
-            if v1 > goal_v {
-                self.pass();
-                if self.verts.len() * 10 > v1 * 9 && self.vertex_level < 31 {
+            // Enough progress: a tenth off whatever is over its goal.
+            let reduced = |s: &Scene| {
+                (m0 <= goal_m || s.moves.len() * 10 <= m0 * 9)
+                    && (v0 <= goal_v || s.verts.len() * 10 <= v0 * 9)
+            };
+            self.pass();
+            if !reduced(self) {
+                if v0 > goal_v && self.vertex_level < 24 {
                     self.vertex_level += 1;
+                }
+                // Points at the ends of moves go only when moves merge.
+                if (m0 > goal_m || self.vertex_level >= 6) && self.merge_level < 31 {
+                    self.merge_level += 1;
+                }
+                self.pass();
+                if !reduced(self) && self.drop_level < 31 {
+                    self.drop_level += 1;
                     self.pass();
                 }
             }
             self.detail.passes += 1;
         }
+        // Nothing more could go (only moves that must stay are left): the
+        // budget grows rather than coarsening again at every move.
+        self.max_moves = self.max_moves.max(self.moves.len() * 2);
+        self.max_vertices = self.max_vertices.max(self.verts.len() * 2);
     }
 
     /// Brings the moves added since the last coarsening to the level of the
@@ -526,13 +536,16 @@ impl Scene {
         }
         let old_verts = std::mem::take(&mut self.verts);
         let old_prot = std::mem::take(&mut self.vprot);
+        let old_seq = std::mem::take(&mut self.vseq);
         let mut remap: HashMap<u32, u32> = HashMap::new();
         let mut verts: Vec<[f32; 3]> = Vec::with_capacity(old_verts.len());
         let mut prot: Vec<u8> = Vec::with_capacity(old_verts.len());
+        let mut seqs: Vec<u32> = Vec::with_capacity(old_verts.len());
         let mut put = |old: u32, verts: &mut Vec<[f32; 3]>, prot: &mut Vec<u8>| {
             let n = verts.len() as u32;
             verts.push(old_verts[old as usize]);
             prot.push(old_prot[old as usize]);
+            seqs.push(old_seq[old as usize]);
             if old_prot[old as usize] > 0 {
                 remap.insert(old, n);
             }
@@ -543,9 +556,7 @@ impl Scene {
         let mut moves: Vec<Mv> = Vec::with_capacity(groups.len());
         for (mut a, b) in groups {
             let end = b.as_ref().map_or(a.end, |b| b.end);
-            let thin = b.as_ref().map_or(a.thin, |b| a.thin.max(b.thin));
-            let halvings = self.vertex_level.saturating_sub(thin).min(16);
-            let step = 1u32 << halvings;
+            let step = 1u32 << self.vertex_level.min(31);
             let start = match last {
                 Some((o, n)) if o == a.start => n,
                 _ => put(a.start, &mut verts, &mut prot),
@@ -553,8 +564,9 @@ impl Scene {
             // The points inside: a's, the shared one, b's.
             let inner = a.start + 1..end;
             let keep_all = a.viol != 0 || b.as_ref().is_some_and(|b| b.viol != 0);
-            for (j, v) in inner.enumerate() {
-                if keep_all || (j as u32 + 1).is_multiple_of(step) || old_prot[v as usize] > 0 {
+            for v in inner {
+                if keep_all || old_seq[v as usize].is_multiple_of(step) || old_prot[v as usize] > 0
+                {
                     put(v, &mut verts, &mut prot);
                 } else {
                     self.detail.left_out_points += 1;
@@ -570,7 +582,6 @@ impl Scene {
             }
             a.start = start;
             a.end = new_end;
-            a.thin = self.vertex_level.max(thin);
             moves.push(a);
         }
         for (_, i) in self.ext.iter_mut().flatten() {
@@ -581,6 +592,7 @@ impl Scene {
         self.moves = moves;
         self.verts = verts;
         self.vprot = prot;
+        self.vseq = seqs;
     }
 
     /// The scene as the page's data.

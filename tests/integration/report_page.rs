@@ -417,3 +417,66 @@ impl Case<'_> {
         assert_eq!(warn[1], json!([warn_line]), "{warn}");
     }
 }
+
+/// `plot --open` hands the written page, by its absolute path, to the
+/// desktop's opener (here a stand-in `xdg-open` first on PATH).
+#[cfg(all(unix, not(target_os = "macos")))]
+#[test]
+fn plot_open_starts_the_desktop_opener() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = crate::tmp();
+    crate::put(dir.path(), "p.ngc", "G21 G90 F100\nG1 X10 Y5\nM2\n");
+    let bin = dir.path().join("bin");
+    let seen = dir.path().join("opened.txt");
+    crate::put(
+        dir.path(),
+        "bin/xdg-open",
+        &format!("#!/bin/sh\nprintf '%s' \"$1\" > '{}'\n", seen.display()),
+    );
+    std::fs::set_permissions(bin.join("xdg-open"), std::fs::Permissions::from_mode(0o755))
+        .expect("chmod");
+    let path = format!(
+        "{}:{}",
+        bin.display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    let plot = |open: bool, out: &str| {
+        let mut args = vec!["plot", "--zero-start", "-o", out, "p.ngc"];
+        if open {
+            args.insert(1, "--open");
+        }
+        std::process::Command::new(crate::bin())
+            .current_dir(dir.path())
+            .env("PATH", &path)
+            .env_remove("WSL_DISTRO_NAME")
+            .args(args)
+            .output()
+            .expect("run ngcflat")
+    };
+    let out = plot(true, "p.html");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let t = std::time::Instant::now();
+    while !seen.exists() && t.elapsed() < std::time::Duration::from_secs(10) {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let got = std::fs::read_to_string(&seen).expect("the opener was started");
+    let want = std::fs::canonicalize(dir.path().join("p.html")).expect("page written");
+    assert_eq!(
+        std::fs::canonicalize(&got).expect("opened path exists"),
+        want
+    );
+    // Without --open nothing is started.
+    std::fs::remove_file(&seen).expect("rm");
+    let out = plot(false, "q.html");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    assert!(!seen.exists());
+}

@@ -118,6 +118,8 @@
       if (f > feedHi) feedHi = f;
     }
   }
+  const toolUsed = S.tools.map(() => false);
+  for (let k = 0; k < N; k++) toolUsed[mTool[k]] = true;
   // Colour bucket of every move for the current colouring.
   const bucket = new Uint16Array(N);
   let bucketColours = [];
@@ -142,9 +144,10 @@
     legend();
   }
   function legend() {
-    let h = '<span class="sw" style="border-top:2px dashed #e0702a;height:0"></span>rapid';
+    let h = '<span class="sw" style="border-top:2px dashed #e0702a;height:0"></span>rapid' +
+      '<span class="sw" style="border-top:2px dotted #8e24aa;height:0"></span>probe';
     if (st.colour === 'tool') {
-      S.tools.forEach((t, i) => { h += '<span class="sw" style="background:' + toolColour(i) + '"></span>T' + t; });
+      S.tools.forEach((t, i) => { if (toolUsed[i]) h += '<span class="sw" style="background:' + toolColour(i) + '"></span>T' + t; });
     } else {
       const [lo, hi, unit] = st.colour === 'feed' ? [feedLo, feedHi, ' mm/min'] : [zLow, zHigh, ' mm'];
       h += '<span class="sw" style="background:linear-gradient(90deg,' + ramp(0) + ',' + ramp(0.5) + ',' + ramp(1) + ');width:6em"></span>' +
@@ -318,7 +321,8 @@
     ctx.lineJoin = 'round';
     feedPaths.forEach((p, i) => { ctx.strokeStyle = bucketColours[i]; ctx.stroke(p); });
     ctx.strokeStyle = '#8e24aa';
-    ctx.setLineDash([2, 2]);
+    ctx.lineWidth = 2;
+    ctx.setLineDash([2, 3]);
     ctx.stroke(probe);
     ctx.lineWidth = 1;
     ctx.strokeStyle = 'rgba(224,112,42,0.85)';
@@ -355,7 +359,7 @@
     canvas.width = Math.round(w * dpr);
     canvas.height = Math.round(h * dpr);
     W = w; H = h;
-    if (first) setView('iso'); else draw();
+    if (first) setView(bmax[1] - bmin[1] < 1e-9 && bmax[0] - bmin[0] > 0 ? 'front' : 'iso'); else draw();
   }
 
   // ---- picking
@@ -542,9 +546,7 @@
   {
     const box = $('tools');
     S.tools.forEach((t, i) => {
-      let used = false;
-      for (let k = 0; k < N && !used; k++) used = mTool[k] === i;
-      if (!used) return;
+      if (!toolUsed[i]) return;
       const l = document.createElement('label');
       l.innerHTML = '<input type="checkbox" checked data-tool="' + i + '"><span class="sw" style="background:' + toolColour(i) + '"></span>T' + esc(t);
       l.firstChild.addEventListener('change', (e) => { st.toolOn[i] = e.target.checked; draw(); });
