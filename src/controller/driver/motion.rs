@@ -280,8 +280,14 @@ impl Lowering {
             89 => K::G89,
             _ => return Err(self.refuse(format!("G{n}"), "the target has no such cycle")),
         };
+        // In G7 an X word is a diameter; the lowering reads radii.
+        let modes = &self.m.modes;
         let block = lower::CycleBlock {
-            axes: [b.value(b'X'), b.value(b'Y'), b.value(b'Z')],
+            axes: [
+                b.value(b'X').map(|x| modes.radius_word(0, x)),
+                b.value(b'Y'),
+                b.value(b'Z'),
+            ],
             r: b.value(b'R'),
             l: b.value(b'L').map(|l| l.round().max(0.0) as u32),
             p: b.value(b'P'),
