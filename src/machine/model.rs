@@ -492,7 +492,7 @@ impl Machine {
     }
 
     /// Target of axis words in work coordinates (mm), by the distance mode.
-    fn target(&self, b: &Block) -> MaybeAxes {
+    pub(crate) fn target(&self, b: &Block) -> MaybeAxes {
         let s = self.scale();
         let axes = b.axes();
         let mut t = self.pos;

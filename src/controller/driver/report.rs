@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use crate::block::{Block, DecodeError, MotionMode, NonModal, ToolLength};
 use crate::controller::lower;
-use crate::diag::{Diagnostic, Error, ErrorKind, Site, WarningKind};
+use crate::diag::{BlockError, Diagnostic, Error, ErrorKind, Site, WarningKind};
 use crate::eval::Origin;
 use crate::machine::Machine;
 use crate::program::SourceFile;
@@ -86,6 +86,18 @@ impl Lowering {
             || b.tool_length() == Some(ToolLength::Dynamic)
         {
             return None;
+        }
+        // G38.2/G38.4 to the point the tool is at: LinuxCNC refuses it
+        // itself, with its own error (a G38.3/G38.5 it runs).
+        if matches!(motion, MotionMode::Probe(2 | 4)) {
+            let to = before.target(b);
+            let axes = b.axes();
+            let here = (0..3).filter(|&a| axes[a].is_some()).all(
+                |a| matches!((before.pos[a], to[a]), (Some(f), Some(t)) if (f - t).abs() < 1e-7),
+            );
+            if here && (0..3).any(|a| axes[a].is_some()) {
+                return Some(ErrorKind::Block(BlockError::ProbeTooClose));
+            }
         }
         // Where the probe ends if it does not trip (the model forgets the
         // position after a probe unless the probe is taken as not tripping).

@@ -248,13 +248,16 @@ impl Lowering {
             self.target_coord = self.m.modes.coord;
         }
         if let Some(k) = self.probe_in_place(b, before) {
-            return Err(Problem {
-                span: b
-                    .g_codes()
+            // LinuxCNC's own refusal at the line, as the evaluator reports
+            // it; the target's at the probe code.
+            let span = if matches!(k, ErrorKind::Block(_)) {
+                Some(LINE_START)
+            } else {
+                b.g_codes()
                     .find(|(g, _)| matches!(g, GCode::Motion(MotionMode::Probe(_))))
-                    .map(|(_, w)| w.span),
-                kind: k,
-            });
+                    .map(|(_, w)| w.span)
+            };
+            return Err(Problem { span, kind: k });
         }
         if let Some(ws) = self.dynamic_tool_length(b, before).map_err(|k| Problem {
             span: g_span(b, 431, 431),
