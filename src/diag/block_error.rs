@@ -34,6 +34,14 @@ pub enum BlockError {
     PeckQMissing,
     /// P word missing with G76
     G76PMissing,
+    /// G76 with I 0
+    G76IZero,
+    /// G76 with J not above 0
+    G76JNotPositive,
+    /// G76 with K not above J
+    G76KNotAboveJ,
+    /// a G1/G2/G3 feed per revolution with spindle speed 0
+    ZeroSpindlePerRev,
     /// R, I, J and K words all missing for arc
     ArcWordsMissing,
     /// spindle not turning in G33
@@ -165,6 +173,10 @@ impl BlockError {
             CycleDwellMissing => "E0613",
             PeckQMissing => "E0614",
             G76PMissing => "E0615",
+            G76IZero => "E0665",
+            G76JNotPositive => "E0666",
+            G76KNotAboveJ => "E0667",
+            ZeroSpindlePerRev => "E0668",
             ArcWordsMissing => "E0616",
             SpindleStoppedG33 => "E0617",
             TwoAxisGCodes => "E0618",
@@ -238,6 +250,10 @@ impl fmt::Display for BlockError {
             CycleDwellMissing => "dwell time P word missing with G82/G86/G88/G89",
             PeckQMissing => "Q word missing with G73/G83",
             G76PMissing => "P word missing with G76",
+            G76IZero => "in G76, I must not be 0",
+            G76JNotPositive => "in G76, J must be greater than 0",
+            G76KNotAboveJ => "in G76, K must be greater than J",
+            ZeroSpindlePerRev => "cannot feed with zero spindle speed in feed per rev mode",
             ArcWordsMissing => "R, I, J and K words all missing for arc",
             SpindleStoppedG33 => "spindle not turning in G33",
             TwoAxisGCodes => "two G-codes that both use axis values",

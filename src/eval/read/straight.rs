@@ -569,7 +569,12 @@ pub(in crate::eval) fn fast_line(mach: &mut Machine, p: &Plain) -> bool {
         mach.modal.feed
     };
     let moves = g || p.mask & AXIS_MASK != 0;
-    let feed_ok = mach.modal.feed_mode != FeedMode::InverseTime && feed != 0.0;
+    // Per revolution a feed move also needs a spindle speed: the general
+    // path checks it.
+    let speed_ok = mach.modal.feed_mode != FeedMode::PerRev
+        || (p.mask & (1 << S) == 0 && mach.modal.speed != 0.0)
+        || (p.mask & (1 << S) != 0 && p.vals[S] != 0.0);
+    let feed_ok = mach.modal.feed_mode != FeedMode::InverseTime && feed != 0.0 && speed_ok;
     let accepted = match motion {
         MotionMode::Rapid => p.mask & !FAST_MASK == 0,
         MotionMode::Linear => p.mask & !FAST_MASK == 0 && (!moves || feed_ok),

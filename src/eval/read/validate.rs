@@ -104,6 +104,7 @@ fn simple_block_ok(words: &[(u8, f64)], modal: &Modes) -> bool {
     let mut mask = 0u32;
     let mut g = None;
     let mut feed = None;
+    let mut speed = None;
     for &(l, v) in words {
         if !l.is_ascii_lowercase() {
             return false;
@@ -117,6 +118,7 @@ fn simple_block_ok(words: &[(u8, f64)], modal: &Modes) -> bool {
             b'g' => g = Some(v),
             b'f' | b's' if v < 0.0 => return false,
             b'f' => feed = Some(v),
+            b's' => speed = Some(v),
             _ => {}
         }
     }
@@ -131,7 +133,9 @@ fn simple_block_ok(words: &[(u8, f64)], modal: &Modes) -> bool {
         M::Rapid => true,
         M::Linear => {
             !moves
-                || (modal.feed_mode != FeedMode::InverseTime && feed.unwrap_or(modal.feed) != 0.0)
+                || (modal.feed_mode != FeedMode::InverseTime
+                    && feed.unwrap_or(modal.feed) != 0.0
+                    && (modal.feed_mode != FeedMode::PerRev || speed.unwrap_or(modal.speed) != 0.0))
         }
         _ => false,
     }
@@ -648,6 +652,19 @@ fn check_motion_words(d: &Decoded<'_>) -> Check {
         if m == M::ThreadCycle && d.has_at(b'p').is_none() {
             return bad(BlockError::G76PMissing, None);
         }
+        if m == M::ThreadCycle {
+            // The reference's order; a missing word counts as 0.
+            let v = |c: u8| d.value(c).unwrap_or(0.0);
+            if v(b'i') == 0.0 {
+                return bad(BlockError::G76IZero, None);
+            }
+            if v(b'j') <= 0.0 {
+                return bad(BlockError::G76JNotPositive, None);
+            }
+            if v(b'k') <= v(b'j') {
+                return bad(BlockError::G76KNotAboveJ, None);
+            }
+        }
         if arc(m)
             && ![b'i', b'j', b'k', b'r']
                 .iter()
@@ -913,13 +930,13 @@ fn takes_p(d: &Decoded<'_>) -> bool {
                     | M::CubicSpline
                     | M::Nurbs
                     | M::ThreadCycle
-                    | M::Cycle(82 | 86 | 88 | 89)
+                    | M::Cycle(82 | 84 | 86 | 88 | 89)
             ) | GCode::NonModal(NonModal::Dwell | NonModal::SetData)
                 | GCode::Path(PathMode::Blend)
         )
     }) || matches!(
         d.motion,
-        M::ArcCw | M::ArcCcw | M::Nurbs | M::Cycle(82 | 86 | 88 | 89) | G70
+        M::ArcCw | M::ArcCcw | M::Nurbs | M::Cycle(82 | 84 | 86 | 88 | 89) | G70
     ) || d.m_on(|m| {
         matches!(
             m,
@@ -1060,6 +1077,23 @@ fn check_feed(d: &Decoded<'_>) -> Check {
             }
         } else if feed.unwrap_or(d.modal.feed) == 0.0 {
             return bad(BlockError::ZeroFeed, None);
+        }
+        // G1/G2/G3 per revolution need a spindle speed (the S value, not
+        // whether the spindle turns; the cycles do not check it).
+        let per_rev = d.has_g(GCode::FeedMode(FeedMode::PerRev))
+            || (d.modal.feed_mode == FeedMode::PerRev
+                && !d.g_on(|g| {
+                    matches!(
+                        g,
+                        GCode::FeedMode(FeedMode::PerMinute | FeedMode::InverseTime)
+                    )
+                }));
+        let speed = d.words.iter().rev().find(|w| w.0 == b's').map(|w| w.1);
+        if per_rev
+            && matches!(d.motion, M::Linear | M::ArcCw | M::ArcCcw)
+            && speed.unwrap_or(d.modal.speed) == 0.0
+        {
+            return bad(BlockError::ZeroSpindlePerRev, None);
         }
         if arc(d.motion) && d.axis_word.is_some() {
             let arc = ["i", "j", "k", "r"]
