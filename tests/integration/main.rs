@@ -5,6 +5,8 @@ mod check;
 mod cli;
 mod comp;
 mod config;
+mod corpus;
+mod cycles;
 mod fixtures;
 mod fuzz;
 mod generated;

@@ -316,9 +316,13 @@ fn dist(a: P3, b: P3) -> f64 {
 /// first (the points come in path order), all of them when that finds
 /// nothing within `tol`; the hint moves to the nearest segment.
 fn to_polyline(p: P3, line: &[P3], hint: &mut usize, tol: f64) -> f64 {
-    let near = near_polyline(p, line, hint, 1000);
-    if near <= tol {
-        return near;
+    // Windows growing around the hint: the next point is nearly always
+    // within a few segments of the last one.
+    for window in [4, 64, 1024] {
+        let near = near_polyline(p, line, hint, window);
+        if near <= tol {
+            return near;
+        }
     }
     near_polyline(p, line, hint, usize::MAX)
 }
@@ -387,16 +391,22 @@ fn compare(a: &[Item], b: &[Item], tol: f64) -> Result<(), String> {
                     return Err(format!("item {i}: {ka} F{fa} against {kb} F{fb}"));
                 }
                 let ends = dist(pa[0], pb[0]).max(dist(pa[pa.len() - 1], pb[pb.len() - 1]));
-                let mut worst = ends;
-                let mut hint = 0;
-                for p in densify(pa, 0.25) {
-                    worst = worst.max(to_polyline(p, pb, &mut hint, tol));
-                }
-                let mut hint = 0;
-                for p in densify(pb, 0.25) {
-                    worst = worst.max(to_polyline(p, pa, &mut hint, tol));
-                }
-                if worst > tol {
+                // The first point off the other path is enough: a search
+                // of the whole path for every point of a long differing
+                // run would take quadratic time.
+                let off = |from: &[P3], to: &[P3]| {
+                    let mut hint = 0;
+                    densify(from, 0.5)
+                        .into_iter()
+                        .map(|p| to_polyline(p, to, &mut hint, tol))
+                        .find(|d| *d > tol)
+                };
+                let worst = if ends > tol {
+                    Some(ends)
+                } else {
+                    off(pa, pb).or_else(|| off(pb, pa))
+                };
+                if let Some(worst) = worst {
                     return Err(format!(
                         "item {i}: {ka} paths differ by {worst:.5} mm (from {:?} to {:?} against {:?} to {:?})",
                         pa[0],
@@ -466,6 +476,12 @@ fn motion_check(path: &Path) -> Result<(), String> {
     let b = rs274_with(stdout.as_bytes(), tbl.as_deref(), var.as_deref())
         .map_err(|e| format!("rs274 rejects the lowered output: {e}\n{stdout}"))?;
     compare(&Replay::run(&a), &Replay::run(&b), 0.002)
+}
+
+/// Whether two canon streams of rs274 (its stdout lines, COMMENT lines
+/// kept) move the machine the same within `tol` mm; Err says where not.
+pub fn same_canon_motion(a: &[String], b: &[String], tol: f64) -> Result<(), String> {
+    compare(&Replay::run(a), &Replay::run(b), tol)
 }
 
 /// Whether rs274 moves the machine the same for `original` and `lowered`
