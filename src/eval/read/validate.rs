@@ -643,10 +643,13 @@ fn check_motion_words(d: &Decoded<'_>) -> Check {
         if needs_axes && d.axis_word.is_none() {
             return bad(BlockError::AxesMissing, None);
         }
-        if matches!(m, M::Cycle(82 | 86 | 88 | 89)) && !d.given(b'p') {
+        // P and Q are sticky while the same cycle stays in effect, its
+        // code written again or not.
+        let again = d.modal.motion == m;
+        if matches!(m, M::Cycle(82 | 86 | 88 | 89)) && !d.given(b'p') && !again {
             return bad(BlockError::CycleDwellMissing, None);
         }
-        if matches!(m, M::Cycle(73 | 83)) && !d.given(b'q') {
+        if matches!(m, M::Cycle(73 | 83)) && !d.given(b'q') && !again {
             return bad(BlockError::PeckQMissing, None);
         }
         if m == M::ThreadCycle && d.has_at(b'p').is_none() {
