@@ -5,7 +5,7 @@
 
 use std::collections::HashMap;
 
-use ngcflat::controller::{PROFILES, TargetOptions, ToolChange};
+use ngcflat::controller::{TargetOptions, ToolChange, profiles};
 use ngcflat::diag::{MessageFormat, render};
 use ngcflat::eval::Settings;
 use ngcflat::parse::LineParser;
@@ -72,7 +72,7 @@ pub fn flatten(data: &[u8]) {
         ..Settings::default()
     };
     // Low two bits: no target, or one of the others than linuxcnc.
-    let target = PROFILES
+    let target = profiles()
         .get((more & 3) as usize)
         .filter(|_| more & 3 != 0)
         .map(|p| {
@@ -152,7 +152,7 @@ pub fn straight(data: &[u8]) {
     assert_eq!(show(&fast), show(&slow), "program:\n{text}");
     if flags & 0x80 != 0 {
         let grbl = |s: &Settings| {
-            let consumer = ngcflat::lowering(s, Some(TargetOptions::new(PROFILES[1])));
+            let consumer = ngcflat::lowering(s, Some(TargetOptions::new(&profiles()[1])));
             let (diags, r) =
                 ngcflat::flatten_memory(text.as_bytes().to_vec(), HashMap::new(), s, consumer);
             let shown: Vec<String> = diags

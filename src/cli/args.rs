@@ -48,8 +48,9 @@ pub(crate) enum Command {
     /// Draw the toolpath as SVG (or a self-contained HTML page with the
     /// statistics, when the output ends in .html).
     Plot(PlotArgs),
-    /// List the target controllers with their limits.
-    Targets,
+    /// List the target controllers with their limits, or print one's
+    /// profile (--show NAME) as a file to edit and pass as --target FILE.
+    Targets(TargetsArgs),
     /// Print a shell completion script to stdout, e.g.
     /// `ngcflat completions bash > ~/.local/share/bash-completion/completions/ngcflat`.
     Completions {
@@ -59,6 +60,15 @@ pub(crate) enum Command {
     /// Print the manual page (roff) to stdout, e.g.
     /// `ngcflat man > ~/.local/share/man/man1/ngcflat.1`.
     Man,
+}
+
+/// `ngcflat targets`.
+#[derive(Args, Debug)]
+pub(crate) struct TargetsArgs {
+    /// Print the profile of target NAME (a TOML file: edit it and pass it
+    /// back with --target ./FILE.toml).
+    #[arg(long, value_name = "NAME")]
+    pub(super) show: Option<String>,
 }
 
 #[derive(Args, Debug)]
@@ -288,8 +298,9 @@ pub(crate) struct CommonArgs {
     #[command(flatten)]
     pub(super) machine: MachineArgs,
     /// Write for this controller: linuxcnc (the default: the flattened
-    /// program as it is), grbl, ...; `list` prints them. Also
-    /// $NGCFLAT_TARGET.
+    /// program as it is), grbl, ...; `list` prints them; a path (with a `/`
+    /// or ending in .toml) reads a profile file (`ngcflat targets --show
+    /// NAME` prints one to start from). Also $NGCFLAT_TARGET.
     #[arg(long, value_name = "NAME")]
     pub(super) target: Option<String>,
     /// What M6 becomes for a target: pause (M0; the default where the

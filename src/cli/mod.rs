@@ -24,6 +24,8 @@ use crate::diag::{Diagnostic, ErrorKind, MessageFormat, report, report_summary, 
 enum Action {
     /// `ngcflat targets`, or `--target list`.
     Targets,
+    /// `ngcflat targets --show NAME`.
+    ShowTarget(String),
     /// `ngcflat completions SHELL`.
     Completions(clap_complete::Shell),
     /// `ngcflat man`.
@@ -80,7 +82,7 @@ fn resolve(cli: Cli) -> anyhow::Result<Action> {
         check,
     };
     Ok(match cli.command {
-        Some(Command::Targets) => Action::Targets,
+        Some(Command::Targets(a)) => a.show.clone().map_or(Action::Targets, Action::ShowTarget),
         Some(Command::Completions { shell }) => Action::Completions(shell),
         Some(Command::Man) => Action::Man,
         Some(Command::Check(args)) => match args.common.to_config(env_path) {
@@ -106,6 +108,7 @@ fn resolve(cli: Cli) -> anyhow::Result<Action> {
 fn dispatch(action: Action) -> ExitCode {
     match action {
         Action::Targets => targets::run(),
+        Action::ShowTarget(name) => targets::show(&name),
         Action::Completions(shell) => completions::run(shell),
         Action::Man => man::run(),
         Action::Flatten(job, cfg) => flatten::run(job, *cfg),

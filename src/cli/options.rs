@@ -36,8 +36,12 @@ impl CommonArgs {
         let Some(name) = self.target_name() else {
             return Ok(None);
         };
-        let profile = crate::controller::find(&name)
-            .ok_or(ErrorKind::Target(TargetError::UnknownTarget { name }))?;
+        let profile = if crate::controller::is_profile_file(&name) {
+            crate::controller::load(&name)?
+        } else {
+            crate::controller::find(&name)
+                .ok_or(ErrorKind::Target(TargetError::UnknownTarget { name }))?
+        };
         if !(self.tolerance > 0.0 && self.tolerance.is_finite()) {
             return Err(ErrorKind::Setup(SetupError::BadDefine {
                 text: format!("--tolerance {}", self.tolerance),

@@ -167,7 +167,7 @@ impl Lowering {
     }
 
     fn name(&self) -> &'static str {
-        self.p.name
+        self.p.name.as_str()
     }
 
     /// Runs the line `text` through the reused block that `decode` fills

@@ -312,7 +312,7 @@ impl LineWriter {
         };
         (len > limit).then(|| {
             ErrorKind::Target(TargetError::TargetLineTooLong {
-                target: self.p.name,
+                target: self.p.name.as_str(),
                 len: len - 1,
                 limit: limit - 1,
             })
@@ -364,7 +364,7 @@ mod tests {
 
     #[test]
     fn codes_are_written_whole_or_with_their_tenth() {
-        let p = &crate::controller::profiles::grbl::PROFILE;
+        let p = &crate::controller::find("grbl").unwrap();
         for (v, want) in [
             (1.0, "G1"),
             (38.2, "G38.2"),
@@ -384,7 +384,7 @@ mod tests {
     /// driver does, with `axes`; what the target adds up (in its units)
     /// against the exact sums.
     fn summed(axes: AxisWords, units: Units, inc: [f64; 2], steps: u32) -> ([f64; 2], [f64; 2]) {
-        let mut w = LineWriter::new(&crate::controller::profiles::grbl::PROFILE);
+        let mut w = LineWriter::new(crate::controller::find("grbl").unwrap());
         let mut sum = [0.0; 2];
         for _ in 0..steps {
             w.begin_words(units, axes);
@@ -422,7 +422,7 @@ mod tests {
         }
         // A change of units drops the carry (under a unit of the last
         // decimal); the next increment starts afresh.
-        let mut w = LineWriter::new(&crate::controller::profiles::grbl::PROFILE);
+        let mut w = LineWriter::new(crate::controller::find("grbl").unwrap());
         w.begin_words(Units::Inch, AxisWords::Increments);
         w.word(b'X', 0.000004, WordKind::Value);
         assert_eq!(w.buf, b"X0");
@@ -454,7 +454,7 @@ mod tests {
                 && written_as_is(s, code, decimals, max_digits)
             {
                 let v: f64 = t.parse().unwrap();
-                let mut w = LineWriter::new(&crate::controller::profiles::grbl::PROFILE);
+                let mut w = LineWriter::new(crate::controller::find("grbl").unwrap());
                 w.push_word(b'X', v, code);
                 let want = if code {
                     String::from_utf8_lossy(&w.buf[1..]).into_owned()

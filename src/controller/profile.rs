@@ -1,9 +1,16 @@
 //! A target controller's profile: plain data read by the lowering driver.
-//! Adding a controller is adding one file under `profiles/` and listing it
-//! in [`super::PROFILES`].
+//! A profile is a TOML file (`file.rs` reads and checks one); the built-in
+//! ones are such files under `profiles/`, embedded in the program. Adding a
+//! controller is adding one file there and listing it in
+//! [`super::BUILT_IN`].
+
+mod file;
+
+pub use file::ProfileError;
 
 /// How the firmware counts a line against its buffer.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum LineCount {
     /// Every byte of the line (the terminator included).
     AllBytes,
@@ -13,7 +20,8 @@ pub enum LineCount {
 }
 
 /// What happens to comments.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Comments {
     /// Written as they are.
     Keep,
@@ -22,7 +30,8 @@ pub enum Comments {
 }
 
 /// What M6 becomes by default.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum ToolChange {
     /// M0 and a message naming the tool.
     Pause,
@@ -33,24 +42,24 @@ pub enum ToolChange {
 }
 
 /// A controller's G-code dialect, as its parser source has it.
-#[derive(Debug)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Profile {
-    pub name: &'static str,
-    pub summary: &'static str,
+    pub name: String,
+    pub summary: String,
     /// The firmware source this profile was built from (file and commit).
-    pub source: &'static str,
+    pub source: String,
     /// Everything is written as flattened (no lowering, no checks).
     pub passthrough: bool,
     /// G codes accepted, ×10 (G38.2 → 382).
-    pub g_codes: &'static [u16],
+    pub g_codes: Vec<u16>,
     /// M codes accepted.
-    pub m_codes: &'static [u16],
+    pub m_codes: Vec<u16>,
     /// Letters of value words accepted (axis letters included).
-    pub words: &'static [u8],
+    pub words: Vec<u8>,
     /// Axis letters the machine has.
-    pub axes: &'static [u8],
+    pub axes: Vec<u8>,
     /// G10 L numbers accepted.
-    pub g10_l: &'static [u8],
+    pub g10_l: Vec<u8>,
     /// Coordinate systems accepted (1 = G54 … 9 = G59.3).
     pub coord_systems: u8,
     /// Line buffer in bytes (terminator included) and how it is counted.
@@ -62,7 +71,7 @@ pub struct Profile {
     pub decimals_inch: u8,
     /// Bytes the firmware acts on wherever they appear (real-time
     /// commands), besides every byte above 0x7F when `high_bytes` is set.
-    pub realtime: &'static [u8],
+    pub realtime: Vec<u8>,
     pub high_bytes: bool,
     pub comments: Comments,
     /// `(MSG, …)` is shown to the operator.

@@ -17,6 +17,7 @@ mod lowering;
 mod motion;
 mod named2007;
 mod oracle;
+mod profiles;
 mod props;
 mod report_page;
 mod rng;

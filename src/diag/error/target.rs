@@ -28,6 +28,18 @@ super::phase! {
         },
         /// `--target nosuch`
         "E1003" UnknownTarget { name: String },
+        /// `--target ./board.toml` not TOML (`name = grbl`).
+        "E1004" ProfileSyntax { path: String, error: crate::controller::ProfileError },
+        /// A profile file with a key the format does not have.
+        "E1005" ProfileUnknownKey { path: String, error: crate::controller::ProfileError },
+        /// A profile file without a key the format requires.
+        "E1006" ProfileMissingKey { path: String, error: crate::controller::ProfileError },
+        /// A profile file key of the wrong type or range (`g_codes = ["G38.7"]`).
+        "E1007" ProfileBadValue { path: String, error: crate::controller::ProfileError },
+        /// Profile keys that contradict each other (`line_limit = 0`).
+        "E1008" ProfileContradiction { path: String, error: crate::controller::ProfileError },
+        /// `--target ./nosuch.toml`: the file cannot be read.
+        "E1009" ProfileUnreadable { path: String, error: crate::controller::ProfileError },
         /// `G0 Z1` then `G38.2 Z1` with `--target grblhal`: GRBL-class
         /// firmwares refuse a probe move to the point the tool is at
         /// (LinuxCNC accepts it and does nothing).
@@ -55,6 +67,14 @@ impl fmt::Display for TargetError {
                 f,
                 "this line is {len} bytes as {target} counts it, over its line buffer of {limit}; lines are never split"
             ),
+            ProfileSyntax { path, error }
+            | ProfileUnknownKey { path, error }
+            | ProfileMissingKey { path, error }
+            | ProfileBadValue { path, error }
+            | ProfileContradiction { path, error }
+            | ProfileUnreadable { path, error } => {
+                write!(f, "target profile {path}: {error}")
+            }
             UnknownTarget { name } => {
                 write!(f, "unknown target '{name}' (`ngcflat targets` lists them)")
             }
@@ -62,6 +82,21 @@ impl fmt::Display for TargetError {
                 f,
                 "probe move to the point the tool is already at: {target} refuses it (its error 33, invalid target)"
             ),
+        }
+    }
+}
+
+impl TargetError {
+    /// The error of profile file `path`, by its kind.
+    pub fn profile(path: String, error: crate::controller::ProfileError) -> TargetError {
+        use crate::controller::ProfileError as P;
+        match error {
+            P::Unreadable { .. } => TargetError::ProfileUnreadable { path, error },
+            P::Syntax { .. } => TargetError::ProfileSyntax { path, error },
+            P::UnknownKey { .. } => TargetError::ProfileUnknownKey { path, error },
+            P::MissingKey { .. } => TargetError::ProfileMissingKey { path, error },
+            P::BadValue { .. } => TargetError::ProfileBadValue { path, error },
+            P::Contradiction { .. } => TargetError::ProfileContradiction { path, error },
         }
     }
 }

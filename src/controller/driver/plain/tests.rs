@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use proptest::prelude::*;
 
-use crate::controller::{PROFILES, TargetOptions};
+use crate::controller::{TargetOptions, profiles};
 use crate::emit::{Destination, Output, Sink};
 use crate::eval::{LineConsumer, Origin, Settings};
 use crate::program::SourceFile;
@@ -56,7 +56,7 @@ fn run_with(
         zero_start,
         ..Settings::default()
     };
-    let mut opts = TargetOptions::new(PROFILES[p]);
+    let mut opts = TargetOptions::new(&profiles()[p]);
     opts.check = true;
     let mut l = Lowering::new(&settings, opts);
     l.plain = plain;
@@ -309,7 +309,7 @@ proptest! {
 #[test]
 fn common_lines_are_plain() {
     let settings = Settings::default();
-    let mut l = Lowering::new(&settings, TargetOptions::new(PROFILES[1]));
+    let mut l = Lowering::new(&settings, TargetOptions::new(&profiles()[1]));
     let mut b = crate::block::Block::default();
     for (text, want) in [
         ("G1 X1.5000 Y-2 F300", true),
