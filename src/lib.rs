@@ -27,6 +27,7 @@ mod modes;
 mod number;
 pub mod parse;
 pub mod program;
+mod runtime;
 mod source;
 mod view;
 

@@ -8,7 +8,7 @@ use super::args::ViewArg;
 use crate::config::Config;
 use crate::diag::{Diagnostic, ErrorKind, report};
 use crate::view::plot::View;
-use crate::view::run::{Observer, program_name, run_for_view, write_atomic};
+use crate::view::run::{Observer, program_name, run_for_view, target_name, write_atomic};
 
 /// What `plot` was asked for.
 pub(super) struct Job {
@@ -57,9 +57,9 @@ pub(super) fn run(job: &Job, cfg: &Config) -> ExitCode {
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("html") || e.eq_ignore_ascii_case("htm"));
     let observer = if html {
-        Observer::scene(&cfg.machine)
+        Observer::scene(&cfg.machine, target_name(cfg))
     } else {
-        Observer::stats(&cfg.machine, Some(job.view))
+        Observer::stats(&cfg.machine, target_name(cfg), Some(job.view))
     };
     let (obs, warnings) = match run_for_view(file, cfg, observer) {
         Ok(o) => o,

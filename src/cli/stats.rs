@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use crate::config::Config;
-use crate::view::run::{Observer, program_name, run_for_view};
+use crate::view::run::{Observer, program_name, run_for_view, target_name};
 
 /// What `stats` was asked for.
 pub(super) struct Job {
@@ -26,7 +26,11 @@ impl From<super::args::StatsArgs> for Job {
 
 pub(super) fn run(job: &Job, cfg: &Config) -> ExitCode {
     let file = job.file.as_deref();
-    let obs = match run_for_view(file, cfg, Observer::stats(&cfg.machine, None)) {
+    let obs = match run_for_view(
+        file,
+        cfg,
+        Observer::stats(&cfg.machine, target_name(cfg), None),
+    ) {
         Ok((o, _)) => o,
         Err(code) => return code,
     };

@@ -114,6 +114,15 @@ impl Output {
             .map(|s| Output::new(s, None, usize::MAX))
     }
 
+    /// Takes the lines written so far to a memory destination on this
+    /// thread (see [`Sink::drain_memory`]).
+    pub(crate) fn drain_memory(&mut self) -> Vec<u8> {
+        match &mut self.mode {
+            Mode::Direct(sink) => sink.drain_memory(),
+            _ => Vec::new(),
+        }
+    }
+
     /// Moves the sink to a second thread; if none can be started, output
     /// stays on this thread. Tried once.
     fn start_thread(&mut self) {

@@ -346,6 +346,17 @@ impl Sink {
         Ok(())
     }
 
+    /// Takes the lines held so far out of a [`Destination::Memory`] sink
+    /// (nothing for any other destination), for a reader that consumes the
+    /// output as it is made.
+    pub(crate) fn drain_memory(&mut self) -> Vec<u8> {
+        if matches!(self.dest, Destination::Memory(_)) {
+            std::mem::take(&mut self.mem)
+        } else {
+            Vec::new()
+        }
+    }
+
     /// Appends bytes (whole lines).
     #[inline]
     pub fn write(&mut self, bytes: &[u8]) -> io::Result<()> {

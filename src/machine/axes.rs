@@ -47,6 +47,8 @@ pub enum GrblEnvelope {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct MachineAxes {
     pub axes: [AxisData; 9],
+    /// The planner settings of a GRBL `$$` listing, when one was given.
+    pub(crate) grbl: Option<crate::runtime::GrblSettings>,
 }
 
 impl MachineAxes {
@@ -131,6 +133,7 @@ impl MachineAxes {
     /// `$120`–`$122` acceleration (mm/s²), `$130`–`$132` max travel (mm).
     /// Other settings, comments and `ok` lines are ignored.
     pub fn add_grbl(&mut self, text: &str, envelope: GrblEnvelope) -> Result<(), ErrorKind> {
+        self.grbl = Some(crate::runtime::GrblSettings::from_listing(text)?);
         for line in text.lines() {
             let t = line.trim();
             let Some(rest) = t.strip_prefix('$') else {

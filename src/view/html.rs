@@ -258,7 +258,7 @@ fn tables(s: &mut String, report: &Report) {
     s.push_str("</table>\n");
     s.push_str(&format!(
         "<p class=\"model\">How the estimate is made: {}{}</p>\n",
-        xml_escape(t.model),
+        xml_escape(&t.model),
         if t.machine_limits_used {
             ""
         } else {

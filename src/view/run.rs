@@ -32,10 +32,14 @@ impl Observer {
         }
     }
 
-    /// For `stats` (and `plot` with `view`).
-    pub(crate) fn stats(axes: &MachineAxes, view: Option<View>) -> Observer {
+    /// For `stats` (and `plot` with `view`), timing the program with the
+    /// planner of `target` (`None`: LinuxCNC).
+    pub(crate) fn stats(axes: &MachineAxes, target: Option<&str>, view: Option<View>) -> Observer {
         Observer {
-            stats: Some(Stats::new(axes.clone())),
+            stats: Some(Stats::new(
+                axes.clone(),
+                crate::runtime::TimeModel::for_target(target, axes),
+            )),
             plot: view.map(Plot::new),
             ..Observer::default()
         }
@@ -43,9 +47,12 @@ impl Observer {
 
     /// For the interactive page: statistics and the scene, with moves
     /// outside the travel limits marked.
-    pub(crate) fn scene(axes: &MachineAxes) -> Observer {
+    pub(crate) fn scene(axes: &MachineAxes, target: Option<&str>) -> Observer {
         Observer {
-            stats: Some(Stats::new(axes.clone())),
+            stats: Some(Stats::new(
+                axes.clone(),
+                crate::runtime::TimeModel::for_target(target, axes),
+            )),
             scene: Some(Scene::default()),
             scene_limits: LimitCheck::new(axes),
             ..Observer::default()
@@ -70,19 +77,14 @@ impl Observer {
         if let Some(l) = &self.limits {
             l.check(m)?;
         }
-        let before = self
-            .stats
-            .as_ref()
-            .map(|s| (s.total_time(), s.untimed_feeds + s.untimed_rapids));
+        let before = self.stats.as_ref().map(|s| (s.total_time(), s.untimed()));
         if let Some(s) = &mut self.stats {
             s.add(m);
         }
         if let Some(scene) = &mut self.scene {
             // The time of this event is what it added to the estimate.
             let (dur, timed) = match (before, &self.stats) {
-                (Some((t, u)), Some(s)) => {
-                    (s.total_time() - t, s.untimed_feeds + s.untimed_rapids == u)
-                }
+                (Some((t, u)), Some(s)) => (s.total_time() - t, s.untimed() == u),
                 _ => (0.0, false),
             };
             let violation = match self.scene_limits.as_ref().map(|l| l.check(m)) {
@@ -120,24 +122,37 @@ pub(crate) fn write_atomic(path: &std::path::Path, data: &[u8]) -> std::io::Resu
     })
 }
 
-/// Runs a program and feeds its motion to `observer` (nothing is written).
+/// Runs a program and feeds its motion to `observer` (nothing is written);
+/// with a target, the motion of the program as lowered for it.
 /// Returns the warnings.
 pub(crate) fn observe(
     source: crate::program::SourceFile,
     cfg: &crate::config::Config,
     observer: &mut Observer,
 ) -> Result<Vec<crate::diag::Diagnostic>, crate::diag::Error> {
-    let consumer = super::consumer::ViewConsumer::new(&cfg.settings, observer, false, None, false);
+    let view =
+        super::consumer::ViewConsumer::new(&cfg.settings, observer, false, None, false, None);
+    // With a target, what its controller receives: the lowered lines.
+    let consumer: Box<dyn crate::eval::LineConsumer + '_> =
+        match crate::flatten::lowering(&cfg.settings, cfg.target.clone()) {
+            Some(lower) => Box::new(super::consumer::Lowered::new(lower, view)),
+            None => Box::new(view),
+        };
     match crate::flatten::flatten_with(
         source,
         &cfg.settings,
         &cfg.search,
         crate::emit::Destination::Discard,
-        Some(Box::new(consumer)),
+        Some(consumer),
     ) {
         (w, None) => Ok(w),
         (_, Some(e)) => Err(e),
     }
+}
+
+/// The name of the target a program is written for (`None`: LinuxCNC).
+pub(crate) fn target_name(cfg: &crate::config::Config) -> Option<&'static str> {
+    cfg.target.as_ref().map(|t| t.profile.name)
 }
 
 pub(crate) fn program_name(file: Option<&std::path::Path>) -> String {
@@ -264,9 +279,20 @@ pub(crate) fn flatten_chained<'s>(
         },
         None => None,
     };
-    let consumer =
-        super::consumer::ViewConsumer::new(settings, &mut observer, true, map, extras.annotate)
-            .then(next);
+    // Each line's planned time, for the flattened program as it is
+    // (LinuxCNC's, or GRBL's when a `$$` listing says the machine runs it).
+    let timing = next
+        .is_none()
+        .then(|| crate::runtime::TimeModel::for_target(None, &cfg.machine));
+    let consumer = super::consumer::ViewConsumer::new(
+        settings,
+        &mut observer,
+        true,
+        map,
+        extras.annotate,
+        timing,
+    )
+    .then(next);
     let (w, mut err) =
         crate::flatten::flatten_with(source, settings, search, dest, Some(Box::new(consumer)));
     if let Some((target, tmp)) = &map_tmp {

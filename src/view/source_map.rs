@@ -65,6 +65,13 @@ struct Entry<'a> {
     at: &'a Located,
     /// Call sites, innermost first.
     calls: &'a [Located],
+    /// When the line starts on the machine (s from the program's start),
+    /// as the run-time model plans it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    t: Option<f64>,
+    /// How long the line takes (s).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    dt: Option<f64>,
 }
 
 /// Writes the JSON-lines source map.
@@ -84,8 +91,13 @@ impl<W: Write> SourceMap<W> {
     }
 
     /// Records the next output line, made at `at` with the call sites
-    /// `calls` (innermost first).
-    pub(crate) fn line(&mut self, at: &Place, calls: &[Place]) -> io::Result<()> {
+    /// `calls` (innermost first), and its planned time when known.
+    pub(crate) fn line(
+        &mut self,
+        at: &Place,
+        calls: &[Place],
+        time: Option<crate::runtime::LineTime>,
+    ) -> io::Result<()> {
         self.line += 1;
         let at = self.locator.locate(at);
         let calls: Vec<Located> = calls.iter().map(|c| self.locator.locate(c)).collect();
@@ -93,6 +105,8 @@ impl<W: Write> SourceMap<W> {
             output_line: self.line,
             at: &at,
             calls: &calls,
+            t: time.map(|t| round_ms(t.start)),
+            dt: time.map(|t| round_ms(t.seconds)),
         };
         serde_json::to_writer(&mut self.out, &e).map_err(io::Error::other)?;
         self.out.write_all(b"\n")
@@ -107,6 +121,17 @@ impl<W: Write> SourceMap<W> {
         self.out.flush()?;
         Ok(self.out)
     }
+}
+
+/// Seconds to the microsecond (the model is not finer than that).
+fn round_ms(s: f64) -> f64 {
+    (s * 1e6).round() / 1e6
+}
+
+/// The planned time of a line for `--annotate`: ` t=START dt=DURATION`
+/// (seconds).
+pub(crate) fn time_note(t: &crate::runtime::LineTime) -> String {
+    format!(" t={:.3} dt={:.3}", t.start, t.seconds)
 }
 
 /// The `--annotate` comment for a line: ` ;from file:line:col <
@@ -142,6 +167,7 @@ mod tests {
                 offset: 0,
             },
             &[],
+            None,
         )
         .unwrap();
         m.line(
@@ -153,6 +179,11 @@ mod tests {
                 file: f.clone(),
                 offset: 19,
             }],
+            Some(crate::runtime::LineTime {
+                line: 2,
+                start: 1.5,
+                seconds: 0.25,
+            }),
         )
         .unwrap();
         let text = String::from_utf8(m.finish().unwrap()).unwrap();
@@ -163,7 +194,7 @@ mod tests {
         );
         assert_eq!(
             lines[1],
-            r#"{"output_line":2,"file":"p.ngc","line":2,"column":3,"calls":[{"file":"p.ngc","line":3,"column":1}]}"#
+            r#"{"output_line":2,"file":"p.ngc","line":2,"column":3,"calls":[{"file":"p.ngc","line":3,"column":1}],"t":1.5,"dt":0.25}"#
         );
         let mut loc = Locator::default();
         let a = loc.locate(&Place {

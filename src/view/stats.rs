@@ -7,20 +7,9 @@ use std::fmt::Write as _;
 use serde::Serialize;
 
 use super::geom::{ArcGeom, arc_length, extreme_points, line_length};
-use crate::codes::FeedMode;
 use crate::machine::axes::{LETTERS, MachineAxes, is_rotary};
 use crate::machine::motion::{Axes, Motion, MoveKind};
-
-/// How the run time is estimated, printed with every estimate.
-pub(crate) const TIME_MODEL: &str = "each move is timed on its own as a trapezoid that starts and ends at rest: \
-it speeds up at the acceleration limit, runs at the programmed feed (rapids: the \
-maximum velocity), and slows down again; the feed and acceleration of a move are \
-capped so that no axis exceeds its own maximum velocity or acceleration, and an arc \
-at the slowest of its plane's axes and below sqrt(acceleration * radius). Without an \
-acceleration limit moves start at full speed; without a velocity limit rapids are not \
-timed. Controllers that blend moves (LinuxCNC G64, GRBL's planner) run programs of \
-many short moves faster than this estimate. Dwells count in full; pauses (M0, M1) and \
-tool changes count as no time.";
+use crate::runtime::{RunTime, TimeModel};
 
 /// The range of one axis.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -60,21 +49,15 @@ pub(crate) struct Stats {
     pub feed_length: f64,
     pub tool_changes: u64,
     pub tools: BTreeSet<i64>,
-    pub feed_time: f64,
-    pub rapid_time: f64,
-    pub dwell_time: f64,
-    /// Feed moves that could not be timed (no feed rate, or feed per
-    /// revolution with the spindle stopped).
-    pub untimed_feeds: u64,
-    /// Rapids that could not be timed (no maximum velocity for an axis).
-    pub untimed_rapids: u64,
-    spindle_speed: f64,
+    /// The run time as the target's planner runs the program.
+    pub run_time: RunTime,
     started: bool,
 }
 
 impl Stats {
-    pub(crate) fn new(axes: MachineAxes) -> Stats {
+    pub(crate) fn new(axes: MachineAxes, model: TimeModel) -> Stats {
         Stats {
+            run_time: RunTime::new(model),
             axes,
             work: [None; 9],
             machine: [None; 9],
@@ -87,53 +70,26 @@ impl Stats {
             feed_length: 0.0,
             tool_changes: 0,
             tools: BTreeSet::new(),
-            feed_time: 0.0,
-            rapid_time: 0.0,
-            dwell_time: 0.0,
-            untimed_feeds: 0,
-            untimed_rapids: 0,
-            spindle_speed: 0.0,
             started: false,
         }
     }
 
     /// Adds one motion event.
     pub(crate) fn add(&mut self, m: &Motion) {
+        self.run_time.motion(m);
         match m {
-            Motion::Line {
-                kind,
-                from,
-                to,
-                feed,
-            } => {
+            Motion::Line { kind, from, to, .. } => {
                 self.extent(m, from.offset.zip(to.offset).map(|(o, _)| o));
                 let len = finite(line_length(&from.work, &to.work));
-                match kind {
-                    MoveKind::Rapid => {
-                        self.rapid_moves += 1;
-                        self.rapid_length += len;
-                        match self.rapid_duration(&from.work, &to.work) {
-                            Some(t) => self.rapid_time += t,
-                            None => self.untimed_rapids += 1,
-                        }
+                if *kind == MoveKind::Rapid {
+                    self.rapid_moves += 1;
+                    self.rapid_length += len;
+                } else {
+                    if *kind == MoveKind::Probe {
+                        self.probes += 1;
                     }
-                    _ => {
-                        if *kind == MoveKind::Probe {
-                            self.probes += 1;
-                        }
-                        self.feed_moves += 1;
-                        self.feed_length += len;
-                        let d: Axes = std::array::from_fn(|i| to.work[i] - from.work[i]);
-                        let path = path_len(&d);
-                        let (vmax, amax) = self.line_caps(&d, path);
-                        match self.feed_speed(feed.rate, feed.mode, path) {
-                            Some(Speed::Rate(v)) => {
-                                self.feed_time += trapezoid(path, v.min(vmax), amax)
-                            }
-                            Some(Speed::Duration(t)) => self.feed_time += t,
-                            None => self.untimed_feeds += 1,
-                        }
-                    }
+                    self.feed_moves += 1;
+                    self.feed_length += len;
                 }
             }
             Motion::Arc {
@@ -143,38 +99,34 @@ impl Stats {
                 plane,
                 ccw,
                 turns,
-                feed,
+                ..
             } => {
                 self.extent(m, from.offset);
                 self.arcs += 1;
                 self.feed_moves += 1;
                 let g = ArcGeom::new(&from.work, &to.work, *center, *plane, *ccw, *turns);
-                let len = finite(arc_length(&g, &from.work, &to.work));
-                self.feed_length += len;
-                let cap = |f: fn(&crate::machine::axes::AxisData) -> Option<f64>| {
-                    [g.a, g.b]
-                        .iter()
-                        .filter_map(|&i| f(&self.axes.axes[i]))
-                        .fold(f64::INFINITY, f64::min)
-                };
-                let vmax_plane = cap(|a| a.max_vel);
-                let amax = cap(|a| a.max_acc);
-                let r = 0.5 * (g.r0 + g.r1);
-                let vmax = vmax_plane.min((amax * r).sqrt());
-                match self.feed_speed(feed.rate, feed.mode, len) {
-                    Some(Speed::Rate(v)) => self.feed_time += trapezoid(len, v.min(vmax), amax),
-                    Some(Speed::Duration(t)) => self.feed_time += t,
-                    None => self.untimed_feeds += 1,
-                }
+                self.feed_length += finite(arc_length(&g, &from.work, &to.work));
             }
-            Motion::Dwell { seconds } => self.dwell_time += seconds.max(0.0),
-            Motion::Spindle { speed, .. } => self.spindle_speed = *speed,
             Motion::ToolChange { tool } => {
                 self.tool_changes += 1;
                 self.tools.insert(*tool);
             }
             _ => {}
         }
+    }
+
+    /// The run time planned so far (s): the blocks that have left the
+    /// planner's look-ahead window, dwells and waits. It trails the events
+    /// by up to the window; each line's own time, once final, comes from
+    /// [`RunTime::line`] and [`RunTime::next_line`].
+    pub(crate) fn total_time(&self) -> f64 {
+        self.run_time.totals().total
+    }
+
+    /// Moves the run-time model could not time so far.
+    pub(crate) fn untimed(&self) -> u64 {
+        let t = self.run_time.totals();
+        t.untimed_feeds + t.untimed_rapids
     }
 
     fn extent(&mut self, m: &Motion, offset: Option<Axes>) {
@@ -204,63 +156,6 @@ impl Stats {
         }
     }
 
-    /// Velocity and acceleration caps for a straight move of direction `d`
-    /// and path length `path` (from each axis's limits).
-    fn line_caps(&self, d: &Axes, path: f64) -> (f64, f64) {
-        let mut v = f64::INFINITY;
-        let mut a = f64::INFINITY;
-        if path <= 0.0 {
-            return (v, a);
-        }
-        for (i, di) in d.iter().enumerate() {
-            if *di == 0.0 {
-                continue;
-            }
-            let k = path / di.abs();
-            if let Some(m) = self.axes.axes[i].max_vel {
-                v = v.min(m * k);
-            }
-            if let Some(m) = self.axes.axes[i].max_acc {
-                a = a.min(m * k);
-            }
-        }
-        (v, a)
-    }
-
-    fn rapid_duration(&self, from: &Axes, to: &Axes) -> Option<f64> {
-        let d: Axes = std::array::from_fn(|i| to[i] - from[i]);
-        let path = path_len(&d);
-        if path <= 0.0 {
-            return Some(0.0);
-        }
-        if d.iter()
-            .enumerate()
-            .any(|(i, di)| *di != 0.0 && self.axes.axes[i].max_vel.is_none())
-        {
-            return None;
-        }
-        let (v, a) = self.line_caps(&d, path);
-        Some(trapezoid(path, v, a))
-    }
-
-    fn feed_speed(&self, rate: f64, mode: FeedMode, path: f64) -> Option<Speed> {
-        if path <= 0.0 {
-            return Some(Speed::Duration(0.0));
-        }
-        match mode {
-            FeedMode::PerMinute if rate > 0.0 => Some(Speed::Rate(rate / 60.0)),
-            FeedMode::InverseTime if rate > 0.0 => Some(Speed::Duration(60.0 / rate)),
-            FeedMode::PerRev if rate > 0.0 && self.spindle_speed > 0.0 => {
-                Some(Speed::Rate(rate * self.spindle_speed / 60.0))
-            }
-            _ => None,
-        }
-    }
-
-    pub(crate) fn total_time(&self) -> f64 {
-        self.feed_time + self.rapid_time + self.dwell_time
-    }
-
     /// The axes worth reporting: X, Y and Z, and any other that moved or
     /// sits away from 0.
     fn shown_axes(&self) -> Vec<usize> {
@@ -270,6 +165,36 @@ impl Stats {
                 None => false,
             })
             .collect()
+    }
+
+    /// The run time, the program run to its end.
+    fn time_report(&self) -> TimeReport {
+        let mut rt = self.run_time.clone();
+        rt.finish();
+        let t = rt.totals();
+        let info = rt.model();
+        TimeReport {
+            total_s: t.total,
+            feed_s: t.feed,
+            rapid_s: t.rapid,
+            dwell_s: t.dwell,
+            wait_s: t.waits,
+            stops: t.stops,
+            per_tool: t
+                .per_tool
+                .iter()
+                .map(|(tool, s)| ToolTime {
+                    tool: *tool,
+                    seconds: *s,
+                })
+                .collect(),
+            untimed_feed_moves: t.untimed_feeds,
+            untimed_rapid_moves: t.untimed_rapids,
+            machine_limits_used: self.axes.has_dynamics() || self.axes.grbl.is_some(),
+            model_name: info.name,
+            approximate: info.approximate,
+            model: info.description,
+        }
     }
 
     /// The statistics as a serialisable report.
@@ -328,16 +253,7 @@ impl Stats {
             feed_length: self.feed_length,
             tool_changes: self.tool_changes,
             tools: self.tools.iter().copied().collect(),
-            time: TimeReport {
-                total_s: self.total_time(),
-                feed_s: self.feed_time,
-                rapid_s: self.rapid_time,
-                dwell_s: self.dwell_time,
-                untimed_feed_moves: self.untimed_feeds,
-                untimed_rapid_moves: self.untimed_rapids,
-                machine_limits_used: self.axes.has_dynamics(),
-                model: TIME_MODEL,
-            },
+            time: self.time_report(),
         }
     }
 }
@@ -345,45 +261,6 @@ impl Stats {
 /// A length of a move with an unknown end counts as 0.
 fn finite(v: f64) -> f64 {
     if v.is_finite() { v } else { 0.0 }
-}
-
-enum Speed {
-    /// mm/s
-    Rate(f64),
-    /// s
-    Duration(f64),
-}
-
-fn path_len(d: &Axes) -> f64 {
-    let d: Axes = d.map(finite);
-    let lin = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-    if lin > 0.0 {
-        return lin;
-    }
-    let uvw = (d[6] * d[6] + d[7] * d[7] + d[8] * d[8]).sqrt();
-    if uvw > 0.0 {
-        return uvw;
-    }
-    (d[3] * d[3] + d[4] * d[4] + d[5] * d[5]).sqrt()
-}
-
-/// Time of a move of length `len` from rest to rest at cruise velocity `v`
-/// and acceleration `a` (infinite: no ramps).
-pub(crate) fn trapezoid(len: f64, v: f64, a: f64) -> f64 {
-    if len <= 0.0 || v.is_nan() || v <= 0.0 {
-        return 0.0;
-    }
-    if !a.is_finite() {
-        return len / v;
-    }
-    if a <= 0.0 {
-        return 0.0;
-    }
-    if len >= v * v / a {
-        len / v + v / a
-    } else {
-        2.0 * (len / a).sqrt()
-    }
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -394,16 +271,35 @@ pub(crate) struct AxisReport {
     pub machine: Option<Range>,
 }
 
+/// The run time of the program (s), from [`crate::runtime`].
 #[derive(Debug, Clone, Serialize)]
 pub(crate) struct TimeReport {
     pub total_s: f64,
     pub feed_s: f64,
     pub rapid_s: f64,
     pub dwell_s: f64,
+    /// Waits after full stops (GRBL's step idle delay).
+    pub wait_s: f64,
+    /// Full stops where the planner ran empty.
+    pub stops: u64,
+    /// Time with each tool in the spindle (`tool` null: before any change).
+    pub per_tool: Vec<ToolTime>,
     pub untimed_feed_moves: u64,
     pub untimed_rapid_moves: u64,
     pub machine_limits_used: bool,
-    pub model: &'static str,
+    /// The planner model, e.g. "GRBL 1.1h planner".
+    pub model_name: String,
+    /// Whether the model is approximate for this target.
+    pub approximate: bool,
+    /// How the figure is made and how far to trust it.
+    pub model: String,
+}
+
+/// The time spent with one tool.
+#[derive(Debug, Clone, Serialize)]
+pub(crate) struct ToolTime {
+    pub tool: Option<i64>,
+    pub seconds: f64,
 }
 
 /// One axis's travel limits and whether the program stays inside them
@@ -538,20 +434,42 @@ impl Report {
                 format!(" (tools {})", tools.join(", "))
             }
         );
+        self.time_text(&mut s);
+        s
+    }
+
+    /// The run-time part of [`Report::text`].
+    fn time_text(&self, s: &mut String) {
         let t = &self.time;
         let _ = writeln!(
             s,
-            "estimated time: {} (feed {}, rapid {}, dwell {}){}",
+            "estimated time: {}{} (feed {}, rapid {}, dwell {}, waits {} at {} stops){}",
+            if t.approximate { "about " } else { "" },
             hms(t.total_s),
             hms(t.feed_s),
             hms(t.rapid_s),
             hms(t.dwell_s),
+            hms(t.wait_s),
+            t.stops,
             if t.machine_limits_used {
                 ""
             } else {
                 "; no machine velocity or acceleration limits given (--ini, --grbl-settings)"
             }
         );
+        if t.per_tool.len() > 1 || t.per_tool.iter().any(|p| p.tool.is_some()) {
+            for p in &t.per_tool {
+                let _ = writeln!(
+                    s,
+                    "  {}: {}",
+                    p.tool
+                        .map_or("before any tool change".to_string(), |n| format!(
+                            "tool {n}"
+                        )),
+                    hms(p.seconds)
+                );
+            }
+        }
         if t.untimed_feed_moves > 0 {
             let _ = writeln!(
                 s,
@@ -566,15 +484,20 @@ impl Report {
                 t.untimed_rapid_moves
             );
         }
-        let _ = writeln!(s, "how the estimate is made: {}", t.model);
-        s
+        let _ = writeln!(
+            s,
+            "how the estimate is made ({}{}): {}",
+            t.model_name,
+            if t.approximate { ", approximate" } else { "" },
+            t.model
+        );
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::codes::Plane;
+    use crate::codes::{FeedMode, Plane};
     use crate::machine::motion::{Feed, Point};
 
     fn pt(x: f64, y: f64, z: f64, off: Option<f64>) -> Point {
@@ -588,6 +511,12 @@ mod tests {
         }
     }
 
+    fn rest(axes: MachineAxes) -> TimeModel {
+        TimeModel::RestToRest {
+            axes: Box::new(axes),
+        }
+    }
+
     fn feed(r: f64) -> Feed {
         Feed {
             rate: r,
@@ -596,17 +525,8 @@ mod tests {
     }
 
     #[test]
-    fn trapezoid_shapes() {
-        assert_eq!(trapezoid(10.0, 5.0, f64::INFINITY), 2.0);
-        // Reaches 5 mm/s after 1 s and 2.5 mm: 2.5 + 5 cruise + 2.5.
-        assert!((trapezoid(10.0, 5.0, 5.0) - 3.0).abs() < 1e-12);
-        // Triangle: 1 mm at 1 mm/s² -> 2 * sqrt(1).
-        assert!((trapezoid(1.0, 5.0, 1.0) - 2.0).abs() < 1e-12);
-    }
-
-    #[test]
     fn ranges_lengths_and_counts() {
-        let mut s = Stats::new(MachineAxes::default());
+        let mut s = Stats::new(MachineAxes::default(), rest(MachineAxes::default()));
         s.add(&Motion::Line {
             kind: MoveKind::Rapid,
             from: pt(0.0, 0.0, 0.0, Some(10.0)),
@@ -641,8 +561,9 @@ mod tests {
         );
         assert!((s.rapid_length - 5.0).abs() < 1e-12);
         assert!((s.feed_length - 4.0 * std::f64::consts::PI).abs() < 1e-12);
-        assert!((s.feed_time - 4.0 * std::f64::consts::PI / 10.0).abs() < 1e-12);
-        assert_eq!(s.untimed_rapids, 1);
+        let t = s.report("p").time;
+        assert!((t.feed_s - 4.0 * std::f64::consts::PI / 10.0).abs() < 1e-12);
+        assert_eq!(t.untimed_rapid_moves, 1);
         assert_eq!((s.arcs, s.tool_changes), (1, 1));
         let r = s.report("p");
         assert!(r.text().contains("tools 4"));
@@ -654,7 +575,7 @@ mod tests {
         let mut axes = MachineAxes::default();
         axes.axes[0].max_vel = Some(2.0);
         axes.axes[1].max_vel = Some(100.0);
-        let mut s = Stats::new(axes);
+        let mut s = Stats::new(axes.clone(), rest(axes));
         // 10 mm along X at F6000 (100 mm/s), capped by X at 2 mm/s.
         s.add(&Motion::Line {
             kind: MoveKind::Feed,
@@ -662,7 +583,7 @@ mod tests {
             to: pt(10.0, 0.0, 0.0, None),
             feed: feed(6000.0),
         });
-        assert!((s.feed_time - 5.0).abs() < 1e-12);
+        assert!((s.report("p").time.feed_s - 5.0).abs() < 1e-12);
         // A rapid moving only Y at 100 mm/s.
         s.add(&Motion::Line {
             kind: MoveKind::Rapid,
@@ -670,7 +591,7 @@ mod tests {
             to: pt(10.0, 50.0, 0.0, None),
             feed: feed(0.0),
         });
-        assert!((s.rapid_time - 0.5).abs() < 1e-12);
+        assert!((s.report("p").time.rapid_s - 0.5).abs() < 1e-12);
         assert_eq!(s.machine_unknown, 2);
         assert!(s.report("p").axes.iter().all(|a| a.machine.is_none()));
     }

@@ -576,23 +576,33 @@ fn run_time_estimate_uses_grbl_rates_and_accelerations() {
     );
     assert_eq!(code, 0, "{err}");
     let j: serde_json::Value = serde_json::from_str(&out).expect("json");
-    // Rest to rest: accelerate to v at a, cruise, brake; a triangle when
-    // the move is too short to reach v.
-    let trapezoid = |len: f64, v: f64, a: f64| {
-        if len >= v * v / a {
-            len / v + v / a
-        } else {
-            2.0 * (len / a).sqrt()
-        }
-    };
-    let rapid = trapezoid(200.0, 100.0, 50.0) + trapezoid(5.0, 25.0, 10.0);
-    let feed = trapezoid(100.0, 20.0, 50.0);
+    // GRBL's planner, the other settings GRBL's defaults ($11 = 0.01 mm
+    // junction deviation, $1 = 25 ms idle delay). Both corners are 90°:
+    // the junction's direction (-1, ±1)/√2 allows min(50, 10)·√2 =
+    // 14.142 mm/s²; v² = 14.142·0.01·sin45°/(1 − sin45°) = 0.34142.
+    let vj2: f64 = 10.0 * 2f64.sqrt() * 0.01 * 0.5f64.sqrt() / (1.0 - 0.5f64.sqrt());
+    let vj = vj2.sqrt();
+    // X200 at 100 mm/s, 50 mm/s² from rest to vj: cruises for
+    // 200 − 100 − (100² − vj²)/100 mm.
+    let x = 2.0 + (100.0 - vj) / 50.0 + (200.0 - 100.0 - (1e4 - vj2) / 100.0) / 100.0;
+    // Y5 at 10 mm/s² from vj to vj never reaches 25 mm/s: a triangle
+    // peaking at sqrt((2·10·5 + 2·vj²)/2).
+    let peak = ((100.0 + 2.0 * vj2) / 2.0f64).sqrt();
+    let y = 2.0 * (peak - vj) / 10.0;
+    // X100 at F1200 (20 mm/s), 50 mm/s², from vj to rest.
+    let up = (400.0 - vj2) / 100.0;
+    let feed = (20.0 - vj) / 50.0 + 0.4 + (100.0 - up - 4.0) / 20.0;
+    let rapid = x + y;
     let t = &j["time"];
     assert!(close(t["rapid_s"].as_f64().unwrap_or(0.0), rapid), "{t}");
     assert!(close(t["feed_s"].as_f64().unwrap_or(0.0), feed), "{t}");
     assert!(close(t["dwell_s"].as_f64().unwrap_or(0.0), 1.0), "{t}");
+    // The dwell empties the buffer: one full stop and its 25 ms; M2 finds
+    // the machine at rest.
+    assert!(close(t["wait_s"].as_f64().unwrap_or(0.0), 0.025), "{t}");
+    assert_eq!(t["stops"], 1);
     assert!(
-        close(t["total_s"].as_f64().unwrap_or(0.0), rapid + feed + 1.0),
+        close(t["total_s"].as_f64().unwrap_or(0.0), rapid + feed + 1.025),
         "{t}"
     );
     assert_eq!(t["machine_limits_used"], true);
@@ -609,7 +619,7 @@ fn run_time_estimate_uses_grbl_rates_and_accelerations() {
     );
     assert_eq!(code, 0, "{err}");
     assert!(
-        text.contains("how the estimate is made: each move is timed"),
+        text.contains("how the estimate is made (GRBL 1.1h planner)"),
         "{text}"
     );
 }

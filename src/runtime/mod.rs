@@ -1,0 +1,704 @@
+//! Run time: how long the controller takes to run a program, as its own
+//! motion planner runs it, in total and for every output line.
+//!
+//! # Use
+//!
+//! ```text
+//! let mut rt = RunTime::new(TimeModel::for_target(Some("grbl"), &axes));
+//! for each output line n (1, 2, …):
+//!     rt.line(n);                     // the events that follow are line n's
+//!     for each motion event m of the line: rt.motion(&m);
+//!     while let Some(t) = rt.next_line() { … t.line, t.start, t.seconds … }
+//! rt.finish();                        // end of program: the machine stops
+//! while let Some(t) = rt.next_line() { … }
+//! rt.totals()                         // total, feed, rapid, dwell, waits, per tool
+//! rt.model()                          // what the figure is and how far to trust it
+//! ```
+//!
+//! A line's time is final only once the planner has run every block the
+//! line made: up to a look-ahead window (GRBL 1.1: 15 blocks) later. So
+//! [`RunTime::next_line`] hands out the lines in order as their times
+//! become final; [`LineTime::start`] is when the line starts on the
+//! machine (seconds from the program's start), [`LineTime::seconds`] how
+//! long it takes. The times of all lines add up to [`Totals::total`].
+//!
+//! Work per event is O(1) amortised (a replan walks the window once) and
+//! memory is flat (the window, and the lines whose blocks are still in it).
+//!
+//! # Models
+//!
+//! - **GRBL family** (`grbl`, `grblhal`, `fluidnc`): GRBL 1.1h's planner and
+//!   step-segment generator ([`grbl`], [`planner`]), from a saved `$$`
+//!   listing or GRBL's defaults. Checked against GRBL 1.1h's own
+//!   `planner.c`/`stepper.c` run on the same output: within 0.5% on
+//!   LinuxCNC's example programs and dense CAM programs (docs/run-time.md
+//!   has the table). grblHAL and FluidNC plan the same way with a larger
+//!   window; their figures are GRBL's model with their window and are not
+//!   measured.
+//! - **Every other target** ([`TimeModel::RestToRest`]): each move from
+//!   rest to rest at its feed and the axes' limits: too long for programs
+//!   of many short moves (up to 10× on dense CAM programs), said so next
+//!   to the figure.
+
+pub(crate) mod grbl;
+pub(crate) mod planner;
+
+use std::collections::{BTreeMap, VecDeque};
+
+use serde::Serialize;
+
+use crate::codes::FeedMode;
+use crate::machine::axes::MachineAxes;
+use crate::machine::motion::{Axes, Motion, MoveKind, Point};
+use crate::view::geom::ArcGeom;
+pub(crate) use grbl::GrblSettings;
+use planner::{Block, Window};
+
+/// Which planner the run time follows.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum TimeModel {
+    /// GRBL 1.1h's planner and stepper: the settings, the planner's window
+    /// (blocks it holds: GRBL 1.1h keeps one of its 16 slots empty) and the
+    /// firmware's name.
+    Grbl {
+        settings: GrblSettings,
+        window: usize,
+        firmware: &'static str,
+    },
+    /// Each move timed alone from rest to rest at the axes' limits.
+    RestToRest { axes: Box<MachineAxes> },
+}
+
+/// Blocks GRBL 1.1h's planner holds: `BLOCK_BUFFER_SIZE` 16 (`planner.h`),
+/// one slot always empty.
+pub(crate) const GRBL_WINDOW: usize = 15;
+
+impl TimeModel {
+    /// The model for a target (`None`: LinuxCNC, the flattened program as
+    /// it is). The GRBL family uses `axes.grbl` (a `$$` listing) or GRBL's
+    /// defaults; with no target, a `$$` listing says the machine runs GRBL.
+    pub(crate) fn for_target(target: Option<&str>, axes: &MachineAxes) -> TimeModel {
+        let firmware = match target {
+            Some("grbl") => "GRBL 1.1h",
+            None if axes.grbl.is_some() => "GRBL 1.1h",
+            Some("grblhal") => "grblHAL",
+            Some("fluidnc") => "FluidNC",
+            _ => {
+                return TimeModel::RestToRest {
+                    axes: Box::new(axes.clone()),
+                };
+            }
+        };
+        TimeModel::Grbl {
+            settings: axes.grbl.clone().unwrap_or_default(),
+            window: GRBL_WINDOW,
+            firmware,
+        }
+    }
+}
+
+/// What a figure means: the model, in words, and whether it is
+/// approximate, for printing next to the figure.
+#[derive(Debug, Clone, Serialize)]
+pub(crate) struct ModelInfo {
+    pub(crate) name: String,
+    pub(crate) approximate: bool,
+    pub(crate) description: String,
+}
+
+/// The planned time of one output line.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub(crate) struct LineTime {
+    /// The line number given to [`RunTime::line`].
+    pub(crate) line: u64,
+    /// When the line starts (s from the program's start).
+    pub(crate) start: f64,
+    /// How long it takes (s): its moves, dwells and waits.
+    pub(crate) seconds: f64,
+}
+
+/// Sums over the whole program (s).
+#[derive(Debug, Clone, Default, Serialize)]
+pub(crate) struct Totals {
+    pub(crate) total: f64,
+    pub(crate) feed: f64,
+    pub(crate) rapid: f64,
+    pub(crate) dwell: f64,
+    /// Waits after full stops (GRBL's `$1` step idle delay).
+    pub(crate) waits: f64,
+    /// Full stops: where the planner ran empty (program end, spindle,
+    /// coolant, dwell, pause, offset changes).
+    pub(crate) stops: u64,
+    /// Time with each tool in the spindle (`None`: before any tool change).
+    pub(crate) per_tool: BTreeMap<Option<i64>, f64>,
+    /// Feed moves that could not be timed (no feed rate, or feed per
+    /// revolution with the spindle stopped).
+    pub(crate) untimed_feeds: u64,
+    /// Rapids that could not be timed (no maximum velocity for an axis, or
+    /// a start that is not known).
+    pub(crate) untimed_rapids: u64,
+}
+
+/// What a block's time is charged to.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct Charge {
+    pub(crate) line: u64,
+    pub(crate) tool: Option<i64>,
+    pub(crate) rapid: bool,
+}
+
+/// A line whose time is not final yet.
+#[derive(Debug, Clone, Copy)]
+struct Open {
+    line: u64,
+    seconds: f64,
+    /// Blocks of the line still in the window.
+    blocks: u64,
+}
+
+/// The run-time model fed with a program's motion, line by line.
+#[derive(Debug, Clone)]
+pub(crate) struct RunTime {
+    model: TimeModel,
+    window: Window,
+    /// GRBL's planner position in steps (`None`: not known yet).
+    steps: [Option<i64>; 3],
+    prev_unit: [f64; 3],
+    prev_nominal: f64,
+    /// Offset of the last move (work → machine).
+    offset: Option<Axes>,
+    /// Spindle state the firmware last synchronised to (direction, speed).
+    spindle: Option<(crate::codes::SpindleDir, f64)>,
+    coolant: (bool, bool),
+    /// Spindle speed for feed per revolution (rev/min).
+    rpm: f64,
+    /// The machine moved since the last full stop.
+    moving: bool,
+    charge: Charge,
+    totals: Totals,
+    open: VecDeque<Open>,
+    /// Time handed out so far (start of the next final line).
+    clock: f64,
+}
+
+impl RunTime {
+    pub(crate) fn new(model: TimeModel) -> RunTime {
+        let window = match &model {
+            TimeModel::Grbl { window, .. } => Window::new(*window),
+            TimeModel::RestToRest { .. } => Window::new(1),
+        };
+        RunTime {
+            model,
+            window,
+            steps: [None; 3],
+            prev_unit: [0.0; 3],
+            prev_nominal: 0.0,
+            offset: None,
+            spindle: None,
+            coolant: (false, false),
+            rpm: 0.0,
+            moving: false,
+            charge: Charge::default(),
+            totals: Totals::default(),
+            open: VecDeque::new(),
+            clock: 0.0,
+        }
+    }
+
+    /// The events that follow belong to output line `line` (numbers must
+    /// increase).
+    pub(crate) fn line(&mut self, line: u64) {
+        self.charge.line = line;
+        self.open.push_back(Open {
+            line,
+            seconds: 0.0,
+            blocks: 0,
+        });
+    }
+
+    /// What the figures mean.
+    pub(crate) fn model(&self) -> ModelInfo {
+        match &self.model {
+            TimeModel::Grbl {
+                settings,
+                window,
+                firmware,
+            } => ModelInfo {
+                name: format!("{firmware} planner"),
+                approximate: *firmware != "GRBL 1.1h",
+                description: format!(
+                    "{firmware}'s look-ahead planner as GRBL 1.1h runs it ({window} blocks, \
+                     junction deviation {} mm, arcs in chords within {} mm, per-axis rates and \
+                     accelerations{}), full stops at spindle, coolant, dwell, pause and offset \
+                     changes with a {} ms wait each, dwells in 50 ms steps; within 0.5% of \
+                     GRBL 1.1h's own planner and stepper code{}",
+                    settings.junction_deviation,
+                    settings.arc_tolerance,
+                    if settings.defaults {
+                        " from GRBL's default settings: no --grbl-settings given"
+                    } else {
+                        " from the --grbl-settings listing"
+                    },
+                    settings.idle_wait() * 1000.0,
+                    if *firmware == "GRBL 1.1h" {
+                        ""
+                    } else {
+                        "; not measured on this firmware, whose window is larger"
+                    }
+                ),
+            },
+            TimeModel::RestToRest { .. } => ModelInfo {
+                name: "rest to rest".into(),
+                approximate: true,
+                description: REST_TO_REST.into(),
+            },
+        }
+    }
+
+    /// Feeds one motion event of the current line.
+    pub(crate) fn motion(&mut self, m: &Motion) {
+        match m {
+            Motion::Line {
+                kind,
+                from,
+                to,
+                feed,
+            } => {
+                if *kind == MoveKind::Probe {
+                    self.sync();
+                }
+                self.offset_change(from);
+                let rate = self.feed_rate(*kind, feed.rate, feed.mode);
+                self.straight(&machine(from), &machine(to), rate, *kind == MoveKind::Rapid);
+                if *kind == MoveKind::Probe {
+                    self.sync();
+                }
+            }
+            Motion::Arc {
+                from,
+                to,
+                center,
+                plane,
+                ccw,
+                turns,
+                feed,
+            } => {
+                self.offset_change(from);
+                let g = ArcGeom::new(&from.work, &to.work, *center, *plane, *ccw, *turns);
+                let rate = self.feed_rate(MoveKind::Feed, feed.rate, feed.mode);
+                self.arc(&g, from, to, rate);
+            }
+            Motion::Dwell { seconds } => {
+                self.sync();
+                // GRBL waits in 50 ms steps, rounding up (delay_sec()).
+                let t = (seconds.max(0.0) * 20.0).ceil() * 0.05;
+                self.totals.dwell += t;
+                self.add_wait(t);
+            }
+            Motion::Spindle { dir, speed, .. } => {
+                self.rpm = if *dir == crate::codes::SpindleDir::Off {
+                    0.0
+                } else {
+                    *speed
+                };
+                let state = Some((*dir, *speed));
+                if self.spindle != state {
+                    self.sync();
+                    self.spindle = state;
+                }
+            }
+            Motion::Coolant { mist, flood } => {
+                if self.coolant != (*mist, *flood) {
+                    self.sync();
+                    self.coolant = (*mist, *flood);
+                }
+            }
+            Motion::ToolChange { tool } => {
+                // A tool change is a pause for the GRBL family (M6 → M0).
+                self.sync();
+                self.charge.tool = Some(*tool);
+            }
+            Motion::Pause { optional } => {
+                if !optional {
+                    self.sync();
+                }
+            }
+            Motion::End => self.sync(),
+        }
+    }
+
+    /// The end of the program: whatever is planned runs to a stop.
+    pub(crate) fn finish(&mut self) {
+        self.sync();
+    }
+
+    /// The next line whose time is final, in line order. Call it between
+    /// lines (after all the events of a line): a line is final once every
+    /// block it made has run.
+    pub(crate) fn next_line(&mut self) -> Option<LineTime> {
+        if self.open.front()?.blocks > 0 {
+            return None;
+        }
+        let o = self.open.pop_front()?;
+        let t = LineTime {
+            line: o.line,
+            start: self.clock,
+            seconds: o.seconds,
+        };
+        self.clock += o.seconds;
+        Some(t)
+    }
+
+    pub(crate) fn totals(&self) -> &Totals {
+        &self.totals
+    }
+
+    fn feed_rate(&self, kind: MoveKind, rate: f64, mode: FeedMode) -> Feed {
+        if kind == MoveKind::Rapid {
+            return Feed::Rapid;
+        }
+        match mode {
+            FeedMode::PerMinute if rate > 0.0 => Feed::PerMinute(rate),
+            FeedMode::InverseTime if rate > 0.0 => Feed::Inverse(rate),
+            FeedMode::PerRev if rate > 0.0 && self.rpm > 0.0 => Feed::PerMinute(rate * self.rpm),
+            _ => Feed::None,
+        }
+    }
+
+    /// A move whose offset differs from the last one's: GRBL empties its
+    /// buffer at every change of the work offset (G10, G92, G43.1, G54…;
+    /// `FORCE_BUFFER_SYNC_DURING_WCO_CHANGE`).
+    fn offset_change(&mut self, from: &Point) {
+        if let (Some(o), Some(n)) = (self.offset, from.offset)
+            && o != n
+        {
+            self.sync();
+        }
+        if from.offset.is_some() {
+            self.offset = from.offset;
+        }
+    }
+
+    /// A straight move from `from` to `target` (machine coordinates, NaN:
+    /// not known).
+    fn straight(&mut self, from: &Axes, target: &Axes, feed: Feed, rapid: bool) {
+        let settings = match &self.model {
+            TimeModel::Grbl { settings, .. } => settings,
+            TimeModel::RestToRest { axes } => {
+                let b = rest_to_rest(axes, from, target, feed, rapid, self.charge);
+                match b {
+                    Some(b) => self.push(b),
+                    None => self.untimed(rapid),
+                }
+                return;
+            }
+        };
+        let mut delta = [0i64; 3];
+        let mut known = true;
+        for i in 0..3 {
+            let spm = settings.steps_per_mm[i];
+            if self.steps[i].is_none() && from[i].is_finite() {
+                self.steps[i] = Some((from[i] * spm).round() as i64);
+            }
+            let x = target[i];
+            if !x.is_finite() {
+                continue;
+            }
+            let t = (x * spm).round() as i64;
+            match self.steps[i] {
+                Some(p) => delta[i] = t - p,
+                None => known = false,
+            }
+            self.steps[i] = Some(t);
+        }
+        if !known {
+            self.untimed(rapid);
+            return;
+        }
+        if delta == [0; 3] {
+            return; // GRBL drops a block of no step.
+        }
+        let mut unit: [f64; 3] =
+            std::array::from_fn(|i| delta[i] as f64 / settings.steps_per_mm[i]);
+        let mm = (unit[0] * unit[0] + unit[1] * unit[1] + unit[2] * unit[2]).sqrt();
+        for u in &mut unit {
+            *u /= mm;
+        }
+        let max_rate: [f64; 3] = settings.max_rate.map(|r| r / 60.0);
+        let rapid_rate = grbl::limit_by_axes(&max_rate, &unit);
+        let programmed = match feed {
+            Feed::Rapid => rapid_rate,
+            Feed::PerMinute(f) => f / 60.0,
+            Feed::Inverse(f) => f * mm / 60.0,
+            Feed::None => {
+                self.untimed(rapid);
+                return;
+            }
+        };
+        // GRBL's MINIMUM_FEED_RATE: 1 mm/min.
+        let nominal = programmed.min(rapid_rate).max(1.0 / 60.0);
+        let junction = grbl::junction_speed_sqr(settings, &self.prev_unit, &unit);
+        let b = Block {
+            mm,
+            accel: grbl::limit_by_axes(&settings.accel, &unit),
+            nominal,
+            max_entry_sqr: (nominal * nominal)
+                .min(self.prev_nominal * self.prev_nominal)
+                .min(junction),
+            entry_sqr: 0.0,
+            charge: Charge {
+                rapid,
+                ..self.charge
+            },
+        };
+        self.prev_unit = unit;
+        self.prev_nominal = nominal;
+        self.push(b);
+    }
+
+    /// An arc: GRBL's chords, each a straight move.
+    fn arc(&mut self, g: &ArcGeom, from: &Point, to: &Point, feed: Feed) {
+        let target = machine(to);
+        let off = from.offset.unwrap_or([0.0; 9]);
+        let segments = match &self.model {
+            TimeModel::Grbl { settings, .. } => grbl::arc_segments(settings, g.sweep, g.r0),
+            TimeModel::RestToRest { axes } => {
+                match rest_to_rest_arc(axes, g, from, to, feed, self.charge) {
+                    Some(b) => self.push(b),
+                    None => self.untimed(false),
+                }
+                return;
+            }
+        };
+        if segments == 0 {
+            return self.straight(&machine(from), &target, feed, false);
+        }
+        // Inverse time: GRBL gives every chord the arc's inverse-time value
+        // times the number of chords, read as mm/min (mc_arc()).
+        let feed = match feed {
+            Feed::Inverse(f) => Feed::PerMinute(f * segments as f64),
+            f => f,
+        };
+        let h0 = from.work[g.h];
+        let dh = to.work[g.h] - h0;
+        let mut last = machine(from);
+        for i in 1..segments {
+            let t = i as f64 / segments as f64;
+            let ang = g.start + g.sweep * t;
+            let mut p = target;
+            p[g.a] = g.ca + g.r0 * ang.cos() + off[g.a];
+            p[g.b] = g.cb + g.r0 * ang.sin() + off[g.b];
+            p[g.h] = h0 + dh * t + off[g.h];
+            self.straight(&last, &p, feed, false);
+            last = p;
+        }
+        self.straight(&last, &target, feed, false);
+    }
+
+    fn untimed(&mut self, rapid: bool) {
+        if rapid {
+            self.totals.untimed_rapids += 1;
+        } else {
+            self.totals.untimed_feeds += 1;
+        }
+    }
+
+    fn push(&mut self, b: Block) {
+        self.moving = true;
+        if let Some(o) = self.open.back_mut() {
+            o.blocks += 1;
+        }
+        if let Some(ran) = self.window.push(b) {
+            self.account(ran);
+        }
+    }
+
+    /// Charges a block that ran to its line, its tool and its kind.
+    fn account(&mut self, (b, t): planner::Ran) {
+        let c = b.charge;
+        if c.rapid {
+            self.totals.rapid += t;
+        } else {
+            self.totals.feed += t;
+        }
+        self.totals.total += t;
+        *self.totals.per_tool.entry(c.tool).or_default() += t;
+        if let Some(o) = self.open.iter_mut().find(|o| o.line == c.line) {
+            o.seconds += t;
+            o.blocks = o.blocks.saturating_sub(1);
+        }
+    }
+
+    /// A wait (dwell, idle delay) of the current line.
+    fn add_wait(&mut self, t: f64) {
+        self.totals.total += t;
+        *self.totals.per_tool.entry(self.charge.tool).or_default() += t;
+        if let Some(o) = self.open.back_mut() {
+            o.seconds += t;
+        }
+    }
+
+    /// The firmware empties its buffer: everything planned runs to a stop,
+    /// then the idle delay.
+    fn sync(&mut self) {
+        while let Some(ran) = self.window.run_first() {
+            self.account(ran);
+        }
+        if self.moving {
+            self.moving = false;
+            self.totals.stops += 1;
+            if let TimeModel::Grbl { settings, .. } = &self.model {
+                let w = settings.idle_wait();
+                self.totals.waits += w;
+                self.add_wait(w);
+            }
+        }
+    }
+}
+
+/// A straight move timed alone, from rest to rest (`None`: not timed).
+fn rest_to_rest(
+    axes: &MachineAxes,
+    from: &Axes,
+    to: &Axes,
+    feed: Feed,
+    rapid: bool,
+    charge: Charge,
+) -> Option<Block> {
+    let mut d = [0.0; 9];
+    for i in 0..9 {
+        match (from[i].is_finite(), to[i].is_finite()) {
+            (true, true) => d[i] = to[i] - from[i],
+            // An axis never given: it does not move.
+            (false, false) => {}
+            _ => return None,
+        }
+    }
+    let path = path_len(&d);
+    if path <= 0.0 {
+        return Some(still(charge));
+    }
+    let mut vmax = f64::INFINITY;
+    let mut amax = f64::INFINITY;
+    for (i, di) in d.iter().enumerate() {
+        if *di == 0.0 {
+            continue;
+        }
+        let k = path / di.abs();
+        match axes.axes[i].max_vel {
+            Some(m) => vmax = vmax.min(m * k),
+            None if rapid => return None,
+            None => {}
+        }
+        if let Some(m) = axes.axes[i].max_acc {
+            amax = amax.min(m * k);
+        }
+    }
+    let v = match feed {
+        Feed::Rapid => vmax,
+        Feed::PerMinute(f) => (f / 60.0).min(vmax),
+        Feed::Inverse(f) => (f * path / 60.0).min(vmax),
+        Feed::None => return None,
+    };
+    Some(Block {
+        mm: path,
+        accel: amax,
+        nominal: v,
+        max_entry_sqr: 0.0,
+        entry_sqr: 0.0,
+        charge: Charge { rapid, ..charge },
+    })
+}
+
+/// An arc timed alone, from rest to rest: at most as fast as the slowest
+/// axis of its plane allows, and below sqrt(acceleration · radius).
+fn rest_to_rest_arc(
+    axes: &MachineAxes,
+    g: &ArcGeom,
+    from: &Point,
+    to: &Point,
+    feed: Feed,
+    charge: Charge,
+) -> Option<Block> {
+    let len = crate::view::geom::arc_length(g, &from.work, &to.work);
+    if !len.is_finite() {
+        return None;
+    }
+    if len <= 0.0 {
+        return Some(still(charge));
+    }
+    let cap = |f: fn(&crate::machine::axes::AxisData) -> Option<f64>| {
+        [g.a, g.b]
+            .iter()
+            .filter_map(|&i| f(&axes.axes[i]))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let amax = cap(|a| a.max_acc);
+    let vmax = cap(|a| a.max_vel).min((amax * 0.5 * (g.r0 + g.r1)).sqrt());
+    let v = match feed {
+        Feed::PerMinute(f) => (f / 60.0).min(vmax),
+        Feed::Inverse(f) => (f * len / 60.0).min(vmax),
+        Feed::Rapid | Feed::None => return None,
+    };
+    Some(Block {
+        mm: len,
+        accel: amax,
+        nominal: v,
+        max_entry_sqr: 0.0,
+        entry_sqr: 0.0,
+        charge,
+    })
+}
+
+/// A block of no length (it takes no time).
+fn still(charge: Charge) -> Block {
+    Block {
+        mm: 0.0,
+        accel: f64::INFINITY,
+        nominal: 1.0,
+        max_entry_sqr: 0.0,
+        entry_sqr: 0.0,
+        charge,
+    }
+}
+
+/// The path length of a move: XYZ, else UVW, else ABC (degrees).
+fn path_len(d: &Axes) -> f64 {
+    let lin = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    if lin > 0.0 {
+        return lin;
+    }
+    let uvw = (d[6] * d[6] + d[7] * d[7] + d[8] * d[8]).sqrt();
+    if uvw > 0.0 {
+        return uvw;
+    }
+    (d[3] * d[3] + d[4] * d[4] + d[5] * d[5]).sqrt()
+}
+
+/// How a move's speed is given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Feed {
+    Rapid,
+    /// mm/min
+    PerMinute(f64),
+    /// 1/min (G93)
+    Inverse(f64),
+    /// Not known (no feed, or per revolution with the spindle stopped).
+    None,
+}
+
+/// Machine coordinates of a point (work coordinates when the offset is not
+/// known: the run time does not depend on where the program sits).
+fn machine(p: &Point) -> Axes {
+    match p.offset {
+        Some(o) => std::array::from_fn(|i| p.work[i] + o[i]),
+        None => p.work,
+    }
+}
+
+const REST_TO_REST: &str = "each move is timed on its own as a trapezoid that starts and ends at rest: \
+it speeds up at the acceleration limit, runs at the programmed feed (rapids: the \
+maximum velocity), and slows down again; the feed and acceleration of a move are \
+capped so that no axis exceeds its own maximum velocity or acceleration. This target's \
+planner is not modelled: it blends moves, so programs of many short moves run faster \
+than this figure (up to 10 times on dense CAM programs)";
