@@ -48,7 +48,7 @@ pub enum GrblEnvelope {
 pub struct MachineAxes {
     pub axes: [AxisData; 9],
     /// The planner settings of a GRBL `$$` listing, when one was given.
-    pub(crate) grbl: Option<crate::runtime::GrblSettings>,
+    pub(crate) grbl: Option<super::grbl::GrblSettings>,
 }
 
 impl MachineAxes {
@@ -133,7 +133,7 @@ impl MachineAxes {
     /// `$120`–`$122` acceleration (mm/s²), `$130`–`$132` max travel (mm).
     /// Other settings, comments and `ok` lines are ignored.
     pub fn add_grbl(&mut self, text: &str, envelope: GrblEnvelope) -> Result<(), ErrorKind> {
-        self.grbl = Some(crate::runtime::GrblSettings::from_listing(text)?);
+        self.grbl = Some(super::grbl::GrblSettings::from_listing(text)?);
         for line in text.lines() {
             let t = line.trim();
             let Some(rest) = t.strip_prefix('$') else {

@@ -30,7 +30,7 @@
 //! - **GRBL family** (`grbl`, `grblhal`, `fluidnc`): GRBL 1.1h's planner and
 //!   step-segment generator ([`grbl`], [`planner`]), from a saved `$$`
 //!   listing or GRBL's defaults. Checked against GRBL 1.1h's own
-//!   `planner.c`/`stepper.c` run on the same output: within 0.5% on
+//!   `planner.c`/`stepper.c` run on the same output: within 1.1% on
 //!   LinuxCNC's example programs and dense CAM programs (docs/run-time.md
 //!   has the table). grblHAL and FluidNC plan the same way with a larger
 //!   window; their figures are GRBL's model with their window and are not
@@ -49,9 +49,8 @@ use serde::Serialize;
 
 use crate::codes::FeedMode;
 use crate::machine::axes::MachineAxes;
+pub(crate) use crate::machine::grbl::GrblSettings;
 use crate::machine::motion::{Axes, Motion, MoveKind, Point};
-use crate::view::geom::ArcGeom;
-pub(crate) use grbl::GrblSettings;
 use planner::{Block, Window};
 
 /// Which planner the run time follows.
@@ -230,7 +229,7 @@ impl RunTime {
                     "{firmware}'s look-ahead planner as GRBL 1.1h runs it ({window} blocks, \
                      junction deviation {} mm, arcs in chords within {} mm, per-axis rates and \
                      accelerations{}), full stops at spindle, coolant, dwell, pause and offset \
-                     changes with a {} ms wait each, dwells in 50 ms steps; within 0.5% of \
+                     changes with a {} ms wait each, dwells in 50 ms steps; within 1.1% of \
                      GRBL 1.1h's own planner and stepper code{}",
                     settings.junction_deviation,
                     settings.arc_tolerance,
@@ -620,7 +619,7 @@ fn rest_to_rest_arc(
     feed: Feed,
     charge: Charge,
 ) -> Option<Block> {
-    let len = crate::view::geom::arc_length(g, &from.work, &to.work);
+    let len = g.length(&from.work, &to.work);
     if !len.is_finite() {
         return None;
     }
@@ -702,3 +701,80 @@ maximum velocity), and slows down again; the feed and acceleration of a move are
 capped so that no axis exceeds its own maximum velocity or acceleration. This target's \
 planner is not modelled: it blends moves, so programs of many short moves run faster \
 than this figure (up to 10 times on dense CAM programs)";
+
+/// An arc's geometry: the plane's axes (`a`, `b`, helix `h`), the centre,
+/// the start angle and the signed sweep (radians, counter-clockwise
+/// positive, full turns included), and the start and end radii.
+#[derive(Debug, Clone, Copy)]
+struct ArcGeom {
+    a: usize,
+    b: usize,
+    h: usize,
+    ca: f64,
+    cb: f64,
+    start: f64,
+    sweep: f64,
+    r0: f64,
+    r1: f64,
+}
+
+impl ArcGeom {
+    /// `center` holds the centre's coordinates on the plane's axes in
+    /// ascending axis order.
+    fn new(
+        from: &Axes,
+        to: &Axes,
+        center: [f64; 2],
+        plane: crate::codes::Plane,
+        ccw: bool,
+        turns: u32,
+    ) -> ArcGeom {
+        let [a, b, h] = plane.axes();
+        let (ca, cb) = if a < b {
+            (center[0], center[1])
+        } else {
+            (center[1], center[0])
+        };
+        let (sa, sb) = (from[a] - ca, from[b] - cb);
+        let (ea, eb) = (to[a] - ca, to[b] - cb);
+        let start = sb.atan2(sa);
+        let end = eb.atan2(ea);
+        let extra = std::f64::consts::TAU * f64::from(turns.max(1) - 1);
+        // GRBL's ARC_ANGULAR_TRAVEL_EPSILON: a sweep this close to 0 is a
+        // full circle.
+        let sweep = if ccw {
+            let mut d = end - start;
+            if d <= 5e-7 {
+                d += std::f64::consts::TAU;
+            }
+            d + extra
+        } else {
+            let mut d = start - end;
+            if d <= 5e-7 {
+                d += std::f64::consts::TAU;
+            }
+            -(d + extra)
+        };
+        ArcGeom {
+            a,
+            b,
+            h,
+            ca,
+            cb,
+            start,
+            sweep,
+            r0: sa.hypot(sb),
+            r1: ea.hypot(eb),
+        }
+    }
+
+    /// The length of the arc or helix (a spiral's radius changing evenly).
+    fn length(&self, from: &Axes, to: &Axes) -> f64 {
+        let p = self.sweep.abs() * 0.5 * (self.r0 + self.r1);
+        let dh = to[self.h] - from[self.h];
+        (p * p + dh * dh).sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -294,8 +294,12 @@ impl Scene {
                 )),
             ),
             Motion::Dwell { .. } => return self.wait(dur),
-            Motion::ToolChange { tool } => return self.tool_change(*tool),
-            _ => return,
+            Motion::ToolChange { tool } => {
+                // What the planner ran to a stop here counts too.
+                self.wait(dur);
+                return self.tool_change(*tool);
+            }
+            _ => return self.wait(dur),
         };
         let seq = self.detail.program_moves;
         self.detail.program_moves += 1;

@@ -19,6 +19,7 @@ const ORDER: &[&str] = &[
     "eval",
     "library",
     "machine",
+    "runtime",
     "controller",
     "config",
     "flatten",
