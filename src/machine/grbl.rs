@@ -2,7 +2,7 @@
 //! (gnea/grbl 1.1h, commit `bfb67f0c7963fe3ce4aaf8a97f9009ea5a8db36e`,
 //! `defaults.h` `DEFAULTS_GENERIC`, `settings.c`).
 
-use crate::diag::ErrorKind;
+use crate::diag::{ErrorKind, SetupError};
 
 /// The GRBL settings the run time depends on.
 #[derive(Debug, Clone, PartialEq)]
@@ -91,9 +91,11 @@ fn setting(line: &str) -> Result<Option<(u32, f64)>, ErrorKind> {
         .parse()
         .ok()
         .filter(|x: &f64| x.is_finite())
-        .ok_or_else(|| ErrorKind::BadMachineValue {
-            source: format!("GRBL ${n}"),
-            text: val.to_string(),
+        .ok_or_else(|| {
+            ErrorKind::Setup(SetupError::BadMachineValue {
+                source: format!("GRBL ${n}"),
+                text: val.to_string(),
+            })
         })?;
     Ok(Some((n, v)))
 }

@@ -102,7 +102,10 @@ impl<'a> ViewConsumer<'a> {
                 String::from_utf8_lossy(text),
                 e.what
             );
-            return Err(Diagnostic::error(ErrorKind::Internal { what }, None));
+            return Err(Diagnostic::error(
+                ErrorKind::Setup(SetupError::Internal { what }),
+                None,
+            ));
         }
         m.apply(&self.block);
         for ev in m.take_events() {
