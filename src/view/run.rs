@@ -151,8 +151,8 @@ pub(crate) fn observe(
 }
 
 /// The name of the target a program is written for (`None`: LinuxCNC).
-pub(crate) fn target_name(cfg: &crate::config::Config) -> Option<&'static str> {
-    cfg.target.as_ref().map(|t| t.profile.name)
+pub(crate) fn target_name(cfg: &crate::config::Config) -> Option<&str> {
+    cfg.target.as_ref().map(|t| t.profile.name.as_str())
 }
 
 pub(crate) fn program_name(file: Option<&std::path::Path>) -> String {
