@@ -9,8 +9,8 @@ mod warning_kind;
 
 pub use block_error::BlockError;
 pub use error::{
-    ErrorKind, ExprError, LimitError, MachineError, OWordError, SetupError, SyntaxError,
-    TargetError,
+    ErrorKind, ExprError, LimitError, MachineError, OWordError, ProfileError, SetupError,
+    SyntaxError, TargetError,
 };
 pub use lathe_error::LatheError;
 pub use render::{MessageFormat, render, render_summary, use_color};

@@ -29,17 +29,17 @@ super::phase! {
         /// `--target nosuch`
         "E1003" UnknownTarget { name: String },
         /// `--target ./board.toml` not TOML (`name = grbl`).
-        "E1004" ProfileSyntax { path: String, error: crate::controller::ProfileError },
+        "E1004" ProfileSyntax { path: String, error: super::ProfileError },
         /// A profile file with a key the format does not have.
-        "E1005" ProfileUnknownKey { path: String, error: crate::controller::ProfileError },
+        "E1005" ProfileUnknownKey { path: String, error: super::ProfileError },
         /// A profile file without a key the format requires.
-        "E1006" ProfileMissingKey { path: String, error: crate::controller::ProfileError },
+        "E1006" ProfileMissingKey { path: String, error: super::ProfileError },
         /// A profile file key of the wrong type or range (`g_codes = ["G38.7"]`).
-        "E1007" ProfileBadValue { path: String, error: crate::controller::ProfileError },
+        "E1007" ProfileBadValue { path: String, error: super::ProfileError },
         /// Profile keys that contradict each other (`line_limit = 0`).
-        "E1008" ProfileContradiction { path: String, error: crate::controller::ProfileError },
+        "E1008" ProfileContradiction { path: String, error: super::ProfileError },
         /// `--target ./nosuch.toml`: the file cannot be read.
-        "E1009" ProfileUnreadable { path: String, error: crate::controller::ProfileError },
+        "E1009" ProfileUnreadable { path: String, error: super::ProfileError },
         /// `G0 Z1` then `G38.2 Z1` with `--target grblhal`: GRBL-class
         /// firmwares refuse a probe move to the point the tool is at
         /// (LinuxCNC accepts it and does nothing).
@@ -88,8 +88,8 @@ impl fmt::Display for TargetError {
 
 impl TargetError {
     /// The error of profile file `path`, by its kind.
-    pub fn profile(path: String, error: crate::controller::ProfileError) -> TargetError {
-        use crate::controller::ProfileError as P;
+    pub fn profile(path: String, error: super::ProfileError) -> TargetError {
+        use super::ProfileError as P;
         match error {
             P::Unreadable { .. } => TargetError::ProfileUnreadable { path, error },
             P::Syntax { .. } => TargetError::ProfileSyntax { path, error },
