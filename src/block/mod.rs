@@ -30,7 +30,7 @@ pub(crate) use shape::{kept_digits, without_trailing_zeros, written_as_is};
 
 /// A span of the decoded line (byte offsets).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Span {
+pub struct BlockSpan {
     pub start: u16,
     pub end: u16,
 }
@@ -51,7 +51,7 @@ pub struct Word {
     pub letter: u8,
     pub value: f64,
     pub kind: WordKind,
-    pub span: Span,
+    pub span: BlockSpan,
     /// How its number is written.
     pub shape: Shape,
 }
@@ -72,15 +72,15 @@ pub enum CommentKind {
 pub struct Comment {
     pub kind: CommentKind,
     /// The whole comment, parentheses or `;` included.
-    pub span: Span,
+    pub span: BlockSpan,
     /// The text inside (after `MSG,` for a message).
-    pub text: Span,
+    pub text: BlockSpan,
 }
 
 /// Why a line could not be decoded.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DecodeError {
-    pub span: Span,
+    pub span: BlockSpan,
     pub what: DecodeProblem,
 }
 
@@ -117,7 +117,7 @@ pub struct Block {
     /// A `%` line.
     pub percent: bool,
     /// The N word.
-    pub line_number: Option<(f64, Span)>,
+    pub line_number: Option<(f64, BlockSpan)>,
     /// Every word in order (G, M and value words, not N).
     pub words: Vec<Word>,
     pub comments: Vec<Comment>,
@@ -421,11 +421,11 @@ impl Block {
         };
         self.comments.push(Comment {
             kind,
-            span: Span {
+            span: BlockSpan {
                 start: start as u16,
                 end: end as u16,
             },
-            text: Span {
+            text: BlockSpan {
                 start: text_start.min(inner_end) as u16,
                 end: inner_end as u16,
             },
@@ -436,7 +436,7 @@ impl Block {
         &mut self,
         letter: u8,
         value: f64,
-        span: Span,
+        span: BlockSpan,
         shape: Shape,
     ) -> Result<(), DecodeError> {
         let kind = match letter {
@@ -517,7 +517,7 @@ impl LineSink for Block {
         &mut self,
         letter: u8,
         value: f64,
-        span: Span,
+        span: BlockSpan,
         shape: Shape,
         _: bool,
     ) -> Result<(), DecodeError> {

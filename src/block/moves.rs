@@ -3,7 +3,7 @@
 //! what a consumer that writes such lines by a rule needs ([`MovesRule`],
 //! [`MoveValues`], [`Cuts`]).
 
-use super::{MotionMode, Shape, Span};
+use super::{BlockSpan, MotionMode, Shape};
 
 /// Where a line of moves alone is written otherwise than as its text: the
 /// `n` bytes ending at `end` (offsets in the line) are dropped for each of
@@ -192,7 +192,7 @@ impl MoveValues {
 pub struct RawWord {
     pub letter: u8,
     pub value: f64,
-    pub span: Span,
+    pub span: BlockSpan,
     pub shape: Shape,
 }
 
@@ -204,8 +204,8 @@ pub struct RawWord {
 pub struct RawLine {
     words: [RawWord; 14],
     len: u8,
-    pub(super) line_number: Option<(f64, Span)>,
-    pub(super) comment: Option<Span>,
+    pub(super) line_number: Option<(f64, BlockSpan)>,
+    pub(super) comment: Option<BlockSpan>,
 }
 
 impl RawLine {
@@ -225,11 +225,11 @@ impl RawLine {
         }
     }
 
-    pub fn set_line_number(&mut self, value: f64, span: Span) {
+    pub fn set_line_number(&mut self, value: f64, span: BlockSpan) {
         self.line_number = Some((value, span));
     }
 
-    pub fn set_comment(&mut self, span: Span) {
+    pub fn set_comment(&mut self, span: BlockSpan) {
         self.comment = Some(span);
     }
 

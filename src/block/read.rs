@@ -2,7 +2,7 @@
 //! ([`read_flat_line`]), and of the words written the usual way
 //! ([`read_words`]), which the straight-line loop reads its lines with too.
 
-use super::{DecodeError, DecodeProblem, Shape, Span};
+use super::{BlockSpan, DecodeError, DecodeProblem, Shape};
 use crate::number::{Digits, POW10, digits_at};
 
 /// What [`read_flat_line`] hands over as it reads a line, in line order.
@@ -28,7 +28,7 @@ pub(crate) trait LineSink {
         &mut self,
         letter: u8,
         value: f64,
-        span: Span,
+        span: BlockSpan,
         shape: Shape,
         spaced: bool,
     ) -> Result<(), Self::Error>;
@@ -64,7 +64,7 @@ pub(crate) fn read_flat_line_in<S: LineSink>(
         Some(c) if c.is_ascii_digit() || *c == b'.' => line,
         _ => buf,
     };
-    let span = |a: usize, b: usize| Span {
+    let span = |a: usize, b: usize| BlockSpan {
         start: a as u16,
         end: b as u16,
     };
@@ -324,7 +324,7 @@ impl<S: LineSink> WordSink for Usual<'_, S> {
             Some(d) if S::SHAPES => Shape::of(d, buf, num, sign == b'-', sign == b'+'),
             _ => Shape::default(),
         };
-        let span = Span {
+        let span = BlockSpan {
             start: at as u16,
             end: end as u16,
         };
@@ -354,7 +354,7 @@ fn comment_at<S: LineSink>(line: &[u8], i: usize, sink: &mut S) -> Result<usize,
         .iter()
         .position(|&b| b == b')')
         .ok_or(DecodeError {
-            span: Span {
+            span: BlockSpan {
                 start: i as u16,
                 end: n as u16,
             },

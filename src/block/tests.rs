@@ -22,7 +22,7 @@ impl LineSink for Unusual {
         &mut self,
         letter: u8,
         value: f64,
-        span: Span,
+        span: BlockSpan,
         shape: Shape,
         spaced: bool,
     ) -> Result<(), DecodeError> {

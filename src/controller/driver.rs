@@ -26,20 +26,20 @@ use crate::block::{Block, CoordSystem, DecodeError};
 use crate::diag::{Diagnostic, Error, ErrorKind, WarningKind};
 use crate::emit::Output;
 use crate::eval::{LineConsumer, Origin, Settings};
-use crate::machine::Machine;
+use crate::machine::FlatMachine;
 
 use super::TargetOptions;
 use super::format::LineWriter;
 use super::lower;
 use super::profile::Profile;
 
-use comp::CompPath;
+use cutter_path::CompPath;
 use report::decode_problem;
 use splines::NurbsCurve;
 
 mod arcs;
 mod centres;
-mod comp;
+mod cutter_path;
 mod fates;
 mod inverse;
 mod motion;
@@ -51,7 +51,7 @@ mod splines;
 
 /// A problem found on a line: the word it is about and what it is.
 struct Problem {
-    span: Option<crate::block::Span>,
+    span: Option<crate::block::BlockSpan>,
     kind: ErrorKind,
 }
 
@@ -61,7 +61,7 @@ pub struct Lowering {
     opts: TargetOptions,
     /// The machine as LinuxCNC runs the program (its state alone: it
     /// records no motion events, nor do its snapshots).
-    m: Machine,
+    m: FlatMachine,
     /// Scratch for decoding (boxed: taken out and put back each line).
     block: Option<Box<Block>>,
     w: LineWriter,
@@ -124,7 +124,7 @@ pub struct Lowering {
 impl Lowering {
     pub fn new(settings: &Settings, opts: TargetOptions) -> Lowering {
         let p = opts.profile;
-        let m = Machine::new(settings);
+        let m = FlatMachine::new(settings);
         // A program starting in a system the target lacks: the target is
         // in G54, as after its reset.
         let target_coord = if m.modes.coord.0 <= p.coord_systems {

@@ -5,10 +5,10 @@
 mod exec;
 mod expr;
 mod flow;
-mod out;
 mod read;
 mod settings;
 pub(crate) mod state;
+mod write;
 
 pub use expr::params;
 pub use state::tools;
@@ -17,11 +17,11 @@ pub(crate) use state::arc::arc_refusal;
 
 use crate::diag::{LimitError, OWordError, SetupError, SyntaxError};
 use flow::{Flow, Frame, FrameKind, label_of_key};
-pub(crate) use out::output_error;
-use out::{Writer, place_limit, too_large};
 use read::Reader;
 use read::plain;
 use state::Machine;
+pub(crate) use write::output_error;
+use write::{Writer, place_limit, too_large};
 
 use std::collections::HashSet;
 
@@ -34,10 +34,10 @@ use crate::parse::ast::{Line, LineKind, OKind, Span};
 use crate::parse::{LineParser, Name};
 use crate::program::{FileIndex, Loader, SourceFile, Window, next_line};
 
-pub use out::hook::{FormLine, FormLines, LineConsumer, Origin};
 pub use settings::{
     Define, Settings, parse_axis_word, parse_define, read_tool_table, read_var_file,
 };
+pub use write::hook::{FormLine, FormLines, LineConsumer, Origin};
 
 use expr::params::Params;
 
@@ -348,7 +348,7 @@ impl<'s> Interp<'s> {
     }
 
     /// Runs the rest of the program with the consumer (and the output) on
-    /// a second thread (see [`out::apart`]); stays on this one if no thread
+    /// a second thread (see [`write::apart`]); stays on this one if no thread
     /// can be had.
     fn run_apart(&mut self) -> Result<(), Error> {
         use std::sync::atomic::AtomicBool;
@@ -373,13 +373,13 @@ impl<'s> Interp<'s> {
         let slot = std::sync::Mutex::new(Some((consumer, output)));
         let failed = Arc::new(AtomicBool::new(false));
         std::thread::scope(|sc| {
-            let (to, from) = mpsc::sync_channel(out::apart::QUEUE);
+            let (to, from) = mpsc::sync_channel(write::apart::QUEUE);
             let (give_back, back) = mpsc::channel();
             let flag = failed.clone();
             let slot = &slot;
             let spawned = std::thread::Builder::new().spawn_scoped(sc, move || {
                 let (c, o) = slot.lock().ok()?.take()?;
-                Some(out::apart::serve(c, o, from, give_back, &flag))
+                Some(write::apart::serve(c, o, from, give_back, &flag))
             });
             let Ok(thread) = spawned else {
                 if let Some((c, o)) = slot.lock().ok().and_then(|mut s| s.take()) {
@@ -388,7 +388,7 @@ impl<'s> Interp<'s> {
                 }
                 return rest(self);
             };
-            self.out.apart = Some(out::apart::Apart::new(to, back, failed, computes_comp));
+            self.out.apart = Some(write::apart::Apart::new(to, back, failed, computes_comp));
             let r = rest(self);
             if let Some(a) = self.out.apart.take() {
                 a.close();
@@ -401,7 +401,7 @@ impl<'s> Interp<'s> {
                 // The thread never had the consumer and the output (it
                 // cannot happen: nothing else takes them from the slot).
                 // Nothing is written rather than a partial program.
-                return Err(out::apart::lost());
+                return Err(write::apart::lost());
             };
             self.out.consumer = Some(c);
             self.out.output = o;

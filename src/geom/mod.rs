@@ -1,5 +1,5 @@
 //! Geometry computed ahead of time: cutter radius compensation and the
 //! moves of lathe cycles.
 
-pub mod comp;
+pub mod cutter_comp;
 pub(crate) mod lathe;

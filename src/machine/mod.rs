@@ -9,5 +9,5 @@ pub(crate) mod grbl;
 pub(crate) mod model;
 pub(crate) mod motion;
 
-pub(crate) use model::Machine;
+pub(crate) use model::FlatMachine;
 pub(crate) use model::radius_center;

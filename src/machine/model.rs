@@ -32,7 +32,7 @@ const ZERO: MaybeAxes = [Some(0.0); 9];
 
 /// The machine state a flat program runs on.
 #[derive(Debug, Clone)]
-pub(crate) struct Machine {
+pub(crate) struct FlatMachine {
     pub modes: Modes,
     /// Tool-tip position in the active work coordinates, mm.
     pub pos: MaybeAxes,
@@ -48,7 +48,7 @@ pub(crate) struct Machine {
     pub home30: MaybeAxes,
     /// The tool table (machine units), the tool in the spindle and the
     /// selected one, kept as the evaluator keeps them
-    /// ([`Machine::current_tool`] reads the tool as a whole number).
+    /// ([`FlatMachine::current_tool`] reads the tool as a whole number).
     pub tools: Tools,
     /// Machine units are millimetres.
     pub machine_metric: bool,
@@ -78,9 +78,9 @@ fn numbered(settings: &Settings) -> FxMap<usize, f64> {
     m
 }
 
-impl Machine {
+impl FlatMachine {
     /// The machine at the start of a program run with `settings`.
-    pub(crate) fn new(settings: &Settings) -> Machine {
+    pub(crate) fn new(settings: &Settings) -> FlatMachine {
         let zs = settings.zero_start;
         let base = if zs { ZERO } else { UNKNOWN };
         let mu = if settings.machine_metric {
@@ -108,7 +108,7 @@ impl Machine {
             Some(v) => Some(*v != 0.0),
             None => zs.then_some(false),
         };
-        Machine {
+        FlatMachine {
             modes: Modes {
                 coord,
                 ..Modes::default()
@@ -134,8 +134,8 @@ impl Machine {
 
     /// A copy of the state without the tool table and the pending events
     /// (cheap: no allocation), for comparing before and after a block.
-    pub(crate) fn snapshot(&self) -> Machine {
-        Machine {
+    pub(crate) fn snapshot(&self) -> FlatMachine {
+        FlatMachine {
             modes: self.modes.clone(),
             pos: self.pos,
             g5x: self.g5x,
@@ -223,9 +223,9 @@ impl Machine {
         })
     }
 
-    /// Stops recording motion events ([`Machine::take_events`] then gives
+    /// Stops recording motion events ([`FlatMachine::take_events`] then gives
     /// none); the state is followed as before.
-    pub(crate) fn without_events(mut self) -> Machine {
+    pub(crate) fn without_events(mut self) -> FlatMachine {
         self.record = false;
         self
     }
@@ -293,16 +293,16 @@ impl Machine {
         )
     }
 
-    /// [`Machine::apply`] for a block of G0–G3 (written or modal), axis
+    /// [`FlatMachine::apply`] for a block of G0–G3 (written or modal), axis
     /// words, F, S and arc words alone, without motion events: only the
-    /// steps of [`Machine::apply_any`] such a block reaches (a test runs
+    /// steps of [`FlatMachine::apply_any`] such a block reaches (a test runs
     /// both on random blocks).
     fn apply_plain_move(&mut self, b: &Block) {
         let axes = AXIS_LETTERS.map(|l| b.value(l));
         self.apply_plain_values(b.motion(), b.value(b'F'), b.value(b'S'), &axes);
     }
 
-    /// [`Machine::apply`] for a block of G0–G3 (or none, in G0–G3) with X,
+    /// [`FlatMachine::apply`] for a block of G0–G3 (or none, in G0–G3) with X,
     /// Y, Z, F and arc centre words alone, given as values (the centre
     /// changes nothing the model keeps when it records no motion): false
     /// (nothing done) when the model records motion or the motion is
@@ -320,7 +320,7 @@ impl Machine {
         true
     }
 
-    /// The steps of [`Machine::apply_plain_move`], from the block's values.
+    /// The steps of [`FlatMachine::apply_plain_move`], from the block's values.
     #[inline]
     fn apply_plain_values(
         &mut self,
@@ -874,12 +874,12 @@ pub(crate) fn radius_center(a: [f64; 2], b: [f64; 2], r: f64, ccw: bool) -> [f64
 mod tests {
     use super::*;
 
-    fn run(lines: &[&str]) -> (Machine, Vec<Motion>) {
+    fn run(lines: &[&str]) -> (FlatMachine, Vec<Motion>) {
         let s = Settings {
             zero_start: true,
             ..Settings::default()
         };
-        let mut m = Machine::new(&s);
+        let mut m = FlatMachine::new(&s);
         let mut ev = Vec::new();
         for l in lines {
             m.apply(&Block::decode(l.as_bytes()).unwrap());
@@ -913,7 +913,7 @@ mod tests {
                 zero_start: zero,
                 ..Settings::default()
             };
-            let mut fast = Machine::new(&s).without_events();
+            let mut fast = FlatMachine::new(&s).without_events();
             fast.rotated = rotated;
             let mut slow = fast.clone();
             for (k, codes) in lines.iter().enumerate() {
@@ -1094,7 +1094,7 @@ mod tests {
             )],
             ..Settings::default()
         };
-        let mut m = Machine::new(&s);
+        let mut m = FlatMachine::new(&s);
         for l in ["T2 M6", "G43", "G0 Z1"] {
             m.apply(&Block::decode(l.as_bytes()).unwrap());
         }

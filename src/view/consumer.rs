@@ -13,13 +13,13 @@ use crate::block::Block;
 use crate::diag::{Diagnostic, Error, ErrorKind, Site};
 use crate::emit::Output;
 use crate::eval::{LineConsumer, Origin, Settings};
-use crate::machine::model::Machine;
+use crate::machine::model::FlatMachine;
 
 /// Where the source map goes.
 pub(crate) type MapSink = SourceMap<std::io::BufWriter<std::fs::File>>;
 
 pub(crate) struct ViewConsumer<'a> {
-    machine: Option<Machine>,
+    machine: Option<FlatMachine>,
     block: Block,
     pub observer: &'a mut Observer,
     /// Write each line to the output (flattening; not for stats and plot).
@@ -71,7 +71,7 @@ impl<'a> ViewConsumer<'a> {
                 held: VecDeque::new(),
             });
         ViewConsumer {
-            machine: (observer.is_active() || timing.is_some()).then(|| Machine::new(settings)),
+            machine: (observer.is_active() || timing.is_some()).then(|| FlatMachine::new(settings)),
             timing,
             block: Block::default(),
             observer,

@@ -7,7 +7,7 @@
 //! off the plane, rapids), and leave with G40 or end with M2, in G17 and
 //! G18 (lathe tools with orientations), in millimetres and inches. Each
 //! program runs through rs274 (with the tool table, `-t`) and through
-//! [`ngcflat::geom::comp`]; the moves (STRAIGHT_TRAVERSE, STRAIGHT_FEED,
+//! [`ngcflat::geom::cutter_comp`]; the moves (STRAIGHT_TRAVERSE, STRAIGHT_FEED,
 //! ARC_FEED) must agree within 1e-4 and an error must be raised at the same
 //! line. Each program is also checked with `ngcflat check`, which must
 //! refuse it at the same line, or accept it.
@@ -16,7 +16,7 @@
 //! `NGCFLAT_COMP_SEED=S` the first seed.
 
 use ngcflat::block::{ArcDistance, Units};
-use ngcflat::geom::comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
+use ngcflat::geom::cutter_comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
 
 use crate::oracle;
 use crate::rng::Rng;
@@ -717,10 +717,10 @@ fn check(case: &Case) -> Verdict {
 /// the original's, arcs possibly in several parts around the same centre.
 fn lowered_matches(case: &Case, original: &[String]) -> Result<bool, String> {
     use ngcflat::block::Plane;
-    use ngcflat::controller::lower::comp::lower_comp_moves;
+    use ngcflat::controller::lower::cutter_moves::lower_comp_moves;
     let (_, out) = model_moves(case);
     let plane = if case.xz { Plane::XZ } else { Plane::XY };
-    let tolerance = ngcflat::controller::lower::comp::arc_radius_tolerance(case.units());
+    let tolerance = ngcflat::controller::lower::cutter_moves::arc_radius_tolerance(case.units());
     let lines = match lower_comp_moves(plane, [0.0; 3], &out, tolerance) {
         Ok((lines, _)) => lines,
         // An arc released off its circle (a stop in a concave corner):

@@ -128,7 +128,7 @@ fn architecture_states_the_layer_order() {
 
 /// The evaluator's parts (`src/eval`), lowest first: each uses only those
 /// before it. `eval/mod.rs`, which holds them all, is above them.
-const EVAL_ORDER: &[&str] = &["settings", "expr", "state", "flow", "read", "out", "exec"];
+const EVAL_ORDER: &[&str] = &["settings", "expr", "state", "flow", "read", "write", "exec"];
 
 /// The parts of the evaluator `text` names: `eval::part::`, and from its
 /// own files `super::part::` (`super::super::part::` one folder down).

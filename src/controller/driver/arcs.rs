@@ -22,8 +22,8 @@ use crate::codes::{ArcDistance, Units};
 use crate::controller::format::format_number;
 use crate::controller::lower;
 use crate::diag::ErrorKind;
-use crate::geom::comp::{Arc as CompArc, ArcCenter, Tolerances, arc_center};
-use crate::machine::{Machine, radius_center};
+use crate::geom::cutter_comp::{Arc as CompArc, ArcCenter, Tolerances, arc_center};
+use crate::machine::{FlatMachine, radius_center};
 
 use super::Lowering;
 use crate::eval::arc_refusal;
@@ -49,12 +49,12 @@ impl Lowering {
     pub(super) fn arc_off_target(
         &self,
         b: &Block,
-        before: &Machine,
-        after: &Machine,
+        before: &FlatMachine,
+        after: &FlatMachine,
         motion: MotionMode,
     ) -> bool {
         let ccw = motion == MotionMode::ArcCcw;
-        let xyz = |m: &Machine| [m.pos[0], m.pos[1], m.pos[2]];
+        let xyz = |m: &FlatMachine| [m.pos[0], m.pos[1], m.pos[2]];
         match b.value(b'R') {
             Some(r) => self.r_arc_off(after, xyz(before), xyz(after), r, ccw),
             None => {
@@ -67,7 +67,11 @@ impl Lowering {
     /// [`Lowering::arc_refused`] for a block whose arc is written or
     /// lowered from its end point (G2/G3 with an axis word, no other use of
     /// the axis words), run from `before` to the model's state.
-    pub(super) fn linuxcnc_arc_refusal(&self, b: &Block, before: &Machine) -> Option<ErrorKind> {
+    pub(super) fn linuxcnc_arc_refusal(
+        &self,
+        b: &Block,
+        before: &FlatMachine,
+    ) -> Option<ErrorKind> {
         let motion = b.motion().unwrap_or(before.modes.motion);
         let other_axis_use = b.non_modal().is_some_and(|n| !matches!(n, NonModal::Dwell))
             || b.tool_length() == Some(ToolLength::Dynamic);
@@ -88,13 +92,13 @@ impl Lowering {
     pub(super) fn arc_refused(
         &self,
         b: &Block,
-        before: &Machine,
-        after: &Machine,
+        before: &FlatMachine,
+        after: &FlatMachine,
         motion: MotionMode,
     ) -> Option<ErrorKind> {
         let [p, q, _] = after.modes.plane.xyz_axes()?;
         let s = after.scale();
-        let at = |m: &Machine, a: usize| m.pos[a].map(|v| v / s);
+        let at = |m: &FlatMachine, a: usize| m.pos[a].map(|v| v / s);
         let (start, end) = (
             [at(before, p)?, at(before, q)?],
             [at(after, p)?, at(after, q)?],
@@ -138,7 +142,7 @@ impl Lowering {
     /// refuses it).
     fn ijk_off(
         &self,
-        m: &Machine,
+        m: &FlatMachine,
         start: [Option<f64>; 3],
         end: [Option<f64>; 3],
         words: [f64; 3],
@@ -174,7 +178,7 @@ impl Lowering {
     /// ends are written apart stays an arc.
     fn barely_turns(
         &self,
-        m: &Machine,
+        m: &FlatMachine,
         start: [f64; 2],
         end: [f64; 2],
         centre: [f64; 2],
@@ -199,11 +203,11 @@ impl Lowering {
     }
 
     /// Half a unit of the last decimal the target is written with, in mm.
-    fn quantum(&self, m: &Machine) -> f64 {
+    fn quantum(&self, m: &FlatMachine) -> f64 {
         0.5 * 10f64.powi(-i32::from(self.decimals(m))) * m.scale()
     }
 
-    fn decimals(&self, m: &Machine) -> u8 {
+    fn decimals(&self, m: &FlatMachine) -> u8 {
         match m.modes.units {
             Units::Mm => self.p.decimals_mm,
             Units::Inch => self.p.decimals_inch,
@@ -214,7 +218,7 @@ impl Lowering {
     /// X Y Z in mm, `r` in program units, `m` the state the arc runs in).
     fn r_arc_off(
         &self,
-        m: &Machine,
+        m: &FlatMachine,
         start: [Option<f64>; 3],
         end: [Option<f64>; 3],
         r: f64,

@@ -16,7 +16,7 @@ use crate::block::{Block, MotionMode, NonModal, ToolLength};
 use crate::codes::ArcDistance;
 use crate::diag::ErrorKind;
 use crate::diag::TargetError;
-use crate::machine::Machine;
+use crate::machine::FlatMachine;
 
 use super::Lowering;
 
@@ -34,7 +34,7 @@ impl Lowering {
     pub(super) fn centre_offsets(
         &self,
         b: &Block,
-        before: &Machine,
+        before: &FlatMachine,
     ) -> Result<Option<[Option<f64>; 3]>, ErrorKind> {
         let motion = b.motion().unwrap_or(before.modes.motion);
         let other_axis_use = b.non_modal().is_some_and(|n| !matches!(n, NonModal::Dwell))

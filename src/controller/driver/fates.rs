@@ -400,7 +400,7 @@ fn g_name(w: &Word) -> String {
     }
 }
 
-pub(super) fn g_span(b: &Block, a: u16, c: u16) -> Option<crate::block::Span> {
+pub(super) fn g_span(b: &Block, a: u16, c: u16) -> Option<crate::block::BlockSpan> {
     b.words
         .iter()
         .find(|w| matches!(w.kind, WordKind::G(_)) && (code10(w) == a || code10(w) == c))

@@ -8,7 +8,7 @@
 
 use crate::block::{Block, FeedMode, Units};
 use crate::controller::format::format_number;
-use crate::machine::Machine;
+use crate::machine::FlatMachine;
 
 use super::Lowering;
 use super::lower::{PlainLine, Word};
@@ -20,7 +20,7 @@ impl Lowering {
     pub(super) fn inverse_time_feeds(
         &self,
         b: &Block,
-        before: &Machine,
+        before: &FlatMachine,
         lowered: &mut [PlainLine],
     ) {
         if self.m.modes.feed_mode != FeedMode::InverseTime {

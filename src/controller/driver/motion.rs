@@ -7,8 +7,8 @@ use crate::block::{ArcDistance, Block, MotionMode, NonModal, Plane, ToolLength};
 use crate::controller::lower::{self, PlainLine};
 use crate::diag::ErrorKind;
 use crate::diag::{SetupError, TargetError};
-use crate::geom::comp::{Arc as CompArc, ArcCenter, Tolerances};
-use crate::machine::Machine;
+use crate::geom::cutter_comp::{Arc as CompArc, ArcCenter, Tolerances};
+use crate::machine::FlatMachine;
 
 use super::fates::g_span;
 use super::run::words_line;
@@ -20,7 +20,7 @@ impl Lowering {
     pub(super) fn lower_motion(
         &mut self,
         b: &Block,
-        before: &Machine,
+        before: &FlatMachine,
     ) -> Result<Option<Vec<PlainLine>>, ErrorKind> {
         let motion = b.motion().unwrap_or(before.modes.motion);
         let moves = b.has_axis() || b.value(b'@').is_some() || b.value(b'^').is_some();
@@ -101,7 +101,7 @@ impl Lowering {
         }
     }
 
-    pub(super) fn prog_pos(&self, m: &Machine) -> [Option<f64>; 3] {
+    pub(super) fn prog_pos(&self, m: &FlatMachine) -> [Option<f64>; 3] {
         let s = m.scale();
         [
             m.pos[0].map(|v| v / s),
@@ -110,7 +110,7 @@ impl Lowering {
         ]
     }
 
-    pub(super) fn plane(m: &Machine) -> Result<Plane, ErrorKind> {
+    pub(super) fn plane(m: &FlatMachine) -> Result<Plane, ErrorKind> {
         match m.modes.plane {
             p @ (Plane::XY | Plane::XZ | Plane::YZ) => Ok(p),
             Plane::UV | Plane::WU | Plane::VW => Err(ErrorKind::Setup(SetupError::Unsupported {
@@ -122,7 +122,7 @@ impl Lowering {
     fn lower_arc(
         &mut self,
         b: &Block,
-        before: &Machine,
+        before: &FlatMachine,
         motion: MotionMode,
         turns: f64,
     ) -> Result<Vec<PlainLine>, ErrorKind> {
@@ -157,9 +157,13 @@ impl Lowering {
                 turns: 1,
             };
             let tol = Tolerances::default_for(self.m.modes.units);
-            let (c, _) =
-                crate::geom::comp::arc_center(&tol, arc, [start[p], start[q]], [end[p], end[q]])
-                    .map_err(|_| self.lower_error(lower::LowerError::BadArc))?;
+            let (c, _) = crate::geom::cutter_comp::arc_center(
+                &tol,
+                arc,
+                [start[p], start[q]],
+                [end[p], end[q]],
+            )
+            .map_err(|_| self.lower_error(lower::LowerError::BadArc))?;
             (centre[p], centre[q]) = (c[0], c[1]);
         }
         let ijk = [b.value(b'I'), b.value(b'J'), b.value(b'K')];
@@ -184,7 +188,7 @@ impl Lowering {
     }
 
     /// The current X Y (program units), which a lowering needs.
-    pub(super) fn xy_known(&self, m: &Machine, what: &str) -> Result<[f64; 2], ErrorKind> {
+    pub(super) fn xy_known(&self, m: &FlatMachine, what: &str) -> Result<[f64; 2], ErrorKind> {
         let p = self.prog_pos(m);
         let need = |axis: char| {
             ErrorKind::Target(TargetError::TargetNeedsValue {
@@ -203,7 +207,7 @@ impl Lowering {
     /// G0/G1 with polar words as G0/G1 X Y (and Z).
     /// The X Y end point of a block with polar words (program units),
     /// which the model then has.
-    fn polar_end(&mut self, b: &Block, before: &Machine) -> Result<[f64; 2], ErrorKind> {
+    fn polar_end(&mut self, b: &Block, before: &FlatMachine) -> Result<[f64; 2], ErrorKind> {
         let current = self.xy_known(before, "polar coordinates (@ ^)")?;
         let input = lower::polar::PolarInput {
             distance: self.m.modes.distance,
@@ -221,7 +225,7 @@ impl Lowering {
 
     /// An arc with polar words: its end point is worked out before the
     /// arc is checked and lowered (the model's is not LinuxCNC's).
-    pub(super) fn polar_arc_end(&mut self, b: &Block, before: &Machine) -> Result<(), Problem> {
+    pub(super) fn polar_arc_end(&mut self, b: &Block, before: &FlatMachine) -> Result<(), Problem> {
         let motion = b.motion().unwrap_or(before.modes.motion);
         let other_axis_use = b.non_modal().is_some_and(|n| !matches!(n, NonModal::Dwell))
             || b.tool_length() == Some(ToolLength::Dynamic);
@@ -242,7 +246,7 @@ impl Lowering {
     fn lower_polar(
         &mut self,
         b: &Block,
-        before: &Machine,
+        before: &FlatMachine,
         motion: MotionMode,
     ) -> Result<Vec<PlainLine>, ErrorKind> {
         let [x, y] = self.polar_end(b, before)?;
@@ -264,7 +268,7 @@ impl Lowering {
         &mut self,
         n: u8,
         b: &Block,
-        before: &Machine,
+        before: &FlatMachine,
     ) -> Result<Vec<PlainLine>, ErrorKind> {
         use lower::CycleKind as K;
         let kind = match n {

@@ -8,7 +8,7 @@ use crate::block::{Block, CoordSystem, Distance, NonModal, ToolLength, WordKind}
 use crate::controller::lower::PlainLine;
 use crate::diag::ErrorKind;
 use crate::diag::TargetError;
-use crate::machine::Machine;
+use crate::machine::FlatMachine;
 
 use super::fates::{Fate, g_span};
 use super::{Lowering, Problem};
@@ -47,7 +47,7 @@ impl Lowering {
     /// coordinates: G92 values, and in absolute distance mode motion and
     /// G28/G30 intermediate points. Those are rewritten when the
     /// program's coordinate system is not the target's.
-    pub(super) fn positions_in_work(b: &Block, m: &Machine) -> bool {
+    pub(super) fn positions_in_work(b: &Block, m: &FlatMachine) -> bool {
         b.non_modal() == Some(NonModal::SetG92)
             || m.modes.distance == Distance::Absolute
                 && b.tool_length() != Some(ToolLength::Dynamic)
@@ -59,7 +59,7 @@ impl Lowering {
 
     /// What to add (mm, X Y Z) to a position in `m`'s work coordinates to
     /// get the same machine position in the target's system `target`.
-    fn coord_shift(&self, m: &Machine, target: CoordSystem) -> Result<[f64; 3], ErrorKind> {
+    fn coord_shift(&self, m: &FlatMachine, target: CoordSystem) -> Result<[f64; 3], ErrorKind> {
         let (from, to) = (m.modes.coord, target);
         let (a, t) = (&m.g5x[from.index()], &m.g5x[to.index()]);
         let mut out = [0.0; 3];
@@ -98,7 +98,7 @@ impl Lowering {
     pub(super) fn offset_sync(
         &self,
         b: &Block,
-        before: &Machine,
+        before: &FlatMachine,
     ) -> Result<Option<Vec<(u8, f64)>>, ErrorKind> {
         let (code, what) = match b.non_modal() {
             Some(NonModal::LocalOffset) => (520, "G52 (local offset)"),
@@ -110,7 +110,7 @@ impl Lowering {
         if self.p.has_g(code) {
             return Ok(None);
         }
-        let effective = |m: &Machine, a: usize| match m.g92_applied {
+        let effective = |m: &FlatMachine, a: usize| match m.g92_applied {
             Some(true) => m.g92[a],
             Some(false) => Some(0.0),
             None => None,
@@ -174,7 +174,7 @@ impl Lowering {
     pub(super) fn tool_length_words(
         &self,
         b: &Block,
-        before: &Machine,
+        before: &FlatMachine,
     ) -> Result<Vec<(u8, f64)>, ErrorKind> {
         // The G43.1 line goes before the block's own line, so its value is
         // in the units in effect before the block (a G20/G21 on the line
@@ -222,7 +222,7 @@ impl Lowering {
     pub(super) fn dynamic_tool_length(
         &self,
         b: &Block,
-        before: &Machine,
+        before: &FlatMachine,
     ) -> Result<Option<Vec<(u8, f64)>>, ErrorKind> {
         if b.tool_length() != Some(ToolLength::Dynamic) || !self.p.g43_1_z_only {
             return Ok(None);

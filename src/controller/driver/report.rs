@@ -12,14 +12,14 @@ use crate::block::{Block, DecodeError, MotionMode, NonModal, ToolLength};
 use crate::controller::lower;
 use crate::diag::{BlockError, Diagnostic, Error, ErrorKind, Site, WarningKind};
 use crate::eval::Origin;
-use crate::machine::Machine;
+use crate::machine::FlatMachine;
 use crate::program::SourceFile;
 
 use super::{Lowering, Problem};
 
 /// A problem's span that stands for the start of its line, where the
 /// evaluator reports an error of the block (an arc rs274 refuses).
-pub(super) const LINE_START: crate::block::Span = crate::block::Span {
+pub(super) const LINE_START: crate::block::BlockSpan = crate::block::BlockSpan {
     start: u16::MAX,
     end: u16::MAX,
 };
@@ -78,7 +78,7 @@ impl Lowering {
     /// zero. Checked where both points are known: under `--zero-start` a
     /// probe is taken as not tripping, so a second probe to the same
     /// target is refused too.
-    pub(super) fn probe_in_place(&self, b: &Block, before: &Machine) -> Option<ErrorKind> {
+    pub(super) fn probe_in_place(&self, b: &Block, before: &FlatMachine) -> Option<ErrorKind> {
         let motion = b.motion().unwrap_or(before.modes.motion);
         if !matches!(motion, MotionMode::Probe(_))
             || !b.has_axis()
@@ -140,7 +140,11 @@ impl Lowering {
 /// The site of `span` of a flat line from `origin`: exact on a line written
 /// as read; otherwise the same-lettered word of the source line (by its
 /// rank), or the whole line; [`LINE_START`] where the line starts.
-pub(super) fn site_of(origin: &Origin<'_>, text: &[u8], span: Option<crate::block::Span>) -> Site {
+pub(super) fn site_of(
+    origin: &Origin<'_>,
+    text: &[u8],
+    span: Option<crate::block::BlockSpan>,
+) -> Site {
     let file: &Arc<SourceFile> = origin.file;
     let start = origin.line_start;
     let Some(span) = span else {

@@ -14,7 +14,7 @@ use crate::controller::lower::{self, PlainLine};
 use crate::diag::{Diagnostic, Error, ErrorKind};
 use crate::emit::Output;
 use crate::eval::Origin;
-use crate::machine::Machine;
+use crate::machine::FlatMachine;
 
 use super::fates::{Decided, Fate, code10, g_span};
 use super::offsets::{shift_line, xyz_index};
@@ -133,7 +133,7 @@ impl Lowering {
         &mut self,
         b: &Block,
         text: &[u8],
-        before: &Machine,
+        before: &FlatMachine,
         d: &mut Decided,
     ) -> Result<Vec<Vec<u8>>, Problem> {
         self.polar_arc_end(b, before)?;
@@ -220,7 +220,12 @@ impl Lowering {
     /// Rewrites that need the state after the block: the target's G92
     /// offset and coordinate system, refused probes and arcs, G5 words,
     /// tool length offsets the target lacks.
-    fn state_lines(&mut self, b: &Block, before: &Machine, d: &mut Decided) -> Result<(), Problem> {
+    fn state_lines(
+        &mut self,
+        b: &Block,
+        before: &FlatMachine,
+        d: &mut Decided,
+    ) -> Result<(), Problem> {
         // The target's G92 offset follows LinuxCNC's effective G92/G52
         // offset (a line before the block's own, in the target's state
         // before it); then the target takes the block's coordinate system
@@ -306,7 +311,7 @@ impl Lowering {
     fn motion_lines(
         &mut self,
         b: &Block,
-        before: &Machine,
+        before: &FlatMachine,
         fates: &mut [Fate],
     ) -> Result<Option<Vec<PlainLine>>, Problem> {
         self.f_before = self.last_f;

@@ -5,7 +5,7 @@
 use crate::block::{Block, Distance, FeedMode, LatheMode, MotionMode, Plane};
 use crate::controller::lower::{self, PlainLine};
 use crate::diag::ErrorKind;
-use crate::machine::Machine;
+use crate::machine::FlatMachine;
 
 use super::Lowering;
 
@@ -25,7 +25,7 @@ impl Lowering {
     pub(super) fn native_g5_words(
         &mut self,
         b: &Block,
-        before: &Machine,
+        before: &FlatMachine,
         extra: &mut Vec<(u8, f64)>,
     ) {
         let motion = b.motion().unwrap_or(before.modes.motion);
@@ -50,7 +50,7 @@ impl Lowering {
     pub(super) fn lower_spline(
         &mut self,
         b: &Block,
-        before: &Machine,
+        before: &FlatMachine,
         motion: MotionMode,
     ) -> Result<Vec<PlainLine>, ErrorKind> {
         if self.m.modes.plane != Plane::XY {
@@ -99,7 +99,7 @@ impl Lowering {
     pub(super) fn lower_nurbs_block(
         &mut self,
         b: &Block,
-        before: &Machine,
+        before: &FlatMachine,
         motion: MotionMode,
     ) -> Result<Option<Vec<PlainLine>>, ErrorKind> {
         let not_lowered = |s: &Self, message: &str| ErrorKind::TargetLowering {

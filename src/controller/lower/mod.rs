@@ -23,14 +23,14 @@
 //! | [`arc::lower_arc`] | full circle without end point, arcs with P turns | [`arc::ArcInput`]: plane, direction, start, end, centre, helix end, turns |
 //! | [`polar::polar_target`] | `@` radius / `^` angle words | [`polar::PolarInput`]: distance mode, current X Y, words |
 //! | [`diameter::radius_words`] | G7 diameter mode | X (and I) words of a block |
-//! | [`comp::lower_comp_moves`] | cutter radius compensation G41/G42, G41.1/G42.1 | the moves released by [`crate::geom::comp::Comp`], the plane, the position before them |
+//! | [`comp::lower_comp_moves`] | cutter radius compensation G41/G42, G41.1/G42.1 | the moves released by [`crate::geom::cutter_comp::Comp`], the plane, the position before them |
 //! | [`spline::lower_g5`], [`spline::lower_g5_1`], [`spline::lower_nurbs`] | G5, G5.1, G5.2/G5.3 splines | control points, tolerance |
 //!
 //! Errors are [`LowerError`]s with their own codes (E1100–E1149); the
 //! caller adds the position of the block.
 
 pub mod arc;
-pub mod comp;
+pub mod cutter_moves;
 pub mod cycle;
 pub mod diameter;
 pub mod polar;

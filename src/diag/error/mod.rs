@@ -11,7 +11,7 @@
 use std::fmt;
 
 use super::{BlockError, LatheError};
-use crate::geom::comp::CompError;
+use crate::geom::cutter_comp::CompError;
 
 /// Declares one phase's errors: each variant is written after its code,
 /// and `code()` gives it back.
@@ -86,7 +86,7 @@ pub enum ErrorKind {
     /// A lathe cycle (G70–G72) LinuxCNC refuses.
     Lathe(LatheError),
     /// `G41 G1 X0.1` with a 0.25 radius tool: the compensated path cannot
-    /// be made (see [`crate::geom::comp::CompError`]).
+    /// be made (see [`crate::geom::cutter_comp::CompError`]).
     CutterComp { error: CompError },
     /// Runaway guards, output and travel limits.
     Limit(LimitError),
@@ -142,9 +142,9 @@ impl fmt::Display for ErrorKind {
 }
 
 /// Codes of the compensation geometry errors: E1150 and up, in the order
-/// of [`crate::geom::comp::CompError::ALL`].
-fn comp_code(e: crate::geom::comp::CompError) -> &'static str {
-    use crate::geom::comp::CompError::*;
+/// of [`crate::geom::cutter_comp::CompError::ALL`].
+fn comp_code(e: crate::geom::cutter_comp::CompError) -> &'static str {
+    use crate::geom::cutter_comp::CompError::*;
     match e {
         EntryTooShort => "E1150",
         EntryArcTooShort => "E1151",
@@ -188,7 +188,7 @@ mod tests {
     fn codes_are_well_formed_and_unique() {
         let mut codes = phase_codes();
         codes.extend(
-            crate::geom::comp::CompError::ALL
+            crate::geom::cutter_comp::CompError::ALL
                 .iter()
                 .map(|e| comp_code(*e)),
         );

@@ -19,7 +19,7 @@ use crate::program::{FileIndex, Window, next_line};
 use crate::codes::{GCode, MotionMode};
 use crate::eval::flow::SubRec;
 use crate::eval::read::validate::check_contour_line;
-use crate::eval::state::codes::{Checked, LineCodes};
+use crate::eval::state::checked::{Checked, LineCodes};
 use crate::eval::{Interp, file_key, read_error};
 
 /// A contour line's evaluated words, and its motion code if it has one.

@@ -24,7 +24,7 @@ use crate::eval::read::block::{
     trimmed_len,
 };
 use crate::eval::read::validate::check_block;
-use crate::eval::state::codes::Checked;
+use crate::eval::state::checked::Checked;
 
 impl Interp<'_> {
     /// The block checks of a line's evaluated `words` in the machine's

@@ -12,9 +12,9 @@
 mod call;
 mod control;
 mod expr;
+mod handoff;
 mod lathe;
 mod line;
-mod out;
 mod restore;
 mod straight;
 mod words;

@@ -10,11 +10,11 @@ use crate::program::FileIndex;
 
 use crate::block::MovesRule;
 use crate::eval::Interp;
-use crate::eval::out::hook::FormBatch;
 use crate::eval::read::scan_ahead::{Ahead, Decoded, InPlace, LineRoom, Lines, Read, Shared};
 use crate::eval::read::straight::{
     BATCH, Plain, fast_line, fast_words, move_values, plain_words, read_line,
 };
+use crate::eval::write::hook::FormBatch;
 
 /// The bytes a straight-line run reads: `buf` is the file's text from
 /// offset `base`, whose first line is `first_line`; at most `max_lines` are

@@ -11,7 +11,7 @@ use crate::program::FileIndex;
 
 use crate::eval::Interp;
 use crate::eval::state::Env;
-use crate::eval::state::codes::Checked;
+use crate::eval::state::checked::Checked;
 
 impl Interp<'_> {
     /// Applies the line's words to the model, with its G and M codes as

@@ -11,7 +11,7 @@ use crate::diag::SyntaxError;
 use crate::emit::Edit;
 use crate::parse::ast::{ExprKind, Item, Span, Word};
 
-use crate::eval::state::codes::Checked;
+use crate::eval::state::checked::Checked;
 
 /// Evaluated words of the line: (letter, value).
 pub(crate) type Words = Vec<(u8, f64)>;

@@ -6,7 +6,7 @@
 //! test checks every line it takes against the grammar); any other goes to
 //! the grammar.
 
-use crate::block::{DecodeError, LineSink, RawLine, RawWord, Shape, Span, read_flat_line_in};
+use crate::block::{BlockSpan, DecodeError, LineSink, RawLine, RawWord, Shape, read_flat_line_in};
 use crate::parse::MAX_LINE;
 
 /// Room for a plain line's words: as the straight-line reader keeps them
@@ -74,7 +74,7 @@ impl LineSink for Plain<'_> {
         &mut self,
         letter: u8,
         value: f64,
-        span: Span,
+        span: BlockSpan,
         shape: Shape,
         spaced: bool,
     ) -> Result<(), NotPlain> {
@@ -114,7 +114,7 @@ impl LineSink for Plain<'_> {
 /// (for a line number, no sign and a digit first). The reader has read
 /// the number, so it has a digit and at most one point.
 #[inline(always)]
-fn written_plainly(line: &[u8], span: Span, line_number: bool) -> bool {
+fn written_plainly(line: &[u8], span: BlockSpan, line_number: bool) -> bool {
     let Some(t) = line.get(span.start as usize + 1..span.end as usize) else {
         return false;
     };

@@ -13,8 +13,8 @@
 //! them are the loop's own steps.
 
 use crate::block::{
-    Cuts, MoveValues, MovesRule, RawLine, RawWord, Shape, Spacing, Span, WordSink as ReadWords,
-    WordsEnd, kept_digits, read_words,
+    BlockSpan, Cuts, MoveValues, MovesRule, RawLine, RawWord, Shape, Spacing,
+    WordSink as ReadWords, WordsEnd, kept_digits, read_words,
 };
 use crate::number::{Digits, POW10, digits_in};
 
@@ -170,8 +170,8 @@ impl<'a> ToRaw<'a> {
     }
 
     #[inline(always)]
-    fn span(&self, a: usize, b: usize) -> Span {
-        Span {
+    fn span(&self, a: usize, b: usize) -> BlockSpan {
+        BlockSpan {
             start: (a - self.start) as u16,
             end: (b - self.start) as u16,
         }

@@ -12,7 +12,7 @@ use crate::codes::{
     SpindleDir, SpindleMode, ToolLength,
 };
 use crate::diag::BlockError;
-use crate::eval::state::codes::{Checked, G80, LineCodes};
+use crate::eval::state::checked::{Checked, G80, LineCodes};
 use crate::eval::state::cycle::{Cycle, depth_axis};
 use crate::eval::state::nurbs::{NO_MOTION, NURBS, Nurbs};
 use crate::modes::Modes;

@@ -21,7 +21,7 @@ pub(crate) fn arc_refusal(
     start: [f64; 2],
     end: [f64; 2],
 ) -> Option<BlockError> {
-    use crate::geom::comp::{Arc, ArcCenter, CompError, Tolerances, arc_center};
+    use crate::geom::cutter_comp::{Arc, ArcCenter, CompError, Tolerances, arc_center};
     let (i, j) = (ij[0].unwrap_or(0.0), ij[1].unwrap_or(0.0));
     let center = match r {
         Some(r) => ArcCenter::Radius(r),

@@ -11,7 +11,7 @@ use crate::emit::number_string;
 use crate::geom::lathe::{self, C, Contour, Cycle, MAX_MOVES, Move, cut_moves};
 use crate::program::FileIndex;
 
-use super::ccomp::Written;
+use super::cutter_check::Written;
 use super::{Machine, Unknown};
 use crate::codes::{
     ArcDistance, CutterComp, Distance, FeedMode, LatheMode, MotionMode, Plane, Units,
@@ -446,11 +446,11 @@ type PathLine = (Vec<(u8, f64)>, [f64; 3]);
 /// end lie at radii more than 0.005 mm apart (LinuxCNC releases such arcs
 /// in some corners) has no G2/G3: `Err` says why.
 fn comp_line(
-    m: crate::geom::comp::Out<()>,
+    m: crate::geom::cutter_comp::Out<()>,
     at: [f64; 3],
     units: Units,
 ) -> Result<PathLine, &'static str> {
-    use crate::geom::comp::Out;
+    use crate::geom::cutter_comp::Out;
     match m {
         Out::Line { rapid, end, .. } => {
             let e = [end[1], end[2], end[0]];

@@ -3,8 +3,8 @@
 //! parameters and the position parameters.
 
 pub(super) mod arc;
-pub(super) mod ccomp;
-pub(super) mod codes;
+pub(super) mod checked;
+pub(super) mod cutter_check;
 pub(super) mod cycle;
 pub(super) mod lathe;
 pub(super) mod modal;
@@ -95,13 +95,13 @@ pub(super) struct Machine {
     /// standalone reference still has as current (see W0110).
     pub(super) m61: Option<(u32, Option<f64>)>,
     /// Cutter compensation, once a program turns it on.
-    pub(super) comp: Option<Box<ccomp::CompRun>>,
+    pub(super) comp: Option<Box<cutter_check::CompRun>>,
     /// G40 ended an offset path: the next move must be straight (the fast
     /// paths leave such lines to the general one).
     pub(super) comp_pending: bool,
     /// A G70 whose compensated path the evaluator writes itself (see
-    /// [`ccomp::Written`]).
-    pub(super) comp_written: ccomp::Written,
+    /// [`cutter_check::Written`]).
+    pub(super) comp_written: cutter_check::Written,
     /// A lathe cycle whose contour subroutine is running.
     pub(super) lathe: Option<Box<lathe::LatheRun>>,
     /// Tools whose data a G10 left unknown (a tool-data read of one is
@@ -159,7 +159,7 @@ impl Machine {
             m61: None,
             comp: None,
             comp_pending: false,
-            comp_written: ccomp::Written::No,
+            comp_written: cutter_check::Written::No,
             lathe: None,
             unknown_tools: HashSet::new(),
         }

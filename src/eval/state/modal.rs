@@ -4,7 +4,7 @@ use crate::diag::{BlockError, ErrorKind, WarningKind};
 use crate::diag::{ExprError, MachineError};
 
 use super::arc::arc_refusal;
-use super::codes::{Checked, LineCodes};
+use super::checked::{Checked, LineCodes};
 use super::nurbs::{NO_MOTION, NURBS};
 use super::{AXES, Env, Machine, Unknown};
 use crate::codes::{

@@ -1,5 +1,5 @@
 //! Cutter radius compensation in the evaluator: the programmed moves of
-//! blocks run while G41/G42 is on are handed to [`crate::geom::comp`], so
+//! blocks run while G41/G42 is on are handed to [`crate::geom::cutter_comp`], so
 //! that a program the reference would refuse (an entry move too short, a
 //! concave corner the tool cannot reach, an arc too small for the tool, ...)
 //! is refused here too, at the same line. Programs that never turn
@@ -12,7 +12,7 @@
 
 use crate::diag::{ErrorKind, WarningKind};
 use crate::diag::{ExprError, MachineError};
-use crate::geom::comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
+use crate::geom::cutter_comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
 
 use super::Machine;
 use super::tools::{ToolData, standalone_diameter};

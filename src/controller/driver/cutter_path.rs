@@ -12,8 +12,8 @@ use crate::block::{
 use crate::controller::lower::{self, PlainLine};
 use crate::diag::ErrorKind;
 use crate::diag::{SetupError, TargetError};
-use crate::geom::comp::{Arc as CompArc, ArcCenter, Comp, Out, Side, Tolerances};
-use crate::machine::Machine;
+use crate::geom::cutter_comp::{Arc as CompArc, ArcCenter, Comp, Out, Side, Tolerances};
+use crate::machine::FlatMachine;
 
 use super::fates::Fate;
 use super::run::words_line;
@@ -66,7 +66,7 @@ impl Lowering {
 
     fn comp_refusal(
         &self,
-        span: Option<crate::block::Span>,
+        span: Option<crate::block::BlockSpan>,
         code: &'static str,
         message: &str,
     ) -> Problem {
@@ -128,7 +128,7 @@ impl Lowering {
     pub(super) fn comp_block(
         &mut self,
         b: &Block,
-        before: &Machine,
+        before: &FlatMachine,
         fates: &mut [Fate],
     ) -> Result<Option<Vec<PlainLine>>, Problem> {
         if self.p.has_g(410)
@@ -292,7 +292,7 @@ impl Lowering {
         &mut self,
         motion: MotionMode,
         other_axis_use: bool,
-        motion_span: Option<crate::block::Span>,
+        motion_span: Option<crate::block::BlockSpan>,
     ) -> Result<PlainLine, Problem> {
         if other_axis_use || !matches!(motion, MotionMode::Rapid | MotionMode::Linear) {
             return Err(self.comp_refusal(
@@ -330,8 +330,8 @@ impl Lowering {
 
     fn comp_problem(
         &self,
-        span: Option<crate::block::Span>,
-        error: crate::geom::comp::CompError,
+        span: Option<crate::block::BlockSpan>,
+        error: crate::geom::cutter_comp::CompError,
     ) -> Problem {
         Problem {
             span,
@@ -346,13 +346,13 @@ impl Lowering {
         c: &mut CompPath,
         released: &[Out<MoveTag>],
         lines: &mut Vec<PlainLine>,
-        span: Option<crate::block::Span>,
+        span: Option<crate::block::BlockSpan>,
     ) -> Result<[f64; 3], Problem> {
-        let (out, at) = lower::comp::lower_comp_moves(
+        let (out, at) = lower::cutter_moves::lower_comp_moves(
             c.plane,
             c.at,
             released,
-            lower::comp::arc_radius_tolerance(self.m.modes.units),
+            lower::cutter_moves::arc_radius_tolerance(self.m.modes.units),
         )
         .map_err(|e| Problem {
             span,
@@ -384,9 +384,9 @@ impl Lowering {
     fn comp_on(
         &mut self,
         b: &Block,
-        before: &Machine,
+        before: &FlatMachine,
         cc: CutterComp,
-        span: Option<crate::block::Span>,
+        span: Option<crate::block::BlockSpan>,
     ) -> Result<(), Problem> {
         let need = |s: &Self, value: &str, option: &str| Problem {
             span,
@@ -491,7 +491,7 @@ impl Lowering {
         motion: MotionMode,
         moves: bool,
         other_axis_use: bool,
-        span: Option<crate::block::Span>,
+        span: Option<crate::block::BlockSpan>,
         lines: &mut Vec<PlainLine>,
     ) -> Result<bool, Problem> {
         let arc = matches!(motion, MotionMode::ArcCw | MotionMode::ArcCcw);

@@ -9,7 +9,7 @@ use crate::diag::Error;
 use crate::program::SourceFile;
 
 use crate::eval::Interp;
-use crate::eval::out::hook::{FormBatch, RunAt};
+use crate::eval::write::hook::{FormBatch, RunAt};
 
 /// The run where a line is handed over: the calls of `$i`'s control flow,
 /// the count of its warnings (a macro, so that the writer stays free to

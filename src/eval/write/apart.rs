@@ -19,7 +19,7 @@ use std::sync::mpsc::{Receiver, Sender, SyncSender};
 use super::hook::{LineConsumer, Origin};
 use crate::diag::{Diagnostic, Error, ErrorKind, Site};
 use crate::emit::Output;
-use crate::eval::out::place_limit;
+use crate::eval::write::place_limit;
 use crate::program::SourceFile;
 
 /// Batches on their way to the thread, at most; the evaluator waits when

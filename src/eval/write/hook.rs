@@ -20,7 +20,7 @@ use crate::emit::Output;
 use crate::program::SourceFile;
 
 use crate::eval::flow::{Frame, stack_of};
-use crate::eval::out::{Writer, place_limit};
+use crate::eval::write::{Writer, place_limit};
 
 /// Where an output line came from.
 #[derive(Clone, Copy)]

@@ -2,11 +2,11 @@
 //! grblHAL, FluidNC): the compensated path itself, as plain G0/G1/G2/G3
 //! blocks, with G40/G41/G42 gone.
 //!
-//! The path is computed by [`crate::geom::comp::Comp`] exactly as LinuxCNC
+//! The path is computed by [`crate::geom::cutter_comp::Comp`] exactly as LinuxCNC
 //! computes it; this module writes the moves it releases. The caller feeds
 //! the programmed moves of each block to the `Comp` and passes the released
 //! moves here, with the tool position before the first of them. While the
-//! `Comp` holds a move back ([`crate::geom::comp::Comp::holding`]), the
+//! `Comp` holds a move back ([`crate::geom::cutter_comp::Comp::holding`]), the
 //! reference also holds back the feed, spindle, coolant and dwell commands
 //! of the blocks that follow until the move is released: a caller writes
 //! those blocks after the lines returned here, and writes each released
@@ -25,10 +25,10 @@
 use super::arc::{ArcInput, lower_arc};
 use super::{LowerError, PlainLine, push};
 use crate::codes::{Plane, Units};
-use crate::geom::comp::Out;
+use crate::geom::cutter_comp::Out;
 
 /// XYZ indices of the compensation plane's coordinates (first, second,
-/// third), as [`crate::geom::comp`] orders them: G17 X Y Z, G18 Z X Y.
+/// third), as [`crate::geom::cutter_comp`] orders them: G17 X Y Z, G18 Z X Y.
 /// LinuxCNC compensates in those two planes only.
 fn axes(plane: Plane) -> Result<[usize; 3], LowerError> {
     match plane {
