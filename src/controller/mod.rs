@@ -22,6 +22,7 @@ pub const BUILT_IN: &[(&str, &str)] = &[
     ("grbl", include_str!("profiles/grbl.toml")),
     ("grblhal", include_str!("profiles/grblhal.toml")),
     ("fluidnc", include_str!("profiles/fluidnc.toml")),
+    ("g2core", include_str!("profiles/g2core.toml")),
 ];
 
 static PROFILES: std::sync::LazyLock<Vec<Profile>> = std::sync::LazyLock::new(|| {

@@ -623,7 +623,7 @@ fn lowered_offsets_move_as_rs274() {
 
 /// The GRBL-class target a random program `seed` is lowered for.
 fn random_target(seed: u64) -> &'static str {
-    ["grbl", "grblhal", "fluidnc"][(seed % 3) as usize]
+    ["grbl", "grblhal", "fluidnc", "g2core"][(seed % 4) as usize]
 }
 
 /// `program` lowered for `target` with `--zero-start`: exit code, output,
