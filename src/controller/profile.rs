@@ -95,6 +95,9 @@ pub struct Profile {
     pub optional_stop: bool,
     /// Arcs take P (turns).
     pub arc_turns: bool,
+    /// A probe move shorter than this (mm) is refused by the firmware; 0:
+    /// only one to the point the tool is at.
+    pub min_probe_travel: f64,
 }
 
 impl Profile {

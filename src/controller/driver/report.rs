@@ -106,14 +106,30 @@ impl Lowering {
         m.apply(b);
         // The target's own axes must be known and unmoved; the others
         // cannot be written for it anyway.
-        let same = crate::block::AXIS_LETTERS
+        let mut sq = 0.0;
+        for (_, (a, z)) in crate::block::AXIS_LETTERS
             .iter()
             .zip(before.pos.iter().zip(m.pos.iter()))
             .filter(|(l, _)| self.p.has_axis(**l))
-            .all(|(_, (a, z))| matches!((a, z), (Some(a), Some(z)) if (a - z).abs() < 1e-9));
-        same.then_some(ErrorKind::Target(TargetError::TargetProbeInPlace {
-            target: self.name(),
-        }))
+        {
+            match (a, z) {
+                (Some(a), Some(z)) => sq += (a - z) * (a - z),
+                _ => return None,
+            }
+        }
+        let travel = f64::sqrt(sq);
+        if travel < 1e-9 {
+            return Some(ErrorKind::Target(TargetError::TargetProbeInPlace {
+                target: self.name(),
+            }));
+        }
+        (travel < self.p.min_probe_travel).then(|| {
+            ErrorKind::Target(TargetError::TargetProbeTooShort {
+                target: self.name(),
+                travel: crate::emit::number_string(travel, Some(4)),
+                min: crate::emit::number_string(self.p.min_probe_travel, None),
+            })
+        })
     }
 
     pub(super) fn lower_error(&self, e: lower::LowerError) -> ErrorKind {

@@ -47,6 +47,7 @@ pub(super) const KEYS: &[&str] = &[
     "g43_1_z_only",
     "optional_stop",
     "arc_turns",
+    "min_probe_travel",
 ];
 
 /// `line_limit`: bytes, or `"none"`.
@@ -89,6 +90,7 @@ struct ProfileFile {
     g43_1_z_only: bool,
     optional_stop: bool,
     arc_turns: bool,
+    min_probe_travel: f64,
 }
 
 /// The 1-based line of byte `at` in `text`.
@@ -240,6 +242,7 @@ impl ProfileFile {
             g43_1_z_only: self.g43_1_z_only,
             optional_stop: self.optional_stop,
             arc_turns: self.arc_turns,
+            min_probe_travel: self.min_probe_travel,
         };
         match p.contradiction() {
             Some(what) => Err(ProfileError::Contradiction { what }),
@@ -289,8 +292,10 @@ impl Profile {
                 "coord_systems must be 1 (G54 only) to 9 (G54 to G59.3)".into(),
             ),
             (
-                !(self.max_line_number >= 0.0 && self.max_tool >= 0.0),
-                "max_line_number and max_tool cannot be negative".into(),
+                !(self.max_line_number >= 0.0
+                    && self.max_tool >= 0.0
+                    && (0.0..1000.0).contains(&self.min_probe_travel)),
+                "max_line_number, max_tool and min_probe_travel cannot be negative".into(),
             ),
             (
                 self.realtime

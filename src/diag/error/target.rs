@@ -44,6 +44,13 @@ super::phase! {
         /// firmwares refuse a probe move to the point the tool is at
         /// (LinuxCNC accepts it and does nothing).
         "E1050" TargetProbeInPlace { target: &'static str },
+        /// `G0 Z1` then `G38.2 Z0.9` with `--target g2core`: g2core refuses a
+        /// probe move shorter than 0.254 mm (its profile's `min_probe_travel`).
+        "E1051" TargetProbeTooShort {
+            target: &'static str,
+            travel: String,
+            min: String,
+        },
     }
 }
 
@@ -81,6 +88,14 @@ impl fmt::Display for TargetError {
             TargetProbeInPlace { target } => write!(
                 f,
                 "probe move to the point the tool is already at: {target} refuses it (its error 33, invalid target)"
+            ),
+            TargetProbeTooShort {
+                target,
+                travel,
+                min,
+            } => write!(
+                f,
+                "probe move of {travel} mm: {target} refuses a probe move shorter than {min} mm"
             ),
         }
     }
