@@ -49,6 +49,26 @@ pub struct MachineAxes {
     pub axes: [AxisData; 9],
     /// The planner settings of a GRBL `$$` listing, when one was given.
     pub(crate) grbl: Option<super::grbl::GrblSettings>,
+    /// What a LinuxCNC INI says about its trajectory planner, when one was
+    /// given.
+    pub(crate) traj: Option<Traj>,
+}
+
+/// The trajectory planner's settings of a LinuxCNC INI, in mm and seconds.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Traj {
+    /// `[TRAJ]MAX_LINEAR_VELOCITY` (mm/s).
+    pub(crate) max_vel: Option<f64>,
+    /// `[TRAJ]MAX_LINEAR_ACCELERATION` (mm/s²).
+    pub(crate) max_acc: Option<f64>,
+    /// One machine unit in mm (`[TRAJ]LINEAR_UNITS`): LinuxCNC's defaults
+    /// for what the INI does not say are 1 machine unit per second.
+    pub(crate) unit_mm: f64,
+    /// `[EMCMOT]SERVO_PERIOD` (s): the planner's cycle.
+    pub(crate) cycle: Option<f64>,
+    /// `[TRAJ]ARC_BLEND_OPTIMIZATION_DEPTH`: segments the planner looks
+    /// back over.
+    pub(crate) depth: Option<usize>,
 }
 
 impl MachineAxes {
@@ -126,6 +146,32 @@ impl MachineAxes {
                 a.max_acc = Some(v.abs());
             }
         }
+        let num = |sec: &str, key: &str| -> Result<Option<f64>, ErrorKind> {
+            match ini.get(sec, key) {
+                None => Ok(None),
+                Some(v) => v
+                    .split_whitespace()
+                    .next()
+                    .and_then(|w| w.parse::<f64>().ok())
+                    .filter(|x| x.is_finite())
+                    .map(|x| Some(x.abs()))
+                    .ok_or_else(|| {
+                        ErrorKind::Setup(SetupError::BadMachineValue {
+                            source: format!("INI [{sec}]{key}"),
+                            text: v.to_string(),
+                        })
+                    }),
+            }
+        };
+        self.traj = Some(Traj {
+            max_vel: num("TRAJ", "MAX_LINEAR_VELOCITY")?.map(|v| v * scale),
+            max_acc: num("TRAJ", "MAX_LINEAR_ACCELERATION")?.map(|v| v * scale),
+            unit_mm: scale,
+            cycle: num("EMCMOT", "SERVO_PERIOD")?
+                .filter(|&ns| ns > 0.0)
+                .map(|ns| ns * 1e-9),
+            depth: num("TRAJ", "ARC_BLEND_OPTIMIZATION_DEPTH")?.map(|d| d as usize),
+        });
         Ok(())
     }
 

@@ -404,6 +404,18 @@ impl FlatMachine {
         // fields, in the reference's order (tool length, coordinate
         // system, non-modal code, motion).
         for g in b.modal_codes() {
+            if let crate::codes::GCode::Path(p) = g {
+                // G64's P is in the units in effect after the line's own
+                // G20/G21 (LinuxCNC sets the units first; the groups come
+                // in that order here).
+                let exact = p != crate::codes::PathMode::Blend;
+                let tolerance = if exact {
+                    0.0
+                } else {
+                    b.value(b'P').unwrap_or(0.0).abs() * self.scale()
+                };
+                self.push(Motion::PathMode { exact, tolerance });
+            }
             if let Some(MachineCode::Units(u)) = self.modes.set_mode(g) {
                 // The cycles' level keeps its number in program units.
                 let from = self.scale();

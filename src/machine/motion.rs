@@ -86,6 +86,12 @@ pub(crate) enum Motion {
     ToolChange {
         tool: i64,
     },
+    /// G61, G61.1 (`exact`) or G64 with its P tolerance (mm; 0: none
+    /// given), as it comes into effect.
+    PathMode {
+        exact: bool,
+        tolerance: f64,
+    },
     /// M0 (`optional: false`) or M1.
     Pause {
         optional: bool,

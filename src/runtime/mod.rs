@@ -41,6 +41,7 @@
 //!   to the figure.
 
 pub(crate) mod grbl;
+pub(crate) mod linuxcnc;
 pub(crate) mod planner;
 
 use std::collections::{BTreeMap, VecDeque};
@@ -64,6 +65,8 @@ pub(crate) enum TimeModel {
         window: usize,
         firmware: &'static str,
     },
+    /// LinuxCNC 2.9's trajectory planner ([`linuxcnc`]).
+    LinuxCnc { limits: Box<linuxcnc::Limits> },
     /// Each move timed alone from rest to rest at the axes' limits.
     RestToRest { axes: Box<MachineAxes> },
 }
@@ -82,6 +85,11 @@ impl TimeModel {
             None if axes.grbl.is_some() => "GRBL 1.1h",
             Some("grblhal") => "grblHAL",
             Some("fluidnc") => "FluidNC",
+            None | Some("linuxcnc") => {
+                return TimeModel::LinuxCnc {
+                    limits: Box::new(linuxcnc::Limits::from_axes(axes)),
+                };
+            }
             _ => {
                 return TimeModel::RestToRest {
                     axes: Box::new(axes.clone()),
@@ -102,6 +110,9 @@ impl TimeModel {
 pub(crate) struct ModelInfo {
     pub(crate) name: String,
     pub(crate) approximate: bool,
+    /// How far the figure is known to be off, in a few words, for printing
+    /// next to it.
+    pub(crate) error: String,
     pub(crate) description: String,
 }
 
@@ -173,6 +184,11 @@ pub(crate) struct RunTime {
     rpm: f64,
     /// The machine moved since the last full stop.
     moving: bool,
+    /// LinuxCNC: the last segment, whose end waits for the next one's
+    /// corner.
+    pending: Option<linuxcnc::Seg>,
+    /// LinuxCNC: the path mode in effect (exact stop, G64 tolerance).
+    path: (bool, f64),
     charge: Charge,
     totals: Totals,
     open: VecDeque<Open>,
@@ -184,6 +200,7 @@ impl RunTime {
     pub(crate) fn new(model: TimeModel) -> RunTime {
         let window = match &model {
             TimeModel::Grbl { window, .. } => Window::new(*window),
+            TimeModel::LinuxCnc { limits } => Window::new(limits.depth),
             TimeModel::RestToRest { .. } => Window::new(1),
         };
         RunTime {
@@ -197,6 +214,8 @@ impl RunTime {
             coolant: (false, false),
             rpm: 0.0,
             moving: false,
+            pending: None,
+            path: (false, 0.0),
             charge: Charge::default(),
             totals: Totals::default(),
             open: VecDeque::new(),
@@ -225,6 +244,19 @@ impl RunTime {
             } => ModelInfo {
                 name: format!("{firmware} planner"),
                 approximate: *firmware != "GRBL 1.1h",
+                error: if *firmware == "GRBL 1.1h" {
+                    format!(
+                        "within 0.1% of GRBL 1.1h's own planner on 25 of 26 programs checked, 1.1% \
+                         on one{}",
+                        if settings.defaults {
+                            "; GRBL's default settings: no --grbl-settings given"
+                        } else {
+                            ""
+                        }
+                    )
+                } else {
+                    format!("not measured on {firmware}; GRBL 1.1h's model")
+                },
                 description: format!(
                     "{firmware}'s look-ahead planner as GRBL 1.1h runs it ({window} blocks, \
                      junction deviation {} mm, arcs in chords within {} mm, per-axis rates and \
@@ -246,10 +278,63 @@ impl RunTime {
                     }
                 ),
             },
-            TimeModel::RestToRest { .. } => ModelInfo {
+            TimeModel::LinuxCnc { limits } => ModelInfo {
+                name: "LinuxCNC 2.9 trajectory planner".into(),
+                approximate: true,
+                error: match limits.source {
+                    linuxcnc::LimitSource::Defaults => {
+                        "a model, not measured against LinuxCNC; no --ini: LinuxCNC's default \
+                         limits of 1 mm/s and 1 mm/s², far slower than a real machine"
+                    }
+                    linuxcnc::LimitSource::IniWithDefaults => {
+                        "a model, not measured against LinuxCNC; LinuxCNC's default limits for \
+                         what the INI does not give"
+                    }
+                    linuxcnc::LimitSource::Ini => "a model, not measured against LinuxCNC",
+                }
+                .into(),
+                description: format!(
+                    "a model of LinuxCNC 2.9's trajectory planner: corners blended by arcs within \
+                     the G64 P tolerance (without P: a quarter of the shorter move), a stop at every \
+                     corner in G61/G61.1, look-ahead over {} segments, arcs within the centripetal \
+                     limit, per-axis velocity and acceleration limits {}; full stops at spindle, \
+                     coolant, dwell, tool change, pause and probe. Its error is not measured \
+                     against LinuxCNC's own planner (parabolic blends, spindle at-speed waits, \
+                     feed overrides and the servo cycle are not modelled)",
+                    limits.depth,
+                    match limits.source {
+                        linuxcnc::LimitSource::Ini => "from the INI",
+                        linuxcnc::LimitSource::IniWithDefaults =>
+                            "from the INI, and LinuxCNC's defaults (1 machine unit/s, 1 machine \
+                             unit/s²) for the X, Y or Z values it does not give",
+                        linuxcnc::LimitSource::Defaults =>
+                            "at LinuxCNC's defaults for an INI that gives none (1 mm/s, \
+                             1 mm/s² on every axis): no --ini given, and a real machine is faster, \
+                             so the figure is too long for it",
+                    }
+                ),
+            },
+            TimeModel::RestToRest { axes } => ModelInfo {
                 name: "rest to rest".into(),
                 approximate: true,
-                description: REST_TO_REST.into(),
+                error: if axes.has_dynamics() {
+                    "each move from rest to rest: too long, up to 10× on programs of many short \
+                     moves"
+                } else {
+                    "no machine limits given: programmed feeds only, no acceleration, rapids not \
+                     timed"
+                }
+                .into(),
+                description: format!(
+                    "{REST_TO_REST}{}",
+                    if axes.has_dynamics() {
+                        ""
+                    } else {
+                        ". No machine velocity or acceleration limits are given (--ini, \
+                         --grbl-settings): feeds are timed at the programmed rate with no \
+                         acceleration, rapids not at all"
+                    }
+                ),
             },
         }
     }
@@ -268,7 +353,8 @@ impl RunTime {
                 }
                 self.offset_change(from);
                 let rate = self.feed_rate(*kind, feed.rate, feed.mode);
-                self.straight(&machine(from), &machine(to), rate, *kind == MoveKind::Rapid);
+                let rapid = *kind == MoveKind::Rapid;
+                self.straight(&machine(from), &machine(to), rate, rapid);
                 if *kind == MoveKind::Probe {
                     self.sync();
                 }
@@ -290,7 +376,11 @@ impl RunTime {
             Motion::Dwell { seconds } => {
                 self.sync();
                 // GRBL waits in 50 ms steps, rounding up (delay_sec()).
-                let t = (seconds.max(0.0) * 20.0).ceil() * 0.05;
+                let t = if matches!(self.model, TimeModel::Grbl { .. }) {
+                    (seconds.max(0.0) * 20.0).ceil() * 0.05
+                } else {
+                    seconds.max(0.0)
+                };
                 self.totals.dwell += t;
                 self.add_wait(t);
             }
@@ -318,10 +408,12 @@ impl RunTime {
                 self.charge.tool = Some(*tool);
             }
             Motion::Pause { optional } => {
-                if !optional {
+                // GRBL ignores M1; LinuxCNC waits for the motion first.
+                if !optional || matches!(self.model, TimeModel::LinuxCnc { .. }) {
                     self.sync();
                 }
             }
+            Motion::PathMode { exact, tolerance } => self.path = (*exact, *tolerance),
             Motion::End => self.sync(),
         }
     }
@@ -370,6 +462,7 @@ impl RunTime {
     fn offset_change(&mut self, from: &Point) {
         if let (Some(o), Some(n)) = (self.offset, from.offset)
             && o != n
+            && matches!(self.model, TimeModel::Grbl { .. })
         {
             self.sync();
         }
@@ -383,6 +476,7 @@ impl RunTime {
     fn straight(&mut self, from: &Axes, target: &Axes, feed: Feed, rapid: bool) {
         let settings = match &self.model {
             TimeModel::Grbl { settings, .. } => settings,
+            TimeModel::LinuxCnc { .. } => return self.lc_line(from, target, feed, rapid),
             TimeModel::RestToRest { axes } => {
                 let b = rest_to_rest(axes, from, target, feed, rapid, self.charge);
                 match b {
@@ -461,6 +555,7 @@ impl RunTime {
         let off = from.offset.unwrap_or([0.0; 9]);
         let segments = match &self.model {
             TimeModel::Grbl { settings, .. } => grbl::arc_segments(settings, g.sweep, g.r0),
+            TimeModel::LinuxCnc { .. } => return self.lc_arc(g, from, to, feed),
             TimeModel::RestToRest { axes } => {
                 match rest_to_rest_arc(axes, g, from, to, feed, self.charge) {
                     Some(b) => self.push(b),
@@ -504,12 +599,208 @@ impl RunTime {
 
     fn push(&mut self, b: Block) {
         self.moving = true;
-        if let Some(o) = self.open.back_mut() {
-            o.blocks += 1;
-        }
+        self.reserve(b.charge.line, 1);
         if let Some(ran) = self.window.push(b) {
             self.account(ran);
         }
+    }
+
+    /// Counts a block of `line` still to run (`delta` 1), or one less.
+    fn reserve(&mut self, line: u64, delta: i64) {
+        if let Some(o) = self.open.iter_mut().rev().find(|o| o.line == line) {
+            o.blocks = o.blocks.saturating_add_signed(delta);
+        }
+    }
+
+    /// LinuxCNC: a straight move from `from` to `to` (machine
+    /// coordinates, NaN: not known).
+    fn lc_line(&mut self, from: &Axes, to: &Axes, feed: Feed, rapid: bool) {
+        let TimeModel::LinuxCnc { limits } = &self.model else {
+            return;
+        };
+        let mut d = [0.0; 9];
+        for i in 0..9 {
+            match (from[i].is_finite(), to[i].is_finite()) {
+                (true, true) => d[i] = to[i] - from[i],
+                (false, false) => {}
+                _ => return self.untimed(rapid),
+            }
+        }
+        let len = linuxcnc::path_len(&d);
+        if len < 1e-12 {
+            return; // LinuxCNC drops a segment of no length.
+        }
+        let maxvel = linuxcnc::along(&limits.vel, &d)
+            .min(limits.traj_vel)
+            .min(len / limits.cycle);
+        let acc = linuxcnc::along(&limits.acc, &d).min(limits.traj_acc);
+        let req = match feed {
+            Feed::Rapid => maxvel,
+            Feed::PerMinute(f) => f / 60.0,
+            Feed::Inverse(f) => f * len / 60.0,
+            Feed::None => return self.untimed(rapid),
+        };
+        let xyz = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let u = if xyz > 0.0 {
+            [d[0] / xyz, d[1] / xyz, d[2] / xyz]
+        } else {
+            [0.0; 3]
+        };
+        let seg = linuxcnc::Seg {
+            len,
+            nominal_len: len,
+            u0: u,
+            u1: u,
+            req,
+            maxvel,
+            acc,
+            acc_ratio: 1.0,
+            arc: false,
+            rotary: d[3..].iter().any(|v| *v != 0.0),
+            exact: self.path.0,
+            tolerance: self.path.1,
+            charge: Charge {
+                rapid,
+                ..self.charge
+            },
+            entry_sqr: 0.0,
+        };
+        self.lc_add(seg);
+    }
+
+    /// LinuxCNC: an arc or helix.
+    fn lc_arc(&mut self, g: &ArcGeom, from: &Point, to: &Point, feed: Feed) {
+        let TimeModel::LinuxCnc { limits } = &self.model else {
+            return;
+        };
+        let len = g.length(&from.work, &to.work);
+        if !len.is_finite() {
+            return self.untimed(false);
+        }
+        if len < 1e-12 {
+            return;
+        }
+        let dh = to.work[g.h] - from.work[g.h];
+        let cap = |m: &[f64; 9]| {
+            let mut v = m[g.a].min(m[g.b]);
+            if dh != 0.0 {
+                v = v.min(m[g.h] * len / dh.abs());
+            }
+            v
+        };
+        let (maxvel, ratio) = linuxcnc::arc_limits(
+            g.r0.min(g.r1),
+            cap(&limits.vel).min(limits.traj_vel),
+            cap(&limits.acc).min(limits.traj_acc),
+        );
+        let req = match feed {
+            Feed::PerMinute(f) => f / 60.0,
+            Feed::Inverse(f) => f * len / 60.0,
+            Feed::Rapid | Feed::None => return self.untimed(false),
+        };
+        let planar = g.sweep.abs() * 0.5 * (g.r0 + g.r1);
+        let tangent = |ang: f64| {
+            let s = g.sweep.signum() * planar / len;
+            let mut u = [0.0; 3];
+            u[g.a] = -ang.sin() * s;
+            u[g.b] = ang.cos() * s;
+            u[g.h] = dh / len;
+            u
+        };
+        let seg = linuxcnc::Seg {
+            len,
+            nominal_len: len,
+            u0: tangent(g.start),
+            u1: tangent(g.start + g.sweep),
+            req,
+            maxvel: maxvel.min(len / limits.cycle),
+            acc: cap(&limits.acc).min(limits.traj_acc),
+            acc_ratio: ratio,
+            arc: true,
+            rotary: false,
+            exact: self.path.0,
+            tolerance: self.path.1,
+            charge: Charge {
+                rapid: false,
+                ..self.charge
+            },
+            entry_sqr: 0.0,
+        };
+        self.lc_add(seg);
+    }
+
+    /// LinuxCNC: a new segment; the corner with the one before decides
+    /// how that one ends.
+    fn lc_add(&mut self, mut next: linuxcnc::Seg) {
+        let TimeModel::LinuxCnc { limits } = &self.model else {
+            return;
+        };
+        let acc3 = [limits.acc[0], limits.acc[1], limits.acc[2]];
+        let cycle = limits.cycle;
+        self.moving = true;
+        self.reserve(next.charge.line, 1);
+        let Some(mut prev) = self.pending.take() else {
+            next.entry_sqr = 0.0;
+            self.pending = Some(next);
+            return;
+        };
+        let mut arc = None;
+        match linuxcnc::corner(&prev, &next, &acc3, cycle) {
+            linuxcnc::Corner::Stop => next.entry_sqr = 0.0,
+            linuxcnc::Corner::Tangent { speed, reduce } => {
+                prev.acc *= 1.0 - reduce;
+                next.acc *= 1.0 - reduce;
+                next.entry_sqr = speed * speed;
+            }
+            linuxcnc::Corner::Blend {
+                trim,
+                len,
+                speed,
+                maxvel,
+                acc,
+            } => {
+                prev.len -= trim;
+                next.len -= trim;
+                let mut a = linuxcnc::Seg {
+                    len,
+                    nominal_len: len,
+                    u0: prev.u1,
+                    u1: next.u0,
+                    req: speed,
+                    maxvel,
+                    acc,
+                    acc_ratio: 1.0,
+                    arc: true,
+                    rotary: false,
+                    exact: false,
+                    tolerance: prev.tolerance,
+                    charge: prev.charge,
+                    entry_sqr: 0.0,
+                };
+                next.entry_sqr = speed * speed;
+                a.entry_sqr = speed * speed;
+                if linuxcnc::consumed(prev.len, speed, cycle) {
+                    // The blend takes the rest of the segment as its
+                    // lead-in, and its place.
+                    a.len += prev.len.max(0.0);
+                    a.entry_sqr = prev.entry_sqr;
+                    self.reserve(prev.charge.line, -1);
+                    self.push(a.block());
+                    self.pending = Some(next);
+                    return;
+                }
+                arc = Some(a);
+            }
+        }
+        let pc = prev.req.min(prev.maxvel);
+        next.entry_sqr = next.entry_sqr.min(pc * pc);
+        self.reserve(prev.charge.line, -1);
+        self.push(prev.block());
+        if let Some(mut a) = arc {
+            a.entry_sqr = a.entry_sqr.min(pc * pc);
+            self.push(a.block());
+        }
+        self.pending = Some(next);
     }
 
     /// Charges a block that ran to its line, its tool and its kind.
@@ -540,6 +831,10 @@ impl RunTime {
     /// The firmware empties its buffer: everything planned runs to a stop,
     /// then the idle delay.
     fn sync(&mut self) {
+        if let Some(p) = self.pending.take() {
+            self.reserve(p.charge.line, -1);
+            self.push(p.block());
+        }
         while let Some(ran) = self.window.run_first() {
             self.account(ran);
         }

@@ -202,3 +202,120 @@ fn time_per_tool_and_syncs() {
     assert!((t.total - 2.0 * (leg + 0.025)).abs() < 1e-9, "{}", t.total);
     assert!((t.per_tool[&Some(2)] - t.total).abs() < 1e-12);
 }
+
+/// LinuxCNC's model: every axis at 100 mm/s and 100 mm/s², a 1 ms cycle.
+fn linuxcnc(exact: bool, tolerance: f64) -> RunTime {
+    let mut rt = RunTime::new(TimeModel::LinuxCnc {
+        limits: Box::new(linuxcnc::Limits {
+            vel: [100.0; 9],
+            acc: [100.0; 9],
+            traj_vel: f64::INFINITY,
+            traj_acc: f64::INFINITY,
+            cycle: 0.001,
+            depth: 50,
+            source: linuxcnc::LimitSource::Ini,
+        }),
+    });
+    rt.motion(&Motion::PathMode { exact, tolerance });
+    rt
+}
+
+/// The time of a block of `mm` at cruise `v` with acceleration `a`,
+/// entered at `v0` and left at `v1`, when it reaches `v`.
+fn trapezoid(mm: f64, v: f64, a: f64, v0: f64, v1: f64) -> f64 {
+    let up = (v * v - v0 * v0) / (2.0 * a);
+    let down = (v * v - v1 * v1) / (2.0 * a);
+    (v - v0) / a + (v - v1) / a + (mm - up - down) / v
+}
+
+#[test]
+fn linuxcnc_exact_stop_is_a_trapezoid_per_side() {
+    // G61: a 10 mm square at F600 (10 mm/s) with 100 mm/s². Each side
+    // stops: 0.1 s and 0.5 mm up to speed, the same down, 9 mm at 10 mm/s
+    // in 0.9 s: 1.1 s a side, 4.4 s. No waits after the stop (a GRBL
+    // thing).
+    let mut rt = linuxcnc(true, 0.0);
+    let c = [
+        (0.0, 0.0),
+        (10.0, 0.0),
+        (10.0, 10.0),
+        (0.0, 10.0),
+        (0.0, 0.0),
+    ];
+    for w in c.windows(2) {
+        rt.motion(&line(p(w[0].0, w[0].1), p(w[1].0, w[1].1), 600.0));
+    }
+    let t = total(rt);
+    assert!((t - 4.4).abs() < 1e-9, "{t}");
+}
+
+#[test]
+fn linuxcnc_blends_a_corner_within_the_tolerance() {
+    // G64 P0.1: 10 mm along X then 10 mm along Y at 10 mm/s, 100 mm/s².
+    // The kink test fails (a_inst = 10/0.001 + 100 = 10100 mm/s² against
+    // 100: far above a tenth), so a blend arc: θ = 45°, φ = 90°, a_max =
+    // 100 in the XY plane, a_n = 86.603. d_tol = cos 45°·0.1/(1 − sin 45°)
+    // = 0.24142 (under half a side, 5 mm), R = tan 45°·0.24142 = 0.24142,
+    // v_plan = sqrt(86.603·0.24142) = 4.5725 mm/s; R_plan = max(v²/a_n,
+    // R_blend) = 0.24142, so the arc is 0.24142·π/2 = 0.37922 mm, each
+    // side gives up 0.24142 mm. Side 1 (9.7586 mm): up to 10 mm/s
+    // (0.1 s), down to 4.5725 (0.054275 s), 8.8631 mm cruising: 1.04059 s.
+    // The arc at 4.5725 mm/s: 0.082935 s. Side 2 as side 1: 2.16411 s in
+    // all, where G61 takes 2.2 s.
+    let mut rt = linuxcnc(false, 0.1);
+    rt.motion(&line(p(0.0, 0.0), p(10.0, 0.0), 600.0));
+    rt.motion(&line(p(10.0, 0.0), p(10.0, 10.0), 600.0));
+    let t = total(rt);
+    let r = 0.1 * (0.5f64).sqrt() / (1.0 - (0.5f64).sqrt());
+    let v = (100.0 * 0.75f64.sqrt() * r).sqrt();
+    let side = trapezoid(10.0 - r, 10.0, 100.0, 0.0, v);
+    let expect = 2.0 * side + r * std::f64::consts::FRAC_PI_2 / v;
+    assert!((v - 4.5725).abs() < 1e-4, "{v}");
+    assert!((expect - 2.16411).abs() < 1e-5, "{expect}");
+    assert!((t - expect).abs() < 1e-9, "{t} against {expect}");
+}
+
+#[test]
+fn linuxcnc_g64_without_tolerance_runs_the_corner_at_the_feed() {
+    // G64 P0: the tolerance is a quarter of a side, 2.5 mm: d_tol =
+    // 6.0355, over half a side, so d = 5, R_geom = 5 and v_plan =
+    // min(sqrt(86.603·5) = 20.8, 10) = 10 mm/s. R_blend: a parabolic blend
+    // at a_max/2 = 50 takes 10/50 = 0.2 s and 2 mm, over φ = π/2: R =
+    // 1.27324; R_plan = max(10²/86.603 = 1.1547, 1.27324) = 1.27324. The
+    // arc is 2 mm at 10 mm/s: 0.2 s; each side 8.72676 mm, from rest to
+    // 10 mm/s (0.1 s, 0.5 mm) then 8.22676 mm cruising: 0.922676 s.
+    // 2.045352 s in all, less than P0.1's 2.16411 s.
+    let mut rt = linuxcnc(false, 0.0);
+    rt.motion(&line(p(0.0, 0.0), p(10.0, 0.0), 600.0));
+    rt.motion(&line(p(10.0, 0.0), p(10.0, 10.0), 600.0));
+    let t = total(rt);
+    let r = 2.0 / std::f64::consts::FRAC_PI_2;
+    let side = trapezoid(10.0 - r, 10.0, 100.0, 0.0, 10.0);
+    let expect = 2.0 * side + 0.2;
+    assert!((expect - 2.045352).abs() < 1e-6, "{expect}");
+    assert!((t - expect).abs() < 1e-9, "{t} against {expect}");
+}
+
+#[test]
+fn linuxcnc_arc_at_the_centripetal_limit() {
+    // A half circle of radius 1 mm at F6000 (100 mm/s), 100 mm/s²: v²/r
+    // would be 10000 mm/s², over 0.866·100, so v = sqrt(86.603·1) =
+    // 9.3060 mm/s and half of 100 mm/s² is left along the path. π mm
+    // from rest to rest: 0.18612 s and 0.86603 mm up, the same down,
+    // 1.40954 mm at 9.3060 mm/s (0.151466 s): 0.523707 s.
+    let mut rt = linuxcnc(false, 0.0);
+    rt.motion(&Motion::Arc {
+        from: p(1.0, 0.0),
+        to: p(-1.0, 0.0),
+        center: [0.0, 0.0],
+        plane: Plane::XY,
+        ccw: true,
+        turns: 1,
+        feed: feed(6000.0),
+    });
+    let t = total(rt);
+    let v = (100.0 * 0.75f64.sqrt()).sqrt();
+    let expect = trapezoid(std::f64::consts::PI, v, 50.0, 0.0, 0.0);
+    assert!((expect - 0.523707).abs() < 1e-6, "{expect}");
+    assert!((t - expect).abs() < 1e-9, "{t} against {expect}");
+}

@@ -244,7 +244,7 @@ fn tables(s: &mut String, report: &Report) {
             report.rapid_moves,
             t.untimed_rapid_moves,
             "no rapid moves",
-            "no maximum velocity was given for the machine's axes (--ini, --grbl-settings)",
+            "their start is not known, or no maximum velocity was given for an axis they move",
         ),
     ));
     s.push_str(&row(
@@ -257,12 +257,9 @@ fn tables(s: &mut String, report: &Report) {
     ));
     s.push_str("</table>\n");
     s.push_str(&format!(
-        "<p class=\"model\">How the estimate is made: {}{}</p>\n",
+        "<p class=\"model\">{} ({}). How the estimate is made: {}</p>\n",
+        xml_escape(&t.model_name),
+        xml_escape(&t.error),
         xml_escape(&t.model),
-        if t.machine_limits_used {
-            ""
-        } else {
-            " No machine velocity or acceleration limits were given (--ini, --grbl-settings)."
-        }
     ));
 }

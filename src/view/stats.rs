@@ -193,6 +193,7 @@ impl Stats {
             machine_limits_used: self.axes.has_dynamics() || self.axes.grbl.is_some(),
             model_name: info.name,
             approximate: info.approximate,
+            error: info.error,
             model: info.description,
         }
     }
@@ -291,6 +292,8 @@ pub(crate) struct TimeReport {
     pub model_name: String,
     /// Whether the model is approximate for this target.
     pub approximate: bool,
+    /// How far the figure is known to be off.
+    pub error: String,
     /// How the figure is made and how far to trust it.
     pub model: String,
 }
@@ -443,19 +446,25 @@ impl Report {
         let t = &self.time;
         let _ = writeln!(
             s,
-            "estimated time: {}{} (feed {}, rapid {}, dwell {}, waits {} at {} stops){}",
+            "estimated time: {}{} by the {} ({})",
             if t.approximate { "about " } else { "" },
             hms(t.total_s),
+            t.model_name,
+            t.error,
+        );
+        let _ = writeln!(
+            s,
+            "  feed {}, rapid {}, dwell {}{}; {} full stop{}",
             hms(t.feed_s),
             hms(t.rapid_s),
             hms(t.dwell_s),
-            hms(t.wait_s),
-            t.stops,
-            if t.machine_limits_used {
-                ""
+            if t.wait_s > 0.0 {
+                format!(", waits after stops {}", hms(t.wait_s))
             } else {
-                "; no machine velocity or acceleration limits given (--ini, --grbl-settings)"
-            }
+                String::new()
+            },
+            t.stops,
+            if t.stops == 1 { "" } else { "s" },
         );
         if t.per_tool.len() > 1 || t.per_tool.iter().any(|p| p.tool.is_some()) {
             for p in &t.per_tool {
@@ -480,17 +489,12 @@ impl Report {
         if t.untimed_rapid_moves > 0 {
             let _ = writeln!(
                 s,
-                "  not timed: {} rapid moves (no maximum velocity for an axis they move)",
+                "  not timed: {} rapid moves (their start is not known: give --zero-start or \
+                 a first move with every axis; or no maximum velocity for an axis they move)",
                 t.untimed_rapid_moves
             );
         }
-        let _ = writeln!(
-            s,
-            "how the estimate is made ({}{}): {}",
-            t.model_name,
-            if t.approximate { ", approximate" } else { "" },
-            t.model
-        );
+        let _ = writeln!(s, "how the estimate is made: {}", t.model);
     }
 }
 

@@ -619,7 +619,7 @@ fn run_time_estimate_uses_grbl_rates_and_accelerations() {
     );
     assert_eq!(code, 0, "{err}");
     assert!(
-        text.contains("how the estimate is made (GRBL 1.1h planner)"),
+        text.contains("by the GRBL 1.1h planner (within 0.1%"),
         "{text}"
     );
 }
@@ -650,10 +650,9 @@ fn html_page_is_self_contained() {
         "p.ngc",
         "(a <test> & more)\nG21 G90 F100\nT3 M6\nG0 X10 Y0\nG2 X0 Y10 I-10 J0\nM2\n",
     );
-    let (code, _, err) = crate::run(
-        dir.path(),
-        &["plot", "--zero-start", "-o", "p.html", "p.ngc"],
-    );
+    // Without --zero-start the first rapid's start is not known: it is
+    // not timed.
+    let (code, _, err) = crate::run(dir.path(), &["plot", "-o", "p.html", "p.ngc"]);
     assert_eq!(code, 0, "{err}");
     let html = std::fs::read_to_string(dir.path().join("p.html")).expect("page written");
     assert!(html.starts_with("<!DOCTYPE html>"));
@@ -963,4 +962,40 @@ fn ini_limits_are_checked_only_when_asked() {
     let (code, _, err) = crate::run(dir.path(), &["--ini", "m.ini", "--ini-limits", "p.ngc"]);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("E1204"), "{err}");
+}
+
+/// A feed far above what any axis can do (3D_Chips.ngc scales its feeds
+/// by 10000) runs at the machine's limit, not in no time: with no INI at
+/// LinuxCNC's own defaults for an INI that gives none (1 mm/s, 1 mm/s²),
+/// said next to the figure; with an INI at its MAX_VELOCITY and
+/// MAX_ACCELERATION.
+#[test]
+fn a_feed_above_the_machine_runs_at_its_limits() {
+    let dir = crate::tmp();
+    crate::put(dir.path(), "p.ngc", "G21 G90\nG1 X100 F1000000\nM2\n");
+    crate::put(
+        dir.path(),
+        "m.ini",
+        "[TRAJ]\nLINEAR_UNITS = mm\nCOORDINATES = XYZ\n[AXIS_X]\nMAX_VELOCITY = 10\nMAX_ACCELERATION = 100\n",
+    );
+    let total = |args: &[&str]| {
+        let (code, json, err) = crate::run(dir.path(), args);
+        assert_eq!(code, 0, "{err}");
+        let j: serde_json::Value = serde_json::from_str(&json).expect("json");
+        j["time"]["total_s"].as_f64().expect("a total")
+    };
+    // 100 mm at 1 mm/s with 1 mm/s²: 1 s and 0.5 mm up, the same down,
+    // 99 mm at 1 mm/s: 101 s (the programmed feed alone: 0.006 s).
+    let t = total(&["stats", "--json", "--zero-start", "p.ngc"]);
+    assert!((t - 101.0).abs() < 1e-9, "{t}");
+    // At 10 mm/s and 100 mm/s²: 0.1 s and 0.5 mm up, the same down, 99 mm
+    // in 9.9 s: 10.1 s.
+    let t = total(&["stats", "--json", "--zero-start", "--ini", "m.ini", "p.ngc"]);
+    assert!((t - 10.1).abs() < 1e-9, "{t}");
+    let (_, text, _) = crate::run(dir.path(), &["stats", "--zero-start", "p.ngc"]);
+    assert!(
+        text.contains("by the LinuxCNC 2.9 trajectory planner (a model, not measured against LinuxCNC; no --ini: LinuxCNC's default limits"),
+        "{text}"
+    );
+    assert!(!text.contains("no machine velocity"), "{text}");
 }
