@@ -6,8 +6,8 @@ use std::path::PathBuf;
 use divan::counter::ItemsCount;
 use divan::{Bencher, black_box};
 use ngcflat::emit::Destination;
-use ngcflat::eval::Settings;
 use ngcflat::program::{SearchPath, SourceFile};
+use ngcflat::settings::Settings;
 
 fn main() {
     divan::main();

@@ -7,8 +7,8 @@ use std::collections::HashMap;
 
 use ngcflat::controller::{TargetOptions, ToolChange, profiles};
 use ngcflat::diag::{MessageFormat, render};
-use ngcflat::eval::Settings;
 use ngcflat::parse::LineParser;
+use ngcflat::settings::Settings;
 
 const FORMATS: [MessageFormat; 4] = [
     MessageFormat::Human,

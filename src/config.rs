@@ -6,9 +6,9 @@ use crate::diag::SetupError;
 use std::path::{Path, PathBuf};
 
 use crate::diag::{Diagnostic, ErrorKind, MessageFormat, WarningKind};
-use crate::eval::Settings;
 use crate::program::SearchPath;
 use crate::program::ini::Ini;
+use crate::settings::Settings;
 
 /// Validated options shared by flattening and checking.
 #[derive(Debug, Clone)]

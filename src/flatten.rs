@@ -11,8 +11,9 @@ use std::sync::Arc;
 use crate::controller;
 use crate::diag::{Diagnostic, Error, ErrorKind};
 use crate::emit::{self, Destination, Sink};
-use crate::eval::{self, Interp, Settings};
+use crate::eval::{self, Interp};
 use crate::program::{self, FileIndex, Loader, SearchPath, SourceFile};
+use crate::settings::Settings;
 
 /// Reads a program from a path (`-` is stdin).
 pub fn read_source(path: Option<&Path>) -> Result<SourceFile, Error> {

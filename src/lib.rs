@@ -23,11 +23,12 @@ mod fx_hasher;
 pub mod geom;
 mod library;
 mod machine;
-mod modes;
 mod number;
 pub mod parse;
 pub mod program;
+mod rules;
 mod runtime;
+pub mod settings;
 mod source;
 mod view;
 

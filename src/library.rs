@@ -13,9 +13,10 @@ use std::sync::Arc;
 
 use crate::diag::{Diagnostic, ErrorKind, Site};
 use crate::emit::{Destination, Sink};
-use crate::eval::{Interp, Settings};
+use crate::eval::Interp;
 use crate::parse::ast::{Expr, ExprKind, Item, Label, LineKind, OKind, ParamRef};
 use crate::program::{FileIndex, Loader, SearchPath, SourceFile};
+use crate::settings::Settings;
 
 /// An open O-word block of a definition.
 struct Open {

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use crate::eval::parse_axis_word;
+use crate::settings::parse_axis_word;
 
 /// Flatten LinuxCNC-dialect G-code (O-word subroutines, loops, conditionals,
 /// parameters and expressions) into plain straight-line G-code: for

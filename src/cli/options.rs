@@ -9,8 +9,8 @@ use crate::config::{
     Config, IniPaths, expand_tilde, ini_switches, parse_user_m, read_ini, user_m_files,
 };
 use crate::diag::{Diagnostic, ErrorKind, MessageFormat};
-use crate::eval::{Settings, parse_axis_word, parse_define, read_tool_table, read_var_file};
 use crate::program::SearchPath;
+use crate::settings::{Settings, parse_axis_word, parse_define, read_tool_table, read_var_file};
 
 impl CommonArgs {
     /// The requested diagnostic format.

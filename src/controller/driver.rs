@@ -25,8 +25,9 @@ use std::collections::HashSet;
 use crate::block::{Block, CoordSystem, DecodeError};
 use crate::diag::{Diagnostic, Error, ErrorKind, WarningKind};
 use crate::emit::Output;
-use crate::eval::{LineConsumer, Origin, Settings};
+use crate::eval::{LineConsumer, Origin};
 use crate::machine::FlatMachine;
+use crate::settings::Settings;
 
 use super::TargetOptions;
 use super::format::LineWriter;

@@ -6,12 +6,10 @@ mod exec;
 mod expr;
 mod flow;
 mod read;
-mod settings;
 pub(crate) mod state;
 mod write;
 
 pub use expr::params;
-pub use state::tools;
 
 pub(crate) use state::arc::arc_refusal;
 
@@ -33,10 +31,8 @@ use crate::emit::Sink;
 use crate::parse::ast::{Line, LineKind, OKind, Span};
 use crate::parse::{LineParser, Name};
 use crate::program::{FileIndex, Loader, SourceFile, Window, next_line};
+use crate::settings::{Define, Settings};
 
-pub use settings::{
-    Define, Settings, parse_axis_word, parse_define, read_tool_table, read_var_file,
-};
 pub use write::hook::{FormLine, FormLines, LineConsumer, Origin};
 
 use expr::params::Params;

@@ -11,16 +11,16 @@
 // Axis-indexed loops over several per-axis arrays read best by index.
 #![allow(clippy::needless_range_loop)]
 
-use crate::eval::Settings;
-use crate::eval::tools::{ToolData, Tools};
 use crate::fx_hasher::FxMap;
+use crate::rules::tools::{ToolData, Tools};
+use crate::settings::Settings;
 
 use super::motion::{Feed, Motion, MoveKind, Point};
 use crate::block::{
     AXIS_LETTERS, ArcDistance, Block, CoordSystem, Distance, FeedMode, MCode, MotionMode, NonModal,
     Plane, SpindleDir, ToolLength, Units,
 };
-use crate::modes::{CycleLine, MachineCode, Modes, Switched, polar_end, probe_end};
+use crate::rules::{CycleLine, MachineCode, Modes, Switched, polar_end, probe_end};
 
 const MM_PER_INCH: f64 = 25.4;
 
@@ -71,7 +71,7 @@ pub(crate) struct FlatMachine {
 fn numbered(settings: &Settings) -> FxMap<usize, f64> {
     let mut m = FxMap::default();
     for d in &settings.defines {
-        if let crate::eval::Define::Numbered(i, v) = d {
+        if let crate::settings::Define::Numbered(i, v) = d {
             m.insert(*i, *v);
         }
     }

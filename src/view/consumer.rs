@@ -12,8 +12,9 @@ use super::source_map::{Locator, Place, SourceMap, annotation, time_note};
 use crate::block::Block;
 use crate::diag::{Diagnostic, Error, ErrorKind, Site};
 use crate::emit::Output;
-use crate::eval::{LineConsumer, Origin, Settings};
+use crate::eval::{LineConsumer, Origin};
 use crate::machine::model::FlatMachine;
+use crate::settings::Settings;
 
 /// Where the source map goes.
 pub(crate) type MapSink = SourceMap<std::io::BufWriter<std::fs::File>>;

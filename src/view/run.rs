@@ -206,7 +206,7 @@ pub(crate) struct Extras {
 /// asked. Without any of these it is exactly [`crate::flatten::flatten`].
 pub(crate) fn flatten_observed(
     source: crate::program::SourceFile,
-    settings: &crate::eval::Settings,
+    settings: &crate::settings::Settings,
     search: &crate::program::SearchPath,
     dest: crate::emit::Destination,
     cfg: &crate::config::Config,
@@ -225,7 +225,7 @@ pub(crate) fn flatten_observed(
 /// output written line for line (no `next`).
 pub(crate) fn flatten_chained<'s>(
     source: crate::program::SourceFile,
-    settings: &'s crate::eval::Settings,
+    settings: &'s crate::settings::Settings,
     search: &crate::program::SearchPath,
     dest: crate::emit::Destination,
     cfg: &crate::config::Config,

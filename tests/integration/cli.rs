@@ -569,7 +569,7 @@ fn memory_entry_matches_the_command() {
             (name, std::fs::read(&p).unwrap())
         })
         .collect();
-    let settings = ngcflat::eval::Settings::default();
+    let settings = ngcflat::settings::Settings::default();
     let mut seen = 0;
     for e in std::fs::read_dir(&dir).unwrap() {
         let p = e.unwrap().path();

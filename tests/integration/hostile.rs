@@ -460,7 +460,7 @@ fn a_lathe_cycle_stops_at_the_output_line_guard() {
 /// memory; a contour within the bound is cut.
 #[test]
 fn a_contour_that_never_ends_stops_at_its_bound() {
-    let s = ngcflat::eval::Settings {
+    let s = ngcflat::settings::Settings {
         max_contour: 50,
         ..Default::default()
     };

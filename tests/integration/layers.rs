@@ -8,7 +8,6 @@ const ORDER: &[&str] = &[
     "source",
     "number",
     "codes",
-    "modes",
     "block",
     "geom",
     "fx_hasher",
@@ -16,6 +15,8 @@ const ORDER: &[&str] = &[
     "parse",
     "program",
     "emit",
+    "settings",
+    "rules",
     "eval",
     "library",
     "machine",
@@ -128,7 +129,7 @@ fn architecture_states_the_layer_order() {
 
 /// The evaluator's parts (`src/eval`), lowest first: each uses only those
 /// before it. `eval/mod.rs`, which holds them all, is above them.
-const EVAL_ORDER: &[&str] = &["settings", "expr", "state", "flow", "read", "write", "exec"];
+const EVAL_ORDER: &[&str] = &["expr", "state", "flow", "read", "write", "exec"];
 
 /// The parts of the evaluator `text` names: `eval::part::`, and from its
 /// own files `super::part::` (`super::super::part::` one folder down).
@@ -145,10 +146,6 @@ fn eval_uses(text: &str) -> BTreeSet<String> {
             if named("eval::") || named("super::") {
                 found.insert((*part).to_string());
             }
-        }
-        // `eval::tools` is the machine model's tools.
-        if line.contains("eval::tools::") || line.contains("super::tools::") {
-            found.insert("state".to_string());
         }
     }
     found

@@ -10,9 +10,9 @@ use proptest::prelude::*;
 
 use ngcflat::diag::{Error, MessageFormat, render};
 use ngcflat::emit::{Destination, number_string};
-use ngcflat::eval::Settings;
 use ngcflat::parse::LineParser;
 use ngcflat::program::{SearchPath, SourceFile};
+use ngcflat::settings::Settings;
 
 /// Small limits, so that runaway programs stop quickly.
 fn small_limits() -> Settings {

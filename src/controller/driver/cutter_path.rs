@@ -437,7 +437,7 @@ impl Lowering {
                 let data = t.and_then(|t| match self.m.tools.table.get(&t) {
                     Some(d) => Some((d.diameter, d.orientation.round() as i32)),
                     None if self.standalone_tools => {
-                        Some((crate::eval::tools::standalone_diameter(t), 0))
+                        Some((crate::rules::tools::standalone_diameter(t), 0))
                     }
                     None if self.m.tools.known || t == 0 => Some((0.0, 0)),
                     None => None,

@@ -19,7 +19,7 @@
 
 use super::LowerError;
 use crate::codes::Distance;
-use crate::modes::polar_end;
+use crate::rules::polar_end;
 
 /// The polar words of a block and where the tool is.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -5,15 +5,15 @@
 
 use crate::diag::WarningKind;
 use crate::fx_hasher::FxMap;
-use crate::modes::Modes;
 use crate::parse::Name;
 use crate::parse::ast::{Expr, Span};
+use crate::rules::Modes;
 
 use crate::eval::Interp;
 use crate::eval::expr::params::Params;
 use crate::eval::expr::{self, EvalResult, Fault, Scope, message, named};
 use crate::eval::flow::Flow;
-use crate::eval::settings::Settings;
+use crate::settings::Settings;
 
 /// The evaluator as an expression's surroundings: each reading is of one
 /// part; a warning is the only change.

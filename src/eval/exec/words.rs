@@ -90,10 +90,11 @@ mod tests {
         ArcDistance, CutterComp, Distance, FeedMode, MotionMode, Plane, SpindleDir, Units,
     };
     use crate::emit::{Destination, MemoryOut, Sink};
+    use crate::eval::Interp;
     use crate::eval::read::validate::check_block;
-    use crate::eval::{Interp, Settings};
-    use crate::modes::Modes;
     use crate::program::{FileIndex, Loader, SearchPath, SourceFile};
+    use crate::rules::Modes;
+    use crate::settings::Settings;
 
     /// A line's words: `G80 G1 X1` → g 80, g 1, x 1.
     fn words(line: &str) -> Vec<(u8, f64)> {

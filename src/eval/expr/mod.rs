@@ -11,13 +11,13 @@ pub mod params;
 use crate::diag::ExprError;
 use crate::diag::{ErrorKind, WarningKind};
 use crate::fx_hasher::FxMap;
-use crate::modes::Modes;
 use crate::parse::Name;
 use crate::parse::ast::{BinOp, Expr, ExprKind, Func, ParamRef, Span};
 use crate::parse::integer_value;
+use crate::rules::Modes;
 
 use crate::eval::expr::params::{MAX_PARAM, ParamClass, Params, classify};
-use crate::eval::settings::Settings;
+use crate::settings::Settings;
 
 /// EQ/NE tolerance of LinuxCNC 2.9.
 pub(super) const TOLERANCE_EQUAL: f64 = 0.0001;

@@ -3,9 +3,9 @@
 
 use crate::diag::ErrorKind;
 use crate::diag::ExprError;
-use crate::modes::Modes;
 use crate::parse::Name;
 use crate::parse::ast::Span;
+use crate::rules::Modes;
 
 use crate::codes as code;
 use crate::codes::SpindleDir;
@@ -13,7 +13,7 @@ use crate::fx_hasher::FxMap;
 
 use crate::eval::expr::params::AXES;
 use crate::eval::expr::{EvalResult, Fault, Scope, fault};
-use crate::eval::settings::Settings;
+use crate::settings::Settings;
 
 fn flag(x: bool) -> f64 {
     if x { 1.0 } else { 0.0 }

@@ -8,7 +8,7 @@ use crate::parse::Name;
 /// an axis are at its index from the first of their group (#5221, #5420…).
 pub(crate) const AXES: [u8; 9] = *b"xyzabcuvw";
 
-pub use crate::eval::settings::MAX_PARAM;
+pub use crate::settings::MAX_PARAM;
 
 /// What a numbered parameter means to a flattener.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

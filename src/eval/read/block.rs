@@ -178,8 +178,8 @@ pub(in crate::eval) fn m_word(items: &[Item], k: usize) -> Option<&Word> {
 
 #[cfg(test)]
 mod tests {
-    use crate::eval::Settings;
     use crate::flatten::flatten_str;
+    use crate::settings::Settings;
 
     fn flat(text: &str) -> String {
         flatten_str(text, &Settings::default()).unwrap_or_else(|e| panic!("{text}: {e:?}"))

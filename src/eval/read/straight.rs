@@ -20,8 +20,8 @@ use crate::number::{Digits, POW10, digits_in};
 
 use crate::codes::{FeedMode, MotionMode, Plane};
 use crate::eval::read::plain::{PlainRoom, read_plain_in};
-use crate::eval::settings::Settings;
 use crate::eval::state::Machine;
+use crate::settings::Settings;
 
 /// Word slots: G, X, Y, Z, A, B, C, F, S (the fast set), then I, J, K, R, P
 /// (lines with these take the block checks).

@@ -15,7 +15,7 @@ use crate::diag::BlockError;
 use crate::eval::state::checked::{Checked, G80, LineCodes};
 use crate::eval::state::cycle::{Cycle, depth_axis};
 use crate::eval::state::nurbs::{NO_MOTION, NURBS, Nurbs};
-use crate::modes::Modes;
+use crate::rules::Modes;
 
 use MotionMode as M;
 

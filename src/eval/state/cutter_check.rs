@@ -15,9 +15,9 @@ use crate::diag::{ExprError, MachineError};
 use crate::geom::cutter_comp::{Arc, ArcCenter, Comp, CompError, Out, Side, Tolerances};
 
 use super::Machine;
-use super::tools::{ToolData, standalone_diameter};
 use crate::codes::{CutterComp, Distance, MotionMode, Plane, Units};
-use crate::eval::settings::Settings;
+use crate::rules::tools::{ToolData, standalone_diameter};
+use crate::settings::Settings;
 
 /// A G70 entered with compensation when the output keeps G41/G42
 /// (LinuxCNC): G-code with G41/G42 cannot put LinuxCNC's compensation in

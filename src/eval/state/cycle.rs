@@ -4,7 +4,7 @@
 
 use super::Machine;
 use crate::codes::Plane;
-use crate::modes::CycleLine;
+use crate::rules::CycleLine;
 
 /// The depth axis of cycles in a plane (G17 → Z, G18 → Y, G19 → X), as a
 /// letter and a name.
@@ -18,7 +18,7 @@ pub(crate) fn depth_axis(plane: Plane) -> (u8, &'static str) {
 
 /// R plane and depth of the last cycle block, as written (incremental values
 /// in G91), and the level of the last series of cycles, program units
-/// ([`Modes::cycle_end`](crate::modes::Modes::cycle_end)).
+/// ([`Modes::cycle_end`](crate::rules::Modes::cycle_end)).
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Cycle {
     pub r: f64,
@@ -42,7 +42,7 @@ impl Machine {
 
     /// A cycle block ran (after [`Machine::note_cycle`]; `series`: the
     /// motion mode was a cycle before its line): the tool is where
-    /// [`Modes::cycle_end`](crate::modes::Modes::cycle_end) leaves it, in
+    /// [`Modes::cycle_end`](crate::rules::Modes::cycle_end) leaves it, in
     /// program units. An axis it cannot tell keeps why it was unknown.
     pub(in crate::eval) fn cycle_end(
         &mut self,

@@ -16,7 +16,7 @@ use super::{Machine, Unknown};
 use crate::codes::{
     ArcDistance, CutterComp, Distance, FeedMode, LatheMode, MotionMode, Plane, Units,
 };
-use crate::modes::Modes;
+use crate::rules::Modes;
 
 /// A cycle whose contour subroutine is running.
 pub(crate) struct LatheRun {

@@ -10,19 +10,20 @@ pub(super) mod lathe;
 pub(super) mod modal;
 pub(super) mod nurbs;
 pub(super) mod restore;
-pub mod tools;
+mod tools;
 
 use crate::diag::ExprError;
 use std::collections::HashSet;
 
 use crate::codes::CoordSystem;
 use crate::diag::ErrorKind;
-use crate::modes::Modes;
 use crate::parse::ast::Span;
+use crate::rules::Modes;
 
 use crate::eval::expr::params::Params;
 use crate::eval::expr::{EvalResult, fault};
-use crate::eval::settings::{Define, Settings};
+use crate::rules::tools::Tools;
+use crate::settings::{Define, Settings};
 
 pub(crate) use crate::eval::expr::params::AXES;
 
@@ -64,7 +65,7 @@ pub(super) struct Machine {
     pub(super) modal: Modes,
     pub(super) pos: Position,
     /// The tool table, the tool in the spindle and the selected one.
-    pub(super) tools: tools::Tools,
+    pub(super) tools: Tools,
     /// RETAIN_G43 changed the tool length offset on this line: the output
     /// line to add after it (G43 or G49).
     pub(super) retain_line: Option<bool>,
@@ -145,7 +146,7 @@ impl Machine {
                 ..Modes::default()
             },
             pos,
-            tools: tools::Tools::new(s),
+            tools: Tools::new(s),
             retain_line: None,
             pockets: s.zero_start.then_some((1.0, -1.0)),
             tlo: Some([0.0; 9]),

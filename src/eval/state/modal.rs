@@ -11,8 +11,8 @@ use crate::codes::{
     CoordSystem, CutterComp, Distance, GCode, MCode, MotionMode, NonModal, Plane, ToolLength, Units,
 };
 use crate::eval::expr::params::Params;
-use crate::eval::settings::Settings;
-use crate::modes::{MachineCode, polar_end, probe_end};
+use crate::rules::{MachineCode, polar_end, probe_end};
+use crate::settings::Settings;
 
 /// A motion code other than G80 (which gives way to one on its line).
 #[inline]
@@ -337,7 +337,7 @@ impl Machine {
 
     /// One M code, after the line's other words: the switches (spindle,
     /// coolant, overrides with their P) as the modes set them
-    /// ([`Modes::set_switch`](crate::modes::Modes::set_switch)), tool change
+    /// ([`Modes::set_switch`](crate::rules::Modes::set_switch)), tool change
     /// (M6, M61 with its Q); M2/M30 end the program.
     // One call site, on the hot path: kept inline as before the split.
     #[inline(always)]
@@ -372,7 +372,7 @@ impl Machine {
     }
 
     /// The line's G codes in line order: each sets its field of the modes
-    /// ([`Modes::set_mode`](crate::modes::Modes::set_mode)), and those it
+    /// ([`Modes::set_mode`](crate::rules::Modes::set_mode)), and those it
     /// hands back act on the machine here. Returns the non-modal code
     /// (G10, G28, G30, G53, G92.x, G52) if any, and whether G43.1 set a
     /// tool length offset from axis words. (A G80 beside another motion

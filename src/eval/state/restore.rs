@@ -4,7 +4,7 @@
 use super::{Env, Machine};
 use crate::codes::{CutterComp, GCode, SpindleDir, SpindleMode};
 use crate::eval::expr::params::Params;
-use crate::modes::Modes;
+use crate::rules::Modes;
 
 /// The state M70 or M73 saves: the modal state, and whether G92 offsets
 /// were applied (M72 turns them on or off again).

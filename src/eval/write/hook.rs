@@ -426,7 +426,7 @@ mod tests {
         }
     }
 
-    fn run(text: &str, settings: &crate::eval::Settings) -> String {
+    fn run(text: &str, settings: &crate::settings::Settings) -> String {
         let dir = tempfile::tempdir().expect("dir");
         let out = dir.path().join("out");
         let src = SourceFile::new("<t>".into(), "<t>".into(), text.as_bytes().to_vec());
@@ -444,7 +444,7 @@ mod tests {
     #[test]
     fn every_line_reaches_the_consumer_with_its_origin() {
         let text = "%\nG0 X1 \n(c)\nG1 X2 F3\n\n#1=2\nG1 X#1 (v)\no1 sub\nG0 Y1\no1 endsub\no1 call\nM70\nM72\n%\n";
-        let s = crate::eval::Settings::default();
+        let s = crate::settings::Settings::default();
         let want =
             "0 0 % 0\n2 1 G0 X1 0\n9 1 (c) 0\n13 1 G1 X2 F3 0\n28 0 G1 X2 (v) 0\n46 1 G0 Y1 1\n";
         let got = run(text, &s);
@@ -454,9 +454,9 @@ mod tests {
         assert_eq!(first, want.lines().take(6).collect::<Vec<_>>());
         assert!(got.ends_with("% 0\nend\n"), "{got}");
         // The straight-line loop and the line-by-line path agree.
-        let slow = crate::eval::Settings {
+        let slow = crate::settings::Settings {
             plain_runs: false,
-            ..crate::eval::Settings::default()
+            ..crate::settings::Settings::default()
         };
         assert_eq!(run(text, &slow), got);
     }

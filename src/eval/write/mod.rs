@@ -12,7 +12,7 @@ use crate::diag::{Diagnostic, Error, ErrorKind, Kind, Site};
 use crate::emit::{Output, Sink};
 use crate::program::SourceFile;
 
-use crate::eval::settings::Settings;
+use crate::settings::Settings;
 
 /// Where the executed lines go, and how many went.
 pub(super) struct Writer<'s> {

@@ -9,8 +9,9 @@ use proptest::prelude::*;
 
 use crate::controller::{TargetOptions, profiles};
 use crate::emit::{Destination, Output, Sink};
-use crate::eval::{LineConsumer, Origin, Settings};
+use crate::eval::{LineConsumer, Origin};
 use crate::program::SourceFile;
+use crate::settings::Settings;
 
 use super::Lowering;
 

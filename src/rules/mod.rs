@@ -7,6 +7,8 @@
 //! codes act in, events) is handed back to it ([`MachineCode`],
 //! [`Switched`]).
 
+pub(crate) mod tools;
+
 use crate::codes::{
     ArcDistance, CoordSystem, CutterComp, Distance, FeedMode, GCode, LatheMode, MCode, MotionMode,
     NonModal, PathMode, Plane, Retract, SpindleDir, SpindleMode, ToolLength, Units,
@@ -19,36 +21,36 @@ use crate::codes::{
 /// decoding in `codes`, its field here and its arm in
 /// [`Modes::set_mode`], which both owners update the modes through.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Modes {
+pub(crate) struct Modes {
     /// Group 1. The evaluator keeps `NurbsEnd` after G5.3 (no motion mode).
-    pub motion: MotionMode,
-    pub plane: Plane,
-    pub distance: Distance,
-    pub arc_distance: ArcDistance,
-    pub feed_mode: FeedMode,
-    pub units: Units,
+    pub(crate) motion: MotionMode,
+    pub(crate) plane: Plane,
+    pub(crate) distance: Distance,
+    pub(crate) arc_distance: ArcDistance,
+    pub(crate) feed_mode: FeedMode,
+    pub(crate) units: Units,
     /// As written: G41.1 and G42.1 stay dynamic (`#<_ccomp>` reads the
     /// side, [`CutterComp::side`]).
-    pub cutter_comp: CutterComp,
+    pub(crate) cutter_comp: CutterComp,
     /// `Cancel` (G49), or the code that put an offset in effect.
-    pub tool_length: ToolLength,
+    pub(crate) tool_length: ToolLength,
     /// G54 … G59.3
-    pub coord: CoordSystem,
-    pub path: PathMode,
-    pub retract: Retract,
-    pub spindle_mode: SpindleMode,
-    pub lathe: LatheMode,
+    pub(crate) coord: CoordSystem,
+    pub(crate) path: PathMode,
+    pub(crate) retract: Retract,
+    pub(crate) spindle_mode: SpindleMode,
+    pub(crate) lathe: LatheMode,
     /// In program units (per minute, per rev or inverse time).
-    pub feed: f64,
-    pub speed: f64,
-    pub spindle: SpindleDir,
-    pub mist: bool,
-    pub flood: bool,
+    pub(crate) feed: f64,
+    pub(crate) speed: f64,
+    pub(crate) spindle: SpindleDir,
+    pub(crate) mist: bool,
+    pub(crate) flood: bool,
     /// M48–M53: speed and feed override, adaptive feed, feed hold.
-    pub speed_override: bool,
-    pub feed_override: bool,
-    pub adaptive_feed: bool,
-    pub feed_hold: bool,
+    pub(crate) speed_override: bool,
+    pub(crate) feed_override: bool,
+    pub(crate) adaptive_feed: bool,
+    pub(crate) feed_hold: bool,
 }
 
 impl Default for Modes {
@@ -86,7 +88,7 @@ impl Default for Modes {
 /// modes, which knows the position, the offsets and the tools, and the
 /// order the line's codes act in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum MachineCode {
+pub(crate) enum MachineCode {
     /// Group 1: the line's move runs in it, after its non-modal code.
     Motion(MotionMode),
     /// Group 6: positions and offsets are read in the new units.
@@ -102,7 +104,7 @@ pub enum MachineCode {
 /// What an M code [`Modes::set_switch`] took set: the machine model may
 /// tell the machine (a motion event).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Switched {
+pub(crate) enum Switched {
     /// M3, M4, M5
     Spindle,
     /// M7, M8, M9
@@ -119,7 +121,7 @@ impl Modes {
     /// [`MachineCode`]. The one rule both machine models follow: a new
     /// modal code needs its decoding above, its field and an arm here.
     #[inline(always)]
-    pub fn set_mode(&mut self, g: GCode) -> Option<MachineCode> {
+    pub(crate) fn set_mode(&mut self, g: GCode) -> Option<MachineCode> {
         match g {
             GCode::Plane(p) => self.plane = p,
             GCode::Distance(d) => self.distance = d,
@@ -143,7 +145,7 @@ impl Modes {
     /// machine models: an X word is a diameter in lathe diameter mode
     /// (G7), and positions are radii.
     #[inline(always)]
-    pub fn radius_word(&self, axis: usize, v: f64) -> f64 {
+    pub(crate) fn radius_word(&self, axis: usize, v: f64) -> f64 {
         if axis == 0 && self.lathe == LatheMode::Diameter {
             v / 2.0
         } else {
@@ -155,7 +157,7 @@ impl Modes {
     /// overrides with the line's P word, [`Modes::set_override`]): which
     /// it set, `None` for any other M code (left to the machine model).
     #[inline(always)]
-    pub fn set_switch(&mut self, m: MCode, p: Option<f64>) -> Option<Switched> {
+    pub(crate) fn set_switch(&mut self, m: MCode, p: Option<f64>) -> Option<Switched> {
         match m {
             MCode::Spindle(d) => {
                 self.spindle = d;
@@ -183,7 +185,7 @@ impl Modes {
 
     /// M48–M53 (`n`) with the line's P word: M48 turns both overrides on,
     /// M49 off; M50–M53 turn their switch off with P0, on otherwise.
-    pub fn set_override(&mut self, n: u8, p: Option<f64>) {
+    pub(crate) fn set_override(&mut self, n: u8, p: Option<f64>) {
         let on = p.is_none_or(|p| p != 0.0);
         match n {
             48 | 49 => {
@@ -201,7 +203,7 @@ impl Modes {
     /// What M2 and M30 reset, as LinuxCNC documents it: G54, G17, G90, G94,
     /// M48, G40, M5, G1, M9; and the feed rate, which rs274 sets to 0. The
     /// path mode (G61, G64) stays.
-    pub fn end_of_program(&mut self) {
+    pub(crate) fn end_of_program(&mut self) {
         self.feed = 0.0;
         self.coord = CoordSystem::G54;
         self.plane = Plane::XY;
@@ -220,16 +222,16 @@ impl Modes {
 /// A canned cycle line (G73, G74, G81–G89) as [`Modes::cycle_end`] reads
 /// it, in the length unit of the machine model that asks.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CycleLine {
+pub(crate) struct CycleLine {
     /// The line's words on the plane's two axes ([`Plane::cycle_axes`]),
     /// X as a radius: where they send the axes in G90, the step of each
     /// repeat in G91 (`None`: no word).
-    pub at: [Option<f64>; 2],
+    pub(crate) at: [Option<f64>; 2],
     /// The R plane, the line's R or the last cycle's, as written: from
     /// the series' level in G91.
-    pub r: Option<f64>,
+    pub(crate) r: Option<f64>,
     /// The L word, 1 without one (the checks refuse 0).
-    pub repeats: u32,
+    pub(crate) repeats: u32,
 }
 
 impl Modes {
@@ -247,7 +249,7 @@ impl Modes {
     /// is while the motion mode stays a cycle (`series`: it was one before
     /// the line), wherever the tool went since; it keeps its number when
     /// the units change.
-    pub fn cycle_end(
+    pub(crate) fn cycle_end(
         &self,
         start: [Option<f64>; 3],
         level: &mut Option<f64>,
@@ -282,7 +284,7 @@ impl Modes {
 impl Modes {
     /// How far the standalone reference backs a probe move off its
     /// target, in program units: 0.254 mm (0.01 inch).
-    pub fn probe_backoff(&self) -> f64 {
+    pub(crate) fn probe_backoff(&self) -> f64 {
         match self.units {
             Units::Mm => 0.254,
             Units::Inch => 0.01,
@@ -373,7 +375,7 @@ impl Plane {
     /// The axes of a canned cycle in this plane: the plane's two (X and Y
     /// in G17, Z and X in G18, Y and Z in G19) and the depth axis. The
     /// UVW planes, whose cycles the checks refuse, read as G17.
-    pub fn cycle_axes(self) -> [usize; 3] {
+    pub(crate) fn cycle_axes(self) -> [usize; 3] {
         self.xyz_axes().unwrap_or([0, 1, 2])
     }
 }
@@ -388,7 +390,7 @@ impl ToolLength {
     /// one keeping its offset (as rs274 does); G49 none. Unknown where
     /// what it needs is.
     #[inline]
-    pub fn offset(
+    pub(crate) fn offset(
         self,
         old: [Option<f64>; 9],
         tool: Option<[f64; 9]>,
@@ -409,7 +411,7 @@ impl CoordSystem {
     /// file keeps it) starts a run in: its whole part (taken toward zero)
     /// when 1 to 9, else G54, as the reference reads it. Both machine
     /// models start from it.
-    pub fn from_parameter(v: f64) -> CoordSystem {
+    pub(crate) fn from_parameter(v: f64) -> CoordSystem {
         let n = v.trunc();
         if (1.0..=9.0).contains(&n) {
             CoordSystem(n as u8)
@@ -424,7 +426,7 @@ impl NonModal {
     /// G92), not a move in the motion mode. G4, G28.1, G30.1 and G92.1 to
     /// G92.3 leave them to the motion mode, as in the reference: the line
     /// moves, after the code acts.
-    pub fn takes_axis_words(self) -> bool {
+    pub(crate) fn takes_axis_words(self) -> bool {
         use NonModal::*;
         match self {
             SetData | Home | Home2 | LocalOffset | MachineCoords | SetG92 => true,
