@@ -48,7 +48,7 @@ pub enum GrblEnvelope {
 pub struct MachineAxes {
     pub axes: [AxisData; 9],
     /// The planner settings of a GRBL `$$` listing, when one was given.
-    pub(crate) grbl: Option<super::grbl::GrblSettings>,
+    pub(crate) grbl: Option<super::grbl_listing::GrblSettings>,
     /// What a LinuxCNC INI says about its trajectory planner, when one was
     /// given.
     pub(crate) traj: Option<Traj>,
@@ -179,33 +179,12 @@ impl MachineAxes {
     /// `$120`–`$122` acceleration (mm/s²), `$130`–`$132` max travel (mm).
     /// Other settings, comments and `ok` lines are ignored.
     pub fn add_grbl(&mut self, text: &str, envelope: GrblEnvelope) -> Result<(), ErrorKind> {
-        self.grbl = Some(super::grbl::GrblSettings::from_listing(text)?);
-        for line in text.lines() {
-            let t = line.trim();
-            let Some(rest) = t.strip_prefix('$') else {
-                continue;
-            };
-            let Some((num, val)) = rest.split_once('=') else {
-                continue;
-            };
-            let Ok(n) = num.trim().parse::<u32>() else {
-                continue;
-            };
+        self.grbl = Some(super::grbl_listing::GrblSettings::from_listing(text)?);
+        for (n, v) in super::grbl_listing::listing(text)? {
             let (group, axis) = (n / 10, (n % 10) as usize);
             if !matches!(group, 11..=13) || axis > 2 {
                 continue;
             }
-            let val = val.split(['(', ';', ' ', '\t']).next().unwrap_or("").trim();
-            let v: f64 = val
-                .parse()
-                .ok()
-                .filter(|x: &f64| x.is_finite())
-                .ok_or_else(|| {
-                    ErrorKind::Setup(SetupError::BadMachineValue {
-                        source: format!("GRBL ${n}"),
-                        text: val.to_string(),
-                    })
-                })?;
             let a = &mut self.axes[axis];
             match group {
                 11 => a.max_vel = Some(v.abs() / 60.0),

@@ -2,10 +2,10 @@
 //! (typed [`crate::block`]s) put the machine in ([`model`]), the motion they make
 //! ([`motion`]), and the machine's axes: travel limits, velocities and
 //! accelerations ([`axes`]), and a GRBL `$$` listing's planner settings
-//! ([`grbl`]).
+//! ([`grbl_listing`]).
 
 pub(crate) mod axes;
-pub(crate) mod grbl;
+pub(crate) mod grbl_listing;
 pub(crate) mod model;
 pub(crate) mod motion;
 

@@ -17,7 +17,7 @@
 //! - An arc is cut into `floor(|θ·r/2| / sqrt(tol·(2r − tol)))` chords
 //!   (`$12`), each a block of its own.
 
-use crate::machine::grbl::GrblSettings;
+use crate::machine::grbl_listing::GrblSettings;
 
 /// The largest value along `unit` whose share on each axis stays within
 /// that axis's `max` (GRBL's `limit_value_by_axis_maximum()`).

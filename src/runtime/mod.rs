@@ -50,7 +50,7 @@ use serde::Serialize;
 
 use crate::codes::FeedMode;
 use crate::machine::axes::MachineAxes;
-pub(crate) use crate::machine::grbl::GrblSettings;
+pub(crate) use crate::machine::grbl_listing::GrblSettings;
 use crate::machine::motion::{Axes, Motion, MoveKind, Point};
 use planner::{Block, Window};
 

@@ -47,10 +47,7 @@ impl GrblSettings {
             defaults: false,
             ..GrblSettings::default()
         };
-        for line in text.lines() {
-            let Some((n, v)) = setting(line)? else {
-                continue;
-            };
+        for (n, v) in listing(text)? {
             let axis = (n % 10) as usize;
             match n {
                 1 => s.idle_delay_ms = v,
@@ -73,6 +70,19 @@ impl GrblSettings {
             self.idle_delay_ms.max(0.0) / 1000.0
         }
     }
+}
+
+/// The one reader of a `$$` listing: its `$n=v` lines in order (other
+/// lines, comments and `ok` are ignored); a value that is not a finite
+/// number is an error.
+pub(crate) fn listing(text: &str) -> Result<Vec<(u32, f64)>, ErrorKind> {
+    let mut out = Vec::new();
+    for line in text.lines() {
+        if let Some(s) = setting(line)? {
+            out.push(s);
+        }
+    }
+    Ok(out)
 }
 
 /// `$n=v` of a listing line, `None` for any other line.
