@@ -430,12 +430,28 @@ impl FlatMachine {
             self.tool_length(b, t);
         }
         if let Some(c) = b.coord() {
+            if c != self.modes.coord {
+                self.push(Motion::Offsets);
+            }
             let before = self.offset();
             self.modes.coord = c;
             self.shift(before);
         }
         let motion_used = match b.non_modal() {
             Some(n) => {
+                if matches!(
+                    n,
+                    NonModal::SetData
+                        | NonModal::SetHome
+                        | NonModal::SetHome2
+                        | NonModal::LocalOffset
+                        | NonModal::SetG92
+                        | NonModal::ResetG92
+                        | NonModal::SuspendG92
+                        | NonModal::RestoreG92
+                ) {
+                    self.push(Motion::Offsets);
+                }
                 self.non_modal(b, n);
                 n.takes_axis_words()
             }
@@ -956,8 +972,13 @@ mod tests {
         let (m, ev) = run(&["G20 G0 X1", "G10 L2 P1 X1", "G92 X0", "G91 G1 X1 F10"]);
         assert_eq!(m.pos[0], Some(25.4));
         assert_eq!(m.machine_pos()[0], Some(50.8));
-        assert_eq!(ev.len(), 2);
-        let Motion::Line { kind, to, feed, .. } = &ev[1] else {
+        // The G10 and the G92 each set offsets: an event each.
+        assert_eq!(ev.len(), 4);
+        assert!(
+            matches!(ev[1..3], [Motion::Offsets, Motion::Offsets]),
+            "{ev:?}"
+        );
+        let Motion::Line { kind, to, feed, .. } = &ev[3] else {
             panic!("a line")
         };
         assert_eq!(*kind, MoveKind::Feed);

@@ -92,6 +92,11 @@ pub(crate) enum Motion {
         exact: bool,
         tolerance: f64,
     },
+    /// The program sets offsets or stored positions, or selects another
+    /// coordinate system (G10, G28.1, G30.1, G52, G92, G92.1, G92.2, G92.3,
+    /// G54…G59.3 other than the one in effect), whether or not a value
+    /// changes: GRBL waits for its motion to finish there.
+    Offsets,
     /// M0 (`optional: false`) or M1.
     Pause {
         optional: bool,

@@ -999,3 +999,38 @@ fn a_feed_above_the_machine_runs_at_its_limits() {
     );
     assert!(!text.contains("no machine velocity"), "{text}");
 }
+
+/// GRBL empties its buffer whenever a line selects another coordinate
+/// system or sets G92 or G10 offsets, even to the values in effect
+/// (`systems.ngc` switches G54, G55, G56 with every offset 0): a full stop
+/// and its 25 ms wait each, which the estimate counts.
+#[test]
+fn grbl_stops_at_every_offset_setting() {
+    let dir = crate::tmp();
+    let stops = |prog: &str| {
+        crate::put(dir.path(), "p.ngc", prog);
+        let (code, json, err) = crate::run(
+            dir.path(),
+            &[
+                "stats",
+                "--json",
+                "--zero-start",
+                "--target",
+                "grbl",
+                "p.ngc",
+            ],
+        );
+        assert_eq!(code, 0, "{err}");
+        let j: serde_json::Value = serde_json::from_str(&json).expect("json");
+        (j["time"]["stops"].as_u64(), j["time"]["wait_s"].as_f64())
+    };
+    // One stop at the end.
+    let (n, w) = stops("G21 G90\nG1 X10 F300\nG1 X20 Y5\nM2\n");
+    assert_eq!((n, w), (Some(1), Some(0.025)));
+    // G55 (offsets all 0), G92 X0 at X20 after the stop, G55 again (no
+    // change: no stop), G10 L2 P3 (an inactive system, written to EEPROM).
+    let (n, _) = stops(
+        "G21 G90\nG1 X10 F300\nG55\nG1 X20 Y5\nG92 X0\nG1 X5\nG55 G1 X6\nG10 L2 P3 X0\nG1 X8\nM2\n",
+    );
+    assert_eq!(n, Some(4));
+}
