@@ -345,6 +345,27 @@ impl Block {
         read_flat_line(line, self)
     }
 
+    /// [`Block::decode_into`] of a line whose writer knows the values of
+    /// its words: `known` holds, in line order, each word's upper-case
+    /// letter and the value its number reads as (NaN: not known). The line
+    /// is read by the same reader; a long number whose word is the next
+    /// known one (same letter) takes the known value instead of going
+    /// through the general float reader. A word the list does not name
+    /// (a line number, say) is read as usual.
+    ///
+    /// The caller vouches that each known value is the one its text reads
+    /// as: the shortest text that reads back as exactly the value, as
+    /// [`crate::number::write_number`] writes it without a precision.
+    pub fn decode_known(&mut self, line: &[u8], known: &[(u8, f64)]) -> Result<(), DecodeError> {
+        self.clear();
+        let mut sink = read::Known {
+            block: self,
+            known,
+            next: 0,
+        };
+        read_flat_line(line, &mut sink)
+    }
+
     /// The block of a line the straight-line reader read into `raw` (the
     /// same words, line number and comment, in the same order, through the
     /// same steps as [`Block::decode_into`]); `line` is the line's text.

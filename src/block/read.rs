@@ -2,7 +2,7 @@
 //! ([`read_flat_line`]), and of the words written the usual way
 //! ([`read_words`]), which the straight-line loop reads its lines with too.
 
-use super::{BlockSpan, DecodeError, DecodeProblem, Shape};
+use super::{Block, BlockSpan, DecodeError, DecodeProblem, Shape};
 use crate::number::{Digits, POW10, digits_at};
 
 /// What [`read_flat_line`] hands over as it reads a line, in line order.
@@ -34,6 +34,14 @@ pub(crate) trait LineSink {
     ) -> Result<(), Self::Error>;
     /// The comment `line[start..end]` (`(…)`, or `;` to the end).
     fn on_comment(&mut self, line: &[u8], start: usize, end: usize) -> Result<(), Self::Error>;
+    /// The value of the next word, if the sink knows it already and it has
+    /// `letter`: its number then is not converted again where that takes
+    /// the general float reader (see [`Block::decode_known`]).
+    #[inline(always)]
+    fn known(&self, letter: u8) -> Option<f64> {
+        let _ = letter;
+        None
+    }
 }
 
 /// The one reader of a flat line's text (no terminator; trailing `\r` and
@@ -101,7 +109,8 @@ pub(crate) fn read_flat_line_in<S: LineSink>(
                     }
                     .into());
                 }
-                let num = read_number(line, buf, i + 1, S::SHAPES).ok_or(DecodeError {
+                let known = sink.known(letter);
+                let num = read_number(line, buf, i + 1, S::SHAPES, known).ok_or(DecodeError {
                     span: span(i, i + 1),
                     what: DecodeProblem::BadNumber,
                 })?;
@@ -332,6 +341,54 @@ impl<S: LineSink> WordSink for Usual<'_, S> {
     }
 }
 
+/// A block decoded with the values of its words known (see
+/// [`Block::decode_known`]).
+pub(super) struct Known<'a> {
+    pub(super) block: &'a mut Block,
+    pub(super) known: &'a [(u8, f64)],
+    /// The next entry of `known`.
+    pub(super) next: usize,
+}
+
+impl LineSink for Known<'_> {
+    type Error = DecodeError;
+    const SHAPES: bool = true;
+
+    fn on_percent(&mut self) -> Result<(), DecodeError> {
+        self.block.on_percent()
+    }
+
+    fn on_block_delete(&mut self) {
+        self.block.on_block_delete();
+    }
+
+    fn on_word(
+        &mut self,
+        letter: u8,
+        value: f64,
+        span: BlockSpan,
+        shape: Shape,
+        spaced: bool,
+    ) -> Result<(), DecodeError> {
+        if self.known.get(self.next).is_some_and(|k| k.0 == letter) {
+            self.next += 1;
+        }
+        self.block.on_word(letter, value, span, shape, spaced)
+    }
+
+    fn on_comment(&mut self, line: &[u8], start: usize, end: usize) -> Result<(), DecodeError> {
+        self.block.on_comment(line, start, end)
+    }
+
+    #[inline(always)]
+    fn known(&self, letter: u8) -> Option<f64> {
+        match self.known.get(self.next) {
+            Some(&(l, v)) if l == letter && v.is_finite() => Some(v),
+            _ => None,
+        }
+    }
+}
+
 fn comments_only<S: LineSink>(line: &[u8], mut i: usize, sink: &mut S) -> Result<(), S::Error> {
     while i < line.len() {
         i = match line[i] {
@@ -397,10 +454,17 @@ pub(super) struct Num {
 /// its digits as an integer, exact below 2^53, divided by an exact power of
 /// ten. One correctly rounded division of two exact values is the correctly
 /// rounded value of the decimal, which is what `str::parse` returns too.
-/// Longer numbers without blanks are parsed where they are written; the
-/// rest (blanks inside) is gathered first.
+/// Longer numbers without blanks are parsed where they are written, unless
+/// their value is `known` (the value the text reads as, which the caller
+/// vouches for); the rest (blanks inside) is gathered first.
 #[inline(always)]
-pub(super) fn read_number(line: &[u8], tail: &[u8], start: usize, shapes: bool) -> Option<Num> {
+pub(super) fn read_number(
+    line: &[u8],
+    tail: &[u8],
+    start: usize,
+    shapes: bool,
+    known: Option<f64>,
+) -> Option<Num> {
     let mut i = start;
     let (neg, plus) = match line.get(i) {
         Some(b'-') => {
@@ -504,7 +568,11 @@ pub(super) fn read_number(line: &[u8], tail: &[u8], start: usize, shapes: bool) 
         if digits <= 19 && mant <= 1 << 53 && frac <= 22 {
             return whole(mant as i64 as f64 / POW10[frac as usize], Shape::default());
         }
-        // Long, but in one piece: read where it is written.
+        // Long, but in one piece: its value as the writer of the text
+        // knows it, or read where it is written.
+        if let Some(v) = known {
+            return whole(v.abs(), Shape::default());
+        }
         if let Some(v) = std::str::from_utf8(&line[body..i])
             .ok()
             .and_then(|t| t.parse::<f64>().ok())

@@ -1,6 +1,7 @@
 use super::read::{read_number, read_number_slow};
 use super::*;
 use crate::number::digits_at;
+use proptest::strategy::Strategy as _;
 
 /// The block sink reading every word itself, without [`read_words`].
 struct Unusual(Block);
@@ -113,7 +114,7 @@ proptest::proptest! {
     ) {
         let line = format!("X{text}");
         let start = at.min(line.len());
-        let fast = read_number(line.as_bytes(), line.as_bytes(), start, true).map(|n| (n.value, n.end));
+        let fast = read_number(line.as_bytes(), line.as_bytes(), start, true, None).map(|n| (n.value, n.end));
         let slow = read_number_slow(line.as_bytes(), start);
         proptest::prop_assert_eq!(
             fast.map(|(v, e)| (v.to_bits(), e)),
@@ -163,7 +164,7 @@ proptest::proptest! {
             &digits[at..],
         );
         let line = format!("X{text} Y1");
-        let got = read_number(line.as_bytes(), line.as_bytes(), 1, true)
+        let got = read_number(line.as_bytes(), line.as_bytes(), 1, true, None)
             .map(|n| (n.value.to_bits(), n.end));
         let want: f64 = text.parse().unwrap();
         proptest::prop_assert_eq!(got, Some((want.to_bits(), 1 + text.len())), "{}", line);
@@ -180,10 +181,67 @@ proptest::proptest! {
             "X{}{int}.{frac:0width$} Y1",
             if neg { "-" } else { "" },
         );
-        let got = read_number(line.as_bytes(), line.as_bytes(), 1, true).map(|n| (n.value, n.end));
+        let got = read_number(line.as_bytes(), line.as_bytes(), 1, true, None).map(|n| (n.value, n.end));
         let want: f64 = line[1..line.len() - 3].parse().unwrap();
         proptest::prop_assert_eq!(got.map(|g| g.0.to_bits()), Some(want.to_bits()));
         proptest::prop_assert_eq!(got.map(|g| g.1), Some(line.len() - 3));
+    }
+}
+
+proptest::proptest! {
+    /// A line of words whose values are written as the evaluator writes
+    /// them (shortest, [`crate::number::write_number`]) decodes with
+    /// the values known into the block it decodes into from its text,
+    /// bit for bit, whichever of its words are known, with a line
+    /// number, blanks and a comment about.
+    #[test]
+    fn known_values_decode_as_the_text(
+        words in proptest::collection::vec(
+            (
+                proptest::sample::select(b"GXYZFIJKRSPQABC".to_vec()),
+                proptest::prop_oneof![
+                    -1.0e6f64..1.0e6,
+                    (-4000i64..4000, 0u32..6).prop_map(|(n, k)| n as f64 * 0.025 - f64::from(k) * 0.002),
+                    (-100_000i64..100_000).prop_map(|n| n as f64 / 1000.0),
+                    proptest::num::f64::NORMAL.prop_map(|v| v.clamp(-1e14, 1e14)),
+                ],
+                proptest::bool::ANY,
+            ),
+            1..8,
+        ),
+        indent in 0usize..3,
+        number in proptest::option::of(1u32..99999),
+        comment in proptest::bool::ANY,
+        lower in proptest::bool::ANY,
+    ) {
+        let mut line = " ".repeat(indent).into_bytes();
+        if let Some(n) = number {
+            line.extend(format!("N{n} ").bytes());
+        }
+        let mut known = Vec::new();
+        for (k, &(letter, v, is_known)) in words.iter().enumerate() {
+            if k > 0 {
+                line.push(b' ');
+            }
+            line.push(if lower { letter.to_ascii_lowercase() } else { letter });
+            proptest::prop_assert!(crate::number::write_number(&mut line, v, None));
+            known.push((letter, if is_known { v } else { f64::NAN }));
+        }
+        if comment {
+            line.extend_from_slice(b" (c)");
+        }
+        let want = Block::decode(&line);
+        let mut got = Block::default();
+        let r = got.decode_known(&line, &known);
+        match want {
+            Ok(want) => {
+                proptest::prop_assert!(r.is_ok(), "{:?}", String::from_utf8_lossy(&line));
+                proptest::prop_assert_eq!(&got, &want, "{:?}", String::from_utf8_lossy(&line));
+                let bits = |b: &Block| b.words.iter().map(|w| w.value.to_bits()).collect::<Vec<_>>();
+                proptest::prop_assert_eq!(bits(&got), bits(&want));
+            }
+            Err(e) => proptest::prop_assert_eq!(r, Err(e)),
+        }
     }
 }
 

@@ -217,6 +217,19 @@ impl LineConsumer for Lowering {
         self.report(problems, text, origin)
     }
 
+    fn known_line(
+        &mut self,
+        text: &[u8],
+        known: &[(u8, f64)],
+        origin: &Origin<'_>,
+        out: &mut Output,
+    ) -> Result<(), Error> {
+        if self.p.passthrough {
+            return out.line(text).map_err(io_error);
+        }
+        self.run_decoded(text, origin, out, |b| b.decode_known(text, known))
+    }
+
     fn moves_line(
         &mut self,
         text: &[u8],

@@ -1276,10 +1276,19 @@ proptest! {
             0..4,
         ),
         check in any::<bool>(),
+        computed in any::<bool>(),
     ) {
-        // A loop makes many lines; the tail may warn or fail after it.
+        // A loop makes many lines; the tail may warn or fail after it. Its
+        // body may compute numbers of up to 17 digits (0.07500000000000001)
+        // in a line of words alone, which the consumer apart puts together
+        // and decodes with their values known.
+        let body = if computed {
+            "#3 = [#3 + 0.025]\nG1 X#3 Y[#3 * 3 - 0.002] Z[0 - #3 / 7]\n  G0 x[#3 * 1000000 + 1 / 7]"
+        } else {
+            ""
+        };
         let prog = format!(
-            "{}\no9 repeat [{repeat}]\n{}\no9 endrepeat\n{}\nM2\n",
+            "#3 = 0\n{}\no9 repeat [{repeat}]\n{}\n{body}\no9 endrepeat\n{}\nM2\n",
             lines.join("\n"),
             lines.last().map_or("", String::as_str),
             tail.join("\n"),
@@ -1288,6 +1297,31 @@ proptest! {
         for after in [0, 3] {
             let apart = run_for_target(&prog, "grbl", check, after);
             prop_assert_eq!(&apart, &here, "apart after {} lines, program:\n{}", after, prog);
+        }
+    }
+}
+
+/// A line refused inside nested calls is reported with the same call
+/// stack whichever thread the target runs on, after lines run in other
+/// calls at the same depth and in the calls around them.
+#[test]
+fn consumer_apart_reports_the_calls_of_a_refused_line() {
+    let prog = "G21 F100\no<inner> sub\n  G1 X#1\n  o1 if [#1 GT 6]\n    G1 A#1\n  o1 endif\no<inner> endsub\n\
+                o<outer> sub\n  G1 Y#1\n  o<inner> call [#1 * 2]\n  o<inner> call [#1 * 2 + 1]\no<outer> endsub\n\
+                o<outer> call [1]\no<outer> call [2]\no<outer> call [3]\nM2\n";
+    for check in [false, true] {
+        let here = run_for_target(prog, "grbl", check, usize::MAX);
+        let shown = format!("{here:?}");
+        assert!(
+            shown.contains(":5:8:") && shown.contains(":11:3)") && shown.contains(":15:1)"),
+            "{shown}"
+        );
+        for after in [0, 1, 3] {
+            assert_eq!(
+                run_for_target(prog, "grbl", check, after),
+                here,
+                "check {check}, after {after}"
+            );
         }
     }
 }

@@ -48,6 +48,37 @@ impl Interp<'_> {
         self.out.consume(at, file, line_start, text, verbatim)
     }
 
+    /// Hands a line the evaluator wrote, with the values of its words, to
+    /// the consumer (there is one).
+    #[cold]
+    pub(in crate::eval) fn consume_known(
+        &mut self,
+        file: &Arc<SourceFile>,
+        line_start: u32,
+        text: &[u8],
+        verbatim: bool,
+        known: &[(u8, f64)],
+    ) -> Result<(), Error> {
+        let at = run_at!(self);
+        self.out
+            .consume_known(at, file, line_start, text, verbatim, known)
+    }
+
+    /// Hands the line `raw` with `edits` to the consumer on its own thread
+    /// (see [`crate::eval::out::Writer::consume_edited`]).
+    pub(in crate::eval) fn consume_edited(
+        &mut self,
+        file: &Arc<SourceFile>,
+        line_start: u32,
+        raw: &[u8],
+        edits: &[(crate::source::Span, crate::emit::Edit)],
+        known: &[(u8, f64)],
+    ) -> Result<(), Error> {
+        let at = run_at!(self);
+        self.out
+            .consume_edited(at, (file, line_start), raw, edits, known)
+    }
+
     /// Hands a line and its decoded block to the consumer (there is one).
     #[cold]
     pub(in crate::eval) fn consume_decoded(

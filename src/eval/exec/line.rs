@@ -77,6 +77,7 @@ impl Interp<'_> {
             named_set,
             context_ops,
             word_spans,
+            ..
         } = scratch;
         let mut active = None;
         let mut counts = WordCounts::default();
@@ -183,7 +184,7 @@ impl Interp<'_> {
             })
             .count();
         if kept > 0 {
-            self.write_line(file, start, raw, repl)?;
+            self.write_line(file, start, raw, repl, &[])?;
         }
         // 6. State.
         let ends = self.apply_words(file, start, words, checked, m99)?;
@@ -376,7 +377,9 @@ impl Interp<'_> {
         items: &[Item],
         scratch: &mut Scratch,
     ) -> Result<(), crate::diag::Error> {
-        let Scratch { words, repl, .. } = scratch;
+        let Scratch {
+            words, repl, known, ..
+        } = scratch;
         let mut counts = WordCounts::default();
         for item in items {
             let Item::Word(w) = item else {
@@ -388,9 +391,18 @@ impl Interp<'_> {
                 repl.push((w.value.span, Edit::Number(v)));
             }
         }
+        // For a consumer, the values of the words as written (the shortest
+        // text of each computed one reads back as exactly its value; a
+        // literal keeps its text, read again).
+        if self.out.consuming() && self.s.precision.is_none() {
+            known.extend(items.iter().zip(words.iter()).map(|(i, &(l, v))| {
+                let literal = matches!(i, Item::Word(w) if w.literal);
+                (l.to_ascii_uppercase(), if literal { f64::NAN } else { v })
+            }));
+        }
         if self.fast_words(words) {
             // Checked and applied: a plain move.
-            return self.write_line(file, start, raw, repl);
+            return self.write_line(file, start, raw, repl, known);
         }
         let checked = match self.check_words(words) {
             Err((k, at)) => {
@@ -405,7 +417,7 @@ impl Interp<'_> {
             }
             Ok(c) => c,
         };
-        self.write_line(file, start, raw, repl)?;
+        self.write_line(file, start, raw, repl, known)?;
         if self.apply_words(file, start, words, &checked, false)? {
             self.end_program()?;
         }
@@ -438,13 +450,15 @@ impl Interp<'_> {
     /// Writes the line with its replacements. A line that cannot be too
     /// long whatever its numbers read goes to the output with them (to be
     /// written maybe on the output thread); any other is written here to
-    /// check its length.
+    /// check its length. A consumer gets the values of its words with it
+    /// where `known` has them.
     fn write_line(
         &mut self,
         file: &Rc<FileIndex>,
         start: u32,
         raw: &[u8],
         repl: &[(Span, Edit)],
+        known: &[(u8, f64)],
     ) -> Result<(), crate::diag::Error> {
         if !self.out.consuming()
             && max_edited_len(raw.len(), repl, self.s.precision).is_some_and(|n| n <= MAX_LINE)
@@ -455,6 +469,19 @@ impl Interp<'_> {
                 .output
                 .edited_line(raw, repl)
                 .map_err(|e| self.output_error_at(e, &file.file, start));
+        }
+        // The consumer on its own thread puts a line of numbers in their
+        // shortest form together itself, where it cannot fail.
+        if self.out.consumer_apart()
+            && self.s.precision.is_none()
+            && !repl.is_empty()
+            && repl.len() <= usize::from(u8::MAX)
+            && repl.iter().all(|(_, e)| matches!(e, Edit::Number(_)))
+            && max_edited_len(raw.len(), repl, None).is_some_and(|n| n <= MAX_LINE)
+        {
+            self.count_line()?;
+            let f = file.file.clone();
+            return self.consume_edited(&f, start, raw, repl, known);
         }
         let mut out = std::mem::take(&mut self.out.buf);
         out.clear();
@@ -476,8 +503,14 @@ impl Interp<'_> {
         }
         let r = if self.out.consuming() {
             let f = file.file.clone();
-            self.count_line()
-                .and_then(|_| self.consume(&f, start, &out, repl.is_empty()))
+            let verbatim = repl.is_empty();
+            self.count_line().and_then(|_| {
+                if known.is_empty() {
+                    self.consume(&f, start, &out, verbatim)
+                } else {
+                    self.consume_known(&f, start, &out, verbatim, known)
+                }
+            })
         } else {
             self.emit_raw(&out)
         };

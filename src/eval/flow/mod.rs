@@ -2,7 +2,9 @@
 //! their frames, the subroutines known, and the parsed lines of bodies that
 //! run again.
 
+use std::cell::OnceCell;
 use std::rc::Rc;
+use std::sync::Arc;
 
 use crate::diag::Site;
 use crate::fx_hasher::{FxMap, FxSet};
@@ -63,6 +65,9 @@ pub(super) struct Frame {
     /// Modal state saved by M70/M73; `auto` restores it on return (M73).
     pub saved_modal: Option<Box<crate::eval::state::restore::Saved>>,
     pub auto_restore: bool,
+    /// The call stack of the lines run in this frame, once asked for (see
+    /// [`calls_of`]).
+    pub calls: OnceCell<Option<Arc<Calls>>>,
 }
 
 impl Frame {
@@ -79,6 +84,7 @@ impl Frame {
             m98_loop,
             saved_modal,
             auto_restore,
+            calls,
         } = self;
         *k = kind;
         *n = name;
@@ -90,6 +96,7 @@ impl Frame {
         *m98_loop = None;
         *saved_modal = None;
         *auto_restore = false;
+        calls.take();
     }
 
     pub(in crate::eval) fn new(kind: FrameKind, name: Name) -> Frame {
@@ -104,6 +111,7 @@ impl Frame {
             m98_loop: None,
             saved_modal: None,
             auto_restore: false,
+            calls: OnceCell::new(),
         }
     }
 }
@@ -127,6 +135,46 @@ pub(super) fn stack_of(frames: &[Box<Frame>]) -> Vec<Site> {
             Some(Site::new(&ret.file.file, a, b))
         })
         .collect()
+}
+
+/// A call site and the calls around it, innermost first: the call stack
+/// of the lines run in a call, made once for the call and shared by them
+/// (the consumer on its own thread gets it with each line).
+pub(crate) struct Calls {
+    site: Site,
+    up: Option<Arc<Calls>>,
+}
+
+impl Calls {
+    /// The sites, innermost caller first: [`stack_of`] of the frames it
+    /// was made of.
+    pub(crate) fn sites(&self) -> Vec<Site> {
+        let mut out = vec![self.site.clone()];
+        let mut at = &self.up;
+        while let Some(c) = at {
+            out.push(c.site.clone());
+            at = &c.up;
+        }
+        out
+    }
+}
+
+/// [`stack_of`] `frames` as shared [`Calls`] (none outside calls): each
+/// frame's worked out once, when first asked for.
+#[allow(clippy::vec_box)]
+pub(super) fn calls_of(frames: &[Box<Frame>]) -> Option<Arc<Calls>> {
+    let (last, outer) = frames.split_last()?;
+    last.calls
+        .get_or_init(|| match (last.ret.as_ref(), last.call_oidx) {
+            (Some(ret), Some(oidx)) => {
+                let (a, b) = osite_of(&ret.file, oidx);
+                let site = Site::new(&ret.file.file, a, b);
+                let up = calls_of(outer);
+                Some(Arc::new(Calls { site, up }))
+            }
+            _ => calls_of(outer),
+        })
+        .clone()
 }
 
 /// The label part of a control key (`scope#label`).

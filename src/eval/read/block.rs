@@ -25,6 +25,9 @@ pub(crate) struct Scratch {
     pub(in crate::eval) named_set: Vec<(crate::parse::Name, f64)>,
     pub(in crate::eval) context_ops: Vec<(u8, Span)>,
     pub(in crate::eval) word_spans: Vec<Span>,
+    /// The words' values as written for a consumer (see
+    /// [`crate::block::Block::decode_known`]).
+    pub(in crate::eval) known: Vec<(u8, f64)>,
 }
 
 impl Scratch {
@@ -35,6 +38,7 @@ impl Scratch {
         self.named_set.clear();
         self.context_ops.clear();
         self.word_spans.clear();
+        self.known.clear();
     }
 }
 

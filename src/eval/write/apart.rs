@@ -17,8 +17,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender, SyncSender};
 
 use super::hook::{LineConsumer, Origin};
-use crate::diag::{Diagnostic, Error, ErrorKind, Site};
-use crate::emit::Output;
+use crate::diag::{Diagnostic, Error, ErrorKind};
+use crate::emit::{Edit, Output, write_edited};
+use crate::eval::flow::Calls;
 use crate::eval::write::place_limit;
 use crate::program::SourceFile;
 
@@ -40,9 +41,16 @@ enum Msg {
         /// The file of this line and the ones after it, when it changed.
         file: Option<Arc<SourceFile>>,
         /// The call chain, inside a call.
-        stack: Option<Vec<Site>>,
+        stack: Option<Arc<Calls>>,
         /// Warnings the evaluator had given when it handed the line over.
         warnings: usize,
+        /// The values of its words, the batch's next `known` of them (see
+        /// [`LineConsumer::known_line`]); none: not known.
+        known: u8,
+        /// The text is a source line to write with the batch's next
+        /// `edits` numbers in place of their spans (shortest form, see
+        /// [`crate::emit::write_edited`]); none: the text is the line.
+        edits: u8,
     },
     /// See [`LineConsumer::comp_position`].
     CompPosition([f64; 2]),
@@ -52,6 +60,8 @@ enum Msg {
 pub(in crate::eval) struct Batch {
     msgs: Vec<Msg>,
     text: Vec<u8>,
+    known: Vec<(u8, f64)>,
+    edits: Vec<(crate::source::Span, Edit)>,
 }
 
 /// The first consumer error, and the warnings given before its line.
@@ -114,16 +124,48 @@ impl Apart {
         }
     }
 
-    /// Queues a line for the consumer.
+    /// Queues a line for the consumer, with the values of its words if
+    /// `known` has them (see [`LineConsumer::known_line`]).
+    #[allow(clippy::too_many_arguments)]
     pub(in crate::eval) fn line(
         &mut self,
         file: &Arc<SourceFile>,
         line_start: u32,
         text: &[u8],
         verbatim: bool,
-        stack: Option<Vec<Site>>,
+        stack: Option<Arc<Calls>>,
         warnings: usize,
+        known: &[(u8, f64)],
     ) -> Result<(), Error> {
+        self.edited_line(
+            file,
+            line_start,
+            (text, &[]),
+            verbatim,
+            stack,
+            warnings,
+            known,
+        )
+    }
+
+    /// [`Apart::line`] of the line `raw` once `edits` are made (numbers
+    /// only, at least one, at most 255, shortest form; `raw`'s trailing blanks dropped,
+    /// as [`crate::emit::write_edited`] writes it): put together on the
+    /// consumer's thread. The line cannot fail to be written: its numbers
+    /// have a G-code form and its length a bound within the limit.
+    #[allow(clippy::too_many_arguments)]
+    pub(in crate::eval) fn edited_line(
+        &mut self,
+        file: &Arc<SourceFile>,
+        line_start: u32,
+        (text, edits): (&[u8], &[(crate::source::Span, Edit)]),
+        verbatim: bool,
+        stack: Option<Arc<Calls>>,
+        warnings: usize,
+        known: &[(u8, f64)],
+    ) -> Result<(), Error> {
+        debug_assert!(edits.len() <= usize::from(u8::MAX));
+        debug_assert!(edits.iter().all(|(_, e)| matches!(e, Edit::Number(_))));
         if self.failed.load(Ordering::Relaxed) {
             return Err(stopped());
         }
@@ -135,6 +177,15 @@ impl Apart {
             }
         };
         self.batch.text.extend_from_slice(text);
+        // At most 255 values (a line has far fewer words); more: none.
+        let known = match u8::try_from(known.len()) {
+            Ok(n) => {
+                self.batch.known.extend_from_slice(known);
+                n
+            }
+            Err(_) => 0,
+        };
+        self.batch.edits.extend_from_slice(edits);
         self.batch.msgs.push(Msg::Line {
             len: text.len() as u32,
             line_start,
@@ -142,6 +193,8 @@ impl Apart {
             file,
             stack,
             warnings,
+            known,
+            edits: edits.len() as u8,
         });
         if self.batch.text.len() >= BATCH_BYTES || self.batch.msgs.len() >= BATCH_LINES {
             self.send()?;
@@ -188,6 +241,8 @@ pub(in crate::eval) fn serve<'s>(
         }
         batch.msgs.clear();
         batch.text.clear();
+        batch.known.clear();
+        batch.edits.clear();
         let _ = back.send(batch);
     }
     (consumer, out, failure)
@@ -200,6 +255,9 @@ fn run_batch(
     file: &mut Option<Arc<SourceFile>>,
 ) -> Option<Failure> {
     let mut at = 0;
+    let mut known_at = 0;
+    let mut edits_at = 0;
+    let mut edited = Vec::new();
     for m in &batch.msgs {
         match m {
             Msg::CompPosition(p) => consumer.comp_position(*p),
@@ -210,23 +268,42 @@ fn run_batch(
                 file: changed,
                 stack,
                 warnings,
+                known,
+                edits,
             } => {
                 if let Some(f) = changed {
                     *file = Some(f.clone());
                 }
                 let text = &batch.text[at..at + *len as usize];
                 at += *len as usize;
+                let known = &batch.known[known_at..known_at + usize::from(*known)];
+                known_at += known.len();
+                let edits = &batch.edits[edits_at..edits_at + usize::from(*edits)];
+                edits_at += edits.len();
+                let text = if edits.is_empty() {
+                    text
+                } else {
+                    edited.clear();
+                    // Numbers with a G-code form only (checked when sent).
+                    let _ = write_edited(&mut edited, text, edits, None);
+                    &edited[..]
+                };
                 let Some(f) = file.as_ref() else {
                     continue;
                 };
-                let calls = || stack.clone().unwrap_or_default();
+                let calls = || stack.as_deref().map(Calls::sites).unwrap_or_default();
                 let origin = Origin {
                     file: f,
                     line_start: *line_start,
                     verbatim: *verbatim,
                     stack: &calls,
                 };
-                if let Err(e) = consumer.line(text, &origin, out) {
+                let r = if known.is_empty() {
+                    consumer.line(text, &origin, out)
+                } else {
+                    consumer.known_line(text, known, &origin, out)
+                };
+                if let Err(e) = r {
                     return Some(Failure {
                         error: place_limit(e, f, *line_start, calls),
                         warnings: *warnings,

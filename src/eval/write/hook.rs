@@ -14,12 +14,13 @@ enum Payload<'a> {
     Text,
     Block(&'a Block),
     Moves(&'a [RawWord]),
+    Known(&'a [(u8, f64)]),
 }
 use crate::diag::{Diagnostic, Error, Site};
 use crate::emit::Output;
 use crate::program::SourceFile;
 
-use crate::eval::flow::{Frame, stack_of};
+use crate::eval::flow::{Frame, calls_of, stack_of};
 use crate::eval::write::{Writer, place_limit};
 
 /// Where an output line came from.
@@ -75,6 +76,22 @@ pub trait LineConsumer: Send {
         out: &mut Output,
     ) -> Result<(), Error> {
         let _ = words;
+        self.line(text, origin, out)
+    }
+
+    /// One output line written by the evaluator, and the values of its
+    /// words as it wrote them (see [`Block::decode_known`]: in line order,
+    /// upper-case letter and value, NaN where not known): what
+    /// [`LineConsumer::line`] does with the line; a consumer that decodes
+    /// it may take the values instead of reading long numbers again.
+    fn known_line(
+        &mut self,
+        text: &[u8],
+        known: &[(u8, f64)],
+        origin: &Origin<'_>,
+        out: &mut Output,
+    ) -> Result<(), Error> {
+        let _ = known;
         self.line(text, origin, out)
     }
 
@@ -304,6 +321,55 @@ impl Writer<'_> {
         self.hand_over(at, line, true, Payload::Block(block))
     }
 
+    /// Hands a line the evaluator wrote, with the values of its words (see
+    /// [`LineConsumer::known_line`]), to the consumer (there is one).
+    pub(in crate::eval) fn consume_known(
+        &mut self,
+        at: RunAt<'_>,
+        file: &Arc<SourceFile>,
+        line_start: u32,
+        text: &[u8],
+        verbatim: bool,
+        known: &[(u8, f64)],
+    ) -> Result<(), Error> {
+        let line = (file, line_start, text);
+        self.hand_over(at, line, verbatim, Payload::Known(known))
+    }
+
+    /// Whether the consumer runs on a thread of its own, where a line may
+    /// be put together (see [`Writer::consume_edited`]).
+    pub(in crate::eval) fn consumer_apart(&self) -> bool {
+        self.apart.is_some()
+    }
+
+    /// Hands the line `raw` with `edits` made (numbers alone, each with a
+    /// G-code form, shortest form, the line's length bounded within the
+    /// limit) to the consumer on its own thread, which puts it together;
+    /// with the values of its words if `known` has them.
+    pub(in crate::eval) fn consume_edited(
+        &mut self,
+        at: RunAt<'_>,
+        (file, line_start): (&Arc<SourceFile>, u32),
+        raw: &[u8],
+        edits: &[(crate::source::Span, crate::emit::Edit)],
+        known: &[(u8, f64)],
+    ) -> Result<(), Error> {
+        let Some(a) = self.apart.as_mut() else {
+            unreachable!("a line is put together apart only with the consumer apart")
+        };
+        let stack = calls_of(at.frames);
+        let verbatim = edits.is_empty();
+        a.edited_line(
+            file,
+            line_start,
+            (raw, edits),
+            verbatim,
+            stack,
+            at.warnings,
+            known,
+        )
+    }
+
     /// Hands a line that is a move alone, and its words, to the consumer.
     pub(in crate::eval) fn consume_moves(
         &mut self,
@@ -328,9 +394,12 @@ impl Writer<'_> {
     ) -> Result<(), Error> {
         if let Some(a) = self.apart.as_mut() {
             // A block decoded ahead is the same line: the text carries it.
-            let frames = at.frames;
-            let stack = (frames.len() > 1).then(|| stack_of(frames));
-            return a.line(file, line_start, text, verbatim, stack, at.warnings);
+            let stack = calls_of(at.frames);
+            let known = match payload {
+                Payload::Known(k) => k,
+                _ => &[],
+            };
+            return a.line(file, line_start, text, verbatim, stack, at.warnings, known);
         }
         let Some(mut c) = self.consumer.take() else {
             return Ok(());
@@ -348,6 +417,7 @@ impl Writer<'_> {
             Payload::Text => c.line(text, &origin, out),
             Payload::Block(b) => c.decoded_line(text, b, &origin, out),
             Payload::Moves(w) => c.moves_line(text, w, &origin, out),
+            Payload::Known(k) => c.known_line(text, k, &origin, out),
         };
         self.consumer = Some(c);
         r.map_err(|e| at.placed(e, file, line_start))
