@@ -7,6 +7,7 @@ mod lower;
 mod name;
 pub(crate) mod named2007;
 pub(crate) mod normalize;
+mod quick;
 
 use crate::diag::SyntaxError;
 use pest::Parser as _;
@@ -107,6 +108,12 @@ impl LineParser {
     /// Parses one raw line (without terminator). `terminated` tells whether a
     /// newline followed it, which matters for the length limit.
     pub fn parse(&mut self, raw: &[u8], terminated: bool) -> Result<Line, LineError> {
+        self.parse_with(raw, terminated, true)
+    }
+
+    /// [`LineParser::parse`]; with `quick`, a call with plain numbers as
+    /// arguments is read without the grammar (see [`quick`]).
+    fn parse_with(&mut self, raw: &[u8], terminated: bool, quick: bool) -> Result<Line, LineError> {
         let len = raw.len() + terminated as usize;
         if len > MAX_LINE + 1 {
             return Err(LineError::new(
@@ -138,6 +145,9 @@ impl LineParser {
                 block_delete: false,
                 line_number: None,
             });
+        }
+        if quick && let Some(line) = quick::call_line(&self.norm) {
+            return Ok(line);
         }
         match NgcParser::parse(Rule::line, text) {
             Ok(mut pairs) => {
@@ -187,6 +197,95 @@ impl LineParser {
                     is_o,
                 ))
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// A call written with blanks and letter case anywhere, and arguments
+    /// that are numbers (some malformed), sometimes followed by something
+    /// else.
+    fn call_text() -> impl Strategy<Value = String> {
+        let arg = prop_oneof![
+            "[+-]?[0-9]{0,4}(\\.[0-9]{0,4})?",
+            "[+-]?\\.?[0-9]{1,3}\\.?",
+            Just("1+2".to_string()),
+            Just("#1".to_string()),
+        ];
+        (
+            prop_oneof![
+                "[a-zA-Z0-9_]{1,8}".prop_map(|n| format!("<{n}>")),
+                Just("<a b>".to_string()),
+                Just("<>".to_string()),
+                Just("100".to_string()),
+            ],
+            proptest::collection::vec(arg, 0..33),
+            prop_oneof![
+                4 => Just(String::new()),
+                1 => Just(" (c)".to_string()),
+                1 => Just(" x".to_string()),
+                1 => Just(" ;c".to_string()),
+            ],
+            proptest::collection::vec(0usize..3, 48),
+            any::<bool>(),
+        )
+            .prop_map(|(label, args, tail, blanks, upper)| {
+                let mut s = format!("o{label} call");
+                for a in &args {
+                    s.push_str(&format!(" [{a}]"));
+                }
+                s.push_str(&tail);
+                // Blanks spread over the line (outside the comment).
+                let mut out = String::new();
+                for (k, c) in s.char_indices() {
+                    if c == '(' || c == ';' {
+                        out.push_str(&s[k..]);
+                        break;
+                    }
+                    out.push_str(&" ".repeat(blanks[k % blanks.len()] & usize::from(k % 5 == 0)));
+                    out.push(if upper { c.to_ascii_uppercase() } else { c });
+                }
+                out
+            })
+    }
+
+    proptest! {
+        /// A call read the quick way is the line the grammar makes of it,
+        /// and so is the error of one that is not.
+        #[test]
+        fn quick_calls_read_as_the_grammar_reads_them(text in call_text(), named2007 in any::<bool>()) {
+            let mut p = LineParser::new(named2007);
+            let quick = p.parse_with(text.as_bytes(), true, true);
+            let grammar = p.parse_with(text.as_bytes(), true, false);
+            prop_assert_eq!(quick, grammar, "{:?}", text);
+        }
+    }
+
+    #[test]
+    fn a_call_of_numbers_is_read_quickly() {
+        let mut norm = Normalized::default();
+        normalize::normalize(b"O<Hole> Call [1.5] [-2] [+.5]", &mut norm).unwrap();
+        let line = quick::call_line(&norm).expect("quick");
+        let LineKind::O(o) = line.kind else {
+            panic!("{line:?}")
+        };
+        assert_eq!(o.label, ast::Label::Static(Name::new("hole")));
+        let values: Vec<_> = o.args.iter().map(|a| a.kind.clone()).collect();
+        use ast::ExprKind::Num;
+        assert_eq!(values, [Num(1.5), Num(-2.0), Num(0.5)]);
+        assert_eq!(o.args[1].span, Span::new(19, 23));
+        for other in [
+            "o<a>call[1+2]",
+            "o100call[1]",
+            "o<a>call[1](c)",
+            "o<a>call[.]",
+        ] {
+            normalize::normalize(other.as_bytes(), &mut norm).unwrap();
+            assert!(quick::call_line(&norm).is_none(), "{other}");
         }
     }
 }
