@@ -92,10 +92,6 @@ pub(super) fn run(job: Job, mut cfg: Config) -> ExitCode {
         None => Destination::Stdout,
     };
     let consumer = lowering(&cfg.settings, cfg.target.clone());
-    if consumer.is_some() && (job.source_map.is_some() || job.annotate) {
-        let k = ErrorKind::Setup(SetupError::SourceMapNeedsLinuxcnc);
-        return super::setup_error(k, cfg.format, false);
-    }
     let extras = crate::view::run::Extras {
         source_map: job.source_map,
         annotate: job.annotate,

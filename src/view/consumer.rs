@@ -8,7 +8,7 @@ use std::io::Write;
 use std::collections::VecDeque;
 
 use super::run::Observer;
-use super::source_map::{Locator, Place, SourceMap, annotation, time_note};
+use super::source_map::{Locator, NoteRules, Place, SourceMap, annotation, time_note};
 use crate::block::Block;
 use crate::diag::{Diagnostic, Error, ErrorKind, Site};
 use crate::emit::Output;
@@ -27,6 +27,11 @@ pub(crate) struct ViewConsumer<'a> {
     pass_through: bool,
     pub source_map: Option<MapSink>,
     annotate: Option<Locator>,
+    /// What an annotation may hold, for the controller reading the output.
+    notes: NoteRules,
+    /// Where the last line came from: the lines a target's lowering writes
+    /// at the program's end are mapped there.
+    last: Option<(Place, Vec<Place>)>,
     buf: Vec<u8>,
     /// The consumer that writes the output for a target controller: it gets
     /// every line after this one has looked at it.
@@ -79,9 +84,79 @@ impl<'a> ViewConsumer<'a> {
             pass_through,
             source_map,
             annotate: annotate.then(Locator::default),
+            notes: NoteRules::linuxcnc(),
+            last: None,
             buf: Vec::new(),
             next: None,
         }
+    }
+
+    /// Annotations follow `rules` (a target controller's).
+    pub(crate) fn with_notes(mut self, rules: NoteRules) -> ViewConsumer<'a> {
+        self.notes = rules;
+        self
+    }
+
+    /// Whether this consumer writes the lines it is given.
+    pub(crate) fn writes(&self) -> bool {
+        self.pass_through
+    }
+
+    /// A line that has no place in the program (written by a target's
+    /// lowering when the program ended), written out: mapped to where the
+    /// last line came from.
+    pub(crate) fn end_line(&mut self, text: &[u8], out: &mut Output) -> Result<(), Error> {
+        if let Some(t) = &mut self.timing {
+            t.lines += 1;
+            t.run_time.line(t.lines);
+        }
+        self.block_line(text)?;
+        let Some((at, calls)) = self.last.clone() else {
+            return out.line(text).map_err(crate::eval::output_error);
+        };
+        if let Some(t) = &mut self.timing {
+            t.held.push_back(Held {
+                text: text.to_vec(),
+                at,
+                calls,
+            });
+            return Ok(());
+        }
+        self.write_now(text, &at, &calls, out)
+    }
+
+    /// Writes a line with its source-map entry and annotation, no time.
+    fn write_now(
+        &mut self,
+        text: &[u8],
+        at: &Place,
+        calls: &[Place],
+        out: &mut Output,
+    ) -> Result<(), Error> {
+        if let Some(sm) = &mut self.source_map {
+            sm.line(at, calls, None)
+                .map_err(|e| io_error("<source map>", e))?;
+        }
+        if let Some(loc) = &mut self.annotate {
+            let a = loc.locate(at);
+            let c: Vec<_> = calls.iter().map(|p| loc.locate(p)).collect();
+            let note = annotation(&a, &c, &self.notes);
+            // Never past the line limit: the comment is left off a line it
+            // would make too long.
+            if self.notes.fits(text.len(), note.len()) && text.first() != Some(&b'%') {
+                self.buf.clear();
+                self.buf.extend_from_slice(text);
+                self.buf.extend_from_slice(note.as_bytes());
+                if self.pass_through {
+                    return out.line(&self.buf).map_err(crate::eval::output_error);
+                }
+                return Ok(());
+            }
+        }
+        if self.pass_through {
+            out.line(text).map_err(crate::eval::output_error)?;
+        }
+        Ok(())
     }
 
     /// Hands every line on to `next` (which writes the output) after
@@ -176,6 +251,7 @@ impl LineConsumer for ViewConsumer<'_> {
         }
         if let Some(t) = &mut self.timing {
             let (at, calls) = Self::places(origin);
+            self.last = Some((at.clone(), calls.clone()));
             t.held.push_back(Held {
                 text: text.to_vec(),
                 at,
@@ -185,23 +261,9 @@ impl LineConsumer for ViewConsumer<'_> {
         }
         if self.source_map.is_some() || self.annotate.is_some() {
             let (at, calls) = Self::places(origin);
-            if let Some(sm) = &mut self.source_map {
-                sm.line(&at, &calls, None)
-                    .map_err(|e| io_error("<source map>", e))?;
-            }
-            if let Some(loc) = &mut self.annotate {
-                let a = loc.locate(&at);
-                let c: Vec<_> = calls.iter().map(|p| loc.locate(p)).collect();
-                let note = annotation(&a, &c);
-                // Never past the 252-character line limit: the comment is
-                // left off a line it would make too long.
-                if text.len() + note.len() <= 252 && text.first() != Some(&b'%') {
-                    self.buf.clear();
-                    self.buf.extend_from_slice(text);
-                    self.buf.extend_from_slice(note.as_bytes());
-                    return out.line(&self.buf).map_err(crate::eval::output_error);
-                }
-            }
+            self.write_now(text, &at, &calls, out)?;
+            self.last = Some((at, calls));
+            return Ok(());
         }
         if self.pass_through {
             out.line(text).map_err(crate::eval::output_error)?;
@@ -257,13 +319,13 @@ impl ViewConsumer<'_> {
             if let Some(loc) = &mut self.annotate {
                 let a = loc.locate(&h.at);
                 let c: Vec<_> = h.calls.iter().map(|p| loc.locate(p)).collect();
-                let mut note = annotation(&a, &c);
+                let mut note = annotation(&a, &c, &self.notes);
                 if let Some(lt) = &time {
                     note.push_str(&time_note(lt));
                 }
-                // Never past the 252-character line limit: the comment is
-                // left off a line it would make too long.
-                if h.text.len() + note.len() <= 252 && h.text.first() != Some(&b'%') {
+                // Never past the line limit: the comment is left off a line
+                // it would make too long.
+                if self.notes.fits(h.text.len(), note.len()) && h.text.first() != Some(&b'%') {
                     self.buf.clear();
                     self.buf.extend_from_slice(&h.text);
                     self.buf.extend_from_slice(note.as_bytes());
@@ -367,7 +429,11 @@ impl LineConsumer for Lowered<'_> {
         let warnings = self.lower.finish(&mut self.scratch)?;
         let lines = self.scratch.drain_memory();
         for l in lines.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
-            self.view.block_line(l)?;
+            if self.view.writes() {
+                self.view.end_line(l, out)?;
+            } else {
+                self.view.block_line(l)?;
+            }
         }
         self.view.finish(out)?;
         Ok(warnings)

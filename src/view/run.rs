@@ -4,6 +4,7 @@
 use super::limits::LimitCheck;
 use super::plot::{Plot, View};
 use super::scene::Scene;
+use super::source_map::NoteRules;
 use super::stats::Stats;
 use crate::diag::ErrorKind;
 use crate::diag::{LimitError, SetupError};
@@ -221,8 +222,10 @@ pub(crate) fn flatten_observed(
 /// [`flatten_observed`] in front of `next`, the consumer that writes the
 /// output for a target controller (it sees every line after the limit
 /// check). Returns every diagnostic and the error that stopped the run, as
-/// [`crate::flatten::flatten_with`]. The source map and annotations are only for
-/// output written line for line (no `next`).
+/// [`crate::flatten::flatten_with`]. With `next`, the source map and the
+/// annotations are those of the lines `next` writes (each mapped to the
+/// program line it was lowered from), timed by the target's planner, the
+/// annotations within what the target's profile allows.
 pub(crate) fn flatten_chained<'s>(
     source: crate::program::SourceFile,
     settings: &'s crate::settings::Settings,
@@ -235,11 +238,7 @@ pub(crate) fn flatten_chained<'s>(
     if !cfg.check_limits && extras.source_map.is_none() && !extras.annotate {
         return crate::flatten::flatten_with(source, settings, search, dest, next);
     }
-    let extras = if next.is_some() {
-        &Extras::default()
-    } else {
-        extras
-    };
+    let mut lowered_observer = Observer::default();
     let mut observer = if cfg.check_limits {
         Observer::limits(&cfg.machine)
     } else {
@@ -279,20 +278,39 @@ pub(crate) fn flatten_chained<'s>(
         },
         None => None,
     };
-    // Each line's planned time, for the flattened program as it is
-    // (LinuxCNC's, or GRBL's when a `$$` listing says the machine runs it).
-    let timing = next
-        .is_none()
-        .then(|| crate::runtime::TimeModel::for_target(None, &cfg.machine));
-    let consumer = super::consumer::ViewConsumer::new(
-        settings,
-        &mut observer,
-        true,
-        map,
-        extras.annotate,
-        timing,
-    )
-    .then(next);
+    // Each line's planned time by the target's planner (no target:
+    // LinuxCNC's, or GRBL's when a `$$` listing says the machine runs it).
+    let timing = crate::runtime::TimeModel::for_target(target_name(cfg), &cfg.machine);
+    let consumer = match next {
+        None => super::consumer::ViewConsumer::new(
+            settings,
+            &mut observer,
+            true,
+            map,
+            extras.annotate,
+            Some(timing),
+        ),
+        // The limits are checked on the program's lines; the map, the
+        // annotations and the times follow the lines the target gets.
+        Some(lower) => {
+            let rules = cfg
+                .target
+                .as_ref()
+                .map_or_else(NoteRules::linuxcnc, |t| NoteRules::for_profile(t.profile));
+            let view = super::consumer::ViewConsumer::new(
+                settings,
+                &mut lowered_observer,
+                true,
+                map,
+                extras.annotate,
+                Some(timing),
+            )
+            .with_notes(rules);
+            let lowered = super::consumer::Lowered::new(lower, view);
+            super::consumer::ViewConsumer::new(settings, &mut observer, false, None, false, None)
+                .then(Some(Box::new(lowered)))
+        }
+    };
     let (w, mut err) =
         crate::flatten::flatten_with(source, settings, search, dest, Some(Box::new(consumer)));
     if let Some((target, tmp)) = &map_tmp {

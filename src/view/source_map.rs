@@ -134,16 +134,87 @@ pub(crate) fn time_note(t: &crate::runtime::LineTime) -> String {
     format!(" t={:.3} dt={:.3}", t.start, t.seconds)
 }
 
+/// What an `--annotate` comment may hold and how long a line may grow,
+/// for the controller that reads the output.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct NoteRules {
+    /// Bytes the controller acts on wherever they appear (GRBL's `?`, `!`,
+    /// `~`, ctrl-X), written as `_` in a file name.
+    pub realtime: Vec<u8>,
+    /// Bytes above 0x7F are acted on too: a name's other characters are
+    /// written as `_`.
+    pub ascii_only: bool,
+    /// The longest line with its comment (bytes, terminator excluded);
+    /// `None`: comments do not count against the controller's buffer.
+    pub limit: Option<usize>,
+}
+
+impl NoteRules {
+    /// LinuxCNC's: lines of at most 252 bytes.
+    pub(crate) fn linuxcnc() -> NoteRules {
+        NoteRules {
+            realtime: Vec::new(),
+            ascii_only: false,
+            limit: Some(252),
+        }
+    }
+
+    /// A target controller's, from its profile.
+    pub(crate) fn for_profile(p: &crate::controller::Profile) -> NoteRules {
+        use crate::controller::LineCount;
+        NoteRules {
+            realtime: p.realtime.clone(),
+            ascii_only: p.high_bytes,
+            limit: match p.line_limit {
+                Some((n, LineCount::AllBytes)) => Some(n.saturating_sub(1).min(252)),
+                // Comments are dropped before the buffer: LinuxCNC's
+                // 252 bytes still keep lines readable.
+                Some((_, LineCount::Significant)) | None => Some(252),
+            },
+        }
+    }
+
+    /// Whether a line of `line` bytes may carry a comment of `note` bytes.
+    pub(crate) fn fits(&self, line: usize, note: usize) -> bool {
+        self.limit.is_none_or(|n| line + note <= n)
+    }
+
+    fn clean(&self, s: &str) -> String {
+        s.chars()
+            .map(|c| {
+                if c.is_control() {
+                    if self.realtime.contains(&b'?') {
+                        '_'
+                    } else {
+                        '?'
+                    }
+                } else if (self.ascii_only && !c.is_ascii())
+                    || (c.is_ascii() && self.realtime.contains(&(c as u8)))
+                {
+                    '_'
+                } else {
+                    c
+                }
+            })
+            .collect()
+    }
+}
+
 /// The `--annotate` comment for a line: ` ;from file:line:col <
 /// caller:line:col`. A `;` comment, not a parenthesised one: LinuxCNC acts
 /// only on the last parenthesised comment of a line, so one added after a
-/// `(MSG,...)` would silence the message. Control characters in file names
-/// become `?`.
-pub(crate) fn annotation(at: &Located, calls: &[Located]) -> String {
-    let clean = |s: &str| s.replace(|c: char| c.is_control(), "?");
-    let mut s = format!(" ;from {}:{}:{}", clean(&at.file), at.line, at.column);
+/// `(MSG,...)` would silence the message (GRBL, grblHAL, FluidNC and
+/// g2core read `;` comments too). Control characters in file names become
+/// `?`, and whatever the controller would act on `_`.
+pub(crate) fn annotation(at: &Located, calls: &[Located], rules: &NoteRules) -> String {
+    let mut s = format!(" ;from {}:{}:{}", rules.clean(&at.file), at.line, at.column);
     for c in calls {
-        s.push_str(&format!(" < {}:{}:{}", clean(&c.file), c.line, c.column));
+        s.push_str(&format!(
+            " < {}:{}:{}",
+            rules.clean(&c.file),
+            c.line,
+            c.column
+        ));
     }
     s
 }
@@ -204,8 +275,30 @@ mod tests {
         // The ')' after "  G1 X2 (é": the é is one column.
         assert_eq!((a.line, a.column), (2, 11));
         assert_eq!(
-            annotation(&a, std::slice::from_ref(&a)),
+            annotation(&a, std::slice::from_ref(&a), &NoteRules::linuxcnc()),
             " ;from p.ngc:2:11 < p.ngc:2:11"
+        );
+    }
+
+    /// For GRBL, a file name's real-time bytes (`?`, `!`, `~`), control
+    /// characters and non-ASCII characters become `_`: GRBL acts on them
+    /// even inside a comment.
+    #[test]
+    fn notes_hold_nothing_the_controller_acts_on() {
+        let grbl = NoteRules {
+            realtime: b"?!~\x18".to_vec(),
+            ascii_only: true,
+            limit: Some(252),
+        };
+        let at = Located {
+            file: "a?b!\u{7}é~.ngc".into(),
+            line: 3,
+            column: 1,
+        };
+        assert_eq!(annotation(&at, &[], &grbl), " ;from a_b____.ngc:3:1");
+        assert_eq!(
+            annotation(&at, &[], &NoteRules::linuxcnc()),
+            " ;from a?b!?é~.ngc:3:1"
         );
     }
 }

@@ -828,7 +828,7 @@ fn stats_of_every_fixture_match_rs274() {
 }
 
 #[test]
-fn limits_hold_for_target_output_and_source_maps_need_linuxcnc() {
+fn limits_hold_for_target_output() {
     let dir = crate::tmp();
     crate::put(
         dir.path(),
@@ -877,17 +877,78 @@ fn limits_hold_for_target_output_and_source_maps_need_linuxcnc() {
     );
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("E1203"), "{err}");
-    // Source maps and annotations follow the program's own lines.
-    for extra in [["--annotate", ""], ["--source-map", "m.jsonl"]] {
-        let mut args = vec!["--target", "grbl", "--zero-start"];
-        args.extend(extra.iter().filter(|s| !s.is_empty()));
-        args.push("p.ngc");
-        let (code, out, err) = crate::run(dir.path(), &args);
-        assert_eq!(code, 2, "{args:?}: {err}");
-        assert!(out.is_empty());
-        assert!(err.contains("error[E1205]"), "{err}");
+}
+
+/// With a target, the source map and `--annotate` describe the lines the
+/// controller gets (a canned cycle's moves each mapped to the cycle's
+/// line; the M0 a tool change becomes, to the M6), timed by the target's
+/// planner: the lines' times add up to what `stats` says, and a file
+/// name's bytes GRBL would act on never reach the output.
+#[test]
+fn source_maps_and_annotations_follow_the_target_s_lines() {
+    let dir = crate::tmp();
+    let prog = "G21 G90 G17 F600\nT1 M6\nG0 X10 Y10 Z5\nG81 X20 Y10 Z-2 R1\nX30\nG80\nG1 X50 Y40\nG4 P0.12\nM2\n";
+    crate::put(dir.path(), "p!?.ngc", prog);
+    let base = ["--target", "grbl", "--zero-start", "p!?.ngc"];
+    let (code, plain, err) = crate::run(dir.path(), &base);
+    assert_eq!(code, 0, "{err}");
+    let mut args = vec!["--annotate", "--source-map", "m.jsonl"];
+    args.extend(base);
+    let (code, out, err) = crate::run(dir.path(), &args);
+    assert_eq!(code, 0, "{err}");
+    let map = std::fs::read_to_string(dir.path().join("m.jsonl")).expect("source map written");
+    let entries: Vec<serde_json::Value> = map
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON line"))
+        .collect();
+    // The same lines as without the options, each with its comment.
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines.len(), plain.lines().count(), "{out}");
+    assert_eq!(entries.len(), lines.len(), "{map}");
+    for (l, p) in lines.iter().zip(plain.lines()) {
+        let (code, note) = l.split_once(" ;from ").unwrap_or((l, ""));
+        assert_eq!(code, p);
+        assert!(note.is_empty() || note.starts_with("p__.ngc:"), "{l}");
+        assert!(!note.contains(['!', '?', '~']), "{l}");
     }
-    assert!(!dir.path().join("m.jsonl").exists());
+    // The drilling cycle's moves all come from line 4, the M0 from line 2.
+    let from = |line: u64| entries.iter().filter(|e| e["line"] == line).count();
+    assert!(from(4) > 3, "{map}");
+    let m0 = lines
+        .iter()
+        .position(|l| l.starts_with("M0"))
+        .expect("an M0");
+    assert_eq!(entries[m0]["line"], 2, "{map}");
+    // Times: in order, adding up to the total of `stats` for the target.
+    let mut t = 0.0;
+    for e in &entries {
+        let (start, dt) = (e["t"].as_f64().expect("t"), e["dt"].as_f64().expect("dt"));
+        assert!((start - t).abs() < 1e-5, "{e}");
+        t = start + dt;
+    }
+    let (_, json, _) = crate::run(
+        dir.path(),
+        &[
+            "stats",
+            "--json",
+            "--target",
+            "grbl",
+            "--zero-start",
+            "p!?.ngc",
+        ],
+    );
+    let j: serde_json::Value = serde_json::from_str(&json).expect("json");
+    let total = j["time"]["total_s"].as_f64().expect("total");
+    assert!((t - total).abs() < 1e-4, "{t} against {total}");
+    // The dwell's line takes GRBL's 0.15 s and the stop's 25 ms.
+    let dwell = lines
+        .iter()
+        .position(|l| l.starts_with("G4"))
+        .expect("a G4");
+    assert!(
+        (entries[dwell]["dt"].as_f64().unwrap_or(0.0) - 0.175).abs() < 1e-6,
+        "{map}"
+    );
 }
 
 #[test]

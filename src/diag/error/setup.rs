@@ -32,8 +32,6 @@ super::phase! {
         "E1201" BadLimits { text: String },
         /// `MAX_VELOCITY = fast` in an INI axis section, `$110=x` in GRBL settings.
         "E1202" BadMachineValue { source: String, text: String },
-        /// `--source-map` or `--annotate` with `--target grbl`.
-        "E1205" SourceMapNeedsLinuxcnc,
     }
 }
 
@@ -83,10 +81,6 @@ impl fmt::Display for SetupError {
             BadMachineValue { source, text } => {
                 write!(f, "{source} value '{text}' is not a number")
             }
-            SourceMapNeedsLinuxcnc => write!(
-                f,
-                "--source-map and --annotate map output lines written as the program's own lines; they work with --target linuxcnc only"
-            ),
         }
     }
 }
