@@ -3,7 +3,7 @@
 
 use super::limits::LimitCheck;
 use super::plot::{Plot, View};
-use super::scene::Scene;
+use super::scene::{LineMeta, Scene};
 use super::source_map::NoteRules;
 use super::stats::Stats;
 use crate::diag::ErrorKind;
@@ -22,6 +22,18 @@ pub(crate) struct Observer {
     pub scene: Option<Scene>,
     /// Travel limits the scene marks moves against (the run goes on).
     pub scene_limits: Option<LimitCheck>,
+    /// Lines waiting for their planned time before the scene gets them.
+    held: std::collections::VecDeque<HeldLine>,
+    lines: u64,
+}
+
+/// An output line whose planned time is not final yet, with its motion.
+#[derive(Debug)]
+struct HeldLine {
+    meta: LineMeta,
+    /// Each event, whether it was timed, and the travel-limit violation it
+    /// makes.
+    events: Vec<(Motion, bool, Option<String>)>,
 }
 
 impl Observer {
@@ -65,10 +77,103 @@ impl Observer {
         self.stats.is_some() || self.plot.is_some() || self.limits.is_some() || self.scene.is_some()
     }
 
-    /// The output line whose motion comes next (for the scene).
+    /// The output line whose motion comes next (for the scene, which
+    /// gets each line once the run-time model has fixed its time).
     pub(crate) fn line(&mut self, text: &[u8], origin: &crate::eval::Origin<'_>) {
-        if let Some(s) = &mut self.scene {
-            s.line(text, origin);
+        let Some(s) = &mut self.scene else {
+            return;
+        };
+        let meta = s.line_meta(text, origin);
+        self.release_lines();
+        self.lines += 1;
+        if let Some(st) = &mut self.stats {
+            st.run_time.line(self.lines);
+        }
+        self.held.push_back(HeldLine {
+            meta,
+            events: Vec::new(),
+        });
+    }
+
+    /// The end of the run: the scene gets the lines still held.
+    pub(crate) fn finish(&mut self) {
+        if self.scene.is_none() {
+            return;
+        }
+        if let Some(st) = &mut self.stats {
+            st.run_time.finish();
+        }
+        self.release_lines();
+        // Lines the model gave no time (none timed the run).
+        while let Some(h) = self.held.pop_front() {
+            self.replay(h, None);
+        }
+        if let (Some(scene), Some(st)) = (&mut self.scene, &self.stats) {
+            scene.set_clock(st.total_time());
+        }
+    }
+
+    /// Hands the scene the held lines whose time is final.
+    fn release_lines(&mut self) {
+        loop {
+            let Some(t) = self.stats.as_mut().and_then(|s| s.run_time.next_line()) else {
+                return;
+            };
+            let Some(h) = self.held.pop_front() else {
+                return;
+            };
+            self.replay(h, Some(t));
+        }
+    }
+
+    /// One line for the scene: its moves share the line's time by their
+    /// lengths (a line of one move, the common case, gets it all).
+    fn replay(&mut self, h: HeldLine, time: Option<crate::runtime::LineTime>) {
+        let Some(scene) = &mut self.scene else {
+            return;
+        };
+        let length = |m: &Motion| match m {
+            Motion::Line { from, to, .. } => super::geom::line_length(&from.work, &to.work),
+            Motion::Arc {
+                from,
+                to,
+                center,
+                plane,
+                ccw,
+                turns,
+                ..
+            } => {
+                let g =
+                    super::geom::ArcGeom::new(&from.work, &to.work, *center, *plane, *ccw, *turns);
+                super::geom::arc_length(&g, &from.work, &to.work)
+            }
+            _ => 0.0,
+        };
+        let moves = |m: &Motion| matches!(m, Motion::Line { .. } | Motion::Arc { .. });
+        let lengths: Vec<f64> = h
+            .events
+            .iter()
+            .map(|(m, ..)| {
+                let l = length(m);
+                if l.is_finite() { l } else { 0.0 }
+            })
+            .collect();
+        let total: f64 = lengths.iter().sum();
+        let count = h.events.iter().filter(|(m, ..)| moves(m)).count();
+        let seconds = time.map_or(0.0, |t| t.seconds);
+        if let Some(t) = time {
+            scene.set_clock(t.start);
+        }
+        scene.set_line(h.meta);
+        for ((m, timed, violation), len) in h.events.into_iter().zip(lengths) {
+            let dur = if !moves(&m) {
+                0.0
+            } else if total > 0.0 {
+                seconds * len / total
+            } else {
+                seconds / count as f64
+            };
+            scene.add(&m, dur, timed, violation);
         }
     }
 
@@ -78,15 +183,14 @@ impl Observer {
         if let Some(l) = &self.limits {
             l.check(m)?;
         }
-        let before = self.stats.as_ref().map(|s| (s.total_time(), s.untimed()));
+        let before = self.stats.as_ref().map(|s| s.untimed());
         if let Some(s) = &mut self.stats {
             s.add(m);
         }
         if let Some(scene) = &mut self.scene {
-            // The time of this event is what it added to the estimate.
-            let (dur, timed) = match (before, &self.stats) {
-                (Some((t, u)), Some(s)) => (s.total_time() - t, s.untimed() == u),
-                _ => (0.0, false),
+            let timed = match (before, &self.stats) {
+                (Some(u), Some(s)) => s.untimed() == u,
+                _ => false,
             };
             let violation = match self.scene_limits.as_ref().map(|l| l.check(m)) {
                 Some(Err(ErrorKind::Limit(LimitError::LimitNeedsOffsets))) => {
@@ -96,7 +200,11 @@ impl Observer {
                 Some(Err(e)) => Some(e.to_string()),
                 _ => None,
             };
-            scene.add(m, dur, timed, violation);
+            match self.held.back_mut() {
+                Some(h) => h.events.push((m.clone(), timed, violation)),
+                // Motion before any line (none in practice): untimed.
+                None => scene.add(m, 0.0, timed, violation),
+            }
         }
         if let Some(p) = &mut self.plot {
             p.add(m);
@@ -179,6 +287,7 @@ pub(crate) fn run_for_view(
     };
     match observe(source, cfg, &mut observer) {
         Ok(warnings) => {
+            observer.finish();
             crate::diag::report(&warnings, cfg.format);
             Ok((observer, warnings))
         }

@@ -109,6 +109,15 @@ pub(crate) struct Violation {
     pub line: u32,
 }
 
+/// An output line as the scene keeps it (see [`Scene::line_meta`]).
+#[derive(Debug, Clone)]
+pub(crate) struct LineMeta {
+    text: Box<str>,
+    file: u32,
+    src_line: u32,
+    chain: u32,
+}
+
 /// The scene being built from the motion stream.
 pub(crate) struct Scene {
     verts: Vec<[f32; 3]>,
@@ -207,23 +216,38 @@ impl Scene {
         i
     }
 
-    /// The next output line: its text and where it came from.
-    pub(crate) fn line(&mut self, text: &[u8], origin: &Origin<'_>) {
+    /// The next output line's moves come from `meta`.
+    pub(crate) fn set_line(&mut self, meta: LineMeta) {
         self.line_no += 1;
+        self.line_text = Some(meta.text);
+        self.line_file = meta.file;
+        self.line_src = meta.src_line;
+        self.line_chain = meta.chain;
+    }
+
+    /// The time the next move starts at (s): where the run-time model puts
+    /// its line.
+    pub(crate) fn set_clock(&mut self, start: f64) {
+        if start.is_finite() {
+            self.clock = start;
+        }
+    }
+
+    /// What the scene keeps of an output line: its text, file, source line
+    /// and call chain.
+    pub(crate) fn line_meta(&mut self, text: &[u8], origin: &Origin<'_>) -> LineMeta {
         let cut = text.len().min(MAX_TEXT);
         let mut t = String::from_utf8_lossy(&text[..cut]).into_owned();
         if cut < text.len() {
             t.push('…');
         }
-        self.line_text = Some(t.into_boxed_str());
         let at = self.locator.locate(&Place {
             file: origin.file.clone(),
             offset: origin.line_start,
         });
-        self.line_file = self.file_id(at.file);
-        self.line_src = at.line;
+        let file = self.file_id(at.file);
         let stack = (origin.stack)();
-        self.line_chain = if stack.is_empty() {
+        let chain = if stack.is_empty() {
             0
         } else {
             let mut chain = Vec::with_capacity(stack.len());
@@ -246,6 +270,12 @@ impl Scene {
                 None => u32::MAX,
             }
         };
+        LineMeta {
+            text: t.into_boxed_str(),
+            file,
+            src_line: at.line,
+            chain,
+        }
     }
 
     /// Time that passes without motion (a dwell).

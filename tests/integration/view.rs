@@ -1095,3 +1095,77 @@ fn grbl_stops_at_every_offset_setting() {
     );
     assert_eq!(n, Some(4));
 }
+
+/// The report page's timeline puts each move where the run-time model puts
+/// its line: with GRBL's 15-block look-ahead a move's time is known only
+/// blocks later, and the page's start and duration of every move are those
+/// of its output line in the source map.
+#[test]
+fn the_page_s_timeline_follows_each_line_s_planned_time() {
+    use base64::Engine;
+    let dir = crate::tmp();
+    let mut prog = String::from("G21 G90 F1000\nG0 X10 Y0\n");
+    for i in 1..=60 {
+        let a = f64::from(i) * std::f64::consts::TAU / 60.0;
+        prog.push_str(&format!(
+            "G1 X{:.4} Y{:.4}\n",
+            10.0 * a.cos(),
+            10.0 * a.sin()
+        ));
+    }
+    prog.push_str("M2\n");
+    crate::put(dir.path(), "p.ngc", &prog);
+    let common = ["--target", "grbl", "--zero-start"];
+    let mut args = vec!["--source-map", "m.jsonl"];
+    args.extend(common);
+    args.push("p.ngc");
+    let (code, _, err) = crate::run(dir.path(), &args);
+    assert_eq!(code, 0, "{err}");
+    let map: Vec<serde_json::Value> = std::fs::read_to_string(dir.path().join("m.jsonl"))
+        .expect("map")
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON line"))
+        .collect();
+    let mut args = vec!["plot", "-o", "p.html"];
+    args.extend(common);
+    args.push("p.ngc");
+    let (code, _, err) = crate::run(dir.path(), &args);
+    assert_eq!(code, 0, "{err}");
+    let html = std::fs::read_to_string(dir.path().join("p.html")).expect("page");
+    let json = html
+        .split("<script type=\"application/json\" id=\"ngcflat-data\">")
+        .nth(1)
+        .and_then(|s| s.split("</script>").next())
+        .expect("the page's data");
+    let data: serde_json::Value = serde_json::from_str(json).expect("data");
+    let arr = |k: &str| {
+        base64::engine::general_purpose::STANDARD
+            .decode(data["scene"][k].as_str().expect(k))
+            .expect("base64")
+    };
+    let t0: Vec<f64> = arr("t0")
+        .chunks(8)
+        .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))
+        .collect();
+    let dur: Vec<f32> = arr("dur")
+        .chunks(4)
+        .map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes")))
+        .collect();
+    let line: Vec<u32> = arr("line")
+        .chunks(4)
+        .map(|c| u32::from_le_bytes(c.try_into().expect("4 bytes")))
+        .collect();
+    assert_eq!(t0.len(), 61, "a move per line");
+    for k in 0..t0.len() {
+        let e = &map[line[k] as usize - 1];
+        let (t, dt) = (e["t"].as_f64().expect("t"), e["dt"].as_f64().expect("dt"));
+        assert!((t0[k] - t).abs() < 1e-5, "move {k}: {} against {t}", t0[k]);
+        assert!(
+            (f64::from(dur[k]) - dt).abs() < 1e-5,
+            "move {k}: {} against {dt}",
+            dur[k]
+        );
+    }
+    // The last chords run at the look-ahead's pace, not in no time.
+    assert!(dur[30] > 0.01, "{}", dur[30]);
+}

@@ -416,7 +416,7 @@
     row('called from', ch ? '<span id="src-chain">' + esc(ch) + '</span>' : '<span class="none">the main program</span>');
     row('tool', 'T' + S.tools[mTool[k]]);
     if (kind !== 0) row('feed', isFinite(mFeed[k]) ? num(mFeed[k]) : '–');
-    row('time', (mKind[k] & 8) ? 'not timed (' + esc(kind === 0 ? 'no maximum velocity given' : 'no feed rate') + '), starts at ' + hms(mT0[k]) :
+    row('time', (mKind[k] & 8) ? 'not timed (' + esc(kind === 0 ? 'start not known, or no maximum velocity given' : 'no feed rate') + '), starts at ' + hms(mT0[k]) :
       'starts at ' + hms(mT0[k]) + ', takes ' + (mDur[k] < 60 ? mDur[k].toFixed(2) + ' s' : hms(mDur[k])));
     row('from', point(mStart[k]));
     row('to', point(mEnd[k]));
