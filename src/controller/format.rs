@@ -18,12 +18,18 @@ use crate::diag::ErrorKind;
 use crate::diag::TargetError;
 
 use super::lower::PlainLine;
-use super::profile::{Comments, LineCount, Profile};
+use super::profile::{
+    CommandsPerLine, CommentSyntax, Comments, DwellUnits, Inches, LineCount, Profile,
+};
 
 pub use number::format_number;
 use number::{pow10, read_back, round_u64, write_fixed, write_number};
 
+mod commands;
 mod number;
+
+/// Millimetres in an inch.
+const MM_PER_INCH: f64 = 25.4;
 
 /// What the axis words of the line being written are to the target.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -49,6 +55,18 @@ pub(super) struct LineWriter {
     carry: [f64; 9],
     carry_units: Units,
     num: String,
+    /// Where the profile rewrites lines (`Profile::rewrites_lines`): the
+    /// line's words, kept until it is finished.
+    structured: bool,
+    items: Vec<commands::Item>,
+    /// The program's units of the line (`units` is what is written).
+    in_units: Units,
+    /// The line's comments, written after its words.
+    tail: Vec<u8>,
+    /// What one-command lines carry over to the next (`commands.rs`).
+    carried: commands::Carried,
+    /// The target is in G93 as written: F is no length then.
+    inverse: bool,
 }
 
 impl LineWriter {
@@ -61,6 +79,12 @@ impl LineWriter {
             carry: [0.0; 9],
             carry_units: Units::Mm,
             num: String::with_capacity(32),
+            structured: p.rewrites_lines(),
+            items: Vec::new(),
+            in_units: Units::Mm,
+            tail: Vec::new(),
+            carried: commands::Carried::default(),
+            inverse: false,
         }
     }
 
@@ -78,6 +102,14 @@ impl LineWriter {
     /// [`LineWriter::begin`] for a line of words alone (no line number).
     pub(super) fn begin_words(&mut self, units: Units, axes: AxisWords) {
         self.buf.clear();
+        self.items.clear();
+        self.tail.clear();
+        self.in_units = units;
+        // Inches are written as millimetres where the target has no G20.
+        let units = match self.p.inches {
+            Inches::ToMm => Units::Mm,
+            Inches::Native => units,
+        };
         self.units = units;
         self.axes = axes;
         if units != self.carry_units {
@@ -120,7 +152,16 @@ impl LineWriter {
     }
 
     fn push_word(&mut self, letter: u8, v: f64, code: bool) {
-        if !self.buf.is_empty() {
+        if self.structured {
+            self.items.push((letter, v, code));
+        } else {
+            self.emit_word(letter, v, code);
+        }
+    }
+
+    /// Writes a word into the line's bytes.
+    fn emit_word(&mut self, letter: u8, v: f64, code: bool) {
+        if self.buf.last().is_some_and(|&b| b != b'\n') {
             self.buf.push(b' ');
         }
         self.buf.push(letter);
@@ -174,6 +215,11 @@ impl LineWriter {
     /// that is already how the target's rules write its value (see
     /// [`written_as_is`]), otherwise as [`LineWriter::word`] does.
     pub(super) fn word_of(&mut self, w: &Word, text: &[u8]) {
+        if self.structured {
+            // Numbers are rewritten or words moved: nothing is copied.
+            self.word(w.letter, w.value, w.kind);
+            return;
+        }
         let code = matches!(w.kind, WordKind::G(_) | WordKind::M(_));
         let number = text
             .get(w.span.start as usize + 1..w.span.end as usize)
@@ -240,40 +286,132 @@ impl LineWriter {
 
     /// Appends the comments of `b` (read from `text`) the target keeps.
     pub(super) fn comments(&mut self, b: &Block, text: &[u8]) {
+        let p = self.p;
+        // Where the line's words are kept apart, comments wait for them.
+        let out = if self.structured {
+            &mut self.tail
+        } else {
+            &mut self.buf
+        };
+        let mut semicolon = false;
         for c in &b.comments {
-            let keep = match self.p.comments {
-                Comments::Keep => true,
-                Comments::Strip => c.kind == CommentKind::Message && self.p.messages,
+            let keep = match p.comments {
+                Comments::Keep => p.comment_syntax != CommentSyntax::None,
+                Comments::Strip => c.kind == CommentKind::Message && p.messages,
             };
             if !keep {
                 continue;
             }
             let whole = &text[c.span.start as usize..c.span.end as usize];
-            if !self.buf.is_empty() {
-                self.buf.push(b' ');
-            }
-            if self.p.comments == Comments::Keep {
-                self.buf.extend_from_slice(whole);
+            let inner = &text[c.text.start as usize..c.text.end as usize];
+            if p.comments == Comments::Keep && p.comment_syntax == CommentSyntax::Semicolon {
+                // One `;` comment to the line's end holds them all: the
+                // firmware would read a `(…)` as words.
+                if !semicolon {
+                    if !out.is_empty() {
+                        out.push(b' ');
+                    }
+                    out.push(b';');
+                    semicolon = true;
+                }
+                out.push(b' ');
+                out.extend(
+                    inner
+                        .iter()
+                        .filter(|&&ch| (b' '..=b'~').contains(&ch) && !p.is_realtime(ch)),
+                );
                 continue;
             }
-            let inner = &text[c.text.start as usize..c.text.end as usize];
-            self.buf.extend_from_slice(b"(MSG,");
+            if !out.is_empty() {
+                out.push(b' ');
+            }
+            if p.comments == Comments::Keep {
+                out.extend_from_slice(whole);
+                continue;
+            }
+            out.extend_from_slice(b"(MSG,");
             for &ch in inner {
-                if (b' '..=b'~').contains(&ch)
-                    && ch != b'('
-                    && ch != b')'
-                    && !self.p.is_realtime(ch)
-                {
-                    self.buf.push(ch);
+                if (b' '..=b'~').contains(&ch) && ch != b'(' && ch != b')' && !p.is_realtime(ch) {
+                    out.push(ch);
                 }
             }
-            self.buf.push(b')');
+            out.push(b')');
         }
+    }
+
+    /// Puts the kept words of a line rewritten by the profile into its
+    /// bytes: lengths in millimetres where the target has no G20, G4's P
+    /// in milliseconds where it reads them so, one command per line where
+    /// it takes one (lines apart by a newline), the comments last.
+    fn render(&mut self) {
+        if !self.structured {
+            return;
+        }
+        let mut items = std::mem::take(&mut self.items);
+        let to_mm = self.p.inches == Inches::ToMm && self.in_units == Units::Inch;
+        let mut dwell = false;
+        for &(l, v, code) in &items {
+            if code && l == b'G' {
+                match (v * 10.0).round() as i64 {
+                    930 => self.inverse = true,
+                    940 | 950 => self.inverse = false,
+                    40 => dwell = true,
+                    _ => {}
+                }
+            }
+        }
+        let dwell_ms = dwell && self.p.dwell_units == DwellUnits::Milliseconds;
+        for (l, v, code) in &mut items {
+            if *code {
+                if *l == b'G' && self.p.inches == Inches::ToMm && *v == 20.0 {
+                    *v = 21.0;
+                }
+                continue;
+            }
+            let length = b"XYZUVWIJKRQ".contains(l) || *l == b'F' && !self.inverse;
+            if to_mm && length {
+                *v *= MM_PER_INCH;
+            }
+            if dwell_ms && *l == b'P' {
+                *v *= 1000.0;
+            }
+        }
+        self.buf.clear();
+        match self.p.commands_per_line {
+            CommandsPerLine::Many => {
+                for &(l, v, code) in &items {
+                    self.emit_word(l, v, code);
+                }
+            }
+            CommandsPerLine::One => {
+                for (i, line) in commands::split(&items, &mut self.carried)
+                    .iter()
+                    .enumerate()
+                {
+                    if i > 0 {
+                        self.buf.push(b'\n');
+                    }
+                    for &(l, v, code) in line {
+                        self.emit_word(l, v, code);
+                    }
+                }
+            }
+        }
+        if !self.tail.is_empty() {
+            if self.buf.last().is_some_and(|&b| b != b'\n') {
+                self.buf.push(b' ');
+            }
+            self.buf.extend_from_slice(&self.tail);
+            self.tail.clear();
+        }
+        items.clear();
+        self.items = items;
     }
 
     /// Finishes the line into `out` (nothing for an empty line); an error
     /// if it does not fit the target's line buffer.
     pub(super) fn finish_line(&mut self, out: &mut Vec<u8>) -> Option<ErrorKind> {
+        self.render();
         if self.buf.is_empty() {
             return None;
         }
@@ -289,6 +427,7 @@ impl LineWriter {
     /// the error if it does not fit the target's line buffer:
     /// [`LineWriter::finish_line`] without the copy.
     pub(super) fn finished_line(&mut self) -> Result<Option<&[u8]>, ErrorKind> {
+        self.render();
         if self.buf.is_empty() {
             return Ok(None);
         }
@@ -306,15 +445,18 @@ impl LineWriter {
             // Fits however it is counted.
             return None;
         }
-        let len = match how {
-            LineCount::AllBytes => self.buf.len() + 1,
-            LineCount::Significant => significant_len(&self.buf) + 1,
-        };
-        (len > limit).then(|| {
-            ErrorKind::Target(TargetError::TargetLineTooLong {
-                target: self.p.name.as_str(),
-                len: len - 1,
-                limit: limit - 1,
+        // Each line of a rewritten line on its own.
+        self.buf.split(|&b| b == b'\n').find_map(|line| {
+            let len = match how {
+                LineCount::AllBytes => line.len() + 1,
+                LineCount::Significant => significant_len(line) + 1,
+            };
+            (len > limit).then(|| {
+                ErrorKind::Target(TargetError::TargetLineTooLong {
+                    target: self.p.name.as_str(),
+                    len: len - 1,
+                    limit: limit - 1,
+                })
             })
         })
     }

@@ -39,6 +39,68 @@ pub enum ToolChange {
     Keep,
     /// M6 removed.
     Drop,
+    /// M6 refused: the firmware can neither change tools nor pause.
+    Refuse,
+}
+
+/// How many commands the firmware takes from one line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CommandsPerLine {
+    /// Several G and M codes on a line, run in LinuxCNC's order.
+    Many,
+    /// The first command of a line alone (Klipper, Marlin: `G21 G1 X20`
+    /// runs G21 and drops the move). Each command is written on a line of
+    /// its own, in the order LinuxCNC runs them, with its own words; every
+    /// move names its motion code, F rides on the next move and S on the
+    /// spindle command; line numbers are not written.
+    One,
+}
+
+/// The comments the firmware strips.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CommentSyntax {
+    /// `(…)` (and `;` to the line's end).
+    Parentheses,
+    /// `;` to the line's end only: a `(…)` would be read as words.
+    Semicolon,
+    /// None: no comment is ever written.
+    None,
+}
+
+/// The unit of G4's P word.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DwellUnits {
+    Seconds,
+    Milliseconds,
+}
+
+/// What the firmware does with inches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Inches {
+    /// G20 and G21 as LinuxCNC has them.
+    Native,
+    /// No G20: every length (feeds included) is written in millimetres,
+    /// G20 as G21.
+    ToMm,
+}
+
+/// Which arcs the firmware runs as LinuxCNC does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Arcs {
+    /// Centre (I J K) and radius (R) forms, in G90 and G91.
+    All,
+    /// Centre form only: R arcs are written with I J K.
+    Ijk,
+    /// Centre form only, and only in G90: R arcs and arcs in G91 are
+    /// written as absolute centre-form arcs (between G90 and G91).
+    IjkAbsolute,
+    /// No arcs: every arc is written as G1 chords within `--tolerance`.
+    None,
 }
 
 /// A controller's G-code dialect, as its parser source has it.
@@ -88,6 +150,26 @@ pub struct Profile {
     /// Spindle-synchronised motion (G33, G76).
     pub spindle_sync: bool,
     pub tool_change: ToolChange,
+    /// How many commands it takes from a line.
+    pub commands_per_line: CommandsPerLine,
+    /// The comment form it strips.
+    pub comment_syntax: CommentSyntax,
+    /// The unit of G4 P.
+    pub dwell_units: DwellUnits,
+    /// G20, or inches written as millimetres.
+    pub inches: Inches,
+    /// The arcs it runs.
+    pub arcs: Arcs,
+    /// It has work offsets (G54…, G92 as the codes say); without, every
+    /// position is written in machine coordinates and G5x, G92, G52 and
+    /// G10 L2/L20 are applied by ngcflat.
+    pub work_offsets: bool,
+    /// Tool length offsets (G43, G43.1, G43.2, G49) are applied to the Z
+    /// positions written (the firmware has none).
+    pub tool_length_into_z: bool,
+    /// What the firmware does with a probe move to the point the tool is
+    /// at, in its own words (the reason of E1050).
+    pub probe_in_place: String,
     /// G43.1 takes only a Z word.
     pub g43_1_z_only: bool,
     /// M1 stops the program when the controller's optional-stop switch is
@@ -115,6 +197,17 @@ impl Profile {
 
     pub fn has_axis(&self, letter: u8) -> bool {
         self.axes.contains(&letter)
+    }
+
+    /// Whether lines are rewritten beyond their words' values (one
+    /// command per line, dwell units, inches, offsets or tool length
+    /// applied to positions): no line is copied as it is then.
+    pub fn rewrites_lines(&self) -> bool {
+        self.commands_per_line == CommandsPerLine::One
+            || self.dwell_units == DwellUnits::Milliseconds
+            || self.inches == Inches::ToMm
+            || !self.work_offsets
+            || self.tool_length_into_z
     }
 
     /// Whether the firmware acts on byte `b` in real time.
@@ -146,6 +239,7 @@ impl Profile {
                 ToolChange::Pause => "pause (M0)",
                 ToolChange::Keep => "kept",
                 ToolChange::Drop => "dropped",
+                ToolChange::Refuse => "refused",
             },
             if self.spindle_sync {
                 "spindle-synchronised motion"
@@ -153,6 +247,43 @@ impl Profile {
                 "no spindle sync (G33, G76, G96 refused)"
             },
             self.source
-        )
+        ) + &self.describe_rewrites()
+    }
+
+    /// What the writer does beyond the GRBL family's rules, for
+    /// `ngcflat targets` (empty when nothing).
+    fn describe_rewrites(&self) -> String {
+        let mut parts: Vec<&str> = Vec::new();
+        if self.commands_per_line == CommandsPerLine::One {
+            parts.push("one command per line");
+        }
+        match self.comment_syntax {
+            CommentSyntax::Parentheses => {}
+            CommentSyntax::Semicolon => parts.push("`;` comments only"),
+            CommentSyntax::None => parts.push("no comments"),
+        }
+        if self.dwell_units == DwellUnits::Milliseconds {
+            parts.push("G4 P in milliseconds");
+        }
+        if self.inches == Inches::ToMm {
+            parts.push("no G20 (inches written as mm)");
+        }
+        match self.arcs {
+            Arcs::All => {}
+            Arcs::Ijk => parts.push("arcs by I J K only"),
+            Arcs::IjkAbsolute => parts.push("arcs by I J K in G90 only"),
+            Arcs::None => parts.push("no arcs (G1 chords)"),
+        }
+        if !self.work_offsets {
+            parts.push("no work offsets (machine coordinates)");
+        }
+        if self.tool_length_into_z {
+            parts.push("tool length applied to Z");
+        }
+        if parts.is_empty() {
+            String::new()
+        } else {
+            format!("\n          {}", parts.join("; "))
+        }
     }
 }

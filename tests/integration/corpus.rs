@@ -492,7 +492,8 @@ fn run_case(case: &Case, targets: &[String]) -> Vec<(String, Outcome)> {
                 (Err(_), _) => Outcome::BothRefuse,
                 (Ok(_), 0) => {
                     let flat = ws.dir.path().join(format!("flat-{target}.ngc"));
-                    std::fs::write(&flat, &out).expect("write output");
+                    std::fs::write(&flat, crate::as_rs274_reads(target, &out))
+                        .expect("write output");
                     match rs274(&ws, &flat) {
                         Err(e) => Outcome::Rejected(e),
                         Ok(b) => match crate::motion::same_canon_motion(

@@ -59,6 +59,49 @@ pub fn ngcflat(dir: &Path, args: &[String], stdin: Option<&[u8]>) -> Output {
 }
 
 /// A fresh temporary folder.
+/// Output written for built-in target `target` as rs274 reads it: G4's P
+/// in seconds where the target reads milliseconds, and an M2 at the end
+/// where the target has no program end (the end of the file ends its
+/// program). Everything else a target writes is LinuxCNC's G-code too.
+pub fn as_rs274_reads(target: &str, out: &str) -> String {
+    let profile = std::fs::read_to_string(
+        root()
+            .join("src/controller/profiles")
+            .join(format!("{target}.toml")),
+    )
+    .unwrap_or_default();
+    let ms = profile
+        .lines()
+        .any(|l| l.trim() == "dwell_units = \"milliseconds\"");
+    let ends = profile
+        .lines()
+        .find(|l| l.starts_with("m_codes"))
+        .is_none_or(|l| l.contains("\"M2\""));
+    let mut text = String::with_capacity(out.len() + 4);
+    for line in out.lines() {
+        let words: Vec<&str> = line.split(' ').collect();
+        if ms && words.first() == Some(&"G4") {
+            let rest: Vec<String> = words
+                .iter()
+                .map(
+                    |w| match w.strip_prefix('P').and_then(|v| v.parse::<f64>().ok()) {
+                        Some(v) => format!("P{}", v / 1000.0),
+                        None => w.to_string(),
+                    },
+                )
+                .collect();
+            text.push_str(&rest.join(" "));
+        } else {
+            text.push_str(line);
+        }
+        text.push('\n');
+    }
+    if !ends {
+        text.push_str("M2\n");
+    }
+    text
+}
+
 pub fn tmp() -> tempfile::TempDir {
     tempfile::tempdir().expect("tempdir")
 }

@@ -6,9 +6,9 @@
 
 use crate::block::{
     Block, CutterComp, FeedMode, GCode, LatheMode, MCode, MotionMode, NonModal, PathMode,
-    SpindleDir, SpindleMode, ToolLength, Word, WordKind,
+    SpindleDir, SpindleMode, ToolLength, Units, Word, WordKind,
 };
-use crate::controller::profile::ToolChange;
+use crate::controller::profile::{Inches, ToolChange};
 use crate::diag::TargetError;
 use crate::diag::{ErrorKind, WarningKind};
 
@@ -76,6 +76,29 @@ impl Lowering {
             },
             GCode::NonModal(NonModal::SetData) => self.g10_fate(b, w, problems),
             _ if p.has_g(c) => Fate::Keep,
+            // Written as G21, every length in millimetres (format.rs).
+            GCode::Units(Units::Inch) if p.inches == Inches::ToMm => Fate::Keep,
+            // A plane the target has no code for: its arcs are lowered
+            // (lower_motion), the code goes.
+            GCode::Plane(_) => Fate::Drop,
+            // Without work offsets every position is written in machine
+            // coordinates (target_shift): the codes that set or pick an
+            // offset go, and G53's positions are the target's own.
+            GCode::NonModal(
+                NonModal::SetG92
+                | NonModal::LocalOffset
+                | NonModal::ResetG92
+                | NonModal::SuspendG92
+                | NonModal::RestoreG92
+                | NonModal::MachineCoords,
+            )
+            | GCode::Coord(_)
+                if !p.work_offsets =>
+            {
+                Fate::Drop
+            }
+            // Applied to the Z positions written (target_shift).
+            GCode::ToolLength(_) if p.tool_length_into_z => Fate::Drop,
             // The target's G92 offset is set to the same effective offset
             // after the block (offset_sync); a coordinate system the target
             // lacks is written as coordinates in the one it is in
@@ -163,6 +186,10 @@ impl Lowering {
         let native = p.has_g(100) && p.g10_l.contains(&l);
         match l {
             1 | 10 | 11 if !native => return Fate::Drop,
+            // Offsets the model keeps and target_shift applies.
+            2 | 20 if !p.work_offsets && !b.value(b'R').is_some_and(|r| r != 0.0) => {
+                return Fate::Drop;
+            }
             2 | 20 => {
                 if b.value(b'R').is_some_and(|r| r != 0.0) {
                     problems.push(Problem {
@@ -226,6 +253,16 @@ impl Lowering {
             return match policy {
                 ToolChange::Keep => Fate::Keep,
                 ToolChange::Drop => Fate::Drop,
+                ToolChange::Refuse => {
+                    problems.push(Problem {
+                        span: Some(w.span),
+                        kind: self.refuse(
+                            "M6 (tool change)",
+                            "the target can neither change tools nor pause for a manual change (--tool-change drop to go on with the same tool)",
+                        ),
+                    });
+                    Fate::Drop
+                }
                 ToolChange::Pause => {
                     let tool = b
                         .value(b'T')
@@ -262,6 +299,18 @@ impl Lowering {
         }
         match m {
             MCode::SetTool | MCode::State(_) => Fate::Drop,
+            MCode::End { .. } => {
+                // The end of the file ends the program on a target without
+                // M2/M30; what LinuxCNC's M2 switches off is switched off
+                // on a line of its own.
+                if self.m.modes.spindle != SpindleDir::Off && p.has_m(5) {
+                    extra_lines.push(vec![(b'M', 5.0)]);
+                }
+                if (self.m.modes.mist || self.m.modes.flood) && p.has_m(9) {
+                    extra_lines.push(vec![(b'M', 9.0)]);
+                }
+                Fate::Drop
+            }
             MCode::Override(_) => {
                 self.dropped(
                     &format!("M{n}"),
@@ -327,7 +376,15 @@ impl Lowering {
         }
         // Words of codes that are dropped or lowered go with them (see
         // drop_owned); others are refused.
-        let owned = matches!(l, b'Q' | b'H' | b'D' | b'E' | b'P' | b'L' | b'R');
+        // T selects a tool, which only M6 acts on (by --tool-change).
+        // S sets the speed of a spindle only M3/M4 start, which a target
+        // without them refuses.
+        let no_spindle = l == b'S' && !self.p.has_m(3) && !self.p.has_m(4);
+        let owned = no_spindle
+            || matches!(
+                l,
+                b'Q' | b'H' | b'D' | b'E' | b'P' | b'L' | b'R' | b'T' | b'I' | b'J' | b'K'
+            );
         if !owned {
             problems.push(Problem {
                 span: Some(w.span),
@@ -371,7 +428,9 @@ impl Lowering {
                 drop(l);
             }
         }
-        if dropped_g(520) {
+        // G92's and G43.1's axis words go with them (the offsets are
+        // applied to the positions written).
+        if dropped_g(520) || dropped_g(920) || dropped_g(431) {
             for l in *b"XYZABCUVW" {
                 drop(l);
             }

@@ -3,8 +3,9 @@
 //! P turns, arcs off the target's reading), polar words (`@`, `^`) and
 //! canned cycles, with the positions each lowering needs.
 
-use crate::block::{ArcDistance, Block, MotionMode, NonModal, Plane, ToolLength};
+use crate::block::{ArcDistance, Block, Distance, MotionMode, NonModal, Plane, ToolLength};
 use crate::controller::lower::{self, PlainLine};
+use crate::controller::profile::Arcs;
 use crate::diag::ErrorKind;
 use crate::diag::{SetupError, TargetError};
 use crate::geom::cutter_comp::{Arc as CompArc, ArcCenter, Tolerances};
@@ -46,6 +47,31 @@ impl Lowering {
                     // No arc on this line (`G4 P2` under G2 is a dwell):
                     // its P is not turns.
                     return Ok(None);
+                }
+                if !other_axis_use && (moves || ijk_only) {
+                    // Arcs the target has not in this form: chords where
+                    // it has none (or none in the plane), centre-form arcs
+                    // in G90 where it wants them.
+                    let plane_code = match self.m.modes.plane {
+                        Plane::XY => 170,
+                        Plane::XZ => 180,
+                        _ => 190,
+                    };
+                    let planes = [170, 180, 190].iter().any(|&c| self.p.has_g(c));
+                    let in_plane = self.p.has_g(plane_code) || !planes && plane_code == 170;
+                    if self.p.arcs == Arcs::None || !in_plane {
+                        return self.lower_arc_chords(b, before, motion, turns).map(Some);
+                    }
+                    let incremental = self.m.modes.distance == Distance::Incremental;
+                    let radius_form = b.value(b'R').is_some();
+                    let rewrite = match self.p.arcs {
+                        Arcs::Ijk => radius_form,
+                        Arcs::IjkAbsolute => radius_form || incremental,
+                        Arcs::All | Arcs::None => false,
+                    };
+                    if rewrite {
+                        return self.lower_arc(b, before, motion, turns).map(Some);
+                    }
                 }
                 let p_ok = self.p.arc_turns;
                 // Polar words name the end point (the target has none).
@@ -119,6 +145,19 @@ impl Lowering {
         }
     }
 
+    /// The block's arc as G1 chords within `--tolerance`.
+    fn lower_arc_chords(
+        &mut self,
+        b: &Block,
+        before: &FlatMachine,
+        motion: MotionMode,
+        turns: f64,
+    ) -> Result<Vec<PlainLine>, ErrorKind> {
+        let input = self.arc_input(b, before, motion, turns)?;
+        let tolerance = self.opts.tolerance_mm / self.m.scale();
+        lower::arc::lower_arc_chords(&input, tolerance).map_err(|e| self.lower_error(e))
+    }
+
     fn lower_arc(
         &mut self,
         b: &Block,
@@ -126,6 +165,18 @@ impl Lowering {
         motion: MotionMode,
         turns: f64,
     ) -> Result<Vec<PlainLine>, ErrorKind> {
+        let input = self.arc_input(b, before, motion, turns)?;
+        lower::arc::lower_arc(&input).map_err(|e| self.lower_error(e))
+    }
+
+    /// The block's arc as LinuxCNC moves it.
+    fn arc_input(
+        &self,
+        b: &Block,
+        before: &FlatMachine,
+        motion: MotionMode,
+        turns: f64,
+    ) -> Result<lower::arc::ArcInput, ErrorKind> {
         let start = self.prog_pos(before);
         let end = self.prog_pos(&self.m);
         let known = |v: [Option<f64>; 3], what: &str| -> Result<[f64; 3], ErrorKind> {
@@ -175,7 +226,7 @@ impl Lowering {
                 };
             }
         }
-        let input = lower::arc::ArcInput {
+        Ok(lower::arc::ArcInput {
             plane,
             clockwise: motion == MotionMode::ArcCw,
             start,
@@ -183,8 +234,7 @@ impl Lowering {
             centre,
             turns: turns.max(1.0) as u32,
             radius_step: self.radius_step(),
-        };
-        lower::arc::lower_arc(&input).map_err(|e| self.lower_error(e))
+        })
     }
 
     /// The current X Y (program units), which a lowering needs.

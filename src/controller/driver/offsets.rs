@@ -22,7 +22,7 @@ impl Lowering {
         fates: &[Fate],
         lowered: Option<&[PlainLine]>,
     ) -> Result<Option<[f64; 3]>, Problem> {
-        if self.m.modes.coord == self.target_coord {
+        if self.m.modes.coord == self.target_coord && !self.offsets_applied() {
             return Ok(None);
         }
         let needed = Self::positions_in_work(b, &self.m)
@@ -35,12 +35,65 @@ impl Lowering {
         if !needed {
             return Ok(None);
         }
-        self.coord_shift(&self.m, self.target_coord)
-            .map(Some)
-            .map_err(|k| Problem {
-                span: b.coord().and(g_span(b, 591, 593)),
-                kind: k,
-            })
+        self.machine_shift(&self.m).map(Some).map_err(|k| Problem {
+            span: b.coord().and(g_span(b, 591, 593)),
+            kind: k,
+        })
+    }
+
+    /// Whether the target lacks offsets ngcflat applies to every position
+    /// written (its work offsets, or its tool length offsets).
+    fn offsets_applied(&self) -> bool {
+        !self.p.work_offsets || self.p.tool_length_into_z
+    }
+
+    /// What to add (mm, X Y Z) to a position in `m`'s work coordinates to
+    /// get the same machine position in the target's coordinates: the
+    /// difference of the coordinate systems where the target lacks the
+    /// program's, all of LinuxCNC's offsets where it has none, and the
+    /// tool length offset where it has none.
+    pub(super) fn machine_shift(&self, m: &FlatMachine) -> Result<[f64; 3], ErrorKind> {
+        let mut out = if !self.p.work_offsets {
+            let total = m.offset();
+            let mut o = [0.0; 3];
+            for i in 0..3 {
+                let tool = if self.p.tool_length_into_z {
+                    0.0
+                } else {
+                    m.tlo[i].unwrap_or(0.0)
+                };
+                o[i] = total[i].ok_or_else(|| self.offsets_unknown(m, i))? - tool;
+            }
+            return Ok(o);
+        } else if m.modes.coord == self.target_coord {
+            [0.0; 3]
+        } else {
+            self.coord_shift(m, self.target_coord)?
+        };
+        if self.p.tool_length_into_z {
+            for (i, o) in out.iter_mut().enumerate() {
+                *o += m.tlo[i].ok_or_else(|| self.offsets_unknown(m, i))?;
+            }
+        }
+        Ok(out)
+    }
+
+    /// The error for offsets of axis `i` the model does not know.
+    fn offsets_unknown(&self, m: &FlatMachine, i: usize) -> ErrorKind {
+        let c = m.modes.coord;
+        ErrorKind::Target(TargetError::TargetNeedsValue {
+            target: self.name(),
+            what: "positions written in machine coordinates (the target has no work or tool length offsets)".into(),
+            value: format!(
+                "the {} offsets of {} (parameter {}), of G92 (parameter {}) and the tool length",
+                ['X', 'Y', 'Z'][i],
+                c.name(),
+                c.parameters() + i,
+                5211 + i
+            ),
+            option: "--var-file (the machine's parameter file), -D, --tool-table, or --zero-start"
+                .into(),
+        })
     }
 
     /// Whether the axis words of `b` are positions in the active work
@@ -107,7 +160,8 @@ impl Lowering {
             Some(NonModal::RestoreG92) => (923, "G92.3 (G92 offsets back on)"),
             _ => return Ok(None),
         };
-        if self.p.has_g(code) {
+        if self.p.has_g(code) || !self.p.work_offsets {
+            // Had, or applied to every position (machine_shift).
             return Ok(None);
         }
         let effective = |m: &FlatMachine, a: usize| match m.g92_applied {
@@ -151,11 +205,7 @@ impl Lowering {
         // machine position is the work position plus G5x, the G92 offset
         // and the tool length: value = position + offset before - offset
         // wanted (+ the shift to the target's coordinate system).
-        let shift = if before.modes.coord == self.target_coord {
-            [0.0; 3]
-        } else {
-            self.coord_shift(before, self.target_coord)?
-        };
+        let shift = self.machine_shift(before)?;
         let s = before.scale();
         let mut words = vec![(b'G', 92.0)];
         for (a, letter, had, want) in changed {
@@ -200,6 +250,10 @@ impl Lowering {
             return Err(need("Z"));
         }
         let z = tlo[2].ok_or_else(|| need("Z"))?;
+        if self.p.tool_length_into_z {
+            // Applied to the positions written (machine_shift).
+            return Ok(Vec::new());
+        }
         for (a, v) in tlo.iter().enumerate() {
             if a != 2 && v.is_some_and(|v| v != 0.0) && self.p.g43_1_z_only {
                 return Err(self.refuse(

@@ -169,6 +169,8 @@ impl Lowering {
     /// program's coordinate system.
     fn plain_state(&self) -> bool {
         !(self.comp.is_some()
+            // Lines rewritten beyond their values (the writer's own rules).
+            || self.p.rewrites_lines()
             || self.after_off.is_some()
             || self.feed_rewrite
             // Positions in a coordinate system the target lacks are moved.

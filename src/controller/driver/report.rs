@@ -121,6 +121,7 @@ impl Lowering {
         if travel < 1e-9 {
             return Some(ErrorKind::Target(TargetError::TargetProbeInPlace {
                 target: self.name(),
+                how: self.p.probe_in_place.as_str(),
             }));
         }
         (travel < self.p.min_probe_travel).then(|| {

@@ -294,6 +294,7 @@ impl Lowering {
             })
         {
             match self.tool_length_words(b, before) {
+                Ok(ws) if ws.is_empty() => {}
                 Ok(ws) => d.pre_lines.push(ws),
                 Err(k) => {
                     return Err(Problem {

@@ -157,6 +157,63 @@ pub fn lower_arc(a: &ArcInput) -> Result<Vec<PlainLine>, LowerError> {
     Ok(out)
 }
 
+/// An arc as G1 chords (for a target without arcs, or without arcs in its
+/// plane): points on the arc (on the helix and spiral [`lower_arc`] follows)
+/// at equal angles, close enough that no chord is further than
+/// `tolerance` (program units, above 0) from the arc; an arc that
+/// [`barely_turns`] is one G1 to its end.
+pub fn lower_arc_chords(a: &ArcInput, tolerance: f64) -> Result<Vec<PlainLine>, LowerError> {
+    let [p, q, n] = axes(a.plane)?;
+    let radius = (a.start[q] - a.centre[q]).hypot(a.start[p] - a.centre[p]);
+    if radius.is_nan()
+        || radius <= 0.0
+        || !radius.is_finite()
+        || tolerance.is_nan()
+        || tolerance <= 0.0
+    {
+        return Err(LowerError::BadArc);
+    }
+    let total = sweep(a)?;
+    let chord = (a.end[q] - a.start[q]).hypot(a.end[p] - a.start[p]);
+    if barely_turns(total, chord, a.radius_step) {
+        return Ok(vec![PlainLine::motion(1.0, a.end)]);
+    }
+    let spiral = (a.end[q] - a.centre[q]).hypot(a.end[p] - a.centre[p]) - radius;
+    // A chord over angle t of radius r is r (1 - cos(t / 2)) off the arc at
+    // its middle: the largest angle within the tolerance at the largest
+    // radius the arc reaches.
+    let r = radius.max(radius + spiral);
+    let step = if tolerance >= r {
+        PI / 2.0
+    } else {
+        (2.0 * (1.0 - tolerance / r).acos()).min(PI / 2.0)
+    };
+    let parts_f = (total / step).ceil().max(1.0);
+    if parts_f > super::MAX_LINES as f64 {
+        return Err(LowerError::TooManyLines);
+    }
+    let parts = parts_f as usize;
+    let a0 = (a.start[q] - a.centre[q]).atan2(a.start[p] - a.centre[p]);
+    let sign = if a.clockwise { -1.0 } else { 1.0 };
+    let mut out = Vec::with_capacity(parts);
+    for k in 1..=parts {
+        let to = if k == parts {
+            a.end
+        } else {
+            let t = k as f64 / parts as f64;
+            let angle = a0 + sign * total * t;
+            let r = radius + spiral * t;
+            let mut pt = [0.0; 3];
+            pt[p] = a.centre[p] + r * angle.cos();
+            pt[q] = a.centre[q] + r * angle.sin();
+            pt[n] = a.start[n] + (a.end[n] - a.start[n]) * t;
+            pt
+        };
+        push(&mut out, PlainLine::motion(1.0, to))?;
+    }
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -166,6 +223,47 @@ mod tests {
             .iter()
             .map(|w| (w.letter as char, w.value))
             .collect()
+    }
+
+    #[test]
+    fn chords_stay_within_the_tolerance() {
+        for (r, tol, clockwise) in [
+            (5.0, 0.001, true),
+            (0.5, 0.01, false),
+            (100.0, 0.0001, true),
+        ] {
+            let a = ArcInput {
+                plane: Plane::XZ,
+                clockwise,
+                start: [r, 7.0, 0.0],
+                end: [-r, 9.0, 0.0],
+                centre: [0.0, 0.0, 0.0],
+                turns: 1,
+                radius_step: 0.001,
+            };
+            let out = lower_arc_chords(&a, tol).unwrap();
+            let mut from = a.start;
+            for l in &out {
+                let w = words(l);
+                assert_eq!(w[0], ('G', 1.0));
+                let to = [w[1].1, w[2].1, w[3].1];
+                // Every end on the circle, the middle of every chord
+                // within the tolerance of it (and not much closer: no
+                // more chords than needed).
+                assert!((to[0].hypot(to[2]) - r).abs() < 1e-9);
+                let mid = (to[0] + from[0]).hypot(to[2] + from[2]) / 2.0;
+                assert!(r - mid <= tol * (1.0 + 1e-9), "{r} {tol}: {}", r - mid);
+                assert!(r - mid > tol * 0.25, "{r} {tol}: {}", r - mid);
+                from = to;
+            }
+            assert_eq!(
+                words(out.last().unwrap())[1..4],
+                [('X', -r), ('Y', 9.0), ('Z', 0.0)]
+            );
+            // Half a turn: the Y of the helix half way at the middle.
+            let half = &out[out.len() / 2 - 1];
+            assert!(words(half)[2].1 > 7.0 && words(half)[2].1 < 9.0);
+        }
     }
 
     #[test]

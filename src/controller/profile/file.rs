@@ -12,7 +12,10 @@
 
 use serde::Deserialize;
 
-use super::{Comments, LineCount, Profile, ToolChange};
+use super::{
+    Arcs, CommandsPerLine, CommentSyntax, Comments, DwellUnits, Inches, LineCount, Profile,
+    ToolChange,
+};
 use crate::codes::GCode;
 
 pub use crate::diag::ProfileError;
@@ -48,6 +51,14 @@ pub(super) const KEYS: &[&str] = &[
     "optional_stop",
     "arc_turns",
     "min_probe_travel",
+    "probe_in_place",
+    "commands_per_line",
+    "comment_syntax",
+    "dwell_units",
+    "inches",
+    "arcs",
+    "work_offsets",
+    "tool_length_into_z",
 ];
 
 /// `line_limit`: bytes, or `"none"`.
@@ -91,6 +102,14 @@ struct ProfileFile {
     optional_stop: bool,
     arc_turns: bool,
     min_probe_travel: f64,
+    probe_in_place: String,
+    commands_per_line: CommandsPerLine,
+    comment_syntax: CommentSyntax,
+    dwell_units: DwellUnits,
+    inches: Inches,
+    arcs: Arcs,
+    work_offsets: bool,
+    tool_length_into_z: bool,
 }
 
 /// The 1-based line of byte `at` in `text`.
@@ -243,6 +262,14 @@ impl ProfileFile {
             optional_stop: self.optional_stop,
             arc_turns: self.arc_turns,
             min_probe_travel: self.min_probe_travel,
+            probe_in_place: self.probe_in_place,
+            commands_per_line: self.commands_per_line,
+            comment_syntax: self.comment_syntax,
+            dwell_units: self.dwell_units,
+            inches: self.inches,
+            arcs: self.arcs,
+            work_offsets: self.work_offsets,
+            tool_length_into_z: self.tool_length_into_z,
         };
         match p.contradiction() {
             Some(what) => Err(ProfileError::Contradiction { what }),
@@ -364,6 +391,94 @@ impl Profile {
         let feeds = [10, 20, 30].iter().any(|&g| self.has_g(g));
         if feeds && !self.words.contains(&b'F') {
             return Some("feed moves (G1, G2, G3) need F among the words".into());
+        }
+        self.writer_contradiction()
+    }
+}
+
+impl Profile {
+    /// The writer's capabilities that do not agree with the codes or with
+    /// each other.
+    fn writer_contradiction(&self) -> Option<String> {
+        let any = |codes: &[u16]| codes.iter().find(|&&c| self.has_g(c)).copied();
+        if self.comments == Comments::Keep && self.comment_syntax == CommentSyntax::None {
+            return Some("comments = \"keep\" needs a comment_syntax other than \"none\"".into());
+        }
+        if self.messages && self.comment_syntax != CommentSyntax::Parentheses {
+            return Some(
+                "messages = true writes (MSG,…), which needs comment_syntax = \"parentheses\""
+                    .into(),
+            );
+        }
+        if self.dwell_units == DwellUnits::Milliseconds && !self.has_g(40) {
+            return Some("dwell_units = \"milliseconds\" needs G4 among the codes".into());
+        }
+        match self.inches {
+            Inches::Native if !(self.has_g(200) && self.has_g(210)) => {
+                return Some("inches = \"native\" needs G20 and G21 among the codes".into());
+            }
+            Inches::ToMm if self.has_g(200) || !self.has_g(210) => {
+                return Some(
+                    "inches = \"to-mm\" writes G20 as G21: G21 must be among the codes, G20 not"
+                        .into(),
+                );
+            }
+            _ => {}
+        }
+        let arcs = self.has_g(20) || self.has_g(30);
+        match self.arcs {
+            Arcs::None if arcs => {
+                return Some("arcs = \"none\" but G2 or G3 is among the codes".into());
+            }
+            Arcs::All | Arcs::Ijk | Arcs::IjkAbsolute if !(self.has_g(20) && self.has_g(30)) => {
+                return Some("arcs other than \"none\" need G2 and G3 among the codes".into());
+            }
+            _ => {}
+        }
+        // The centre words of every plane the profile has arcs in (an arc
+        // in a plane without its code is written as chords).
+        let planes = [170, 180, 190].iter().any(|&c| self.has_g(c));
+        for (code, letters) in [(170, "IJ"), (180, "IK"), (190, "JK")] {
+            let has_plane = self.has_g(code) || code == 170 && !planes;
+            if arcs && has_plane && !letters.bytes().all(|l| self.has_word(l)) {
+                return Some(format!(
+                    "arcs in the plane of G{} need {} among the words",
+                    format_code(code),
+                    letters
+                ));
+            }
+        }
+        if self.arc_turns && self.arcs != Arcs::All {
+            return Some("arc_turns = true needs arcs = \"all\"".into());
+        }
+        if self.tool_length_into_z
+            && let Some(c) = any(&[430, 431, 432])
+        {
+            return Some(format!(
+                "tool_length_into_z = true but G{} is among the codes",
+                format_code(c)
+            ));
+        }
+        if !self.work_offsets {
+            if let Some(c) = any(&[
+                520, 530, 540, 550, 560, 570, 580, 590, 591, 592, 593, 920, 921, 922, 923,
+            ]) {
+                return Some(format!(
+                    "work_offsets = false but G{} is among the codes",
+                    format_code(c)
+                ));
+            }
+            if self.coord_systems != 1 || self.g10_l.iter().any(|&l| l == 2 || l == 20) {
+                return Some(
+                    "work_offsets = false needs coord_systems = 1 and no G10 L2 or L20".into(),
+                );
+            }
+        }
+        let probes = [382, 383, 384, 385].iter().any(|&c| self.has_g(c));
+        if probes && self.probe_in_place.trim().is_empty() {
+            return Some(
+                "probe_in_place must say what the firmware does with a probe move to the point the tool is at".into(),
+            );
         }
         None
     }

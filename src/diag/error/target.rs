@@ -42,8 +42,12 @@ super::phase! {
         "E1009" ProfileUnreadable { path: String, error: super::ProfileError },
         /// `G0 Z1` then `G38.2 Z1` with `--target grblhal`: GRBL-class
         /// firmwares refuse a probe move to the point the tool is at
-        /// (LinuxCNC accepts it and does nothing).
-        "E1050" TargetProbeInPlace { target: &'static str },
+        /// (LinuxCNC accepts it and does nothing); `how` is the firmware's
+        /// own behaviour, from its profile (`probe_in_place`).
+        "E1050" TargetProbeInPlace {
+            target: &'static str,
+            how: &'static str,
+        },
         /// `G0 Z1` then `G38.2 Z0.9` with `--target g2core`: g2core refuses a
         /// probe move shorter than 0.254 mm (its profile's `min_probe_travel`).
         "E1051" TargetProbeTooShort {
@@ -85,9 +89,9 @@ impl fmt::Display for TargetError {
             UnknownTarget { name } => {
                 write!(f, "unknown target '{name}' (`ngcflat targets` lists them)")
             }
-            TargetProbeInPlace { target } => write!(
+            TargetProbeInPlace { target, how } => write!(
                 f,
-                "probe move to the point the tool is already at: {target} refuses it (its error 33, invalid target)"
+                "probe move to the point the tool is already at: {target} refuses it ({how})"
             ),
             TargetProbeTooShort {
                 target,
