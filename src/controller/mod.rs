@@ -23,6 +23,8 @@ pub const BUILT_IN: &[(&str, &str)] = &[
     ("grblhal", include_str!("profiles/grblhal.toml")),
     ("fluidnc", include_str!("profiles/fluidnc.toml")),
     ("g2core", include_str!("profiles/g2core.toml")),
+    ("klipper", include_str!("profiles/klipper.toml")),
+    ("marlin", include_str!("profiles/marlin.toml")),
 ];
 
 static PROFILES: std::sync::LazyLock<Vec<Profile>> = std::sync::LazyLock::new(|| {

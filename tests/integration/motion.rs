@@ -473,6 +473,10 @@ fn motion_check(path: &Path) -> Result<(), String> {
         .map(|v| dir.join(v));
     let a = rs274_with(&original, tbl.as_deref(), var.as_deref())
         .map_err(|e| format!("rs274 on the original: {e}"))?;
+    let stdout = match fixtures::target_of(path) {
+        Some(t) => crate::as_rs274_reads(&t, &stdout),
+        None => stdout,
+    };
     let b = rs274_with(stdout.as_bytes(), tbl.as_deref(), var.as_deref())
         .map_err(|e| format!("rs274 rejects the lowered output: {e}\n{stdout}"))?;
     compare(&Replay::run(&a), &Replay::run(&b), 0.002)
@@ -621,9 +625,10 @@ fn lowered_offsets_move_as_rs274() {
     all_pass(results, offsets_program);
 }
 
-/// The GRBL-class target a random program `seed` is lowered for.
+/// The target a random program `seed` is lowered for.
 fn random_target(seed: u64) -> &'static str {
-    ["grbl", "grblhal", "fluidnc", "g2core"][(seed % 4) as usize]
+    const TARGETS: [&str; 6] = ["grbl", "grblhal", "fluidnc", "g2core", "klipper", "marlin"];
+    TARGETS[(seed % TARGETS.len() as u64) as usize]
 }
 
 /// `program` lowered for `target` with `--zero-start`: exit code, output,
@@ -637,7 +642,7 @@ fn lower(program: &str, target: &str) -> (i32, String, String) {
 /// Whether `out`, `program` lowered for `target`, moves under rs274 as
 /// the original's canon `a` does.
 fn moves_as(a: &[String], program: &str, target: &str, out: &str) -> Result<(), String> {
-    let b = rs274(out.as_bytes(), None)
+    let b = rs274(crate::as_rs274_reads(target, out).as_bytes(), None)
         .map_err(|e| format!("{target}: rs274 rejects the output: {e}\n{out}"))?;
     // rs274 prints offsets and positions with 4 decimals in the current
     // units: 0.00254 mm in inches.
