@@ -78,6 +78,9 @@ pub(crate) struct StatsArgs {
     /// Write JSON instead of text.
     #[arg(long)]
     pub(super) json: bool,
+    /// Leave out the run-time estimate (the rest of the statistics only).
+    #[arg(long)]
+    pub(super) no_time: bool,
     #[command(flatten)]
     pub(super) common: CommonArgs,
 }

@@ -13,6 +13,8 @@ pub(super) struct Job {
     file: Option<PathBuf>,
     /// JSON instead of text.
     json: bool,
+    /// No run-time estimate.
+    no_time: bool,
 }
 
 impl From<super::args::StatsArgs> for Job {
@@ -20,17 +22,20 @@ impl From<super::args::StatsArgs> for Job {
         Job {
             file: a.file,
             json: a.json,
+            no_time: a.no_time,
         }
     }
 }
 
 pub(super) fn run(job: &Job, cfg: &Config) -> ExitCode {
     let file = job.file.as_deref();
-    let obs = match run_for_view(
-        file,
-        cfg,
-        Observer::stats(&cfg.machine, target_name(cfg), None),
-    ) {
+    let mut observer = Observer::stats(&cfg.machine, target_name(cfg), None);
+    if job.no_time
+        && let Some(s) = &mut observer.stats
+    {
+        s.run_time = crate::runtime::RunTime::new(crate::runtime::TimeModel::Off);
+    }
+    let obs = match run_for_view(file, cfg, observer) {
         Ok((o, _)) => o,
         Err(code) => return code,
     };

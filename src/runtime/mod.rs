@@ -53,6 +53,7 @@ use std::collections::{BTreeMap, VecDeque};
 use serde::Serialize;
 
 use crate::codes::FeedMode;
+use crate::geom::arc::{ArcGeom, FullCircle};
 use crate::machine::axes::MachineAxes;
 pub(crate) use crate::machine::grbl_listing::GrblSettings;
 use crate::machine::motion::{Axes, Motion, MoveKind, Point};
@@ -73,6 +74,8 @@ pub(crate) enum TimeModel {
     LinuxCnc { limits: Box<linuxcnc::Limits> },
     /// Each move timed alone from rest to rest at the axes' limits.
     RestToRest { axes: Box<MachineAxes> },
+    /// No estimate (`stats --no-time`).
+    Off,
 }
 
 /// Blocks GRBL 1.1h's planner holds: `BLOCK_BUFFER_SIZE` 16 (`planner.h`),
@@ -205,7 +208,7 @@ impl RunTime {
         let window = match &model {
             TimeModel::Grbl { window, .. } => Window::new(*window),
             TimeModel::LinuxCnc { limits } => Window::new(limits.depth),
-            TimeModel::RestToRest { .. } => Window::new(1),
+            TimeModel::RestToRest { .. } | TimeModel::Off => Window::new(1),
         };
         RunTime {
             model,
@@ -317,6 +320,12 @@ impl RunTime {
                     }
                 ),
             },
+            TimeModel::Off => ModelInfo {
+                name: "none".into(),
+                approximate: false,
+                error: "not estimated (--no-time)".into(),
+                description: "the run time was not estimated (--no-time)".into(),
+            },
             TimeModel::RestToRest { axes } => ModelInfo {
                 name: "rest to rest".into(),
                 approximate: true,
@@ -344,6 +353,9 @@ impl RunTime {
 
     /// Feeds one motion event of the current line.
     pub(crate) fn motion(&mut self, m: &Motion) {
+        if self.model == TimeModel::Off {
+            return;
+        }
         match m {
             Motion::Line {
                 kind,
@@ -372,7 +384,12 @@ impl RunTime {
                 feed,
             } => {
                 self.offset_change(from);
-                let g = ArcGeom::new(&from.work, &to.work, *center, *plane, *ccw, *turns);
+                // GRBL cuts a sweep within its epsilon of 0 as a full circle.
+                let rule = match self.model {
+                    TimeModel::Grbl { .. } => FullCircle::Grbl,
+                    _ => FullCircle::Exact,
+                };
+                let g = ArcGeom::new(&from.work, &to.work, *center, *plane, *ccw, *turns, rule);
                 let rate = self.feed_rate(MoveKind::Feed, feed.rate, feed.mode);
                 self.arc(&g, from, to, rate);
             }
@@ -489,6 +506,7 @@ impl RunTime {
         let settings = match &self.model {
             TimeModel::Grbl { settings, .. } => settings,
             TimeModel::LinuxCnc { .. } => return self.lc_line(from, target, feed, rapid),
+            TimeModel::Off => return,
             TimeModel::RestToRest { axes } => {
                 let b = rest_to_rest(axes, from, target, feed, rapid, self.charge);
                 match b {
@@ -568,6 +586,7 @@ impl RunTime {
         let segments = match &self.model {
             TimeModel::Grbl { settings, .. } => grbl::arc_segments(settings, g.sweep, g.r0),
             TimeModel::LinuxCnc { .. } => return self.lc_arc(g, from, to, feed),
+            TimeModel::Off => return,
             TimeModel::RestToRest { axes } => {
                 match rest_to_rest_arc(axes, g, from, to, feed, self.charge) {
                     Some(b) => self.push(b),
@@ -1008,80 +1027,6 @@ maximum velocity), and slows down again; the feed and acceleration of a move are
 capped so that no axis exceeds its own maximum velocity or acceleration. This target's \
 planner is not modelled: it blends moves, so programs of many short moves run faster \
 than this figure (up to 10 times on dense CAM programs)";
-
-/// An arc's geometry: the plane's axes (`a`, `b`, helix `h`), the centre,
-/// the start angle and the signed sweep (radians, counter-clockwise
-/// positive, full turns included), and the start and end radii.
-#[derive(Debug, Clone, Copy)]
-struct ArcGeom {
-    a: usize,
-    b: usize,
-    h: usize,
-    ca: f64,
-    cb: f64,
-    start: f64,
-    sweep: f64,
-    r0: f64,
-    r1: f64,
-}
-
-impl ArcGeom {
-    /// `center` holds the centre's coordinates on the plane's axes in
-    /// ascending axis order.
-    fn new(
-        from: &Axes,
-        to: &Axes,
-        center: [f64; 2],
-        plane: crate::codes::Plane,
-        ccw: bool,
-        turns: u32,
-    ) -> ArcGeom {
-        let [a, b, h] = plane.axes();
-        let (ca, cb) = if a < b {
-            (center[0], center[1])
-        } else {
-            (center[1], center[0])
-        };
-        let (sa, sb) = (from[a] - ca, from[b] - cb);
-        let (ea, eb) = (to[a] - ca, to[b] - cb);
-        let start = sb.atan2(sa);
-        let end = eb.atan2(ea);
-        let extra = std::f64::consts::TAU * f64::from(turns.max(1) - 1);
-        // GRBL's ARC_ANGULAR_TRAVEL_EPSILON: a sweep this close to 0 is a
-        // full circle.
-        let sweep = if ccw {
-            let mut d = end - start;
-            if d <= 5e-7 {
-                d += std::f64::consts::TAU;
-            }
-            d + extra
-        } else {
-            let mut d = start - end;
-            if d <= 5e-7 {
-                d += std::f64::consts::TAU;
-            }
-            -(d + extra)
-        };
-        ArcGeom {
-            a,
-            b,
-            h,
-            ca,
-            cb,
-            start,
-            sweep,
-            r0: sa.hypot(sb),
-            r1: ea.hypot(eb),
-        }
-    }
-
-    /// The length of the arc or helix (a spiral's radius changing evenly).
-    fn length(&self, from: &Axes, to: &Axes) -> f64 {
-        let p = self.sweep.abs() * 0.5 * (self.r0 + self.r1);
-        let dh = to[self.h] - from[self.h];
-        (p * p + dh * dh).sqrt()
-    }
-}
 
 #[cfg(test)]
 mod tests;

@@ -41,7 +41,15 @@ impl LimitCheck {
             ..
         } = m
         {
-            let g = ArcGeom::new(&from.work, &to.work, *center, *plane, *ccw, *turns);
+            let g = ArcGeom::new(
+                &from.work,
+                &to.work,
+                *center,
+                *plane,
+                *ccw,
+                *turns,
+                crate::geom::arc::FullCircle::Exact,
+            );
             for t in g.quadrant_crossings() {
                 points.push(arc_point(&g, &from.work, &to.work, t));
             }

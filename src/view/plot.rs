@@ -204,7 +204,15 @@ impl Plot {
                     rapid: false,
                     tool: self.tool,
                 };
-                let g = ArcGeom::new(&from.work, &to.work, *center, *plane, *ccw, *turns);
+                let g = ArcGeom::new(
+                    &from.work,
+                    &to.work,
+                    *center,
+                    *plane,
+                    *ccw,
+                    *turns,
+                    crate::geom::arc::FullCircle::Exact,
+                );
                 let a = self.view.project(&from.work);
                 let b = self.view.project(&to.work);
                 if !finite(a) || !finite(b) {

@@ -143,8 +143,15 @@ impl Observer {
                 turns,
                 ..
             } => {
-                let g =
-                    super::geom::ArcGeom::new(&from.work, &to.work, *center, *plane, *ccw, *turns);
+                let g = super::geom::ArcGeom::new(
+                    &from.work,
+                    &to.work,
+                    *center,
+                    *plane,
+                    *ccw,
+                    *turns,
+                    crate::geom::arc::FullCircle::Exact,
+                );
                 super::geom::arc_length(&g, &from.work, &to.work)
             }
             _ => 0.0,

@@ -104,7 +104,15 @@ impl Stats {
                 self.extent(m, from.offset);
                 self.arcs += 1;
                 self.feed_moves += 1;
-                let g = ArcGeom::new(&from.work, &to.work, *center, *plane, *ccw, *turns);
+                let g = ArcGeom::new(
+                    &from.work,
+                    &to.work,
+                    *center,
+                    *plane,
+                    *ccw,
+                    *turns,
+                    crate::geom::arc::FullCircle::Exact,
+                );
                 self.feed_length += finite(arc_length(&g, &from.work, &to.work));
             }
             Motion::ToolChange { tool } => {
@@ -444,6 +452,10 @@ impl Report {
     /// The run-time part of [`Report::text`].
     fn time_text(&self, s: &mut String) {
         let t = &self.time;
+        if t.model_name == "none" {
+            let _ = writeln!(s, "estimated time: not estimated (--no-time)");
+            return;
+        }
         let _ = writeln!(
             s,
             "estimated time: {}{} by the {} ({})",

@@ -1169,3 +1169,25 @@ fn the_page_s_timeline_follows_each_line_s_planned_time() {
     // The last chords run at the look-ahead's pace, not in no time.
     assert!(dur[30] > 0.01, "{}", dur[30]);
 }
+
+/// `stats --no-time` leaves the run-time estimate out and says so.
+#[test]
+fn stats_without_the_time() {
+    let dir = crate::tmp();
+    crate::put(dir.path(), "p.ngc", "G21 G90\nG1 X100 F600\nM2\n");
+    let (code, text, err) =
+        crate::run(dir.path(), &["stats", "--zero-start", "--no-time", "p.ngc"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        text.contains("estimated time: not estimated (--no-time)"),
+        "{text}"
+    );
+    assert!(text.contains("path: feed 100.000 mm"), "{text}");
+    let (_, json, _) = crate::run(
+        dir.path(),
+        &["stats", "--json", "--zero-start", "--no-time", "p.ngc"],
+    );
+    let j: serde_json::Value = serde_json::from_str(&json).expect("json");
+    assert_eq!(j["time"]["total_s"], 0.0);
+    assert_eq!(j["time"]["model_name"], "none");
+}
