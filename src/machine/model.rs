@@ -278,7 +278,13 @@ impl FlatMachine {
 
     /// Applies one decoded block in LinuxCNC's order of execution.
     pub(crate) fn apply(&mut self, b: &Block) {
-        if !self.record && b.is_plain_move() && self.plain_motion(b.motion()) {
+        // A G2 or G3 without axis words (a full circle) goes the general
+        // way.
+        if !self.record
+            && b.is_plain_move()
+            && self.plain_motion(b.motion())
+            && (b.has_axis() || b.motion().is_none())
+        {
             self.apply_plain_move(b);
             return;
         }
@@ -878,8 +884,14 @@ impl FlatMachine {
 }
 
 /// Motion modes that act on a line without axis words.
+/// Motion a line makes without axis words: the end of a NURBS, and a G2 or
+/// G3 written on the line (a full circle back to where it starts, as
+/// LinuxCNC runs `G2 I5 J5`).
 fn moves_without_axes(m: MotionMode) -> bool {
-    matches!(m, MotionMode::NurbsEnd)
+    matches!(
+        m,
+        MotionMode::NurbsEnd | MotionMode::ArcCw | MotionMode::ArcCcw
+    )
 }
 
 /// Centre of an R-format arc from `a` to `b` (positive R: the shorter arc).
@@ -965,6 +977,25 @@ mod tests {
                 proptest::prop_assert_eq!(format!("{fast:?}"), format!("{slow:?}"), "{}", line);
             }
         }
+    }
+
+    /// `G2 I.5 J.5` with no axis word is a full circle (3dtest.ngc draws
+    /// three such): an arc back to its start.
+    #[test]
+    fn an_arc_without_axis_words_is_a_full_circle() {
+        let (_, ev) = run(&["G21 G0 X1 Y1", "G17 G2 I.5 J.5 F100"]);
+        let Some(Motion::Arc { from, to, .. }) = ev.last() else {
+            panic!("an arc: {ev:?}")
+        };
+        assert_eq!(from.work, to.work);
+        // I and J alone, without G2 on the line, move nothing.
+        let (_, ev) = run(&["G21 G2 X1 Y1 I.5 J.5 F100", "I.5 J.5"]);
+        assert_eq!(
+            ev.iter()
+                .filter(|e| matches!(e, Motion::Arc { .. }))
+                .count(),
+            1
+        );
     }
 
     #[test]

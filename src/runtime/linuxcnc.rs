@@ -166,6 +166,7 @@ impl Seg {
             nominal: v,
             max_entry_sqr: self.entry_sqr.min(v * v),
             entry_sqr: 0.0,
+            rev_sqr: f64::NAN,
             charge: self.charge,
         }
     }

@@ -34,6 +34,10 @@ pub(crate) struct Block {
     pub(crate) max_entry_sqr: f64,
     /// Square of the planned entry speed.
     pub(crate) entry_sqr: f64,
+    /// Square of the entry speed the reverse pass last gave it (NaN: not
+    /// planned yet): where it comes out the same again, the blocks before
+    /// it are planned as before.
+    pub(crate) rev_sqr: f64,
     /// What the time of this block is charged to (see [`super::Charge`]).
     pub(crate) charge: super::Charge,
 }
@@ -70,6 +74,7 @@ impl Window {
             b.max_entry_sqr = 0.0;
             b.entry_sqr = 0.0;
         }
+        b.rev_sqr = f64::NAN;
         self.blocks.push_back(b);
         self.replan();
         ran
@@ -83,7 +88,12 @@ impl Window {
         Some((b, block_time(&b, exit_sqr)))
     }
 
-    /// Replans after an arrival: the whole window, O(capacity).
+    /// Replans after an arrival, back from the new block until a block's
+    /// reverse-pass entry comes out as it was (the blocks before it then
+    /// plan as before: a block's reverse entry depends only on the blocks
+    /// after it), and forward from there: the same plan as replanning the
+    /// whole window, in O(capacity) at worst and a few blocks when the
+    /// speeds are not limited by the window.
     fn replan(&mut self) {
         let n = self.blocks.len();
         if n < 2 {
@@ -91,21 +101,25 @@ impl Window {
         }
         // Reverse pass: the last block ends at rest; the first block's
         // entry is fixed.
-        let last = &mut self.blocks[n - 1];
-        last.entry_sqr = last.max_entry_sqr.min(2.0 * last.accel * last.mm);
-        for i in (1..n - 1).rev() {
-            let next_entry = self.blocks[i + 1].entry_sqr;
+        let mut from = 1;
+        let mut next_rev = 0.0;
+        for i in (1..n).rev() {
             let b = &mut self.blocks[i];
-            b.entry_sqr = b.max_entry_sqr.min(next_entry + 2.0 * b.accel * b.mm);
-        }
-        // Forward pass: no block ends faster than it can speed up to.
-        for i in 0..n - 1 {
-            let b = self.blocks[i];
-            let reach = b.entry_sqr + 2.0 * b.accel * b.mm;
-            let next = &mut self.blocks[i + 1];
-            if reach < next.entry_sqr {
-                next.entry_sqr = reach;
+            let rev = b.max_entry_sqr.min(next_rev + 2.0 * b.accel * b.mm);
+            if rev == b.rev_sqr {
+                from = i + 1;
+                break;
             }
+            b.rev_sqr = rev;
+            next_rev = rev;
+        }
+        // Forward pass: no block enters faster than the one before can
+        // speed up to.
+        for i in from.max(1)..n {
+            let p = self.blocks[i - 1];
+            let reach = p.entry_sqr + 2.0 * p.accel * p.mm;
+            let b = &mut self.blocks[i];
+            b.entry_sqr = b.rev_sqr.min(reach);
         }
     }
 }
@@ -152,6 +166,7 @@ mod tests {
             nominal,
             max_entry_sqr: max_entry * max_entry,
             entry_sqr: 0.0,
+            rev_sqr: f64::NAN,
             charge: super::super::Charge::default(),
         }
     }

@@ -1055,7 +1055,13 @@ fn a_feed_above_the_machine_runs_at_its_limits() {
     assert!((t - 10.1).abs() < 1e-9, "{t}");
     let (_, text, _) = crate::run(dir.path(), &["stats", "--zero-start", "p.ngc"]);
     assert!(
-        text.contains("by the LinuxCNC 2.9 trajectory planner (a model, not measured against LinuxCNC; no --ini: LinuxCNC's default limits"),
+        text.contains(
+            "by the LinuxCNC 2.9 trajectory planner (a model: against LinuxCNC's simulator"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains("no --ini: LinuxCNC's default limits"),
         "{text}"
     );
     assert!(!text.contains("no machine velocity"), "{text}");
