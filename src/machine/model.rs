@@ -12,6 +12,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::fx_hasher::FxMap;
+use crate::rules::offsets;
 use crate::rules::tools::{ToolData, Tools};
 use crate::settings::Settings;
 
@@ -188,6 +189,26 @@ impl FlatMachine {
             };
             Some(cs[a]? + g92 + self.tlo[a]?)
         })
+    }
+
+    /// The G92/G52 offset in effect on axis `a`: 0 while suspended.
+    fn g92_in_effect(&self, a: usize) -> Option<f64> {
+        match self.g92_applied {
+            Some(true) => self.g92[a],
+            Some(false) => Some(0.0),
+            None => None,
+        }
+    }
+
+    /// The tool tip's machine position on axis `a`
+    /// ([`offsets::machine_tip`]).
+    fn tip_machine(&self, a: usize) -> Option<f64> {
+        let cs = self.g5x[self.modes.coord.index()][a]?;
+        Some(offsets::machine_tip(
+            self.pos[a]?,
+            cs,
+            self.g92_in_effect(a)?,
+        ))
     }
 
     /// The position in machine coordinates (controlled point), per axis.
@@ -608,7 +629,7 @@ impl FlatMachine {
                 let mut to = self.pos;
                 for a in 0..9 {
                     if let Some(v) = axes[a] {
-                        let rot = if (3..=5).contains(&a) { 1.0 } else { s };
+                        let rot = if offsets::is_linear(a) { s } else { 1.0 };
                         to[a] = off[a].map(|o| v * rot - o);
                     }
                 }
@@ -628,17 +649,14 @@ impl FlatMachine {
                 let cs = self.g5x[self.modes.coord.index()];
                 for a in 0..9 {
                     if let Some(v) = axes[a] {
-                        let rot = if (3..=5).contains(&a) { 1.0 } else { s };
+                        let rot = if offsets::is_linear(a) { s } else { 1.0 };
                         self.g92[a] = if n == NonModal::LocalOffset {
                             Some(v * rot)
                         } else {
-                            // The position becomes v: offset = machine - cs - tlo - v.
-                            match (self.pos[a], before[a], cs[a], self.tlo[a]) {
-                                (Some(p), Some(o), Some(c), Some(t)) => {
-                                    Some(p + o - c - t - v * rot)
-                                }
-                                _ => None,
-                            }
+                            // The position becomes v.
+                            self.tip_machine(a)
+                                .zip(cs[a])
+                                .map(|(m, c)| offsets::g92_making(m, c, v * rot))
                         };
                     } else if self.g92_applied != Some(true) {
                         self.g92[a] = Some(0.0);
@@ -669,17 +687,13 @@ impl FlatMachine {
         let p = b.value(b'P').map(|v| v.round() as i64);
         let s = self.scale();
         let axes = b.axes();
-        let scaled = |a: usize, v: f64| if (3..=5).contains(&a) { v } else { v * s };
+        let scaled = |a: usize, v: f64| if offsets::is_linear(a) { v * s } else { v };
         match l {
             Some(2) | Some(20) => {
                 if b.value(b'R').is_some_and(|r| r != 0.0) {
                     self.rotated = true;
                 }
-                let k = match p {
-                    Some(0) | None => self.modes.coord,
-                    Some(k) => CoordSystem(k.clamp(1, 9) as u8),
-                }
-                .index();
+                let k = offsets::g10_system(b.value(b'P'), self.modes.coord).index();
                 let before = self.offset();
                 let active = k == self.modes.coord.index();
                 for a in 0..9 {
@@ -688,15 +702,9 @@ impl FlatMachine {
                             Some(scaled(a, v))
                         } else {
                             // The current position becomes v in system k.
-                            let g92 = match self.g92_applied {
-                                Some(true) => self.g92[a],
-                                Some(false) => Some(0.0),
-                                None => None,
-                            };
-                            match (self.machine_pos()[a], g92, self.tlo[a]) {
-                                (Some(m), Some(g), Some(t)) => Some(m - g - t - scaled(a, v)),
-                                _ => None,
-                            }
+                            self.tip_machine(a)
+                                .zip(self.g92_in_effect(a))
+                                .map(|(m, g)| offsets::g5x_making(m, g, scaled(a, v)))
                         };
                     }
                 }
@@ -720,14 +728,16 @@ impl FlatMachine {
                             // them: after G92 Z1 at Z5 with 7.5 in effect,
                             // L10 Z2 gives 6.5, L11 Z2 then 13.5).
                             let v = scaled(a, v);
+                            let cs = self.g5x[self.modes.coord.index()][a];
                             if l == Some(11) {
-                                match (self.pos[a], self.offset()[a], self.g5x[8][a]) {
-                                    (Some(p), Some(o), Some(c)) => Some(p + o - c - v),
+                                match (self.pos[a], self.tlo[a], cs, self.g92_in_effect(a)) {
+                                    (Some(p), Some(tl), Some(c), Some(g)) => self.g5x[8][a]
+                                        .map(|c9| offsets::tool_offset_l11(p, tl, c, g, c9, v)),
                                     _ => None,
                                 }
                             } else {
                                 match (self.pos[a], self.tlo[a]) {
-                                    (Some(p), Some(tl)) => Some(p + tl - v),
+                                    (Some(p), Some(tl)) => Some(offsets::tool_offset_l10(p, tl, v)),
                                     _ => None,
                                 }
                             }

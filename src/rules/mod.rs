@@ -7,6 +7,7 @@
 //! codes act in, events) is handed back to it ([`MachineCode`],
 //! [`Switched`]).
 
+pub(crate) mod offsets;
 pub(crate) mod tools;
 
 use crate::codes::{

@@ -11,6 +11,7 @@ use crate::codes::{
     CoordSystem, CutterComp, Distance, GCode, MCode, MotionMode, NonModal, Plane, ToolLength, Units,
 };
 use crate::eval::expr::params::Params;
+use crate::rules::offsets::{self, LINEAR};
 use crate::rules::{MachineCode, polar_end, probe_end};
 use crate::settings::Settings;
 
@@ -19,8 +20,6 @@ use crate::settings::Settings;
 fn is_moving_code(g: GCode) -> bool {
     matches!(g, GCode::Motion(m) if m != MotionMode::CancelCycle)
 }
-
-const LINEAR: [bool; 9] = [true, true, true, false, false, false, true, true, true];
 
 fn axis_index(letter: u8) -> Option<usize> {
     AXES.iter().position(|&c| c == letter)
@@ -92,10 +91,11 @@ impl Machine {
     /// Machine position (without tool offsets), program units.
     fn machine_pos(&self, s: &Settings, params: &Params, axis: usize) -> Option<f64> {
         let p = self.pos.axes[axis].as_ref().ok()?;
-        Some(
-            p + self.g5x_offset(s, params, self.modal.coord, axis)?
-                + self.g92_offset(s, params, axis)?,
-        )
+        Some(offsets::machine_tip(
+            *p,
+            self.g5x_offset(s, params, self.modal.coord, axis)?,
+            self.g92_offset(s, params, axis)?,
+        ))
     }
 
     /// The machine positions of all axes (program units).
@@ -421,7 +421,7 @@ impl Machine {
                     // known only if the machine position was.
                     let m = self.machine_pos(env.s, env.params, a);
                     let g5x = self.g5x_offset(env.s, env.params, self.modal.coord, a);
-                    let off = m.zip(g5x).map(|(m, o)| m - o - v);
+                    let off = m.zip(g5x).map(|(m, o)| offsets::g92_making(m, o, v));
                     self.set_param_prog(env, 5211 + a, a, off);
                     self.pos.axes[a] = Ok(v);
                 }
@@ -639,10 +639,7 @@ impl Machine {
         axis_words: &[(usize, f64)],
     ) {
         let l = l.map(|v| v.round() as i32);
-        let cs = match p.map(|v| v.round() as i32) {
-            Some(0) | None => self.modal.coord,
-            Some(n) => CoordSystem(n.clamp(1, 9) as u8),
-        };
+        let cs = offsets::g10_system(p, self.modal.coord);
         let base = cs.parameters();
         let active = cs == self.modal.coord;
         match l {
@@ -659,7 +656,7 @@ impl Machine {
                         Some(v)
                     } else {
                         m.zip(self.g92_offset(env.s, env.params, a))
-                            .map(|(m, g)| m - g - v)
+                            .map(|(m, g)| offsets::g5x_making(m, g, v))
                     };
                     self.set_param_prog(env, base + a, a, new_off);
                     if active {

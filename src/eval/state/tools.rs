@@ -5,6 +5,7 @@
 
 use super::{Env, Machine, Unknown};
 use crate::codes::CoordSystem;
+use crate::rules::offsets;
 use crate::rules::tools::ToolData;
 use crate::settings::Settings;
 
@@ -82,7 +83,7 @@ impl Machine {
                     .as_ref()
                     .ok()
                     .zip(self.tlo)
-                    .map(|(pos, tlo)| pos + tlo[a] * f - v),
+                    .map(|(pos, tlo)| offsets::tool_offset_l10(*pos, tlo[a] * f, v)),
                 _ => {
                     // L11: relative to G59.3 instead of the current system.
                     let cur = self.modal.coord;
@@ -104,7 +105,7 @@ impl Machine {
                         g92,
                     ) {
                         (Some(pos), Some(tlo), Some(oc), Some(o9), Some(g)) => {
-                            Some(pos + tlo[a] * f + oc + g - o9 - v)
+                            Some(offsets::tool_offset_l11(*pos, tlo[a] * f, oc, g, o9, v))
                         }
                         _ => None,
                     }
