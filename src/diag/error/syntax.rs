@@ -27,10 +27,6 @@ super::phase! {
         "E0010" DuplicateWord { letter: char },
         /// `M3 M8 M7 M9 M5`: more than four M words.
         "E0011" TooManyMWords,
-        /// `N` number that is not at the start of the line: `G0 N10`.
-        "E0012" MisplacedLineNumber,
-        /// `(debug, #<open)`
-        "E0206" UnterminatedName,
     }
 }
 
@@ -61,8 +57,6 @@ impl fmt::Display for SyntaxError {
                 letter.to_ascii_uppercase()
             ),
             TooManyMWords => write!(f, "more than four M words on the line"),
-            MisplacedLineNumber => write!(f, "an N line number may only start the line"),
-            UnterminatedName => write!(f, "named parameter is not terminated by '>'"),
         }
     }
 }
