@@ -12,7 +12,7 @@ use crate::settings::Settings;
 
 /// Validated options shared by flattening and checking.
 #[derive(Debug, Clone)]
-pub struct Config {
+pub(crate) struct Config {
     pub settings: Settings,
     pub search: SearchPath,
     pub format: MessageFormat,

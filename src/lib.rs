@@ -13,11 +13,11 @@
 pub mod block;
 pub mod cli;
 mod codes;
-pub mod config;
+pub(crate) mod config;
 pub mod controller;
 pub mod diag;
 pub mod emit;
-pub mod eval;
+pub(crate) mod eval;
 mod flatten;
 mod fx_hasher;
 pub mod geom;

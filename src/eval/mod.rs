@@ -9,8 +9,6 @@ mod read;
 pub(crate) mod state;
 mod write;
 
-pub use expr::params;
-
 pub(crate) use state::arc::arc_refusal;
 
 use crate::diag::{LimitError, OWordError, SetupError, SyntaxError};
@@ -33,7 +31,7 @@ use crate::parse::{LineParser, Name};
 use crate::program::{FileIndex, Loader, SourceFile, Window, next_line};
 use crate::settings::{Define, Settings};
 
-pub use write::hook::{FormLine, FormLines, LineConsumer, Origin};
+pub(crate) use write::hook::{FormLine, FormLines, LineConsumer, Origin};
 
 use expr::params::Params;
 
@@ -41,7 +39,7 @@ use expr::params::Params;
 /// fields and methods: the machine model (`mach`), control flow (`flow`),
 /// parameters (`params`), the reader (`reader`), the output (`out`) and the
 /// diagnostics (`diags`).
-pub struct Interp<'s> {
+pub(crate) struct Interp<'s> {
     s: &'s Settings,
     pub loader: Loader,
     main: Rc<FileIndex>,
@@ -114,14 +112,19 @@ fn file_key(f: &Rc<FileIndex>) -> usize {
 impl<'s> Interp<'s> {
     /// Evaluates an expression that reads no parameter (the library check
     /// of `check`): its value, or the error and its span in the line.
-    pub fn eval_constant(
+    pub(crate) fn eval_constant(
         &mut self,
         e: &crate::parse::ast::Expr,
     ) -> Result<f64, (ErrorKind, crate::parse::ast::Span)> {
         self.eval(e).map_err(|f| *f)
     }
 
-    pub fn new(s: &'s Settings, loader: Loader, main: Rc<FileIndex>, sink: Sink) -> Interp<'s> {
+    pub(crate) fn new(
+        s: &'s Settings,
+        loader: Loader,
+        main: Rc<FileIndex>,
+        sink: Sink,
+    ) -> Interp<'s> {
         let mut params = Params::new(s.zero_start);
         for d in &s.defines {
             match d {
@@ -147,7 +150,7 @@ impl<'s> Interp<'s> {
     }
 
     /// Hands every output line to `consumer` instead of the output.
-    pub fn with_consumer(mut self, consumer: Box<dyn LineConsumer + 's>) -> Interp<'s> {
+    pub(crate) fn with_consumer(mut self, consumer: Box<dyn LineConsumer + 's>) -> Interp<'s> {
         self.out.consumer = Some(consumer);
         self.out.apart_after = self.s.format_thread_after;
         self
@@ -243,18 +246,10 @@ impl<'s> Interp<'s> {
         self.diags.warnings.push(d);
     }
 
-    /// Runs the program to its end and releases the output.
-    pub fn run(self) -> Result<Vec<Diagnostic>, Error> {
-        match self.run_all() {
-            (w, None) => Ok(w),
-            (_, Some(e)) => Err(e),
-        }
-    }
-
     /// Runs the program; returns every diagnostic (with a consumer that
     /// keeps its errors, those too) and the error that stopped the run, if
     /// any. The output is released only without an error.
-    pub fn run_all(mut self) -> (Vec<Diagnostic>, Option<Error>) {
+    pub(crate) fn run_all(mut self) -> (Vec<Diagnostic>, Option<Error>) {
         let r = self.run_steps();
         if let Some(p) = &self.out.progress {
             p.clear();

@@ -19,7 +19,7 @@ pub(crate) fn is_rotary(i: usize) -> bool {
 }
 
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct AxisData {
+pub(crate) struct AxisData {
     /// Travel envelope in machine coordinates.
     pub min: Option<f64>,
     pub max: Option<f64>,
@@ -33,7 +33,7 @@ pub struct AxisData {
 
 /// Where GRBL's machine envelope lies (`--grbl-envelope`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum GrblEnvelope {
+pub(crate) enum GrblEnvelope {
     /// GRBL 1.1 as built by default: homing sets machine zero at the home
     /// switches and the work area is negative, `-$13x..0`, whatever the
     /// homing direction.
@@ -45,7 +45,7 @@ pub enum GrblEnvelope {
 }
 
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct MachineAxes {
+pub(crate) struct MachineAxes {
     pub axes: [AxisData; 9],
     /// The planner settings of a GRBL `$$` listing, when one was given.
     pub(crate) grbl: Option<super::grbl_listing::GrblSettings>,
@@ -73,12 +73,12 @@ pub(crate) struct Traj {
 
 impl MachineAxes {
     /// Whether any axis has a travel limit.
-    pub fn has_limits(&self) -> bool {
+    pub(crate) fn has_limits(&self) -> bool {
         self.axes.iter().any(|a| a.min.is_some() || a.max.is_some())
     }
 
     /// Whether any axis has a velocity or acceleration limit.
-    pub fn has_dynamics(&self) -> bool {
+    pub(crate) fn has_dynamics(&self) -> bool {
         self.axes
             .iter()
             .any(|a| a.max_vel.is_some() || a.max_acc.is_some())
@@ -87,7 +87,7 @@ impl MachineAxes {
     /// Reads `[AXIS_<L>]` (or `[JOINT_<n>]`) MIN_LIMIT, MAX_LIMIT,
     /// MAX_VELOCITY and MAX_ACCELERATION; linear values are converted from
     /// `[TRAJ]LINEAR_UNITS` (`metric` says whether the INI is in mm).
-    pub fn add_ini(&mut self, ini: &Ini, metric: bool) -> Result<(), ErrorKind> {
+    pub(crate) fn add_ini(&mut self, ini: &Ini, metric: bool) -> Result<(), ErrorKind> {
         let scale = if metric { 1.0 } else { 25.4 };
         let coords: Vec<char> = ini
             .get("TRAJ", "COORDINATES")
@@ -178,7 +178,7 @@ impl MachineAxes {
     /// Reads a saved GRBL `$$` listing: `$110`–`$112` max rate (mm/min),
     /// `$120`–`$122` acceleration (mm/s²), `$130`–`$132` max travel (mm).
     /// Other settings, comments and `ok` lines are ignored.
-    pub fn add_grbl(&mut self, text: &str, envelope: GrblEnvelope) -> Result<(), ErrorKind> {
+    pub(crate) fn add_grbl(&mut self, text: &str, envelope: GrblEnvelope) -> Result<(), ErrorKind> {
         self.grbl = Some(super::grbl_listing::GrblSettings::from_listing(text)?);
         for (n, v) in super::grbl_listing::listing(text)? {
             let (group, axis) = (n / 10, (n % 10) as usize);
@@ -204,7 +204,7 @@ impl MachineAxes {
 
     /// Reads `--limits X0:300,Y0:200,Z-60:0` (millimetres, degrees for A-C;
     /// either bound may be left empty: `Z:0`).
-    pub fn add_limits(&mut self, text: &str) -> Result<(), ErrorKind> {
+    pub(crate) fn add_limits(&mut self, text: &str) -> Result<(), ErrorKind> {
         let bad = || {
             ErrorKind::Setup(SetupError::BadLimits {
                 text: text.to_string(),

@@ -6,7 +6,7 @@ pub(super) mod code;
 pub(super) mod degrees;
 pub(super) mod message;
 pub(super) mod named;
-pub mod params;
+pub(crate) mod params;
 
 use crate::diag::ExprError;
 use crate::diag::{ErrorKind, WarningKind};

@@ -8,11 +8,11 @@ use crate::parse::Name;
 /// an axis are at its index from the first of their group (#5221, #5420…).
 pub(crate) const AXES: [u8; 9] = *b"xyzabcuvw";
 
-pub use crate::settings::MAX_PARAM;
+pub(crate) use crate::settings::MAX_PARAM;
 
 /// What a numbered parameter means to a flattener.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ParamClass {
+pub(crate) enum ParamClass {
     Plain,
     /// Written by the machine at run time; readable once given or assigned.
     Runtime(&'static str, &'static str),
@@ -24,7 +24,7 @@ pub enum ParamClass {
     ReadOnlyRuntime(&'static str, &'static str),
 }
 
-pub fn classify(i: usize) -> ParamClass {
+pub(crate) fn classify(i: usize) -> ParamClass {
     match i {
         5061..=5069 => ParamClass::Runtime("probe result", "it is written by G38 probing"),
         5070 => ParamClass::Runtime("probe success flag", "it is written by G38 probing"),
@@ -58,12 +58,12 @@ pub fn classify(i: usize) -> ParamClass {
     }
 }
 
-pub fn is_read_only(i: usize) -> bool {
+pub(crate) fn is_read_only(i: usize) -> bool {
     matches!(i, 5400..=5413 | 5420..=5428)
 }
 
 #[derive(Debug, Clone)]
-pub struct Params {
+pub(crate) struct Params {
     pub values: Vec<f64>,
     /// The value is known (always true for plain parameters).
     pub known: Vec<bool>,
@@ -74,7 +74,7 @@ pub struct Params {
 }
 
 impl Params {
-    pub fn new(zero_start: bool) -> Params {
+    pub(crate) fn new(zero_start: bool) -> Params {
         let mut known = vec![true; MAX_PARAM];
         if !zero_start {
             // Only 5061..=5601 are anything but plain (see `classify`).
@@ -98,14 +98,14 @@ impl Params {
     }
 
     /// Whether the G92 offsets are applied (#5210 not known to be 0).
-    pub fn g92_applied(&self) -> bool {
+    pub(crate) fn g92_applied(&self) -> bool {
         !(self.known[5210] && self.values[5210] == 0.0)
     }
 
     /// A plain parameter (below 5000) the program or a -D set, if its
     /// value is finite.
     #[inline]
-    pub fn stored(&self, i: usize) -> Option<f64> {
+    pub(crate) fn stored(&self, i: usize) -> Option<f64> {
         if i < 5000 && self.set[i] {
             let v = self.values[i];
             if v.is_finite() {
@@ -115,7 +115,7 @@ impl Params {
         None
     }
 
-    pub fn assign(&mut self, i: usize, v: f64) {
+    pub(crate) fn assign(&mut self, i: usize, v: f64) {
         self.values[i] = v;
         self.known[i] = true;
         self.set[i] = true;
