@@ -360,7 +360,8 @@ impl LineWriter {
                 }
             }
         }
-        let dwell_ms = dwell && self.p.dwell_units == DwellUnits::Milliseconds;
+        let dwell_ms = dwell && self.p.dwell_units.in_ms();
+        let whole_ms = self.p.dwell_units == DwellUnits::WholeMilliseconds;
         for (l, v, code) in &mut items {
             if *code {
                 if *l == b'G' && self.p.inches == Inches::ToMm && *v == 20.0 {
@@ -374,6 +375,11 @@ impl LineWriter {
             }
             if dwell_ms && *l == b'P' {
                 *v *= 1000.0;
+                if whole_ms {
+                    // Up to the next whole millisecond, a product's last
+                    // bit of noise (0.003 s → 3.0000000000000004) aside.
+                    *v = (*v - 1e-9).ceil().max(0.0);
+                }
             }
         }
         self.buf.clear();

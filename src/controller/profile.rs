@@ -74,7 +74,19 @@ pub enum CommentSyntax {
 #[serde(rename_all = "kebab-case")]
 pub enum DwellUnits {
     Seconds,
+    /// Milliseconds read as a decimal number.
     Milliseconds,
+    /// Milliseconds read as a whole number, the digits after a `.`
+    /// dropped: the written P is rounded up, so no dwell is shorter than
+    /// the program asks.
+    WholeMilliseconds,
+}
+
+impl DwellUnits {
+    /// Whether G4's P is written in milliseconds.
+    pub fn in_ms(self) -> bool {
+        self != DwellUnits::Seconds
+    }
 }
 
 /// What the firmware does with inches.
@@ -204,7 +216,7 @@ impl Profile {
     /// applied to positions): no line is copied as it is then.
     pub fn rewrites_lines(&self) -> bool {
         self.commands_per_line == CommandsPerLine::One
-            || self.dwell_units == DwellUnits::Milliseconds
+            || self.dwell_units.in_ms()
             || self.inches == Inches::ToMm
             || !self.work_offsets
             || self.tool_length_into_z
@@ -262,8 +274,12 @@ impl Profile {
             CommentSyntax::Semicolon => parts.push("`;` comments only"),
             CommentSyntax::None => parts.push("no comments"),
         }
-        if self.dwell_units == DwellUnits::Milliseconds {
-            parts.push("G4 P in milliseconds");
+        match self.dwell_units {
+            DwellUnits::Seconds => {}
+            DwellUnits::Milliseconds => parts.push("G4 P in milliseconds"),
+            DwellUnits::WholeMilliseconds => {
+                parts.push("G4 P in whole milliseconds (rounded up)");
+            }
         }
         if self.inches == Inches::ToMm {
             parts.push("no G20 (inches written as mm)");

@@ -72,7 +72,7 @@ pub fn as_rs274_reads(target: &str, out: &str) -> String {
     .unwrap_or_default();
     let ms = profile
         .lines()
-        .any(|l| l.trim() == "dwell_units = \"milliseconds\"");
+        .any(|l| l.trim().starts_with("dwell_units") && l.contains("milliseconds"));
     let ends = profile
         .lines()
         .find(|l| l.starts_with("m_codes"))

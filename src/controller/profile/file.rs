@@ -410,8 +410,8 @@ impl Profile {
                     .into(),
             );
         }
-        if self.dwell_units == DwellUnits::Milliseconds && !self.has_g(40) {
-            return Some("dwell_units = \"milliseconds\" needs G4 among the codes".into());
+        if self.dwell_units.in_ms() && !self.has_g(40) {
+            return Some("dwell_units in milliseconds needs G4 among the codes".into());
         }
         match self.inches {
             Inches::Native if !(self.has_g(200) && self.has_g(210)) => {
