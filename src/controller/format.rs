@@ -65,6 +65,9 @@ pub(super) struct LineWriter {
     tail: Vec<u8>,
     /// What one-command lines carry over to the next (`commands.rs`).
     carried: commands::Carried,
+    /// The program's units after the last line rendered (None before the
+    /// first): an F on a line that changes them is in the units before.
+    prog_inch: Option<bool>,
     /// The target is in G93 as written: F is no length then.
     inverse: bool,
 }
@@ -83,7 +86,8 @@ impl LineWriter {
             items: Vec::new(),
             in_units: Units::Mm,
             tail: Vec::new(),
-            carried: commands::Carried::default(),
+            carried: commands::Carried::new(!p.feed_on_rapid),
+            prog_inch: None,
             inverse: false,
         }
     }
@@ -349,6 +353,23 @@ impl LineWriter {
         }
         let mut items = std::mem::take(&mut self.items);
         let to_mm = self.p.inches == Inches::ToMm && self.in_units == Units::Inch;
+        // LinuxCNC sets a line's feed before its units: the F of a line
+        // with G20/G21 is in the units before it (the program's start
+        // units, taken as millimetres, on a first line with G20/G21).
+        let now_inch = self.in_units == Units::Inch;
+        let sets_units = items
+            .iter()
+            .any(|&(l, v, code)| code && l == b'G' && (v == 20.0 || v == 21.0));
+        let before_inch = match self.prog_inch {
+            Some(b) => b,
+            None => {
+                let b = !sets_units && now_inch;
+                self.carried.start_in_inches(b);
+                b
+            }
+        };
+        let f_inch = if sets_units { before_inch } else { now_inch };
+        self.prog_inch = Some(now_inch);
         let mut dwell = false;
         for &(l, v, code) in &items {
             if code && l == b'G' {
@@ -369,8 +390,11 @@ impl LineWriter {
                 }
                 continue;
             }
-            let length = b"XYZUVWIJKRQ".contains(l) || *l == b'F' && !self.inverse;
-            if to_mm && length {
+            if *l == b'F' {
+                if self.p.inches == Inches::ToMm && f_inch && !self.inverse {
+                    *v *= MM_PER_INCH;
+                }
+            } else if to_mm && b"XYZUVWIJKRQ".contains(l) {
                 *v *= MM_PER_INCH;
             }
             if dwell_ms && *l == b'P' {

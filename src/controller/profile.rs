@@ -162,6 +162,16 @@ pub struct Profile {
     /// Spindle-synchronised motion (G33, G76).
     pub spindle_sync: bool,
     pub tool_change: ToolChange,
+    /// A G0 reads F as LinuxCNC does (the feed of later moves). Where it
+    /// does not (RepRapFirmware's G0 ignores F, Smoothieware's takes it as
+    /// its rapid rate), F is written on feed moves only (with
+    /// `commands_per_line = "one"`, which names the motion of every move).
+    pub feed_on_rapid: bool,
+    /// The M code the firmware pauses on until the operator resumes (0
+    /// for M0; Smoothieware's M600, RepRapFirmware's M226): written for
+    /// M0, M60 and a tool change by pause where the firmware's M0 is no
+    /// such pause.
+    pub pause: u16,
     /// How many commands it takes from a line.
     pub commands_per_line: CommandsPerLine,
     /// The comment form it strips.
@@ -248,10 +258,10 @@ impl Profile {
             self.decimals_mm,
             self.decimals_inch,
             match self.tool_change {
-                ToolChange::Pause => "pause (M0)",
-                ToolChange::Keep => "kept",
-                ToolChange::Drop => "dropped",
-                ToolChange::Refuse => "refused",
+                ToolChange::Pause => format!("pause (M{})", self.pause),
+                ToolChange::Keep => "kept".into(),
+                ToolChange::Drop => "dropped".into(),
+                ToolChange::Refuse => "refused".into(),
             },
             if self.spindle_sync {
                 "spindle-synchronised motion"

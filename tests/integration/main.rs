@@ -77,8 +77,19 @@ pub fn as_rs274_reads(target: &str, out: &str) -> String {
         .lines()
         .find(|l| l.starts_with("m_codes"))
         .is_none_or(|l| l.contains("\"M2\""));
+    // The firmware's own pause code (Smoothieware's M600,
+    // RepRapFirmware's M226) is LinuxCNC's M0.
+    let pause = profile
+        .lines()
+        .find_map(|l| l.strip_prefix("pause = \""))
+        .and_then(|r| r.strip_suffix('"'))
+        .filter(|&code| code != "M0");
     let mut text = String::with_capacity(out.len() + 4);
     for line in out.lines() {
+        if pause.is_some_and(|code| line == code) {
+            text.push_str("M0\n");
+            continue;
+        }
         let words: Vec<&str> = line.split(' ').collect();
         if ms && words.first() == Some(&"G4") {
             let rest: Vec<String> = words

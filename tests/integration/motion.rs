@@ -104,6 +104,11 @@ struct Replay {
     /// out from its 4-decimal ends, so the moves a block is lowered into
     /// differ by some 1e-5 of it.
     inverse: bool,
+    /// The item that is the last event and a speed change of the turning
+    /// spindle, if it is.
+    speed_change: Option<usize>,
+    /// Mist and flood coolant on.
+    coolant: [bool; 2],
 }
 
 impl Replay {
@@ -224,6 +229,8 @@ impl Replay {
             dwell: 0.0,
             per_rev: false,
             inverse: false,
+            speed_change: None,
+            coolant: [false; 2],
         };
         for l in lines {
             let Some((name, n, args)) = canon(l) else {
@@ -267,18 +274,27 @@ impl Replay {
                 "STRAIGHT_PROBE" if n.len() >= 3 => r.line("probe", &n),
                 "ARC_FEED" if n.len() >= 6 => r.arc(&n),
                 "DWELL" if !n.is_empty() => r.dwell += n[0],
-                "START_SPINDLE_CLOCKWISE" => {
+                // Starting the spindle the way it already turns changes
+                // nothing (a firmware that reads S only with M3/M4 gets
+                // its speed changes that way).
+                "START_SPINDLE_CLOCKWISE" if r.spindle.0 != 1 => {
                     r.spindle.0 = 1;
                     let sp = r.spindle;
                     r.event(format!("spindle {} {:.3}", sp.0, sp.1));
                 }
-                "START_SPINDLE_COUNTERCLOCKWISE" => {
+                "START_SPINDLE_COUNTERCLOCKWISE" if r.spindle.0 != -1 => {
                     r.spindle.0 = -1;
                     let sp = r.spindle;
                     r.event(format!("spindle {} {:.3}", sp.0, sp.1));
                 }
                 "STOP_SPINDLE_TURNING" if r.spindle.0 != 0 => {
                     r.spindle.0 = 0;
+                    // A speed set and the spindle stopped at once (`M5
+                    // S800`, which a firmware reading S only with M3/M4
+                    // gets as M5 and a later `M3 S800`): the stop alone.
+                    if r.speed_change.is_some_and(|i| i + 1 == r.items.len()) {
+                        r.items.pop();
+                    }
                     r.event("spindle off".into());
                 }
                 "SET_SPINDLE_SPEED" if n.len() >= 2 && r.spindle.1 != n[1] => {
@@ -286,9 +302,24 @@ impl Replay {
                     if r.spindle.0 != 0 {
                         let sp = r.spindle;
                         r.event(format!("spindle {} {:.3}", sp.0, sp.1));
+                        r.speed_change = Some(r.items.len() - 1);
                     }
                 }
-                "FLOOD_ON" | "FLOOD_OFF" | "MIST_ON" | "MIST_OFF" => r.event(name.to_string()),
+                // Coolant switched to the state it is in changes nothing
+                // (an M9 with the coolant off is not written for a
+                // firmware without M9).
+                "FLOOD_ON" | "FLOOD_OFF" | "MIST_ON" | "MIST_OFF" => {
+                    let (i, on) = match name {
+                        "MIST_ON" => (0, true),
+                        "MIST_OFF" => (0, false),
+                        "FLOOD_ON" => (1, true),
+                        _ => (1, false),
+                    };
+                    if r.coolant[i] != on {
+                        r.coolant[i] = on;
+                        r.event(name.to_string());
+                    }
+                }
                 // A program ended by `%` finishes without PROGRAM_END.
                 "PROGRAM_END" | "FINISH" => r.event("end".into()),
                 "SET_FEED_MODE" if !n.is_empty() => r.per_rev = n[n.len() - 1] != 0.0,

@@ -275,24 +275,21 @@ impl Lowering {
                     let k = WarningKind::TargetRewritten {
                         target: self.name(),
                         what,
-                        how: "M0: the program pauses for a manual tool change (--tool-change keep|drop to change that)".into(),
+                        how: format!(
+                            "M{}: the program pauses for a manual tool change (--tool-change keep|drop to change that)",
+                            p.pause
+                        ),
                     };
                     self.warn(k);
                     // The change comes before the block's spindle words,
                     // tool length offset and motion.
-                    pre_lines.push(vec![(b'M', 0.0)]);
+                    pre_lines.push(vec![(b'M', f64::from(p.pause))]);
                     Fate::Drop
                 }
             };
         }
-        if m == (MCode::Pause { optional: true }) && !p.optional_stop {
-            let k = WarningKind::TargetIgnores {
-                target: self.name(),
-                what: "M1 (optional stop)".into(),
-                why: "the program does not pause there, where LinuxCNC stops if its optional-stop switch is on".into(),
-            };
-            self.warn(k);
-            return Fate::Keep;
+        if let Some(fate) = self.stop_fate(m, extra_lines) {
+            return fate;
         }
         if p.has_m(n) && w.value.fract() == 0.0 {
             return Fate::Keep;
@@ -319,7 +316,7 @@ impl Lowering {
                 Fate::Drop
             }
             MCode::PalletPause => {
-                extra_lines.push(vec![(b'M', 0.0)]);
+                extra_lines.push(vec![(b'M', f64::from(p.pause))]);
                 Fate::Drop
             }
             MCode::User(_) => {
@@ -350,6 +347,49 @@ impl Lowering {
                 Fate::Drop
             }
         }
+    }
+
+    /// M0, M1, M30 and M9 where the firmware has no such code or reads it
+    /// otherwise: its pause code for M0, M1 dropped (or kept where the
+    /// firmware reads it and does nothing), M30 as M2, M9 with the coolant
+    /// off not written. `None`: the general rules decide.
+    fn stop_fate(&mut self, m: MCode, extra_lines: &mut Vec<Vec<(u8, f64)>>) -> Option<Fate> {
+        let p = self.p;
+        if m == (MCode::Pause { optional: true }) && !p.optional_stop {
+            let why = "the program does not pause there, where LinuxCNC stops if its optional-stop switch is on";
+            if !p.has_m(1) {
+                // Not written where the firmware lacks it (RepRapFirmware
+                // ends the job on M1).
+                self.dropped("M1 (optional stop)", why);
+                return Some(Fate::Drop);
+            }
+            let k = WarningKind::TargetIgnores {
+                target: self.name(),
+                what: "M1 (optional stop)".into(),
+                why: why.into(),
+            };
+            self.warn(k);
+            return Some(Fate::Keep);
+        }
+        if m == (MCode::Pause { optional: false }) && p.pause != 0 {
+            // The firmware's M0 is no pause (Smoothieware ignores it,
+            // RepRapFirmware ends the job): its own pause code, after the
+            // block's motion as LinuxCNC stops.
+            extra_lines.push(vec![(b'M', f64::from(p.pause))]);
+            return Some(Fate::Drop);
+        }
+        if m == (MCode::End { rewind: true }) && !p.has_m(30) && p.has_m(2) {
+            // M30 and M2 end the program alike (the rewind and pallet
+            // exchange move nothing); some firmwares read M30 as
+            // "delete a file".
+            extra_lines.push(vec![(b'M', 2.0)]);
+            return Some(Fate::Drop);
+        }
+        if m == MCode::CoolantOff && !p.has_m(9) && !self.m.modes.mist && !self.m.modes.flood {
+            // Coolant that is off staying off: nothing to write.
+            return Some(Fate::Drop);
+        }
+        None
     }
 
     pub(super) fn value_fate(&mut self, w: &Word, problems: &mut Vec<Problem>) -> Fate {

@@ -419,7 +419,10 @@ impl Lowering {
         for w in &l.words {
             let ok = match w.letter {
                 b'G' => self.p.has_g((w.value * 10.0).round() as u16),
-                b'M' => self.p.has_m(w.value.round() as u16),
+                b'M' => {
+                    let m = w.value.round() as u16;
+                    self.p.has_m(m) || m == self.p.pause
+                }
                 l => self.p.has_word(l),
             };
             if !ok {

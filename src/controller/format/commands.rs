@@ -27,6 +27,38 @@ pub(super) struct Carried {
     speed: Option<f64>,
     /// M3 or M4 while the spindle turns.
     spindle: Option<f64>,
+    /// F is written on feed moves only, never on G0 (the profile's
+    /// `feed_on_rapid = false`).
+    feed_moves_only: bool,
+    /// The target is in inches (the last G20/G21 written), and the carried
+    /// F is in inches per minute.
+    inch: bool,
+    feed_inch: bool,
+}
+
+impl Carried {
+    /// Nothing carried yet; `feed_moves_only`: F never on a G0.
+    pub(super) fn new(feed_moves_only: bool) -> Carried {
+        Carried {
+            feed_moves_only,
+            ..Carried::default()
+        }
+    }
+
+    /// The units the target is in before the first line (the program's
+    /// at its start).
+    pub(super) fn start_in_inches(&mut self, inch: bool) {
+        self.inch = inch;
+    }
+}
+
+/// Feed `f`, in inches per minute when `from_inch`, in those of `to_inch`.
+fn feed_in(f: f64, from_inch: bool, to_inch: bool) -> f64 {
+    match (from_inch, to_inch) {
+        (true, false) => f * 25.4,
+        (false, true) => f / 25.4,
+        _ => f,
+    }
 }
 
 /// Where LinuxCNC runs a code in a line (its order of execution).
@@ -76,6 +108,7 @@ fn takes_axes(letter: u8, v: f64) -> bool {
 
 /// The lines of one command each for the words `items` of a line.
 pub(super) fn split(items: &[Item], c: &mut Carried) -> Vec<Vec<Item>> {
+    let f_inch = c.inch;
     // The commands of the line: (rank, code) with their words.
     let mut cmds: Vec<(u8, Vec<Item>)> = Vec::new();
     let find = |cmds: &Vec<(u8, Vec<Item>)>, pred: &dyn Fn(u8, f64) -> bool| {
@@ -147,8 +180,15 @@ pub(super) fn split(items: &[Item], c: &mut Carried) -> Vec<Vec<Item>> {
     if let Some(t) = tool {
         cmds.push((5, vec![t]));
     }
+    // M5 (or the end of the program) on the line stops the spindle after
+    // LinuxCNC has set the speed: the speed waits for the next M3/M4.
+    let stops = cmds.iter().any(|(_, w)| {
+        let (l, v, _) = w[0];
+        l == b'M' && matches!((v * 10.0).round() as i64, 20 | 50 | 300)
+    });
     if let Some(s) = speed {
         match c.spindle {
+            _ if stops => c.speed = Some(s),
             // A new speed while the spindle turns: its command again.
             Some(m) => cmds.push((7, vec![(b'M', m, true), (b'S', s, false)])),
             None => c.speed = Some(s),
@@ -156,6 +196,7 @@ pub(super) fn split(items: &[Item], c: &mut Carried) -> Vec<Vec<Item>> {
     }
     if let Some(f) = feed {
         c.feed = Some(f);
+        c.feed_inch = f_inch;
     }
     if !loose.is_empty() {
         // Axis or arc words of the modal motion.
@@ -167,16 +208,23 @@ pub(super) fn split(items: &[Item], c: &mut Carried) -> Vec<Vec<Item>> {
         cmds.push((22, line));
     }
     cmds.sort_by_key(|(r, _)| *r);
-    carry_on(cmds, c)
+    carry_on(cmds, c, f_inch)
 }
 
 /// The commands of a line in their order, with the F and S they carry
 /// over (see [`Carried`]).
-fn carry_on(cmds: Vec<(u8, Vec<Item>)>, c: &mut Carried) -> Vec<Vec<Item>> {
+///
+/// An F of the line is in the units before the line: LinuxCNC sets the
+/// feed before the units (`G20 F60` is 60 mm/min), so one written on a
+/// move after the line's G20 is converted (`f_inch`: those units).
+fn carry_on(cmds: Vec<(u8, Vec<Item>)>, c: &mut Carried, f_inch: bool) -> Vec<Vec<Item>> {
     let mut out = Vec::with_capacity(cmds.len());
     for (_, mut w) in cmds {
         let (l, v, code) = w[0];
         let t = (v * 10.0).round() as i64;
+        if code && l == b'G' && (t == 200 || t == 210) {
+            c.inch = t == 200;
+        }
         if code && l == b'M' {
             match t {
                 30 | 40 => {
@@ -202,12 +250,22 @@ fn carry_on(cmds: Vec<(u8, Vec<Item>)>, c: &mut Carried) -> Vec<Vec<Item>> {
         if let Some(m) = motion {
             c.motion = (m != 80.0).then_some(m);
         }
-        if motion.is_some_and(|m| m != 80.0) {
+        if c.feed_moves_only && motion == Some(0.0) {
+            // A firmware whose G0 reads no F (or reads it as its own
+            // rapid rate): the F waits for the next feed move.
+            if let Some(i) = w.iter().position(|x| x.0 == b'F' && !x.2) {
+                c.feed = Some(w.remove(i).1);
+                c.feed_inch = f_inch;
+            }
+        } else if motion.is_some_and(|m| m != 80.0) {
             match w.iter().position(|x| x.0 == b'F' && !x.2) {
-                Some(_) => c.feed = None,
+                Some(i) => {
+                    w[i].1 = feed_in(w[i].1, f_inch, c.inch);
+                    c.feed = None;
+                }
                 None => {
                     if let Some(f) = c.feed.take() {
-                        w.push((b'F', f, false));
+                        w.push((b'F', feed_in(f, c.feed_inch, c.inch), false));
                     }
                 }
             }
@@ -285,5 +343,55 @@ mod tests {
         assert_eq!(run(&["G92 X0 Y0"]), ["G92 X0 Y0"]);
         assert_eq!(run(&["G10 L2 P1 X3"]), ["G10 L2 P1 X3"]);
         assert_eq!(run(&["G1 X1 F10", "G92 Z0 X2"]), ["G1 X1 F10", "G92 Z0 X2"]);
+    }
+
+    fn run_with(mut c: Carried, lines: &[&str]) -> Vec<String> {
+        lines
+            .iter()
+            .flat_map(|l| show(&split(&parse(l), &mut c)))
+            .collect()
+    }
+
+    #[test]
+    fn feed_on_feed_moves_only_where_a_g0_reads_none() {
+        let lines = ["G0 X1 F300", "G0 Y1", "G1 X2", "G0 X0 F50", "G2 X1 I1"];
+        assert_eq!(
+            run_with(Carried::new(true), &lines),
+            ["G0 X1", "G0 Y1", "G1 X2 F300", "G0 X0", "G2 X1 I1 F50"]
+        );
+        // Otherwise it rides on the G0 as written.
+        assert_eq!(
+            run_with(Carried::new(false), &lines[..3]),
+            ["G0 X1 F300", "G0 Y1", "G1 X2"]
+        );
+    }
+
+    #[test]
+    fn a_speed_beside_m5_waits_for_the_next_start() {
+        assert_eq!(
+            run(&["M3 S500", "M5 S800", "G0 X1", "M3"]),
+            ["M3 S500", "M5", "G0 X1", "M3 S800"]
+        );
+    }
+
+    #[test]
+    fn a_feed_is_in_the_units_before_its_lines_g20() {
+        // LinuxCNC sets F before G20/G21: `G20 F60` is 60 mm/min.
+        let mut c = Carried::new(false);
+        c.start_in_inches(false);
+        assert_eq!(
+            run_with(
+                c,
+                &["G20 F60", "G1 X1", "F10", "G21", "G1 X2", "G20 G1 X3 F254"]
+            ),
+            [
+                "G20",
+                &format!("G1 X1 F{}", 60.0 / 25.4),
+                "G21",
+                &format!("G1 X2 F{}", 10.0 * 25.4),
+                "G20",
+                "G1 X3 F10",
+            ]
+        );
     }
 }

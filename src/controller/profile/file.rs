@@ -47,6 +47,8 @@ pub(super) const KEYS: &[&str] = &[
     "percent",
     "spindle_sync",
     "tool_change",
+    "pause",
+    "feed_on_rapid",
     "g43_1_z_only",
     "optional_stop",
     "arc_turns",
@@ -98,6 +100,8 @@ struct ProfileFile {
     percent: bool,
     spindle_sync: bool,
     tool_change: ToolChange,
+    pause: String,
+    feed_on_rapid: bool,
     g43_1_z_only: bool,
     optional_stop: bool,
     arc_turns: bool,
@@ -227,6 +231,20 @@ impl ProfileFile {
                 self.line_count,
             )),
         };
+        let pause = self
+            .pause
+            .strip_prefix('M')
+            .filter(|n| (1..=4).contains(&n.len()) && n.bytes().all(|b| b.is_ascii_digit()))
+            .and_then(|n| n.parse::<u16>().ok())
+            .ok_or_else(|| {
+                bad(
+                    "pause",
+                    format!(
+                        "`{}`: the M code the firmware pauses on (M0, M600 …)",
+                        self.pause
+                    ),
+                )
+            })?;
         if !self.realtime.is_ascii() {
             return Err(bad(
                 "realtime",
@@ -258,6 +276,8 @@ impl ProfileFile {
             percent: self.percent,
             spindle_sync: self.spindle_sync,
             tool_change: self.tool_change,
+            pause,
+            feed_on_rapid: self.feed_on_rapid,
             g43_1_z_only: self.g43_1_z_only,
             optional_stop: self.optional_stop,
             arc_turns: self.arc_turns,
@@ -355,8 +375,8 @@ impl Profile {
                 "M6",
             ),
             (
-                self.tool_change == ToolChange::Pause,
-                "tool_change = \"pause\"",
+                self.tool_change == ToolChange::Pause && self.pause == 0,
+                "tool_change = \"pause\" with pause = \"M0\"",
                 "M0",
             ),
         ];
@@ -368,6 +388,18 @@ impl Profile {
             if on && !has {
                 return Some(format!("{what} needs {codes} among the codes"));
             }
+        }
+        // A pause code LinuxCNC also has is one the firmware must have
+        // (M600 and the like are the firmware's own).
+        if self.pause != 0 && self.pause < 200 && !self.has_m(self.pause) {
+            return Some(format!(
+                "pause = \"M{0}\" needs M{0} among the codes",
+                self.pause
+            ));
+        }
+        // Only the writer of one command per line moves an F off its G0.
+        if !self.feed_on_rapid && self.commands_per_line != CommandsPerLine::One {
+            return Some("feed_on_rapid = false needs commands_per_line = \"one\"".into());
         }
         // G54 up to the last system the profile has, and none beyond.
         const SYSTEMS: [u16; 9] = [540, 550, 560, 570, 580, 590, 591, 592, 593];
