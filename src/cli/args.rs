@@ -10,7 +10,8 @@ use crate::settings::parse_axis_word;
 
 /// Flatten LinuxCNC-dialect G-code (O-word subroutines, loops, conditionals,
 /// parameters and expressions) into plain straight-line G-code: for
-/// LinuxCNC, or with --target for GRBL, grblHAL or FluidNC.
+/// LinuxCNC, or with --target for GRBL, grblHAL, FluidNC, g2core, Klipper,
+/// Marlin, Smoothieware or RepRapFirmware (`ngcflat targets` lists them).
 ///
 /// Every expression and parameter is evaluated and every O-word expanded
 /// exactly as LinuxCNC 2.9's interpreter would run the program; the result
@@ -190,7 +191,8 @@ pub(crate) struct CheckArgs {
 
 #[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum ToolChangeArg {
-    /// M0 (a pause for a manual change; the default where the target has no M6).
+    /// A pause for a manual change (M0, or the target's own pause code such
+    /// as M600; the default where the target has no M6).
     Pause,
     /// M6 as written.
     Keep,
@@ -306,8 +308,8 @@ pub(crate) struct CommonArgs {
     /// NAME` prints one to start from). Also $NGCFLAT_TARGET.
     #[arg(long, value_name = "NAME")]
     pub(super) target: Option<String>,
-    /// What M6 becomes for a target: pause (M0; the default where the
-    /// target has no M6), keep, drop.
+    /// What M6 becomes for a target: pause (M0 or the target's own pause
+    /// code; the default where the target has no M6), keep, drop.
     #[arg(long, value_enum, value_name = "POLICY")]
     pub(super) tool_change: Option<ToolChangeArg>,
     /// LinuxCNC's block-delete switch for a target: on skips `/` lines, off

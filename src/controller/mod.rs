@@ -25,6 +25,11 @@ pub const BUILT_IN: &[(&str, &str)] = &[
     ("g2core", include_str!("profiles/g2core.toml")),
     ("klipper", include_str!("profiles/klipper.toml")),
     ("marlin", include_str!("profiles/marlin.toml")),
+    ("smoothieware", include_str!("profiles/smoothieware.toml")),
+    (
+        "reprapfirmware",
+        include_str!("profiles/reprapfirmware.toml"),
+    ),
 ];
 
 static PROFILES: std::sync::LazyLock<Vec<Profile>> = std::sync::LazyLock::new(|| {

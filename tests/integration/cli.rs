@@ -612,3 +612,61 @@ fn memory_entry_matches_the_command() {
     let (_, got) = ngcflat::flatten_memory(prog.into(), HashMap::new(), &settings, None);
     assert!(got.unwrap() == want.as_bytes());
 }
+
+/// The firmwares a user might look for, as `--help` and the README spell
+/// them, by the name of their target (`None`: no target).
+const FIRMWARES: [(&str, &str); 9] = [
+    ("GRBL", "grbl"),
+    ("grblHAL", "grblhal"),
+    ("FluidNC", "fluidnc"),
+    ("Marlin", "marlin"),
+    ("Smoothieware", "smoothieware"),
+    ("Klipper", "klipper"),
+    ("RepRapFirmware", "reprapfirmware"),
+    ("g2core", "g2core"),
+    ("TinyG", "tinyg"),
+];
+
+fn listed_targets() -> Vec<String> {
+    let (code, out, _) = crate::run(&crate::root(), &["targets"]);
+    assert_eq!(code, 0);
+    out.lines()
+        .filter(|l| l.starts_with(|c: char| c.is_ascii_alphanumeric()))
+        .filter_map(|l| l.split_whitespace().next().map(str::to_string))
+        .collect()
+}
+
+/// `--help` and the README's target table name every target `ngcflat
+/// targets` lists, and no firmware that has none.
+#[test]
+fn help_and_readme_name_the_targets_that_exist() {
+    let targets = listed_targets();
+    let (code, help, _) = crate::run(&crate::root(), &["--help"]);
+    assert_eq!(code, 0);
+    // The description above the options (clap prints it first).
+    let about = help.split("Usage:").next().unwrap_or_default();
+    let readme = std::fs::read_to_string(crate::root().join("README.md")).unwrap();
+    let table: Vec<&str> = readme
+        .lines()
+        .skip_while(|l| !l.starts_with("| `--target`"))
+        .skip(2)
+        .take_while(|l| l.starts_with('|'))
+        .collect();
+    let rows: Vec<String> = table
+        .iter()
+        .filter_map(|r| r.split('`').nth(1).map(str::to_string))
+        .collect();
+    assert_eq!(rows, targets, "README's target table");
+    let word = |text: &str, w: &str| {
+        text.split(|c: char| !c.is_ascii_alphanumeric())
+            .any(|t| t == w)
+    };
+    for (name, target) in FIRMWARES {
+        let exists = targets.iter().any(|t| t == target);
+        assert_eq!(word(about, name), exists, "--help on {name}:\n{about}");
+        let said = readme
+            .lines()
+            .any(|l| word(l, name) && !l.contains("no profile"));
+        assert!(said || !exists, "README never names {name}");
+    }
+}
