@@ -34,6 +34,8 @@ pub(super) struct Carried {
     /// F is in inches per minute.
     inch: bool,
     feed_inch: bool,
+    /// The target is in G91 (the last G90/G91 written).
+    incremental: bool,
 }
 
 impl Carried {
@@ -225,6 +227,17 @@ fn carry_on(cmds: Vec<(u8, Vec<Item>)>, c: &mut Carried, f_inch: bool) -> Vec<Ve
         if code && l == b'G' && (t == 200 || t == 210) {
             c.inch = t == 200;
         }
+        if code && l == b'G' && (t == 900 || t == 910) {
+            c.incremental = t == 910;
+        }
+        if code && l == b'G' && t == 100 && c.incremental && w.contains(&(b'L', 2.0, false)) {
+            // G10 L2's values are the offsets in LinuxCNC whatever the
+            // distance mode; Smoothieware adds them to the offset in G91.
+            out.push(vec![(b'G', 90.0, true)]);
+            out.push(w);
+            out.push(vec![(b'G', 91.0, true)]);
+            continue;
+        }
         if code && l == b'M' {
             match t {
                 30 | 40 => {
@@ -392,6 +405,23 @@ mod tests {
                 "G20",
                 "G1 X3 F10",
             ]
+        );
+    }
+
+    #[test]
+    fn g10_l2_in_g91_is_written_in_g90() {
+        assert_eq!(
+            run(&["G91 G10 L2 P1 X5", "G10 L20 P1 X1", "G90 G10 L2 P2 Y1"]),
+            [
+                "G91",
+                "G90",
+                "G10 L2 P1 X5",
+                "G91",
+                "G10 L20 P1 X1",
+                "G90",
+                "G10 L2 P2 Y1"
+            ]
+            .map(String::from)
         );
     }
 }
