@@ -279,6 +279,9 @@ impl Profile {
         if self.commands_per_line == CommandsPerLine::One {
             parts.push("one command per line");
         }
+        if !self.feed_on_rapid {
+            parts.push("F on feed moves only");
+        }
         match self.comment_syntax {
             CommentSyntax::Parentheses => {}
             CommentSyntax::Semicolon => parts.push("`;` comments only"),

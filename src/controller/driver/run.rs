@@ -421,7 +421,9 @@ impl Lowering {
                 b'G' => self.p.has_g((w.value * 10.0).round() as u16),
                 b'M' => {
                     let m = w.value.round() as u16;
-                    self.p.has_m(m) || m == self.p.pause
+                    // The firmware's own pause code (M600, M226) is no
+                    // LinuxCNC code; M0 must be among the codes.
+                    self.p.has_m(m) || m == self.p.pause && m >= 200
                 }
                 l => self.p.has_word(l),
             };
