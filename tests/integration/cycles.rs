@@ -245,7 +245,8 @@ fn check(seed: u64, targets: &[String]) -> Result<(), String> {
     for t in targets {
         let (code, out, err) = crate::run(dir.path(), &["--target", t, "--zero-start", "p.ngc"]);
         let r = match (&original, code) {
-            (Ok(a), 0) => rs274(&out)
+            // As LinuxCNC reads it: G4 P in seconds, M0 for a pause code.
+            (Ok(a), 0) => rs274(&crate::as_rs274_reads(t, &out))
                 .map_err(|e| format!("rs274 rejects the output: {e}"))
                 .and_then(|b| crate::motion::same_canon_motion(a, &b, 0.004)),
             // A code the target lacks (G87's spindle orientation M19 on
