@@ -95,6 +95,56 @@ pub fn barely_turns(sweep: f64, chord: f64, least_chord: f64) -> bool {
     sweep < LEAST_SWEEP || sweep < PI && chord < least_chord
 }
 
+/// The points an arc is cut at: `parts` equal angles along its sweep, the
+/// distance from the centre and the helix axis changing evenly with them.
+struct ArcPath {
+    axes: [usize; 3],
+    a0: f64,
+    sign: f64,
+    total: f64,
+    radius: f64,
+    spiral: f64,
+    parts: usize,
+}
+
+impl ArcPath {
+    fn new(
+        a: &ArcInput,
+        axes: [usize; 3],
+        radius: f64,
+        spiral: f64,
+        total: f64,
+        parts: usize,
+    ) -> ArcPath {
+        let [p, q, _] = axes;
+        ArcPath {
+            axes,
+            a0: (a.start[q] - a.centre[q]).atan2(a.start[p] - a.centre[p]),
+            sign: if a.clockwise { -1.0 } else { 1.0 },
+            total,
+            radius,
+            spiral,
+            parts,
+        }
+    }
+
+    /// The end of part `k` (1 to `parts`): the arc's own end for the last.
+    fn point(&self, a: &ArcInput, k: usize) -> [f64; 3] {
+        if k == self.parts {
+            return a.end;
+        }
+        let [p, q, n] = self.axes;
+        let t = k as f64 / self.parts as f64;
+        let angle = self.a0 + self.sign * self.total * t;
+        let r = self.radius + self.spiral * t;
+        let mut pt = [0.0; 3];
+        pt[p] = a.centre[p] + r * angle.cos();
+        pt[q] = a.centre[q] + r * angle.sin();
+        pt[n] = a.start[n] + (a.end[n] - a.start[n]) * t;
+        pt
+    }
+}
+
 /// Lowers a full circle, a P-turn arc or a spiral arc into arcs of less
 /// than half a turn without P (see the module doc for the rule); an arc
 /// that [`barely_turns`] (with `radius_step` as its least chord) is one
@@ -120,26 +170,14 @@ pub fn lower_arc(a: &ArcInput) -> Result<Vec<PlainLine>, LowerError> {
         return Err(LowerError::TooManyLines);
     }
     let parts = parts_f as usize;
-    let a0 = (a.start[q] - a.centre[q]).atan2(a.start[p] - a.centre[p]);
-    let sign = if a.clockwise { -1.0 } else { 1.0 };
+    let path = ArcPath::new(a, [p, q, n], radius, spiral, total, parts);
     let g = if a.clockwise { 2.0 } else { 3.0 };
     // Offset letters of the plane's first and second axes.
     let letters = [b'I', b'J', b'K'];
     let mut out = Vec::with_capacity(parts);
     let mut from = a.start;
     for k in 1..=parts {
-        let to = if k == parts {
-            a.end
-        } else {
-            let t = k as f64 / parts as f64;
-            let angle = a0 + sign * total * t;
-            let r = radius + spiral * t;
-            let mut pt = [0.0; 3];
-            pt[p] = a.centre[p] + r * angle.cos();
-            pt[q] = a.centre[q] + r * angle.sin();
-            pt[n] = a.start[n] + (a.end[n] - a.start[n]) * t;
-            pt
-        };
+        let to = path.point(a, k);
         let (first, second) = if p < q { (p, q) } else { (q, p) };
         push(
             &mut out,
@@ -193,22 +231,10 @@ pub fn lower_arc_chords(a: &ArcInput, tolerance: f64) -> Result<Vec<PlainLine>, 
         return Err(LowerError::TooManyLines);
     }
     let parts = parts_f as usize;
-    let a0 = (a.start[q] - a.centre[q]).atan2(a.start[p] - a.centre[p]);
-    let sign = if a.clockwise { -1.0 } else { 1.0 };
+    let path = ArcPath::new(a, [p, q, n], radius, spiral, total, parts);
     let mut out = Vec::with_capacity(parts);
     for k in 1..=parts {
-        let to = if k == parts {
-            a.end
-        } else {
-            let t = k as f64 / parts as f64;
-            let angle = a0 + sign * total * t;
-            let r = radius + spiral * t;
-            let mut pt = [0.0; 3];
-            pt[p] = a.centre[p] + r * angle.cos();
-            pt[q] = a.centre[q] + r * angle.sin();
-            pt[n] = a.start[n] + (a.end[n] - a.start[n]) * t;
-            pt
-        };
+        let to = path.point(a, k);
         push(&mut out, PlainLine::motion(1.0, to))?;
     }
     Ok(out)
